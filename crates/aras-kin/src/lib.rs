@@ -1,0 +1,70 @@
+//! Kinematics of the ARAS-Diamond coaxial spherical parallel robot.
+//!
+//! A 2-DOF spherical five-bar: two coaxial motors on axis `a` drive the
+//! proximal links; distal links hinged at the elbows `b`, `c` meet at the
+//! end-effector axis `d`. Every link turns about the remote centre of motion
+//! (RCM), the origin of every frame here. Equation numbers refer to
+//! `spec/ARAS-DIAMOND.md` (the source paper's numbering).
+//!
+//! # Conventions
+//!
+//! * Units: radians, rad/s, rad/s² everywhere (degrees only in messages).
+//! * Base frame {0}: `z0 = a`. Task coordinates `X = [φ, γ]`: `γ` is the
+//!   polar angle of `d` from `a`, `φ` its azimuth. Motor angles
+//!   `θ = [θ1, θ2]` with `θ1 = φ + A`, `θ2 = φ − A`.
+//! * Link numbering follows the paper and the robot authors' model: link 1
+//!   is the proximal link driven by **θ2** (elbow `b`), link 2 the proximal
+//!   link driven by **θ1** (elbow `c`), link 3 the distal link on `b`, link 4
+//!   the distal link on `c`. Arrays are indexed 0–3. See [`links`] for the
+//!   frames.
+//! * Jacobian sign: `θ̇ = J Ẋ` with `J = [[1, K], [1, −K]]`, `K = dA/dγ`. The
+//!   paper's (8)–(11) print the opposite sign (see the spec NOTE); ours is
+//!   the derivative of our own IK and is tested against finite differences.
+//!
+//! # Errors
+//!
+//! No function returns NaN or panics on bad input: non-finite inputs,
+//! unreachable poses, and poses within [`Geometry::singularity_tolerance`] of
+//! a singularity are [`KinError`]s that name the value and the limit.
+//!
+//! # Example
+//!
+//! ```
+//! use aras_kin::{evaluate, forward, inverse, AssemblyMode, Geometry};
+//! use nalgebra::Vector2;
+//!
+//! let g = Geometry::aras_diamond();
+//! let x = Vector2::new(85f64.to_radians(), 60f64.to_radians());
+//! let ik = inverse(&g, &x)?;
+//! let back = forward(&g, &ik.theta, AssemblyMode::Plus)?;
+//! assert!((back - x).norm() < 1e-12);
+//!
+//! let s = evaluate(&g, &x, &Vector2::new(0.3, -0.7), &Vector2::zeros())?;
+//! assert!((s.omega[2] - nalgebra::Vector3::new(0.74048, 0.43208, 0.58577)).norm() < 1e-5);
+//! # Ok::<(), aras_kin::KinError>(())
+//! ```
+//!
+//! # Dependencies
+//!
+//! Only `nalgebra` (fixed-size stack types, so per-sample evaluation does not
+//! allocate) and `thiserror`.
+
+mod error;
+mod forward;
+mod geometry;
+mod inverse;
+mod jacobian;
+pub mod links;
+mod pose;
+mod sample;
+mod workspace;
+
+pub use error::KinError;
+pub use forward::{AssemblyMode, forward};
+pub use geometry::{DEFAULT_SINGULARITY_TOLERANCE, Geometry};
+pub use inverse::{InverseSolution, PassiveAngles, inverse};
+pub use jacobian::{Jacobian, jacobian};
+pub use links::{LINKS, link_frames, link_jacobians};
+pub use pose::Singularity;
+pub use sample::{KinematicSample, evaluate};
+pub use workspace::{SingularityDistance, Workspace, singularity_distance};

@@ -1,0 +1,147 @@
+//! Position-level quantities shared by every kinematic function.
+//!
+//! Everything about the mechanism at a pose `X = [φ, γ]` follows from the
+//! spherical triangle (a, b or c, d). The angle `A` at `a` and the elbow angle
+//! `B` depend on `γ` only, so their γ-derivatives are scalars; rotation about
+//! `a` by `φ` carries every vector along. This is why the link Jacobians and
+//! their time derivatives have closed forms (see `links`).
+
+use nalgebra::{Vector2, Vector3};
+
+use crate::{Geometry, KinError, SingularityDistance};
+
+/// All position-level scalars and unit vectors at one pose.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Pose {
+    pub sin_gamma: f64,
+    pub cos_gamma: f64,
+    /// Angle A at `a` (rad), spec (1).
+    pub a: f64,
+    pub sin_a: f64,
+    pub sin_b: f64,
+    pub cos_b: f64,
+    /// K = dA/dγ, spec (8)–(11) with the sign NOTE.
+    pub k: f64,
+    /// dK/dγ.
+    pub k_prime: f64,
+    /// μ: elbow rate of the distal link on `b` per unit γ̇ (Ω3 = θ̇2 a + μ γ̇ b).
+    pub mu: f64,
+    /// dμ/dγ.
+    pub mu_prime: f64,
+    pub theta1: f64,
+    pub theta2: f64,
+    pub b: Vector3<f64>,
+    pub c: Vector3<f64>,
+    pub d: Vector3<f64>,
+}
+
+pub(crate) fn check_finite(name: &'static str, value: f64) -> Result<(), KinError> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(KinError::NonFinite { name, value })
+    }
+}
+
+impl Pose {
+    /// Evaluates the pose and rejects unreachable or singular ones.
+    pub fn new(g: &Geometry, x: &Vector2<f64>) -> Result<Self, KinError> {
+        let pose = Self::unchecked(g, x)?;
+        pose.distance().check(g.singularity_tolerance())?;
+        Ok(pose)
+    }
+
+    pub fn distance(&self) -> SingularityDistance {
+        SingularityDistance {
+            sin_a: self.sin_a,
+            sin_gamma: self.sin_gamma,
+            sin_b: self.sin_b,
+            parallel: self.k.abs(),
+        }
+    }
+
+    /// Evaluates the pose; only reachability and finiteness are checked.
+    /// At a singularity some derived scalars are infinite.
+    pub fn unchecked(g: &Geometry, x: &Vector2<f64>) -> Result<Self, KinError> {
+        let (phi, gamma) = (x[0], x[1]);
+        check_finite("phi", phi)?;
+        check_finite("gamma", gamma)?;
+        let (lo, hi) = g.reachable_gamma();
+        if gamma < lo || gamma > hi {
+            return Err(KinError::Unreachable {
+                gamma,
+                min: lo,
+                max: hi,
+            });
+        }
+        let (sa, ca, sb, cb) = (g.sa, g.ca, g.sb, g.cb);
+        let (sg, cg) = gamma.sin_cos();
+        let (sphi, cphi) = phi.sin_cos();
+
+        // Spherical cosine rule, spec (1) and (4). Rounding can push the
+        // cosines a hair past ±1 at the reach limits; the sines are then 0
+        // and the singularity check rejects the pose.
+        let cos_a = ((cb - cg * ca) / (sg * sa)).clamp(-1.0, 1.0);
+        let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+        let cos_b = ((cg - cb * ca) / (sb * sa)).clamp(-1.0, 1.0);
+        let sin_b = (1.0 - cos_b * cos_b).max(0.0).sqrt();
+        let a = sin_a.atan2(cos_a);
+
+        // K = dA/dγ = −P/(sα s²γ sA), P = cα − cβ cγ (equal to the spec's
+        // −(cot α − cos A cot γ)/sin A).
+        let p = ca - cb * cg;
+        let dp = cb * sg;
+        let u = 1.0 / (sa * sg * sg * sin_a);
+        let k = -p * u;
+        let k_prime = u * (-dp + p * (2.0 * cg / sg + k * cos_a / sin_a));
+        // μ = (b×d)·(∂d/∂γ + K a×d)/s²β in closed form.
+        let s2b = sb * sb;
+        let mu = (-sa * sin_a + k * p) / s2b;
+        let mu_prime = (-sa * cos_a * k + k_prime * p + k * dp) / s2b;
+
+        // θ1 = φ + A, θ2 = φ − A, spec (1)–(2); sines by angle addition.
+        let (st1, ct1) = (sphi * cos_a + cphi * sin_a, cphi * cos_a - sphi * sin_a);
+        let (st2, ct2) = (sphi * cos_a - cphi * sin_a, cphi * cos_a + sphi * sin_a);
+        Ok(Self {
+            sin_gamma: sg,
+            cos_gamma: cg,
+            a,
+            sin_a,
+            sin_b,
+            cos_b,
+            k,
+            k_prime,
+            mu,
+            mu_prime,
+            theta1: phi + a,
+            theta2: phi - a,
+            b: Vector3::new(sa * ct2, sa * st2, ca),
+            c: Vector3::new(sa * ct1, sa * st1, ca),
+            d: Vector3::new(sg * cphi, sg * sphi, cg),
+        })
+    }
+}
+
+/// Which singularity a pose is near (spec §2, "Singularities").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Singularity {
+    /// `sin A = 0`: the proximal links are aligned.
+    ProximalAligned,
+    /// `sin γ = 0`: `d` lies on `a`, so φ is undefined.
+    PolarAxis,
+    /// `sin B = 0`: proximal and distal arcs aligned (reach boundary).
+    ElbowStretched,
+    /// `K = dA/dγ = 0`: γ moves without moving the motors (J singular).
+    Parallel,
+}
+
+impl std::fmt::Display for Singularity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::ProximalAligned => "sin A (proximal links aligned)",
+            Self::PolarAxis => "sin gamma (end-effector on the motor axis)",
+            Self::ElbowStretched => "sin B (elbow stretched, reach boundary)",
+            Self::Parallel => "|dA/dgamma| (Jacobian singular)",
+        })
+    }
+}
