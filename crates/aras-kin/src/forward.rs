@@ -25,7 +25,11 @@ pub enum AssemblyMode {
 ///
 /// The result is checked as in [`inverse`](crate::inverse): a pose at a
 /// singularity (e.g. `γ = 0` on the degenerate branch) is an error.
-pub fn forward(g: &Geometry, theta: &Vector2<f64>, mode: AssemblyMode) -> Result<Vector2<f64>, KinError> {
+pub fn forward(
+    g: &Geometry,
+    theta: &Vector2<f64>,
+    mode: AssemblyMode,
+) -> Result<Vector2<f64>, KinError> {
     check_finite("theta1", theta[0])?;
     check_finite("theta2", theta[1])?;
     let phi = 0.5 * (theta[0] + theta[1]);

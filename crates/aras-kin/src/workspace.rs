@@ -49,7 +49,10 @@ impl SingularityDistance {
 
 /// Distance of a reachable pose to every singularity; unlike the other
 /// functions this does not reject singular poses (it measures them).
-pub fn singularity_distance(g: &Geometry, x: &Vector2<f64>) -> Result<SingularityDistance, KinError> {
+pub fn singularity_distance(
+    g: &Geometry,
+    x: &Vector2<f64>,
+) -> Result<SingularityDistance, KinError> {
     Ok(Pose::unchecked(g, x)?.distance())
 }
 
@@ -64,7 +67,11 @@ pub struct Workspace {
 impl Workspace {
     /// A box `min ≤ X ≤ max` with rate limits `|Ẋ| ≤ max_rate`.
     /// Bounds must be finite, ordered, and the rates positive.
-    pub fn new(min: Vector2<f64>, max: Vector2<f64>, max_rate: Vector2<f64>) -> Result<Self, KinError> {
+    pub fn new(
+        min: Vector2<f64>,
+        max: Vector2<f64>,
+        max_rate: Vector2<f64>,
+    ) -> Result<Self, KinError> {
         let names = [("phi", "phi_dot"), ("gamma", "gamma_dot")];
         for i in 0..2 {
             check_finite(names[i].0, min[i])?;
