@@ -4,6 +4,7 @@
 
 use std::hint::black_box;
 
+use aras_dyn::sim::{SimConfig, simulate};
 use aras_dyn::{Dynamics, Params, Sinusoid, Trajectory};
 use aras_kin::evaluate;
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -92,5 +93,18 @@ fn stacked(c: &mut Criterion) {
     grp.finish();
 }
 
-criterion_group!(benches, per_sample, stacked);
+fn simulation(c: &mut Criterion) {
+    let p = Params::aras_diamond();
+    let traj = Sinusoid::paper_79(0.5).unwrap();
+    let cfg = SimConfig::default();
+    assert_eq!(cfg.duration_s, 160.0);
+    let mut grp = c.benchmark_group("simulate");
+    grp.sample_size(10);
+    grp.bench_function("160 s at 1 kHz output (2 kHz RK4)", |b| {
+        b.iter(|| simulate(black_box(&p), &traj, &cfg).unwrap())
+    });
+    grp.finish();
+}
+
+criterion_group!(benches, per_sample, stacked, simulation);
 criterion_main!(benches);

@@ -229,15 +229,32 @@ impl Dynamics {
         s: &KinematicSample,
         tau_links: &Vector2<f64>,
     ) -> Result<Vector2<f64>, DynError> {
-        let m = self.mass_matrix(s);
-        let rhs =
-            s.jacobian.matrix().transpose() * tau_links - self.coriolis(s) - self.gravity_torque(s);
+        let (m, bias) = self.task_terms(s);
+        let rhs = s.jacobian.matrix().transpose() * tau_links - bias;
         solve_spd(&m, &rhs).ok_or(DynError::NotPositiveDefinite {
             phi_deg: s.x[0].to_degrees(),
             gamma_deg: s.x[1].to_degrees(),
             det: m.determinant(),
             m11: m[(0, 0)],
         })
+    }
+
+    /// `M` and `c + g` in one pass (each `I_k⁰` computed once): the hot
+    /// path of the simulator.
+    #[inline]
+    fn task_terms(&self, s: &KinematicSample) -> (Matrix2<f64>, Vector2<f64>) {
+        let mut m = Matrix2::zeros();
+        let mut bias = Vector2::zeros();
+        for k in 0..4 {
+            let (i0, h0) = self.base_frame(s, k);
+            let jw = &s.link_jacobians[k];
+            let w = &s.omega[k];
+            m += jw.tr_mul(&(i0 * jw));
+            let f = i0 * (s.link_jacobian_dots[k] * s.x_dot) + w.cross(&(i0 * w))
+                - h0.cross(&self.gravity);
+            bias += jw.tr_mul(&f);
+        }
+        (m, bias)
     }
 }
 

@@ -19,6 +19,22 @@
 //! way (Lagrange's equations, exact differentiation); the tests make all
 //! three agree.
 //!
+//! # Example
+//!
+//! ```
+//! use aras_dyn::{Dynamics, Params};
+//! use nalgebra::Vector2;
+//!
+//! let p = Params::aras_diamond();
+//! let model = p.model()?; // rigid links + friction + elasticity: 42 columns
+//! let beta = p.standard_vector(&model)?;
+//! let dy = Dynamics::new(&p)?;
+//! let s = dy.sample(&Vector2::new(1.5, 1.0), &Vector2::new(0.3, -0.2), &Vector2::new(2.0, 1.0))?;
+//! let tau = model.regressor(&s) * &beta; // τ = Y β (48)
+//! assert!((tau - dy.inverse(&s)).norm() < 1e-12);
+//! # Ok::<(), aras_dyn::DynError>(())
+//! ```
+//!
 //! # Conventions
 //!
 //! * SI units, radians: rad, rad/s, rad/s², N·m, kg, m, kg·m², kg·m.
@@ -35,7 +51,7 @@
 //!
 //! * Parameter files: [`Params`] (`docs/parameter-format.md`); the default
 //!   robot is [`Params::aras_diamond`] = `fixtures/robots/aras-diamond.json`.
-//! * Logs: written by the simulator (CSV + JSON sidecar, `docs/log-format.md`).
+//! * Logs: [`sim::write_log`] (CSV + JSON sidecar, `docs/log-format.md`).
 //!
 //! # Dependencies
 //!
@@ -56,6 +72,7 @@ mod model;
 mod params;
 mod regressor;
 mod robots;
+pub mod sim;
 mod trajectory;
 
 pub use dynamics::Dynamics;
