@@ -1,1 +1,8 @@
 //! placeholder
+mod butterworth;
+mod error;
+mod fourier;
+mod sos;
+pub use butterworth::{Butterworth, MAX_ORDER};
+pub use error::{FilterError, LogError, ProcessError};
+pub use sos::{Sos, TransferFunction};
