@@ -3,6 +3,12 @@
 
 use std::path::PathBuf;
 
+/// `x` rounded to 9 significant digits and printed shortest, so differences
+/// of logged times print as `0.004`, not `0.0040000000000000036`.
+pub(crate) fn sig(x: f64) -> f64 {
+    format!("{x:.8e}").parse().unwrap_or(x)
+}
+
 /// Errors of filter design and filtering.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FilterError {
@@ -236,10 +242,10 @@ pub enum LogError {
     },
     /// The sampling step varies beyond the tolerance.
     #[error(
-        "{file}:{line}: irregular sampling: the worst step, {step} s ending at t = {t} s, is \
-         {ratio:.3}× the nominal step {nominal} s (tolerance ±{percent}%); resample the log to a \
+        "{file}:{line}: irregular sampling: the worst step, {s} s ending at t = {t} s, is \
+         {ratio:.3}× the nominal step {n} s (tolerance ±{percent}%); resample the log to a \
          uniform rate, or raise ReadOptions::step_tolerance"
-    , percent = tolerance * 100.0)]
+    , percent = tolerance * 100.0, s = sig(*step), n = sig(*nominal))]
     IrregularSampling {
         /// File name.
         file: String,

@@ -147,7 +147,7 @@ impl FlatAtExtreme {
         let v = self.sign * raw;
         // "Flat" means equal up to rounding of the value itself.
         let tol = 1e-12 * self.value.abs().max(1.0);
-        if v > self.value + tol {
+        if self.value == f64::NEG_INFINITY || v > self.value + tol {
             self.value = v;
             self.runs.clear();
             self.more = 0;
@@ -395,7 +395,12 @@ impl Checks {
         let [f1, f2] = self.flat;
         for (c, pair) in [f1, f2].into_iter().enumerate() {
             let [hi, lo] = pair;
+            // A constant channel is flat at both extremes: report it once.
+            let constant = self.tau_range[c][0] == self.tau_range[c][1];
             for (tracker, extreme) in [(hi, Extreme::Maximum), (lo, Extreme::Minimum)] {
+                if constant && extreme == Extreme::Minimum {
+                    continue;
+                }
                 if let Some((value, spans, more)) = tracker.finish(self.saturation_samples) {
                     warnings.push(Warning::Saturation {
                         channel: format!("tau{}", c + 1),
