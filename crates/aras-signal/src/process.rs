@@ -301,14 +301,17 @@ pub fn process(
                     source,
                 }
             })?;
-            filter_all(&sos, &mut data, fourier.as_mut(), &log.name)?;
+            filter_all(&sos, spec, fs, &mut data, fourier.as_mut(), &log.name)?;
             Some(FilterSummary {
                 order: spec.order,
                 cutoff_hz: spec.cutoff_hz,
                 kind: if periodic {
                     "zero-phase, periodic (|H|² applied to the averaged period's spectrum)".into()
                 } else {
-                    "zero-phase forward-backward (scipy sosfiltfilt defaults)".into()
+                    format!(
+                        "zero-phase forward-backward (scipy sosfiltfilt, odd padding of {} samples)",
+                        padlen(&sos, spec, fs, n)
+                    )
                 },
             })
         }
@@ -393,8 +396,22 @@ pub fn process(
     })
 }
 
+/// Pad length for a non-periodic record: ten time constants of the
+/// filter's slowest pole, `fs/(2π·fc·sin(π/2N))` samples each, so start-up
+/// transients decay to e⁻¹⁰ inside the odd extension; never less than
+/// scipy's default, and capped below the record length.
+fn padlen(sos: &Sos, spec: FilterSpec, fs: f64, n: usize) -> usize {
+    let slowest = (std::f64::consts::PI / (2.0 * spec.order as f64)).sin();
+    let tau = fs / (std::f64::consts::TAU * spec.cutoff_hz * slowest);
+    ((10.0 * tau).ceil() as usize)
+        .max(sos.padlen())
+        .min(n.saturating_sub(1))
+}
+
 fn filter_all(
     sos: &Sos,
+    spec: FilterSpec,
+    fs: f64,
     data: &mut [Vec<f64>],
     fourier: Option<&mut Fourier>,
     name: &str,
@@ -407,8 +424,9 @@ fn filter_all(
         }
         None => {
             let mut scratch = Vec::new();
+            let pad = padlen(sos, spec, fs, data[0].len());
             for (c, ch) in data.iter_mut().enumerate() {
-                sos.filtfilt_in_place(ch, &mut scratch)
+                sos.filtfilt_in_place_padded(ch, pad, &mut scratch)
                     .map_err(|source| ProcessError::Filter {
                         context: format!(
                             "filtering {} of {name}",

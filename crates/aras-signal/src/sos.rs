@@ -250,16 +250,38 @@ impl Sos {
 
     /// [`filtfilt`](Self::filtfilt) overwriting `x`.
     pub fn filtfilt_in_place(&self, x: &mut [f64], scratch: &mut Vec<f64>) -> Result<(), FilterError> {
-        self.check_len(x.len())?;
+        self.filtfilt_in_place_padded(x, self.padlen, scratch)
+    }
+
+    /// [`filtfilt_in_place`](Self::filtfilt_in_place) with an explicit pad
+    /// length, `scipy.signal.sosfiltfilt(sos, x, padlen=padlen)`.
+    ///
+    /// scipy's default pad (`3·ntaps`, a few dozen samples) is far shorter
+    /// than the transient of a low cut-off filter (its slowest pole decays
+    /// over ≈ `fs/(2π·fc·sin(π/2N))` samples), so the first and last few
+    /// hundred samples of a non-periodic record carry start-up error. A pad
+    /// of several such time constants lets the transient die out inside the
+    /// extension; `x` must be longer than `padlen`.
+    pub fn filtfilt_in_place_padded(
+        &self,
+        x: &mut [f64],
+        padlen: usize,
+        scratch: &mut Vec<f64>,
+    ) -> Result<(), FilterError> {
+        if x.len() <= padlen {
+            return Err(FilterError::TooShort {
+                len: x.len(),
+                padlen,
+            });
+        }
         check_finite_input(x)?;
-        let edge = self.padlen;
-        odd_extend(x, edge, scratch);
+        odd_extend(x, padlen, scratch);
         let first = scratch[0];
         self.pass(scratch, first, false);
         let last = scratch[scratch.len() - 1];
         self.pass(scratch, last, true);
         let n = x.len();
-        x.copy_from_slice(&scratch[edge..edge + n]);
+        x.copy_from_slice(&scratch[padlen..padlen + n]);
         Ok(())
     }
 
