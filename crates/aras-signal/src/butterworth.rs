@@ -132,7 +132,10 @@ fn is_real(c: &Complex64) -> bool {
 fn cplxreal(values: &[Complex64]) -> Vec<Complex64> {
     let tol = 100.0 * f64::EPSILON;
     let mut v = values.to_vec();
-    v.sort_by(|a, b| a.re.total_cmp(&b.re).then(a.im.abs().total_cmp(&b.im.abs())));
+    v.sort_by(|a, b| {
+        a.re.total_cmp(&b.re)
+            .then(a.im.abs().total_cmp(&b.im.abs()))
+    });
     let (real, cplx): (Vec<Complex64>, Vec<Complex64>) =
         v.into_iter().partition(|c| c.im.abs() <= tol * c.norm());
     let mut pos: Vec<Complex64> = cplx.iter().copied().filter(|c| c.im > 0.0).collect();
@@ -315,7 +318,9 @@ mod tests {
             Butterworth::lowpass(2, 1.0, f64::NAN),
             Err(FilterError::InvalidSampleRate { .. })
         ));
-        let msg = Butterworth::lowpass(2, 600.0, 1000.0).unwrap_err().to_string();
+        let msg = Butterworth::lowpass(2, 600.0, 1000.0)
+            .unwrap_err()
+            .to_string();
         assert!(msg.contains("Nyquist frequency 500 Hz"), "{msg}");
     }
 }

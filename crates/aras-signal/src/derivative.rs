@@ -73,11 +73,13 @@ fn savgol_weights(half: usize, order: usize) -> Result<(Vec<f64>, Vec<f64>), Pro
     let m = half as f64;
     let a = DMatrix::from_fn(w, order + 1, |i, k| ((i as f64 - m) / m).powi(k as i32));
     let gram = a.transpose() * &a;
-    let inv = gram.try_inverse().ok_or_else(|| ProcessError::InvalidOption {
-        name: "derivative (Savitzky–Golay)",
-        value: format!("half_window = {half}, poly_order = {order}"),
-        reason: "the fit is singular; use a lower poly_order".into(),
-    })?;
+    let inv = gram
+        .try_inverse()
+        .ok_or_else(|| ProcessError::InvalidOption {
+            name: "derivative (Savitzky–Golay)",
+            value: format!("half_window = {half}, poly_order = {order}"),
+            reason: "the fit is singular; use a lower poly_order".into(),
+        })?;
     let rows = inv * a.transpose();
     // d/di = (1/m) d/dz; the second derivative of z^2 coefficient c2 is 2·c2.
     let d1 = (0..w).map(|j| rows[(1, j)] / m).collect();
@@ -141,7 +143,14 @@ pub fn derivatives(
                 edge: 0,
             })
         }
-        DerivativeMethod::CentralDifference => convolve(x, &[-0.5, 0.0, 0.5], &[1.0, -2.0, 1.0], dt, periodic, "central differences"),
+        DerivativeMethod::CentralDifference => convolve(
+            x,
+            &[-0.5, 0.0, 0.5],
+            &[1.0, -2.0, 1.0],
+            dt,
+            periodic,
+            "central differences",
+        ),
         DerivativeMethod::SavitzkyGolay {
             half_window,
             poly_order,
@@ -207,7 +216,10 @@ fn convolve(
                 .map(|(j, c)| c * x[(i + n + j - half) % n])
                 .sum()
         } else {
-            w.iter().zip(&x[i - half..=i + half]).map(|(c, v)| c * v).sum()
+            w.iter()
+                .zip(&x[i - half..=i + half])
+                .map(|(c, v)| c * v)
+                .sum()
         }
     };
     let range = if periodic { 0..n } else { half..n - half };
@@ -241,7 +253,10 @@ mod tests {
     }
 
     fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
-        a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
     }
 
     #[test]

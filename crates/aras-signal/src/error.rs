@@ -94,7 +94,9 @@ pub enum LogError {
         source: std::io::Error,
     },
     /// A line is not valid UTF-8 text.
-    #[error("{file}:{line}: the line is not valid UTF-8 text; save the log as UTF-8 (plain ASCII numbers)")]
+    #[error(
+        "{file}:{line}: the line is not valid UTF-8 text; save the log as UTF-8 (plain ASCII numbers)"
+    )]
     NotUtf8 {
         /// File name.
         file: String,
@@ -122,7 +124,9 @@ pub enum LogError {
         line: u64,
     },
     /// A header field is empty.
-    #[error("{file}:{line}:{column}: column {column} of the header has no name: name it or remove the empty field")]
+    #[error(
+        "{file}:{line}:{column}: column {column} of the header has no name: name it or remove the empty field"
+    )]
     EmptyColumnName {
         /// File name.
         file: String,
@@ -132,7 +136,9 @@ pub enum LogError {
         column: usize,
     },
     /// A column name appears twice.
-    #[error("{file}:{line}:{column}: column `{name}` appears twice (columns {first} and {column}): remove or rename one")]
+    #[error(
+        "{file}:{line}:{column}: column `{name}` appears twice (columns {first} and {column}): remove or rename one"
+    )]
     DuplicateColumn {
         /// File name.
         file: String,
@@ -146,7 +152,9 @@ pub enum LogError {
         name: String,
     },
     /// A required column is missing.
-    #[error("{file}:{line}: required column `{name}` is missing (the header has: {header}); {hint}")]
+    #[error(
+        "{file}:{line}: required column `{name}` is missing (the header has: {header}); {hint}"
+    )]
     MissingColumn {
         /// File name.
         file: String,
@@ -160,7 +168,9 @@ pub enum LogError {
         hint: String,
     },
     /// Only one of a pair of optional columns is present.
-    #[error("{file}:{line}: column `{present}` is present but `{missing}` is not: give both or neither")]
+    #[error(
+        "{file}:{line}: column `{present}` is present but `{missing}` is not: give both or neither"
+    )]
     UnpairedColumn {
         /// File name.
         file: String,
@@ -172,7 +182,9 @@ pub enum LogError {
         missing: String,
     },
     /// A row has a different number of fields than the header.
-    #[error("{file}:{line}: the row has {found} fields but the header has {expected}: every row needs one value per column")]
+    #[error(
+        "{file}:{line}: the row has {found} fields but the header has {expected}: every row needs one value per column"
+    )]
     FieldCount {
         /// File name.
         file: String,
@@ -200,7 +212,9 @@ pub enum LogError {
         hint: String,
     },
     /// A value is NaN or infinite.
-    #[error("{file}:{line}:{column}: `{name}` value {text:?} is not finite: logs must hold finite numbers only (drop or repair the row)")]
+    #[error(
+        "{file}:{line}:{column}: `{name}` value {text:?} is not finite: logs must hold finite numbers only (drop or repair the row)"
+    )]
     NonFinite {
         /// File name.
         file: String,
@@ -263,7 +277,9 @@ pub enum LogError {
         tolerance: f64,
     },
     /// Angle columns hold degrees.
-    #[error("{file}: angles look like degrees (max |{name}| = {max:.1}): convert to radians (largest value on line {line})")]
+    #[error(
+        "{file}: angles look like degrees (max |{name}| = {max:.1}): convert to radians (largest value on line {line})"
+    )]
     Degrees {
         /// File name.
         file: String,

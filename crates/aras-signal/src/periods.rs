@@ -46,13 +46,25 @@ pub fn average_periods(
         reason: reason.into(),
     };
     if !(period_s.is_finite() && period_s > 0.0) {
-        return Err(bad("period", period_s, "the period must be a positive number of seconds"));
+        return Err(bad(
+            "period",
+            period_s,
+            "the period must be a positive number of seconds",
+        ));
     }
     if !(settling_s.is_finite() && settling_s >= 0.0) {
-        return Err(bad("settling_s", settling_s, "the settling time must be ≥ 0 s"));
+        return Err(bad(
+            "settling_s",
+            settling_s,
+            "the settling time must be ≥ 0 s",
+        ));
     }
     if !(dt.is_finite() && dt > 0.0) {
-        return Err(bad("sample step", dt, "the step must be a positive number of seconds"));
+        return Err(bad(
+            "sample step",
+            dt,
+            "the step must be a positive number of seconds",
+        ));
     }
     let n = channels.first().map_or(0, |c| c.len());
     let exact = period_s / dt;
@@ -160,7 +172,11 @@ mod tests {
         // The RMS of 4000 Gaussian samples estimates σ/√N with a relative
         // standard error of 1/√(2·4000) ≈ 1.1 %; 6 % is more than 5 standard
         // errors, yet a reduction by √(N/2) or √(2N) would be caught.
-        assert!((resid.sqrt() / expected - 1.0).abs() < 0.06, "{} vs {expected}", resid.sqrt());
+        assert!(
+            (resid.sqrt() / expected - 1.0).abs() < 0.06,
+            "{} vs {expected}",
+            resid.sqrt()
+        );
         // Each period's deviation from the average is the noise itself.
         assert!((avg.spread_rms[0] / sigma - 1.0).abs() < 0.1);
     }

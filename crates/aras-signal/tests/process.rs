@@ -5,8 +5,8 @@ use std::f64::consts::TAU;
 
 use aras_kin::{Geometry, evaluate, inverse};
 use aras_signal::{
-    DerivativeMethod, FilterSpec, PeriodSource, ProcessError, ProcessOptions, ReadOptions,
-    process, read_log_from,
+    DerivativeMethod, FilterSpec, PeriodSource, ProcessError, ProcessOptions, ReadOptions, process,
+    read_log_from,
 };
 use nalgebra::Vector2;
 
@@ -57,12 +57,20 @@ fn log_text(periods: usize, with_derivatives: bool) -> String {
 }
 
 fn max_err(got: &[f64], t: &[f64], f: impl Fn(f64) -> f64) -> f64 {
-    got.iter().zip(t).map(|(g, &t)| (g - f(t)).abs()).fold(0.0, f64::max)
+    got.iter()
+        .zip(t)
+        .map(|(g, &t)| (g - f(t)).abs())
+        .fold(0.0, f64::max)
 }
 
 #[test]
 fn periodic_record_without_filter_is_exact() {
-    let log = read_log_from(log_text(3, false).as_bytes(), "p.csv", &ReadOptions::default()).unwrap();
+    let log = read_log_from(
+        log_text(3, false).as_bytes(),
+        "p.csv",
+        &ReadOptions::default(),
+    )
+    .unwrap();
     let opts = ProcessOptions {
         filter: None,
         period: PeriodSource::Seconds(PERIOD),
@@ -73,7 +81,14 @@ fn periodic_record_without_filter_is_exact() {
     assert_eq!(s.len(), 2000);
     assert_eq!(out.summary.derivative, DerivativeMethod::Spectral);
     let p = out.summary.periods.as_ref().unwrap();
-    assert_eq!((p.periods_averaged, p.samples_per_period, out.summary.samples_dropped), (3, 2000, 0));
+    assert_eq!(
+        (
+            p.periods_averaged,
+            p.samples_per_period,
+            out.summary.samples_dropped
+        ),
+        (3, 2000, 0)
+    );
     // The logged θ are exact to ~1e-16: averaging identical periods, spectral
     // derivatives and the Jacobian keep X to 1e-12, Ẋ to 1e-9 (×ω ≈ 10),
     // Ẍ to 1e-7 (×ω² ≈ 100, and J⁻¹ with |K| ≈ 0.8).
@@ -85,12 +100,20 @@ fn periodic_record_without_filter_is_exact() {
     // τ passes unchanged (no filter) and θ̇ = J Ẋ holds sample by sample.
     assert!(max_err(&s.tau[0], &s.t, |t| 0.3 * trajectory(t)[2][0]) < 1e-12);
     let serialized = serde_json::to_string(&out.summary).unwrap();
-    assert!(serialized.contains("\"periods_averaged\":3"), "{serialized}");
+    assert!(
+        serialized.contains("\"periods_averaged\":3"),
+        "{serialized}"
+    );
 }
 
 #[test]
 fn default_filter_barely_touches_the_dynamics() {
-    let log = read_log_from(log_text(2, false).as_bytes(), "f.csv", &ReadOptions::default()).unwrap();
+    let log = read_log_from(
+        log_text(2, false).as_bytes(),
+        "f.csv",
+        &ReadOptions::default(),
+    )
+    .unwrap();
     let opts = ProcessOptions {
         period: PeriodSource::Seconds(PERIOD),
         ..ProcessOptions::default()
@@ -111,7 +134,12 @@ fn default_filter_barely_touches_the_dynamics() {
 
 #[test]
 fn non_periodic_record_uses_central_differences_and_drops_edges() {
-    let log = read_log_from(log_text(1, false).as_bytes(), "n.csv", &ReadOptions::default()).unwrap();
+    let log = read_log_from(
+        log_text(1, false).as_bytes(),
+        "n.csv",
+        &ReadOptions::default(),
+    )
+    .unwrap();
     let opts = ProcessOptions {
         period: PeriodSource::Off,
         ..ProcessOptions::default()
@@ -129,14 +157,21 @@ fn non_periodic_record_uses_central_differences_and_drops_edges() {
     let s = &out.samples;
     let mid = 400..1600;
     for c in 0..2 {
-        let e = max_err(&s.x_dot[c][mid.clone()], &s.t[mid.clone()], |t| trajectory(t)[1][c]);
+        let e = max_err(&s.x_dot[c][mid.clone()], &s.t[mid.clone()], |t| {
+            trajectory(t)[1][c]
+        });
         assert!(e < 1e-4, "{e}");
     }
 }
 
 #[test]
 fn logged_derivatives_are_used_when_asked() {
-    let log = read_log_from(log_text(1, true).as_bytes(), "d.csv", &ReadOptions::default()).unwrap();
+    let log = read_log_from(
+        log_text(1, true).as_bytes(),
+        "d.csv",
+        &ReadOptions::default(),
+    )
+    .unwrap();
     let opts = ProcessOptions {
         filter: None,
         period: PeriodSource::Off,
@@ -145,7 +180,10 @@ fn logged_derivatives_are_used_when_asked() {
     };
     let out = process(&log, &opts, &Geometry::aras_diamond()).unwrap();
     assert_eq!(out.samples.len(), 2000);
-    assert_eq!(out.summary.derivative_source, "logged dtheta/ddtheta columns");
+    assert_eq!(
+        out.summary.derivative_source,
+        "logged dtheta/ddtheta columns"
+    );
     let s = &out.samples;
     for c in 0..2 {
         assert!(max_err(&s.x_dot[c], &s.t, |t| trajectory(t)[1][c]) < 1e-12);
@@ -157,12 +195,21 @@ fn logged_derivatives_are_used_when_asked() {
         ..ProcessOptions::default()
     };
     let out = process(&log, &opts, &Geometry::aras_diamond()).unwrap();
-    assert!(out.notes.iter().any(|n| n.contains("logged derivative columns ignored")));
+    assert!(
+        out.notes
+            .iter()
+            .any(|n| n.contains("logged derivative columns ignored"))
+    );
 }
 
 #[test]
 fn wrong_period_is_a_clear_error() {
-    let log = read_log_from(log_text(3, false).as_bytes(), "w.csv", &ReadOptions::default()).unwrap();
+    let log = read_log_from(
+        log_text(3, false).as_bytes(),
+        "w.csv",
+        &ReadOptions::default(),
+    )
+    .unwrap();
     let opts = ProcessOptions {
         period: PeriodSource::Seconds(1.5),
         ..ProcessOptions::default()
@@ -173,11 +220,15 @@ fn wrong_period_is_a_clear_error() {
     assert!(m.contains("differs from the average period by"), "{m}");
     assert!(m.contains("not periodic with period 1.5 s"), "{m}");
     let opts = ProcessOptions {
-        filter: Some(FilterSpec { order: 4, cutoff_hz: 800.0 }),
+        filter: Some(FilterSpec {
+            order: 4,
+            cutoff_hz: 800.0,
+        }),
         period: PeriodSource::Off,
         ..ProcessOptions::default()
     };
-    let m = process(&log, &opts, &Geometry::aras_diamond()).unwrap_err().to_string();
+    let m = process(&log, &opts, &Geometry::aras_diamond())
+        .unwrap_err()
+        .to_string();
     assert!(m.contains("cut-off 800 Hz is invalid"), "{m}");
 }
-

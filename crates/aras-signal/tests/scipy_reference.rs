@@ -31,8 +31,10 @@ fn max_err(a: &[f64], b: &[f64]) -> f64 {
 
 // The contract is 1e-10. The design is a handful of trigonometric and
 // complex operations, and filtering recurses over a few hundred samples;
-// both accumulate only rounding (observed ≤ 1e-13), so 1e-10 is tight yet
-// leaves room for a different libm.
+// both accumulate only rounding: the SOS results agree to 1e-13 (checked by
+// lowering the tolerance), the 'ba' form to somewhat less because its
+// polynomial coefficients amplify rounding. 1e-10 is tight yet leaves room
+// for a different libm.
 const TOL: f64 = 1e-10;
 
 #[test]
@@ -46,13 +48,23 @@ fn butterworth_sections_match_scipy() {
         let expected: Vec<Vec<f64>> = case["sos"].as_array().unwrap().iter().map(vec_of).collect();
         assert_eq!(sos.sections().len(), expected.len(), "order {order}");
         for (got, want) in sos.sections().iter().zip(&expected) {
-            assert!(max_err(got, want) < TOL, "order {order} fc {fc}: {got:?} vs {want:?}");
+            assert!(
+                max_err(got, want) < TOL,
+                "order {order} fc {fc}: {got:?} vs {want:?}"
+            );
         }
         let zi: Vec<Vec<f64>> = case["zi"].as_array().unwrap().iter().map(vec_of).collect();
         for (got, want) in sos.steady_state().iter().zip(&zi) {
-            assert!(max_err(got, want) < TOL, "zi order {order}: {got:?} vs {want:?}");
+            assert!(
+                max_err(got, want) < TOL,
+                "zi order {order}: {got:?} vs {want:?}"
+            );
         }
-        assert_eq!(sos.padlen() as u64, case["padlen"].as_u64().unwrap(), "padlen order {order}");
+        assert_eq!(
+            sos.padlen() as u64,
+            case["padlen"].as_u64().unwrap(),
+            "padlen order {order}"
+        );
     }
 }
 
@@ -70,14 +82,21 @@ fn sosfiltfilt_matches_scipy() {
             let y = vec_of(&s["y"]);
             let got = sos.filtfilt(&x).unwrap();
             let e = max_err(&got, &y);
-            assert!(e < TOL, "order {order} fc {fc} len {}: error {e:e}", x.len());
+            assert!(
+                e < TOL,
+                "order {order} fc {fc} len {}: error {e:e}",
+                x.len()
+            );
             checked += 1;
         }
         // One sample shorter than the shortest accepted: scipy raises too.
         let padlen = sos.padlen();
         assert_eq!(
             sos.filtfilt(&vec![1.0; padlen]).unwrap_err(),
-            FilterError::TooShort { len: padlen, padlen }
+            FilterError::TooShort {
+                len: padlen,
+                padlen
+            }
         );
     }
     assert_eq!(checked, 27);

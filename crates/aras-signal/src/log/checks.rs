@@ -95,7 +95,10 @@ impl fmt::Display for Warning {
                 if *more_spans > 0 {
                     write!(f, " and {more_spans} more spans")?;
                 }
-                write!(f, "; samples there understate the true torque: exclude them or lower the excitation")
+                write!(
+                    f,
+                    "; samples there understate the true torque: exclude them or lower the excitation"
+                )
             }
             Warning::PeriodSpread { channel, relative } => write!(
                 f,
@@ -325,12 +328,11 @@ impl Checks {
                 a.line_of_max_abs = line;
             }
         }
-        for c in 0..2 {
-            let r = &mut self.tau_range[c];
-            r[0] = r[0].min(tau[c]);
-            r[1] = r[1].max(tau[c]);
-            for f in &mut self.flat[c] {
-                f.push(tau[c], self.rows, t, line, self.saturation_samples);
+        for ((r, flat), &v) in self.tau_range.iter_mut().zip(&mut self.flat).zip(&tau) {
+            r[0] = r[0].min(v);
+            r[1] = r[1].max(v);
+            for f in flat {
+                f.push(v, self.rows, t, line, self.saturation_samples);
             }
         }
         self.rows += 1;

@@ -148,7 +148,10 @@ impl Layout {
         let angles = if has(THETA[0]) || has(THETA[1]) {
             for s in THETA {
                 if !has(s) {
-                    return Err(missing(NAMES[s], "give both joint angles theta1, theta2 (rad)"));
+                    return Err(missing(
+                        NAMES[s],
+                        "give both joint angles theta1, theta2 (rad)",
+                    ));
                 }
             }
             used[THETA[0]] = true;
@@ -158,12 +161,14 @@ impl Layout {
             }
             AngleSource::Theta
         } else if has_enc {
-            let cpr = sensors.counts_per_rev.ok_or_else(|| LogError::MissingSensor {
-                file: file.into(),
-                columns: "enc1, enc2".into(),
-                key: "sensors.counts_per_rev".into(),
-                sidecar: sidecar_name.into(),
-            })?;
+            let cpr = sensors
+                .counts_per_rev
+                .ok_or_else(|| LogError::MissingSensor {
+                    file: file.into(),
+                    columns: "enc1, enc2".into(),
+                    key: "sensors.counts_per_rev".into(),
+                    sidecar: sidecar_name.into(),
+                })?;
             let gear = sensors.gear_ratios.ok_or_else(|| LogError::MissingSensor {
                 file: file.into(),
                 columns: "enc1, enc2".into(),
@@ -192,7 +197,10 @@ impl Layout {
         let torques = if has(TAU_[0]) || has(TAU_[1]) {
             for s in TAU_ {
                 if !has(s) {
-                    return Err(missing(NAMES[s], "give both joint torques tau1, tau2 (N·m)"));
+                    return Err(missing(
+                        NAMES[s],
+                        "give both joint torques tau1, tau2 (N·m)",
+                    ));
                 }
             }
             used[TAU_[0]] = true;
@@ -202,12 +210,14 @@ impl Layout {
             }
             TorqueSource::Tau
         } else if has_i {
-            let kt = sensors.torque_constants.ok_or_else(|| LogError::MissingSensor {
-                file: file.into(),
-                columns: "i1, i2".into(),
-                key: "sensors.torque_constants".into(),
-                sidecar: sidecar_name.into(),
-            })?;
+            let kt = sensors
+                .torque_constants
+                .ok_or_else(|| LogError::MissingSensor {
+                    file: file.into(),
+                    columns: "i1, i2".into(),
+                    key: "sensors.torque_constants".into(),
+                    sidecar: sidecar_name.into(),
+                })?;
             let gear = sensors.gear_ratios.ok_or_else(|| LogError::MissingSensor {
                 file: file.into(),
                 columns: "i1, i2".into(),
@@ -253,12 +263,7 @@ impl Layout {
         }
         let slot_of = names
             .iter()
-            .map(|n| {
-                NAMES
-                    .iter()
-                    .position(|s| s == n)
-                    .filter(|&slot| used[slot])
-            })
+            .map(|n| NAMES.iter().position(|s| s == n).filter(|&slot| used[slot]))
             .collect();
         Ok(Self {
             fields: names.len(),

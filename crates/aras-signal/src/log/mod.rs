@@ -82,7 +82,11 @@ impl ReadOptions {
             reason: reason.into(),
         };
         if self.min_rows < 2 {
-            return Err(bad("min_rows", self.min_rows.to_string(), "at least 2 rows are needed"));
+            return Err(bad(
+                "min_rows",
+                self.min_rows.to_string(),
+                "at least 2 rows are needed",
+            ));
         }
         if !(self.step_tolerance.is_finite() && self.step_tolerance > 0.0) {
             return Err(bad(
@@ -94,7 +98,11 @@ impl ReadOptions {
         if let Some(s) = self.nominal_step
             && !(s.is_finite() && s > 0.0)
         {
-            return Err(bad("nominal_step", s.to_string(), "give a positive step in seconds"));
+            return Err(bad(
+                "nominal_step",
+                s.to_string(),
+                "give a positive step in seconds",
+            ));
         }
         if self.saturation_samples < 2 {
             return Err(bad(

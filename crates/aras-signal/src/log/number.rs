@@ -13,9 +13,18 @@ const POW10: [f64; 23] = [
 ];
 
 /// Parses a trimmed field; `None` if it is not a number.
+///
+/// Fields longer than 17 bytes cannot take the fast path (more than 15–16
+/// digits), so they go straight to the standard parser instead of being
+/// scanned twice.
 #[inline]
 pub(crate) fn parse_f64(s: &[u8]) -> Option<f64> {
-    fast(s).or_else(|| std::str::from_utf8(s).ok()?.parse().ok())
+    if s.len() <= 17
+        && let Some(v) = fast(s)
+    {
+        return Some(v);
+    }
+    std::str::from_utf8(s).ok()?.parse().ok()
 }
 
 #[inline]
@@ -36,14 +45,18 @@ fn fast(s: &[u8]) -> Option<f64> {
     let mut digits = 0u32;
     let mut exp: i64 = 0;
     while i < s.len() && s[i].is_ascii_digit() {
-        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(s[i] - b'0'));
+        mantissa = mantissa
+            .wrapping_mul(10)
+            .wrapping_add(u64::from(s[i] - b'0'));
         digits += 1;
         i += 1;
     }
     if i < s.len() && s[i] == b'.' {
         i += 1;
         while i < s.len() && s[i].is_ascii_digit() {
-            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(s[i] - b'0'));
+            mantissa = mantissa
+                .wrapping_mul(10)
+                .wrapping_add(u64::from(s[i] - b'0'));
             digits += 1;
             exp -= 1;
             i += 1;
@@ -96,13 +109,31 @@ mod tests {
     #[test]
     fn parses_like_std() {
         for s in [
-            "0", "-0", "1", "+1.5", "0.001", "123.456e-3", "1E5", ".5", "5.", "-7.25e+2",
-            "0.1234567890123456", "3.141592653589793", "12345678901234567890", "1e300",
-            "4.9e-324", "inf", "-inf", "NaN",
+            "0",
+            "-0",
+            "1",
+            "+1.5",
+            "0.001",
+            "123.456e-3",
+            "1E5",
+            ".5",
+            "5.",
+            "-7.25e+2",
+            "0.1234567890123456",
+            "3.141592653589793",
+            "12345678901234567890",
+            "1e300",
+            "4.9e-324",
+            "inf",
+            "-inf",
+            "NaN",
         ] {
             let ours = parse_f64(s.as_bytes()).unwrap();
             let std: f64 = s.parse().unwrap();
-            assert!(ours == std || (ours.is_nan() && std.is_nan()), "{s}: {ours} vs {std}");
+            assert!(
+                ours == std || (ours.is_nan() && std.is_nan()),
+                "{s}: {ours} vs {std}"
+            );
         }
         for s in ["", "-", "1.2.3", "abc", "1e", "1,5", "0x10", "1 2", ";"] {
             assert_eq!(parse_f64(s.as_bytes()), None, "{s}");
