@@ -6,9 +6,12 @@
 //! Householder QR that never skips a column (LAPACK `geqr2` semantics: a
 //! zero column gets a zero diagonal), applied blockwise in parallel
 //! ("tall-skinny QR") so that large stacked regressors stay fast. faer's fast
-//! blocked QR is still used where the matrix is known to have full rank.
+//! blocked QR factorises each block first; a block it reports as
+//! rank-deficient is redone with the plain QR.
 
-use faer::{Mat, MatRef};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::qr::no_pivoting::factor::{qr_in_place, qr_in_place_scratch, recommended_block_size};
+use faer::{Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
 /// Householder QR of a column-major `m × n` matrix, stored in place: `R` in
@@ -88,29 +91,43 @@ impl HouseholderQr {
     }
 }
 
-/// Rows per block of the tall-skinny QR: large enough to amortise the
-/// per-block `n × n` output, small enough to stay in cache.
-const TSQR_BLOCK_ROWS: usize = 2048;
+/// Rows per block of the tall-skinny QR: a 4096 × 24 block (800 kB) stays in
+/// the L2 cache while it is factorised; one QR over the whole tall matrix
+/// would stream it from memory once per column.
+const TSQR_BLOCK_ROWS: usize = 4096;
 
 /// Returns an upper-triangular `n × n` matrix `R` with `RᵀR = WᵀW` (to
 /// rounding), for any `W` (rank-deficient allowed), without forming `WᵀW`.
-/// Blocks of rows are factorised in parallel and their `R`s stacked and
-/// factorised again.
 pub(crate) fn compress(w: MatRef<'_, f64>) -> Mat<f64> {
-    let (m, n) = (w.nrows(), w.ncols());
+    compress_with(w.nrows(), w.ncols(), |start, mut block| {
+        let rows = block.nrows();
+        block.copy_from(w.subrows(start, rows));
+    })
+}
+
+/// Tall-skinny QR of an implicit `m × n` matrix whose rows `start..start+k`
+/// `fill` writes into a `k × n` block: blocks are factorised in parallel
+/// (faer's blocked QR, in cache; the never-skipping Householder QR when
+/// faer reports a rank-deficient block, since its `R` is then a staircase),
+/// their `R`s stacked and factorised again by the never-skipping QR.
+pub(crate) fn compress_with<F>(m: usize, n: usize, fill: F) -> Mat<f64>
+where
+    F: Fn(usize, MatMut<'_, f64>) + Sync,
+{
     let block = TSQR_BLOCK_ROWS.max(4 * n);
     let starts: Vec<usize> = (0..m).step_by(block.max(1)).collect();
     let rs: Vec<Mat<f64>> = starts
         .par_iter()
         .map(|&s| {
             let rows = block.min(m - s);
-            let mut data = Vec::with_capacity(rows * n);
-            for j in 0..n {
-                for i in s..s + rows {
-                    data.push(w[(i, j)]);
-                }
-            }
-            HouseholderQr::new(data, rows, n).r()
+            let mut a = Mat::<f64>::zeros(rows, n);
+            fill(s, a.as_mut());
+            faer_block_r(a).unwrap_or_else(|| {
+                // faer overwrote the block: fill it again for the plain QR.
+                let mut a = Mat::<f64>::zeros(rows, n);
+                fill(s, a.as_mut());
+                plain_block_r(&a)
+            })
         })
         .collect();
     let total: usize = rs.iter().map(Mat::nrows).sum();
@@ -127,6 +144,31 @@ pub(crate) fn compress(w: MatRef<'_, f64>) -> Mat<f64> {
     };
     // Pad to n × n so callers always get a square factor.
     Mat::from_fn(n, n, |i, j| if i < stacked.nrows() { stacked[(i, j)] } else { 0.0 })
+}
+
+/// `R` factor (`min(rows, n) × n`) of one block by faer's QR, or `None` if
+/// faer skipped a column (its factor is then not upper triangular).
+fn faer_block_r(mut a: Mat<f64>) -> Option<Mat<f64>> {
+    let (rows, n) = (a.nrows(), a.ncols());
+    let k = rows.min(n);
+    if k == 0 {
+        return Some(Mat::zeros(0, n));
+    }
+    let bs = recommended_block_size::<f64>(rows, n);
+    let mut h = Mat::<f64>::zeros(bs, k);
+    let mut mem = MemBuffer::new(qr_in_place_scratch::<f64>(rows, n, bs, Par::Seq, Default::default()));
+    let info = qr_in_place(a.as_mut(), h.as_mut(), Par::Seq, MemStack::new(&mut mem), Default::default());
+    (info.rank == k).then(|| Mat::from_fn(k, n, |i, j| if i <= j { a[(i, j)] } else { 0.0 }))
+}
+
+/// `R` factor of one block by the never-skipping Householder QR.
+fn plain_block_r(a: &Mat<f64>) -> Mat<f64> {
+    let (rows, n) = (a.nrows(), a.ncols());
+    let mut data = Vec::with_capacity(rows * n);
+    for j in 0..n {
+        data.extend((0..rows).map(|i| a[(i, j)]));
+    }
+    HouseholderQr::new(data, rows, n).r()
 }
 
 /// Solves `R x = b` in place for upper-triangular, non-singular `R` (`n × n`).

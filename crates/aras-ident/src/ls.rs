@@ -1,6 +1,7 @@
 //! Ordinary and weighted least squares (62)–(66) through one QR.
 //!
-//! The stacked base regressor and the torques are factorised together,
+//! The stacked base regressor and the torques are factorised together (a
+//! tall-skinny QR: blocks of rows in parallel, in cache),
 //! `[W_b | T] = Q [[R, z], [0, ρ]]`, never through the normal equations
 //! (which would square the condition number). Everything follows from the
 //! small factor: `β̂ = R⁻¹ z`, the residual norm `|ρ|`, the covariance
@@ -9,9 +10,7 @@
 //! `‖W_b K β − T‖² = ‖R K β − z‖² + ρ²` ([`ReducedLs`]), whose size no longer
 //! depends on the number of samples.
 
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::qr::no_pivoting::factor::{qr_in_place, qr_in_place_scratch, recommended_block_size};
-use faer::{Mat, MatRef, Par};
+use faer::{Mat, MatRef};
 use serde::Serialize;
 
 use crate::base::DEFAULT_RANK_TOLERANCE;
@@ -95,26 +94,23 @@ impl ReducedLs {
         }
         check_finite_mat("regressor", w, &names)?;
         check_finite_vec("torque vector T", t)?;
-        let wt = |i: usize| weights.map_or(1.0, |v| v[i]);
-        let augmented =
-            || Mat::from_fn(m, b + 1, |i, j| wt(i) * if j < b { w[(i, j)] } else { t[i] });
-        // Fast path: faer's blocked, parallel QR. It skips columns it deems
-        // dependent (then its R is a staircase), so fall back to the
-        // never-skipping tall-skinny QR when it reports less than full rank
-        // (rank-deficient data, or T exactly in the span of W_b).
-        let mut a = augmented();
-        let bs = recommended_block_size::<f64>(m, b + 1);
-        let mut h = Mat::<f64>::zeros(bs, b + 1);
-        let par = Par::rayon(0);
-        let mut mem =
-            MemBuffer::new(qr_in_place_scratch::<f64>(m, b + 1, bs, par, Default::default()));
-        let info = qr_in_place(a.as_mut(), h.as_mut(), par, MemStack::new(&mut mem), Default::default());
-        let raug = if info.rank == b + 1 {
-            Mat::from_fn(b + 1, b + 1, |i, j| if i <= j { a[(i, j)] } else { 0.0 })
-        } else {
-            drop(a);
-            crate::dense::compress(augmented().as_ref())
-        };
+        // Tall-skinny QR of [W | T] (rows scaled by the weights), block by
+        // block in cache and in parallel; see `dense::compress_with`.
+        let raug = crate::dense::compress_with(m, b + 1, |start, mut blk| {
+            let rows = blk.nrows();
+            blk.as_mut().subcols_mut(0, b).copy_from(w.subrows(start, rows));
+            for i in 0..rows {
+                blk[(i, b)] = t[start + i];
+            }
+            if let Some(v) = weights {
+                for j in 0..=b {
+                    let mut col = blk.as_mut().col_mut(j);
+                    for i in 0..rows {
+                        col[i] *= v[start + i];
+                    }
+                }
+            }
+        });
         let r = Mat::from_fn(b, b, |i, j| raug[(i, j)]);
         let z = (0..b).map(|i| raug[(i, b)]).collect();
         let rss = raug[(b, b)] * raug[(b, b)];
