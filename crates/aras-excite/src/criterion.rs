@@ -1,0 +1,341 @@
+//! Design criteria on the stacked base regressor and their exact gradients.
+//!
+//! Along a trajectory sampled at `t_1 … t_N` the regressor rows stack into
+//! `W` (`2N × n`, actuator-major: rows `0..N` actuator 1, `N..2N` actuator 2),
+//! and the base regressor is `W_b = W E` for a base projection `E` (`n × b`,
+//! spec (59)–(61)).
+//!
+//! * [`Criterion::Condition`]: the condition number `κ = σ_max/σ_min` of the
+//!   column-scaled `W_s = W_b D`, `D = diag(1/‖W_b e_j‖)` (spec §5). Scaling
+//!   makes `κ` independent of parameter units. The optimiser minimises
+//!   `ln κ` (same minimiser, better scaled); its gradient follows from
+//!   `dσ_i = u_iᵀ dW_s v_i`, including the derivative of the scaling:
+//!   `dσ_i = Σ_j (v_ij u_i/‖w_j‖ − σ_i v_ij² w_j/‖w_j‖²)ᵀ dw_j`.
+//! * [`Criterion::DOptimal`]: `−ln det(W_bᵀ W_b / N)`, minus the log-volume
+//!   of the information matrix (unscaled: the minimiser does not depend on
+//!   parameter units since scaling a column only adds a constant), gradient
+//!   `−2 U Σ⁻¹ Vᵀ`.
+//!
+//! The adjoint `G = ∂c/∂W_b` is pulled back to the full regressor (`G Eᵀ`),
+//! contracted per sample with the dual-number derivatives `∂Y/∂(X, Ẋ, Ẍ)`,
+//! and chained through the linear maps from the decision vector.
+
+use aras_kin::Scalar;
+use faer::Mat;
+use nalgebra::{DMatrix, Vector2};
+use num_dual::DualSVec64;
+
+use crate::error::ExciteError;
+use crate::param::Grid;
+use crate::regressor::Regressor;
+
+/// What the design minimises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Criterion {
+    /// Condition number of the column-scaled base regressor (spec §5).
+    #[default]
+    Condition,
+    /// D-optimality: `−ln det` of the (per-sample) information matrix
+    /// `W_bᵀ W_b / N`.
+    DOptimal,
+}
+
+/// Quality figures of the stacked base regressor along one trajectory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Assessment {
+    /// Condition number of the column-scaled base regressor.
+    pub condition_number: f64,
+    /// `−ln det(W_bᵀ W_b / N)` (unscaled base regressor).
+    pub d_criterion: f64,
+    /// Singular values of the column-scaled base regressor, largest first.
+    pub scaled_singular_values: Vec<f64>,
+    /// Number of samples `N` the regressor was stacked on.
+    pub samples: usize,
+}
+
+impl Assessment {
+    /// The value of `criterion` (κ itself for [`Criterion::Condition`]).
+    pub fn value(&self, criterion: Criterion) -> f64 {
+        match criterion {
+            Criterion::Condition => self.condition_number,
+            Criterion::DOptimal => self.d_criterion,
+        }
+    }
+}
+
+/// Number of dual directions: `(φ, γ, φ̇, γ̇, φ̈, γ̈)`.
+const DIRS: usize = 6;
+type D6 = DualSVec64<DIRS>;
+
+/// Checks the shape of a base projection against a regressor.
+pub(crate) fn check_projection(e: &DMatrix<f64>, columns: usize) -> Result<(), ExciteError> {
+    if e.nrows() != columns || e.ncols() == 0 {
+        return Err(ExciteError::ProjectionShape {
+            rows: e.nrows(),
+            cols: e.ncols(),
+            columns,
+        });
+    }
+    for (k, v) in e.iter().enumerate() {
+        crate::error::check_finite(
+            || format!("E[{}, {}]", k % e.nrows(), k / e.nrows()),
+            *v,
+        )?;
+    }
+    Ok(())
+}
+
+/// Buffers for evaluating a criterion on one grid (one per optimiser run;
+/// nothing is allocated per sample).
+pub(crate) struct Evaluator<'a, R: Regressor> {
+    reg: &'a R,
+    criterion: Criterion,
+    e: Mat<f64>,
+    /// Poses are clamped into this box before evaluation (the optimiser's
+    /// intermediate iterates may leave it; inside it everything is exact).
+    clamp: Option<(Vector2<f64>, Vector2<f64>)>,
+    samples: usize,
+    w: Mat<f64>,
+    dw: Vec<Mat<f64>>,
+    rows: Vec<f64>,
+    drows: Vec<D6>,
+    /// Per sample and direction, `⟨∂c/∂W, ∂W/∂z_k⟩`.
+    pub contraction: Vec<[f64; DIRS]>,
+}
+
+/// The outcome of one analysis of `W_b`.
+pub(crate) struct Analysis {
+    /// The optimiser's objective (ln κ, or −ln det).
+    pub objective: f64,
+    pub assessment: Assessment,
+}
+
+impl<'a, R: Regressor> Evaluator<'a, R> {
+    pub fn new(
+        reg: &'a R,
+        e: &DMatrix<f64>,
+        criterion: Criterion,
+        samples: usize,
+        clamp: Option<(Vector2<f64>, Vector2<f64>)>,
+    ) -> Self {
+        let n = reg.columns();
+        Self {
+            reg,
+            criterion,
+            e: Mat::from_fn(e.nrows(), e.ncols(), |i, j| e[(i, j)]),
+            clamp,
+            samples,
+            w: Mat::zeros(2 * samples, n),
+            dw: (0..DIRS).map(|_| Mat::zeros(2 * samples, n)).collect(),
+            rows: vec![0.0; 2 * n],
+            drows: vec![D6::from_re(0.0); 2 * n],
+            contraction: vec![[0.0; DIRS]; samples],
+        }
+    }
+
+    fn clamped(&self, x: Vector2<f64>) -> (Vector2<f64>, [bool; 2]) {
+        match self.clamp {
+            None => (x, [false; 2]),
+            Some((lo, hi)) => {
+                let c = Vector2::new(x[0].clamp(lo[0], hi[0]), x[1].clamp(lo[1], hi[1]));
+                (c, [c[0] != x[0], c[1] != x[1]])
+            }
+        }
+    }
+
+    fn fail(x: &Vector2<f64>, e: impl std::fmt::Display) -> ExciteError {
+        ExciteError::Regressor {
+            at: [x[0], x[1]],
+            message: e.to_string(),
+        }
+    }
+
+    /// Fills `W` (values only) from the states of every sample.
+    pub fn fill_values(
+        &mut self,
+        state: impl Fn(usize) -> [Vector2<f64>; 3],
+    ) -> Result<(), ExciteError> {
+        let n = self.reg.columns();
+        let ns = self.samples;
+        for s in 0..ns {
+            let [x, xd, xdd] = state(s);
+            let (x, _) = self.clamped(x);
+            self.rows.iter_mut().for_each(|v| *v = 0.0);
+            self.reg
+                .fill(&x, &xd, &xdd, &mut self.rows)
+                .map_err(|e| Self::fail(&x, e))?;
+            for r in 0..2 {
+                for c in 0..n {
+                    self.w[(r * ns + s, c)] = self.rows[r * n + c];
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Fills `W` and its derivatives `∂W/∂z_k` by dual numbers.
+    pub fn fill_derivatives(
+        &mut self,
+        state: impl Fn(usize) -> [Vector2<f64>; 3],
+    ) -> Result<(), ExciteError> {
+        let n = self.reg.columns();
+        let ns = self.samples;
+        for s in 0..ns {
+            let [x, xd, xdd] = state(s);
+            let (x, clamped) = self.clamped(x);
+            let seed = |v: f64, k: usize, fixed: bool| {
+                let d = D6::from_re(v);
+                if fixed { d } else { d.derivative(k) }
+            };
+            let xs = Vector2::new(seed(x[0], 0, clamped[0]), seed(x[1], 1, clamped[1]));
+            let xds = Vector2::new(seed(xd[0], 2, false), seed(xd[1], 3, false));
+            let xdds = Vector2::new(seed(xdd[0], 4, false), seed(xdd[1], 5, false));
+            self.drows.iter_mut().for_each(|v| *v = D6::from_re(0.0));
+            self.reg
+                .fill(&xs, &xds, &xdds, &mut self.drows)
+                .map_err(|e| Self::fail(&x, e))?;
+            for r in 0..2 {
+                for c in 0..n {
+                    let d = &self.drows[r * n + c];
+                    let row = r * ns + s;
+                    self.w[(row, c)] = d.value();
+                    match &d.eps.0 {
+                        Some(g) => {
+                            for k in 0..DIRS {
+                                self.dw[k][(row, c)] = g[k];
+                            }
+                        }
+                        None => {
+                            for k in 0..DIRS {
+                                self.dw[k][(row, c)] = 0.0;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Analyses the current `W`; with `adjoint`, also fills
+    /// [`contraction`](Self::contraction) (needs [`fill_derivatives`](Self::fill_derivatives)).
+    pub fn analyse(&mut self, adjoint: bool) -> Result<Analysis, ExciteError> {
+        let wb = &self.w * &self.e;
+        let b = wb.ncols();
+        let ns = self.samples;
+        let norms: Vec<f64> = (0..b).map(|j| wb.col(j).norm_l2()).collect();
+        let degenerate = |reason: String| ExciteError::Degenerate { reason };
+        if let Some(j) = norms.iter().position(|v| !(*v > 0.0) || !v.is_finite()) {
+            return Err(degenerate(format!(
+                "base column {j} is zero (or not finite) along the trajectory: the motion does \
+                 not excite it"
+            )));
+        }
+        let ws = Mat::from_fn(wb.nrows(), b, |i, j| wb[(i, j)] / norms[j]);
+        let svd_s = ws
+            .thin_svd()
+            .map_err(|e| degenerate(format!("SVD failed: {e:?}")))?;
+        let svd_b = wb
+            .thin_svd()
+            .map_err(|e| degenerate(format!("SVD failed: {e:?}")))?;
+        let ss: Vec<f64> = svd_s.S().column_vector().iter().copied().collect();
+        let sb: Vec<f64> = svd_b.S().column_vector().iter().copied().collect();
+        let (smax, smin) = (ss[0], ss[b - 1]);
+        let kappa = smax / smin;
+        let logdet: f64 = sb.iter().map(|s| (s * s / ns as f64).ln()).sum();
+        if !kappa.is_finite() || !logdet.is_finite() || !(smin > 0.0) {
+            return Err(degenerate(format!(
+                "the base regressor is rank-deficient along the trajectory (σ_min = {smin:.3e}): \
+                 some base parameter is not excited"
+            )));
+        }
+        let assessment = Assessment {
+            condition_number: kappa,
+            d_criterion: -logdet,
+            scaled_singular_values: ss.clone(),
+            samples: ns,
+        };
+        let objective = match self.criterion {
+            Criterion::Condition => kappa.ln(),
+            Criterion::DOptimal => -logdet,
+        };
+        if adjoint {
+            let g = match self.criterion {
+                Criterion::Condition => {
+                    let (u, v) = (svd_s.U(), svd_s.V());
+                    let mut g = Mat::<f64>::zeros(wb.nrows(), b);
+                    for (idx, scale) in [(0, 1.0 / smax), (b - 1, -1.0 / smin)] {
+                        let sigma = ss[idx];
+                        for j in 0..b {
+                            let vij = v[(j, idx)];
+                            let a = scale * vij / norms[j];
+                            let c = scale * sigma * vij * vij / (norms[j] * norms[j]);
+                            for r in 0..wb.nrows() {
+                                g[(r, j)] += a * u[(r, idx)] - c * wb[(r, j)];
+                            }
+                        }
+                    }
+                    g
+                }
+                Criterion::DOptimal => {
+                    let (u, v) = (svd_b.U(), svd_b.V());
+                    let scaled = Mat::from_fn(u.nrows(), b, |r, i| -2.0 * u[(r, i)] / sb[i]);
+                    &scaled * v.transpose()
+                }
+            };
+            let a = &g * self.e.transpose();
+            let n = a.ncols();
+            for s in 0..ns {
+                let mut acc = [0.0; DIRS];
+                for (k, dk) in self.dw.iter().enumerate() {
+                    let mut sum = 0.0;
+                    for r in 0..2 {
+                        let row = r * ns + s;
+                        for c in 0..n {
+                            sum += a[(row, c)] * dk[(row, c)];
+                        }
+                    }
+                    acc[k] = sum;
+                }
+                self.contraction[s] = acc;
+            }
+        }
+        Ok(Analysis {
+            objective,
+            assessment,
+        })
+    }
+
+    /// Objective at a decision vector on `grid` (values only).
+    pub fn objective(&mut self, grid: &Grid, p: &[f64]) -> Result<Analysis, ExciteError> {
+        self.fill_values(|s| grid.state(p, s))?;
+        self.analyse(false)
+    }
+
+    /// Objective and its exact gradient with respect to the decision vector.
+    pub fn gradient(
+        &mut self,
+        grid: &Grid,
+        p: &[f64],
+        grad: &mut [f64],
+    ) -> Result<Analysis, ExciteError> {
+        self.fill_derivatives(|s| grid.state(p, s))?;
+        let out = self.analyse(true)?;
+        let w = grid.layout.per_coord();
+        grad.iter_mut().for_each(|v| *v = 0.0);
+        for (s, c) in self.contraction.iter().enumerate() {
+            let (pos, vel, acc) = (
+                grid.row(&grid.pos, s),
+                grid.row(&grid.vel, s),
+                grid.row(&grid.acc, s),
+            );
+            for i in 0..2 {
+                let g = &mut grad[i * w..(i + 1) * w];
+                for m in 0..w {
+                    g[m] += c[i] * pos[m] + c[2 + i] * vel[m] + c[4 + i] * acc[m];
+                }
+            }
+        }
+        Ok(out)
+    }
+}
