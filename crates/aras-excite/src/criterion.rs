@@ -339,3 +339,118 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         Ok(out)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::constraints::{GridConstraints, Limits};
+    use crate::param::Layout;
+    use crate::test_support::{StandIn, base_projection};
+    use rand::rngs::Xoshiro256PlusPlus;
+    use rand::{RngExt, SeedableRng};
+
+    fn setup(l: usize) -> (Layout, Grid, GridConstraints) {
+        let layout = Layout {
+            harmonics: l,
+            omega_f: std::f64::consts::TAU / 10.0,
+        };
+        let cons = GridConstraints::new(layout, &Limits::paper(), 200);
+        (layout, Grid::new(layout, 60, 0.5), cons)
+    }
+
+    fn interior_point(cons: &GridConstraints, seed: u64) -> Vec<f64> {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let w = cons.grid.layout.per_coord();
+        let mut p: Vec<f64> = (0..2 * w)
+            .map(|k| if k % w == 0 { 0.0 } else { rng.random_range(-1.0..1.0) })
+            .collect();
+        cons.scale_to_fit(&mut p, true, true);
+        // Shrink to 80 % so finite-difference steps never reach the clamp.
+        for (k, v) in p.iter_mut().enumerate() {
+            if k % w != 0 {
+                *v *= 0.8;
+            }
+        }
+        p
+    }
+
+    /// The projection finds the stand-in's 10 independent columns and
+    /// `W E` has full rank on fresh data.
+    #[test]
+    fn stand_in_base_projection_has_rank_10() {
+        let reg = StandIn::default();
+        let e = base_projection(&reg, 300, 7);
+        assert_eq!((e.nrows(), e.ncols()), (12, 10));
+        let (_, grid, cons) = setup(5);
+        let p = interior_point(&cons, 3);
+        let mut ev = Evaluator::new(&reg, &e, Criterion::Condition, grid.len(), None);
+        let a = ev.objective(&grid, &p).unwrap().assessment;
+        assert!(a.condition_number.is_finite() && a.condition_number > 1.0);
+    }
+
+    /// Exact gradients agree with central differences. Step 1e-6 on
+    /// coefficients of order 0.1–1: truncation ~h²·|c'''| ≈ 1e-11, rounding
+    /// ~1e-16·|c|/h ≈ 1e-9 (the SVD is accurate to ~1e-15 relative), so a
+    /// 1e-6 bound relative to the largest gradient entry is tight yet robust
+    /// (dropping the column-scaling term of the gradient fails it by 3e-3).
+    #[test]
+    fn gradients_match_finite_differences() {
+        let reg = StandIn::default();
+        let e = base_projection(&reg, 300, 7);
+        for (criterion, l, seed) in [
+            (Criterion::Condition, 5, 1),
+            (Criterion::Condition, 2, 2),
+            (Criterion::DOptimal, 5, 3),
+            (Criterion::DOptimal, 1, 4),
+        ] {
+            let (layout, grid, cons) = setup(l);
+            let p = interior_point(&cons, seed);
+            let ws = Limits::paper().workspace;
+            let mut ev =
+                Evaluator::new(&reg, &e, criterion, grid.len(), Some((ws.min(), ws.max())));
+            let mut g = vec![0.0; layout.dim()];
+            let f0 = ev.gradient(&grid, &p, &mut g).unwrap().objective;
+            let f0v = ev.objective(&grid, &p).unwrap().objective;
+            assert!((f0 - f0v).abs() < 1e-12 * f0.abs().max(1.0));
+            let scale = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for k in 0..p.len() {
+                let h = 1e-6;
+                let mut pp = p.clone();
+                pp[k] += h;
+                let fp = ev.objective(&grid, &pp).unwrap().objective;
+                pp[k] -= 2.0 * h;
+                let fm = ev.objective(&grid, &pp).unwrap().objective;
+                let fd = (fp - fm) / (2.0 * h);
+                assert!(
+                    (fd - g[k]).abs() < 1e-6 * scale.max(1.0),
+                    "{criterion:?} L={l} k={k}: exact {} vs FD {fd}",
+                    g[k]
+                );
+            }
+        }
+    }
+
+    /// A wrong-shaped or non-finite projection is rejected by name.
+    #[test]
+    fn projection_is_checked() {
+        let e = DMatrix::<f64>::zeros(11, 3);
+        assert!(check_projection(&e, 12).unwrap_err().to_string().contains("11×3"));
+        let mut e = DMatrix::<f64>::zeros(12, 3);
+        e[(2, 1)] = f64::NAN;
+        assert!(check_projection(&e, 12).unwrap_err().to_string().contains("E[2, 1]"));
+    }
+
+    /// Motionless trajectories cannot excite anything: a clear error.
+    #[test]
+    fn no_motion_is_degenerate() {
+        let reg = StandIn::default();
+        let e = base_projection(&reg, 300, 7);
+        let (_, grid, _) = setup(5);
+        let mut p = vec![0.0; 20];
+        p[0] = 1.5;
+        p[10] = 1.0;
+        let mut ev = Evaluator::new(&reg, &e, Criterion::Condition, grid.len(), None);
+        let err = ev.objective(&grid, &p).err().unwrap().to_string();
+        assert!(err.contains("degenerate"), "{err}");
+    }
+}

@@ -67,3 +67,10 @@ pub use fourier::{
     DEFAULT_HARMONICS, DEFAULT_OMEGA_F, FORMAT, FourierTrajectory, MotorRow, TaskRow, TaskState,
 };
 pub use regressor::Regressor;
+
+// Lets the shared test helpers name this crate the same way in unit tests,
+// integration tests and benches.
+#[cfg(test)]
+extern crate self as aras_excite;
+#[cfg(test)]
+pub(crate) mod test_support;
