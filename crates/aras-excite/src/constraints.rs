@@ -344,8 +344,13 @@ mod tests {
 
     #[test]
     fn margins_see_a_violation() {
-        let f = FourierTrajectory::new(1.0, [1.5, 1.0], [vec![5.0], vec![0.0]], [vec![0.0], vec![0.0]])
-            .unwrap();
+        let f = FourierTrajectory::new(
+            1.0,
+            [1.5, 1.0],
+            [vec![5.0], vec![0.0]],
+            [vec![0.0], vec![0.0]],
+        )
+        .unwrap();
         let m = Margins::measure(&f, &Limits::paper(), 100);
         assert!(m.velocity[0] < 0.0 && m.worst_relative < 0.0);
     }

@@ -77,10 +77,7 @@ pub(crate) fn check_projection(e: &DMatrix<f64>, columns: usize) -> Result<(), E
         });
     }
     for (k, v) in e.iter().enumerate() {
-        crate::error::check_finite(
-            || format!("E[{}, {}]", k % e.nrows(), k / e.nrows()),
-            *v,
-        )?;
+        crate::error::check_finite(|| format!("E[{}, {}]", k % e.nrows(), k / e.nrows()), *v)?;
     }
     Ok(())
 }
@@ -225,7 +222,7 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         let ns = self.samples;
         let norms: Vec<f64> = (0..b).map(|j| wb.col(j).norm_l2()).collect();
         let degenerate = |reason: String| ExciteError::Degenerate { reason };
-        if let Some(j) = norms.iter().position(|v| !(*v > 0.0) || !v.is_finite()) {
+        if let Some(j) = norms.iter().position(|v| v.is_nan() || *v <= 0.0 || !v.is_finite()) {
             return Err(degenerate(format!(
                 "base column {j} is zero (or not finite) along the trajectory: the motion does \
                  not excite it"
@@ -243,7 +240,7 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         let (smax, smin) = (ss[0], ss[b - 1]);
         let kappa = smax / smin;
         let logdet: f64 = sb.iter().map(|s| (s * s / ns as f64).ln()).sum();
-        if !kappa.is_finite() || !logdet.is_finite() || !(smin > 0.0) {
+        if !kappa.is_finite() || !logdet.is_finite() || smin.is_nan() || smin <= 0.0 {
             return Err(degenerate(format!(
                 "the base regressor is rank-deficient along the trajectory (σ_min = {smin:.3e}): \
                  some base parameter is not excited"
@@ -362,7 +359,13 @@ mod tests {
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
         let w = cons.grid.layout.per_coord();
         let mut p: Vec<f64> = (0..2 * w)
-            .map(|k| if k % w == 0 { 0.0 } else { rng.random_range(-1.0..1.0) })
+            .map(|k| {
+                if k % w == 0 {
+                    0.0
+                } else {
+                    rng.random_range(-1.0..1.0)
+                }
+            })
             .collect();
         cons.scale_to_fit(&mut p, true, true);
         // Shrink to 80 % so finite-difference steps never reach the clamp.
@@ -434,10 +437,20 @@ mod tests {
     #[test]
     fn projection_is_checked() {
         let e = DMatrix::<f64>::zeros(11, 3);
-        assert!(check_projection(&e, 12).unwrap_err().to_string().contains("11×3"));
+        assert!(
+            check_projection(&e, 12)
+                .unwrap_err()
+                .to_string()
+                .contains("11×3")
+        );
         let mut e = DMatrix::<f64>::zeros(12, 3);
         e[(2, 1)] = f64::NAN;
-        assert!(check_projection(&e, 12).unwrap_err().to_string().contains("E[2, 1]"));
+        assert!(
+            check_projection(&e, 12)
+                .unwrap_err()
+                .to_string()
+                .contains("E[2, 1]")
+        );
     }
 
     /// Motionless trajectories cannot excite anything: a clear error.

@@ -418,7 +418,12 @@ pub fn design<R: Regressor>(
         });
     };
     let trajectory = layout.trajectory(&outcomes[best_start].0)?;
-    let assessment = assess(regressor, projection, &trajectory, settings.criterion_points)?;
+    let assessment = assess(
+        regressor,
+        projection,
+        &trajectory,
+        settings.criterion_points,
+    )?;
     let margins = Margins::measure(
         &trajectory,
         &settings.limits,
@@ -491,7 +496,11 @@ fn run_start<R: Regressor>(
         SolverError::Cost("criterion evaluation failed")
     };
     let f = |u: &[f64], cost: &mut f64| -> FunctionCallResult {
-        *cost = ev.borrow_mut().objective(grid, u).map_err(record)?.objective;
+        *cost = ev
+            .borrow_mut()
+            .objective(grid, u)
+            .map_err(record)?
+            .objective;
         Ok(())
     };
     let df = |u: &[f64], grad: &mut [f64]| -> FunctionCallResult {
@@ -541,9 +550,7 @@ fn run_start<R: Regressor>(
         bounds,
         Some(set_c),
         Some(set_y),
-        |u: &[f64], xi: &[f64], cost: &mut f64| -> FunctionCallResult {
-            factory.psi(u, xi, cost)
-        },
+        |u: &[f64], xi: &[f64], cost: &mut f64| -> FunctionCallResult { factory.psi(u, xi, cost) },
         |u: &[f64], xi: &[f64], grad: &mut [f64]| -> FunctionCallResult {
             factory.d_psi(u, xi, grad)
         },

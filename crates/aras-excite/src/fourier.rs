@@ -45,7 +45,13 @@ impl TaskRow {
     pub fn to_array(&self) -> [f64; 7] {
         let s = &self.state;
         [
-            self.t, s.x[0], s.x[1], s.x_dot[0], s.x_dot[1], s.x_ddot[0], s.x_ddot[1],
+            self.t,
+            s.x[0],
+            s.x[1],
+            s.x_dot[0],
+            s.x_dot[1],
+            s.x_ddot[0],
+            s.x_ddot[1],
         ]
     }
 }
@@ -145,7 +151,7 @@ impl From<FourierTrajectory> for FourierJson {
 
 impl FourierTrajectory {
     /// A trajectory from its coefficients: base frequency `omega_f` (rad/s,
-    /// > 0), offsets `[φ0, γ0]` (rad), and per coordinate the `a` and `b`
+    /// positive), offsets `[φ0, γ0]` (rad), and per coordinate the `a` and `b`
     /// coefficients of harmonics 1..L (rad/s). Errors name the bad value.
     pub fn new(
         omega_f: f64,
@@ -188,7 +194,12 @@ impl FourierTrajectory {
     /// The motionless trajectory at `x0` with `harmonics` zero coefficients.
     pub fn at_rest(omega_f: f64, harmonics: usize, x0: Vector2<f64>) -> Result<Self, ExciteError> {
         let z = vec![0.0; harmonics];
-        Self::new(omega_f, [x0[0], x0[1]], [z.clone(), z.clone()], [z.clone(), z])
+        Self::new(
+            omega_f,
+            [x0[0], x0[1]],
+            [z.clone(), z.clone()],
+            [z.clone(), z],
+        )
     }
 
     /// Number of harmonics L.
@@ -393,7 +404,20 @@ mod tests {
 
     #[test]
     fn json_round_trip_is_exact() {
-        let f = traj(&[0.1, -0.2, 0.3, 0.4, 0.5, -0.6, 0.7, 0.8, 1.0 / 3.0, 0.2, 0.1, 0.0]);
+        let f = traj(&[
+            0.1,
+            -0.2,
+            0.3,
+            0.4,
+            0.5,
+            -0.6,
+            0.7,
+            0.8,
+            1.0 / 3.0,
+            0.2,
+            0.1,
+            0.0,
+        ]);
         let back = FourierTrajectory::from_json(&f.to_json()).unwrap();
         assert_eq!(back, f);
     }
@@ -420,7 +444,9 @@ mod tests {
         assert!(FourierTrajectory::new(0.0, [1.0, 1.0], one(), one()).is_err());
         assert!(FourierTrajectory::new(f64::NAN, [1.0, 1.0], one(), one()).is_err());
         assert!(FourierTrajectory::new(1.0, [f64::INFINITY, 1.0], one(), one()).is_err());
-        assert!(FourierTrajectory::new(1.0, [1.0, 1.0], [vec![], vec![]], [vec![], vec![]]).is_err());
+        assert!(
+            FourierTrajectory::new(1.0, [1.0, 1.0], [vec![], vec![]], [vec![], vec![]]).is_err()
+        );
         let e = FourierTrajectory::new(1.0, [1.0, 1.0], [vec![0.1], vec![f64::NAN]], one())
             .unwrap_err()
             .to_string();
@@ -430,7 +456,9 @@ mod tests {
     #[test]
     fn motor_samples_follow_the_kinematics() {
         let g = Geometry::aras_diamond();
-        let f = traj(&[0.1, -0.2, 0.1, 0.05, 0.2, -0.1, 0.1, 0.1, 0.05, 0.1, 0.1, 0.0]);
+        let f = traj(&[
+            0.1, -0.2, 0.1, 0.05, 0.2, -0.1, 0.1, 0.1, 0.05, 0.1, 0.1, 0.0,
+        ]);
         let rows = f.motor_samples(&g, &[0.0, 1.3, 4.0]).unwrap();
         for r in &rows {
             let s = f.eval(r.t);

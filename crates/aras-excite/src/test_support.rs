@@ -82,10 +82,7 @@ pub fn base_projection<R: Regressor>(reg: &R, samples: usize, seed: u64) -> DMat
     let mut rows = vec![0.0; 2 * n];
     for s in 0..samples {
         let mut r = |lo: f64, hi: f64| rng.random_range(lo..hi);
-        let x = Vector2::new(
-            r(ws.min()[0], ws.max()[0]),
-            r(ws.min()[1], ws.max()[1]),
-        );
+        let x = Vector2::new(r(ws.min()[0], ws.max()[0]), r(ws.min()[1], ws.max()[1]));
         let xd = Vector2::new(r(-3.0, 3.0), r(-3.0, 3.0));
         let xdd = Vector2::new(r(-10.0, 10.0), r(-10.0, 10.0));
         rows.iter_mut().for_each(|v| *v = 0.0);

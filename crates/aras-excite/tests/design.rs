@@ -41,7 +41,11 @@ fn design_is_feasible_and_better_than_random() {
     let random = random_feasible(&s, 100, 99).unwrap();
     let kappas: Vec<f64> = random
         .iter()
-        .map(|t| assess(&reg, &e, t, s.criterion_points).unwrap().condition_number)
+        .map(|t| {
+            assess(&reg, &e, t, s.criterion_points)
+                .unwrap()
+                .condition_number
+        })
         .collect();
     let med = median(kappas);
     println!(
@@ -70,7 +74,15 @@ fn design_is_deterministic() {
         ..quick()
     };
     let a = design(&reg, &e, &s).unwrap();
-    let b = design(&reg, &e, &DesignSettings { threads: 1, ..s.clone() }).unwrap();
+    let b = design(
+        &reg,
+        &e,
+        &DesignSettings {
+            threads: 1,
+            ..s.clone()
+        },
+    )
+    .unwrap();
     assert_eq!(a.trajectory, b.trajectory);
     assert_eq!(a.value, b.value);
     let c = design(&reg, &e, &DesignSettings { seed: 2, ..s }).unwrap();
@@ -103,17 +115,32 @@ fn err(s: DesignSettings) -> String {
 #[test]
 fn bad_settings_are_clear_errors() {
     let d = DesignSettings::default;
-    let e = err(DesignSettings { harmonics: 0, ..d() });
+    let e = err(DesignSettings {
+        harmonics: 0,
+        ..d()
+    });
     assert!(e.contains("harmonics = 0"), "{e}");
-    let e = err(DesignSettings { omega_f: 0.0, ..d() });
+    let e = err(DesignSettings {
+        omega_f: 0.0,
+        ..d()
+    });
     assert!(e.contains("omega_f = 0"), "{e}");
-    let e = err(DesignSettings { omega_f: -1.0, ..d() });
+    let e = err(DesignSettings {
+        omega_f: -1.0,
+        ..d()
+    });
     assert!(e.contains("omega_f = -1"), "{e}");
-    let e = err(DesignSettings { omega_f: f64::NAN, ..d() });
+    let e = err(DesignSettings {
+        omega_f: f64::NAN,
+        ..d()
+    });
     assert!(e.contains("omega_f is not finite"), "{e}");
     let e = err(DesignSettings { starts: 0, ..d() });
     assert!(e.contains("starts"), "{e}");
-    let e = err(DesignSettings { constraint_points: 10, ..d() });
+    let e = err(DesignSettings {
+        constraint_points: 10,
+        ..d()
+    });
     assert!(e.contains("constraint_points"), "{e}");
     let mut limits = Limits::paper();
     limits.max_accel = Vector2::new(f64::INFINITY, 1.0);
@@ -128,7 +155,13 @@ fn bad_settings_are_clear_errors() {
         Vector2::new(deg(200.0), deg(200.0)),
     )
     .unwrap();
-    let e = err(DesignSettings { limits: Limits { workspace: ws, ..Limits::paper() }, ..d() });
+    let e = err(DesignSettings {
+        limits: Limits {
+            workspace: ws,
+            ..Limits::paper()
+        },
+        ..d()
+    });
     assert!(e.contains("infeasible") && e.contains("unreachable"), "{e}");
 
     // A rate limit too small for any useful motion.
@@ -138,11 +171,23 @@ fn bad_settings_are_clear_errors() {
         Vector2::new(deg(200.0), deg(0.001)),
     )
     .unwrap();
-    let e = err(DesignSettings { limits: Limits { workspace: ws, ..Limits::paper() }, ..d() });
-    assert!(e.contains("gamma can move at most") && e.contains("velocity"), "{e}");
+    let e = err(DesignSettings {
+        limits: Limits {
+            workspace: ws,
+            ..Limits::paper()
+        },
+        ..d()
+    });
+    assert!(
+        e.contains("gamma can move at most") && e.contains("velocity"),
+        "{e}"
+    );
 
     // A projection that does not fit the regressor.
     let reg = StandIn::default();
     let e = design(&reg, &nalgebra::DMatrix::zeros(3, 2), &d()).unwrap_err();
-    assert!(matches!(e, ExciteError::ProjectionShape { rows: 3, .. }), "{e}");
+    assert!(
+        matches!(e, ExciteError::ProjectionShape { rows: 3, .. }),
+        "{e}"
+    );
 }
