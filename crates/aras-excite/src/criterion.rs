@@ -163,7 +163,7 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
                 .map_err(|e| Self::fail(&x, e))?;
             for r in 0..2 {
                 for c in 0..n {
-                    self.w[(r * ns + s, c)] = self.rows[r * n + c];
+                    self.w[(r * ns + s, c)] = self.rows[2 * c + r];
                 }
             }
         }
@@ -193,7 +193,7 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
                 .map_err(|e| Self::fail(&x, e))?;
             for r in 0..2 {
                 for c in 0..n {
-                    let d = &self.drows[r * n + c];
+                    let d = &self.drows[2 * c + r];
                     let row = r * ns + s;
                     self.w[(row, c)] = d.value();
                     match &d.eps.0 {

@@ -23,9 +23,10 @@ pub trait Regressor: Sync {
     /// Number of columns `n`.
     fn columns(&self) -> usize;
 
-    /// Writes `Y(X, Ẋ, Ẍ)` into `rows` (length `2n`, row-major: `rows[j]` is
-    /// actuator 1's entry of column `j`, `rows[n + j]` actuator 2's). `rows`
-    /// is zeroed before each call. Should not allocate.
+    /// Writes `Y(X, Ẋ, Ẍ)` into `rows`: the 2 × n matrix column-major
+    /// (length `2n`; `rows[2j]` is actuator 1's entry of column `j`,
+    /// `rows[2j + 1]` actuator 2's, as nalgebra's `Matrix2xX` and aras-dyn's
+    /// `Model::fill`). `rows` is zeroed before each call. Should not allocate.
     fn fill<T: Scalar>(
         &self,
         x: &Vector2<T>,

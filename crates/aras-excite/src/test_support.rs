@@ -45,27 +45,31 @@ impl Regressor for StandIn {
         rows: &mut [T],
     ) -> Result<(), KinError> {
         let k = evaluate(&self.geometry, x, x_dot, x_ddot)?;
-        let n = 12;
         let (th, thd, thdd) = (k.theta, k.theta_dot, k.theta_ddot);
         let cd = (th[0] - th[1]).cos();
-        rows[0] = thdd[0];
-        rows[n + 1] = thdd[1];
-        rows[2] = thd[0];
-        rows[n + 3] = thd[1];
-        rows[4] = th[0].cos();
-        rows[n + 4] = th[1].cos();
-        rows[5] = th[0].sin();
-        rows[n + 5] = -th[1].sin();
-        rows[6] = thd[0] * thd[1];
-        rows[n + 6] = thd[1] * thd[1];
-        rows[7] = cd * thdd[1];
-        rows[n + 7] = cd * thdd[0];
-        rows[8] = k.omega_dot[2][2];
-        rows[n + 8] = k.omega_dot[3][2] + k.omega[3][0] * k.omega[3][1];
-        rows[9] = th[0];
-        rows[10] = rows[0] + rows[2];
-        rows[n + 10] = rows[n] + rows[n + 2];
-        // rows[11], rows[n + 11]: zero column.
+        // Column-major 2 × 12: entry (joint j, column c) at 2c + j.
+        let cols: [[T; 2]; 11] = [
+            [thdd[0], T::zero()],
+            [T::zero(), thdd[1]],
+            [thd[0], T::zero()],
+            [T::zero(), thd[1]],
+            [th[0].cos(), th[1].cos()],
+            [th[0].sin(), -th[1].sin()],
+            [thd[0] * thd[1], thd[1] * thd[1]],
+            [cd * thdd[1], cd * thdd[0]],
+            [
+                k.omega_dot[2][2],
+                k.omega_dot[3][2] + k.omega[3][0] * k.omega[3][1],
+            ],
+            [th[0], T::zero()],
+            // Exactly column 0 + column 2: not a base column.
+            [thdd[0] + thd[0], T::zero()],
+        ];
+        for (c, col) in cols.iter().enumerate() {
+            rows[2 * c] = col[0];
+            rows[2 * c + 1] = col[1];
+        }
+        // Column 11 stays zero.
         Ok(())
     }
 }
@@ -90,7 +94,7 @@ pub fn base_projection<R: Regressor>(reg: &R, samples: usize, seed: u64) -> DMat
             .unwrap_or_else(|e| panic!("regressor failed: {e}"));
         for j in 0..2 {
             for c in 0..n {
-                w[(j * samples + s, c)] = rows[j * n + c];
+                w[(j * samples + s, c)] = rows[2 * c + j];
             }
         }
     }
