@@ -51,6 +51,14 @@ pub fn forward(
         AssemblyMode::Minus => -disc.sqrt(),
     };
     let gamma = 2.0 * (g.sa * cos_a + root).atan2(g.ca + g.cb);
+    if gamma.sin() < g.singularity_tolerance() {
+        // The degenerate branch (e.g. γ = 0 for α = β): d on the motor axis.
+        return Err(KinError::Singular {
+            which: crate::Singularity::PolarAxis,
+            value: gamma.sin(),
+            limit: g.singularity_tolerance(),
+        });
+    }
     let x = Vector2::new(phi, gamma);
     let pose = Pose::new(g, &x)?;
     // With A outside (0, π) the triangle closes on the mirrored side: the

@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! Kinematics of the ARAS-Diamond coaxial spherical parallel robot.
 //!
 //! A 2-DOF spherical five-bar: two coaxial motors on axis `a` drive the

@@ -42,14 +42,11 @@ fn frame<T: Scalar>(z: &Vector3<T>, n: &Vector3<T>, s: T) -> Matrix3<T> {
 impl<T: Scalar> Pose<T> {
     pub(crate) fn frames(&self, g: &Geometry) -> [Matrix3<T>; LINKS] {
         let (z, o) = (T::zero(), T::one());
-        let rz = |t: T| {
-            let (s, c) = t.sin_cos();
-            Matrix3::new(c, -s, z, s, c, z, z, z, o)
-        };
+        let rz = |(s, c): (T, T)| Matrix3::new(c, -s, z, s, c, z, z, z, o);
         let sb = T::lift(g.sb);
         [
-            rz(self.theta2),
-            rz(self.theta1),
+            rz(self.sc2),
+            rz(self.sc1),
             frame(&self.b, &self.d, sb),
             frame(&self.c, &self.d, sb),
         ]

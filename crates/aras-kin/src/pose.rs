@@ -30,6 +30,9 @@ pub(crate) struct Pose<T: Scalar = f64> {
     pub mu_prime: T,
     pub theta1: T,
     pub theta2: T,
+    /// (sin θ1, cos θ1) and (sin θ2, cos θ2), reused by the proximal frames.
+    pub sc1: (T, T),
+    pub sc2: (T, T),
     pub b: Vector3<T>,
     pub c: Vector3<T>,
     pub d: Vector3<T>,
@@ -118,6 +121,8 @@ impl<T: Scalar> Pose<T> {
             mu_prime,
             theta1: phi + a,
             theta2: phi - a,
+            sc1: (st1, ct1),
+            sc2: (st2, ct2),
             b: Vector3::new(sa * ct2, sa * st2, ca),
             c: Vector3::new(sa * ct1, sa * st1, ca),
             d: Vector3::new(sg * cphi, sg * sphi, cg),

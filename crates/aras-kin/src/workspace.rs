@@ -19,24 +19,30 @@ pub struct SingularityDistance {
 }
 
 impl SingularityDistance {
-    /// The smallest distance and which singularity it belongs to.
-    pub fn min(&self) -> (Singularity, f64) {
+    fn all(&self) -> [(Singularity, f64); 4] {
         [
             (Singularity::ProximalAligned, self.sin_a),
             (Singularity::PolarAxis, self.sin_gamma),
             (Singularity::ElbowStretched, self.sin_b),
             (Singularity::Parallel, self.parallel),
         ]
-        .into_iter()
-        .fold((Singularity::ProximalAligned, f64::INFINITY), |m, c| {
-            if c.1 < m.1 { c } else { m }
-        })
     }
 
-    /// Errors with the nearest singularity if any distance is below `tol`.
+    /// The smallest distance and which singularity it belongs to
+    /// (a NaN distance, from a degenerate pose, counts as the smallest).
+    pub fn min(&self) -> (Singularity, f64) {
+        self.all()
+            .into_iter()
+            .fold((Singularity::ProximalAligned, f64::INFINITY), |m, c| {
+                if c.1.is_nan() || c.1 < m.1 { c } else { m }
+            })
+    }
+
+    /// Errors with the nearest singularity if any distance is below `tol`
+    /// or not a number.
     pub fn check(&self, tol: f64) -> Result<(), KinError> {
         let (which, value) = self.min();
-        if value < tol || !value.is_finite() {
+        if value.is_nan() || value < tol {
             return Err(KinError::Singular {
                 which,
                 value,
