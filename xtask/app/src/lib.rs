@@ -9,7 +9,19 @@
 //! Dependencies beyond the workspace crates: `clap` (command line),
 //! `toml`/`serde_json` (config files), `plotters` (SVG plots), `indicatif`
 //! (progress bars), `anyhow` (error context across the many file and stage
-//! boundaries of an application; the libraries use `thiserror`).
+//! boundaries of an application; the libraries use `thiserror`), `faer`
+//! (views of the stacked regressor for `aras-ident`).
 
+pub mod cli;
+pub mod cmd;
+pub mod config;
+pub mod excite;
+pub mod identify;
 pub mod output;
+pub mod paper;
 pub mod report;
+pub mod robot;
+pub mod simulate;
+pub mod stages;
+pub mod summary;
+pub mod validate;

@@ -1,3 +1,29 @@
 //! `aras`: the ARAS-Diamond toolkit's command-line tools (run through `cargo xtask`).
 
-fn main() {}
+use std::process::ExitCode;
+
+use aras_app::cli::{Cli, Command};
+use aras_app::cmd;
+use clap::Parser;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Pipeline(a) => cmd::pipeline::run(a),
+        Command::Excite(a) => cmd::excite::run(a),
+        Command::Simulate(a) => cmd::simulate::run(a),
+        Command::Identify(a) => cmd::identify::run(a),
+        Command::Validate(a) => cmd::validate::run(a),
+        Command::Predict(a) => cmd::predict::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            for cause in e.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -2,6 +2,7 @@
 //! SVG files beside it) and to a self-contained HTML page (SVG inline).
 
 pub mod plots;
+pub mod run;
 
 use std::fmt::Write;
 

@@ -1,0 +1,166 @@
+//! The command line (`clap`): one subcommand per tool, each in its own
+//! module under [`crate::cmd`]. To add a tool, add a variant here and a
+//! module there.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+/// ARAS-Diamond dynamics toolkit: excitation design, simulation,
+/// identification, validation and prediction (spec/ARAS-DIAMOND.md).
+#[derive(Debug, Parser)]
+#[command(name = "aras", version, about, long_about = None)]
+pub struct Cli {
+    /// The tool to run.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The tools.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// The whole mission on the (simulated) robot: design → simulate →
+    /// process → identify (OLS + SDP) → validate → report.
+    Pipeline(PipelineArgs),
+    /// Design an optimal excitation trajectory (spec §5) → trajectory.json.
+    Excite(ExciteArgs),
+    /// Simulate the robot tracking a trajectory → LOG.csv + LOG.json.
+    Simulate(SimulateArgs),
+    /// Identify the dynamic parameters from a log → params.json, base.json, report.
+    Identify(IdentifyArgs),
+    /// Validate a parameter file: cross-validation on (79), workspace PD check.
+    Validate(ValidateArgs),
+    /// Predict torques of a log with a parameter file → PRED.csv (t,tau1,tau2).
+    Predict(PredictArgs),
+}
+
+/// Options every command shares.
+#[derive(Debug, Clone, Args)]
+pub struct Common {
+    /// Configuration file (.toml or .json; docs/config.md). Defaults apply
+    /// to every key not given.
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Replace an existing output.
+    #[arg(long)]
+    pub force: bool,
+    /// No progress display and no stage lines on stderr.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// `aras pipeline`.
+#[derive(Debug, Args)]
+pub struct PipelineArgs {
+    /// Output directory.
+    #[arg(long, default_value = "out", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Seed of the design and of the sensor noise (overrides the config's
+    /// `trajectory.seed` and `simulation.seed`).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Leave wall-clock timings out of summary.json, so the same seed gives
+    /// byte-identical outputs (the report still shows them).
+    #[arg(long)]
+    pub reproducible: bool,
+    /// Print the default configuration (TOML) and exit.
+    #[arg(long)]
+    pub print_config: bool,
+    /// Shared options.
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// `aras excite`.
+#[derive(Debug, Args)]
+pub struct ExciteArgs {
+    /// Output trajectory file.
+    #[arg(long, default_value = "trajectory.json", value_name = "FILE")]
+    pub out: PathBuf,
+    /// Seed of the design's starts (overrides `trajectory.seed`).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Shared options.
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// `aras simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// Trajectory file from `aras excite` (periodic: `simulation.periods` periods).
+    #[arg(long, value_name = "FILE", conflicts_with = "frequency")]
+    pub trajectory: Option<PathBuf>,
+    /// Instead: the paper's validation trajectory (79) at this frequency (Hz).
+    #[arg(long, value_name = "HZ")]
+    pub frequency: Option<f64>,
+    /// Output log (the sidecar goes next to it as .json).
+    #[arg(long, default_value = "log.csv", value_name = "LOG.csv")]
+    pub out: PathBuf,
+    /// Noise seed (overrides `simulation.seed`).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Shared options.
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// `aras identify`.
+#[derive(Debug, Args)]
+pub struct IdentifyArgs {
+    /// The log (docs/log-format.md).
+    #[arg(long, value_name = "LOG.csv")]
+    pub data: PathBuf,
+    /// Excitation period (s) for period averaging (overrides the sidecar).
+    #[arg(long, value_name = "S")]
+    pub period: Option<f64>,
+    /// Sidecar file (default: LOG.json next to the log, if present).
+    #[arg(long, value_name = "JSON")]
+    pub sidecar: Option<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "out-identify", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Leave wall-clock timings out of summary.json.
+    #[arg(long)]
+    pub reproducible: bool,
+    /// Shared options.
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// `aras validate`.
+#[derive(Debug, Args)]
+pub struct ValidateArgs {
+    /// Parameter file to validate (e.g. params.json from identify).
+    #[arg(long, value_name = "P.json")]
+    pub params: PathBuf,
+    /// Output directory.
+    #[arg(long, default_value = "out-validate", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Shared options.
+    #[command(flatten)]
+    pub common: Common,
+}
+
+/// `aras predict`.
+#[derive(Debug, Args)]
+pub struct PredictArgs {
+    /// Parameter file.
+    #[arg(long, value_name = "P.json")]
+    pub params: PathBuf,
+    /// The log whose angles drive the prediction.
+    #[arg(long, value_name = "LOG.csv")]
+    pub data: PathBuf,
+    /// Output CSV with columns t,tau1,tau2.
+    #[arg(long, value_name = "PRED.csv")]
+    pub out: PathBuf,
+    /// Average periods of this length (s) first (default: none, the whole log is predicted).
+    #[arg(long, value_name = "S")]
+    pub period: Option<f64>,
+    /// Sidecar file (default: LOG.json next to the log, if present).
+    #[arg(long, value_name = "JSON")]
+    pub sidecar: Option<PathBuf>,
+    /// Shared options.
+    #[command(flatten)]
+    pub common: Common,
+}

@@ -1,0 +1,203 @@
+//! The shared tail of `pipeline` and `identify`: process the log, identify
+//! (OLS + SDP), validate, and write params.json, params_ols.json, base.json,
+//! summary.json and the report into the run's directory.
+
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result};
+use aras_dyn::Params;
+use aras_excite::Design;
+use aras_ident::BaseParameters;
+use aras_signal::Log;
+
+use crate::config::Config;
+use crate::identify::{identify, prepare, process_options};
+use crate::output::OutDir;
+use crate::report::run::{RunData, build};
+use crate::robot::paper_model;
+use crate::stages::Stages;
+use crate::summary::{PseudoInertia, SdpReport, Summary, base_file, fitness_list};
+use crate::validate::{cross_validate, min_eigen_grid, parameter_errors, pd_check, pseudo_inertia_min};
+
+/// What the fit needs.
+pub struct FitInput<'a> {
+    /// Settings.
+    pub cfg: &'a Config,
+    /// The nominal robot (SDP reference, geometry, gravity).
+    pub nominal: &'a Params,
+    /// The truth, when known (simulated logs).
+    pub truth: Option<&'a Params>,
+    /// Simulate and score the cross-validation trajectories (79) with the truth.
+    pub cross_validate: bool,
+    /// The log.
+    pub log: &'a Log,
+    /// Period override (s).
+    pub period: Option<f64>,
+    /// The excitation design, if this run made one.
+    pub design: Option<&'a Design>,
+    /// Base parameters of the model.
+    pub base: &'a BaseParameters,
+    /// Command name for the summary.
+    pub command: &'a str,
+    /// Seed, for the summary.
+    pub seed: Option<u64>,
+    /// Torque noise of the simulated sensors (N·m).
+    pub noise: Option<[f64; 2]>,
+    /// Omit timings from summary.json.
+    pub reproducible: bool,
+    /// The report's first paragraph.
+    pub intro: String,
+}
+
+/// Runs the fit and writes every output into `out`; returns the summary
+/// (with timings, whatever `reproducible` says).
+pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary> {
+    let cfg = input.cfg;
+    let model = paper_model(input.nominal)?;
+    let geometry = input.nominal.geometry()?;
+    let prepared = stages.run("process log + regressor", |_| {
+        prepare(
+            input.log,
+            &process_options(cfg, input.period, false),
+            cfg.identification.filtering,
+            &model,
+            &geometry,
+        )
+    })?;
+    let id = stages.run("identify (OLS + SDP)", |_| {
+        identify(&prepared, input.base, &model, input.nominal, cfg)
+    })?;
+    let ols_std = id.ols_params.standard_vector(&model)?.as_slice().to_vec();
+    let sdp_std = id.sdp.standard.clone();
+
+    let xv = match (input.truth, input.cross_validate) {
+        (Some(truth), true) => {
+            let dir = out.path("validation");
+            std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+            let n = cfg.validation.frequencies_hz.len() as u64;
+            let bar = stages.bar(n, "cross-validation");
+            let r = stages.run("cross-validation (79)", |_| {
+                cross_validate(truth, input.nominal, &model, &[ols_std.clone(), sdp_std.clone()], cfg, &dir, &bar)
+            })?;
+            bar.finish_and_clear();
+            r
+        }
+        _ => Vec::new(),
+    };
+
+    let (pd, heat) = stages.run("workspace PD check (80)", |_| -> Result<_> {
+        let mut pd = BTreeMap::new();
+        pd.insert("ols".to_string(), pd_check(&id.ols_params, cfg)?);
+        pd.insert("sdp".to_string(), pd_check(&id.sdp_params, cfg)?);
+        Ok((pd, min_eigen_grid(&id.sdp_params, cfg)?))
+    })?;
+    let pseudo = PseudoInertia {
+        ols: pseudo_inertia_min(&id.ols_params),
+        sdp: pseudo_inertia_min(&id.sdp_params),
+        truth: input.truth.map(pseudo_inertia_min),
+    };
+    // The truth's paper-model part (extra effects, if any, are not in the
+    // identified model and have no base parameters to compare).
+    let truth_std: Option<Vec<f64>> = input.truth.and_then(|t| {
+        let mut paper = t.clone();
+        paper.extra = Default::default();
+        paper.standard_vector(&model).ok().map(|v| v.as_slice().to_vec())
+    });
+    let truth_base = match &truth_std {
+        Some(t) => Some(id.base.to_base(t)?),
+        None => None,
+    };
+    let errors = match &truth_std {
+        Some(t) => {
+            let mut m = BTreeMap::new();
+            m.insert("ols".to_string(), parameter_errors(&id.base, &id.ols.estimate, &id.ols.std_dev, t)?);
+            m.insert("sdp".to_string(), parameter_errors(&id.base, &id.sdp.base, &id.ols.std_dev, t)?);
+            Some(m)
+        }
+        None => None,
+    };
+    let fitness = fitness_list(&id, &xv, input.design.is_some());
+
+    out.write("params.json", id.sdp_params.to_json_string() + "\n")?;
+    out.write("params_ols.json", id.ols_params.to_json_string() + "\n")?;
+    out.write_json("base.json", &base_file(&id, truth_base.as_deref()))?;
+
+    let timings: BTreeMap<String, f64> = stages.timings().iter().cloned().collect();
+    let mut summary = Summary {
+        format: crate::summary::SUMMARY_FORMAT,
+        command: input.command.into(),
+        seed: input.seed,
+        standard_parameters: id.base.n_standard(),
+        base_parameters: id.base.n_base(),
+        excitation_condition_number: input.design.map(|d| d.condition_number),
+        samples: prepared.n(),
+        torque_noise_std_nm: input.noise,
+        fitness: fitness.clone(),
+        pd_check: pd.clone(),
+        pseudo_inertia_min_eigenvalue: pseudo.clone(),
+        parameter_errors: errors.clone(),
+        sdp: SdpReport::new(&id.sdp),
+        timings_s: None,
+    };
+    if !input.reproducible {
+        summary.timings_s = Some(timings);
+    }
+    out.write_json("summary.json", &summary)?;
+
+    let data = RunData {
+        title: format!("ARAS-Diamond identification report (`aras {}`)", input.command),
+        intro: input.intro,
+        timings: stages.timings(),
+        design: input.design,
+        processing: &prepared.processed.summary,
+        t: &prepared.processed.samples.t,
+        measured: &prepared.t,
+        id: &id,
+        fitness: &fitness,
+        xv: &xv,
+        pd: &pd,
+        heat: Some(&heat),
+        pseudo: &pseudo,
+        errors: errors.as_ref(),
+        truth_base: truth_base.as_deref(),
+    };
+    let report = build(&data)?;
+    for (file, svg) in report.figures() {
+        out.write(file, svg)?;
+    }
+    out.write("report.md", report.to_markdown())?;
+    out.write("report.html", report.to_html())?;
+    summary.timings_s = Some(stages.timings().iter().cloned().collect());
+    Ok(summary)
+}
+
+/// The short terminal table: paper vs ours.
+pub fn terminal_table(s: &Summary) -> String {
+    let mut t = String::from("dataset          paper τ1  ours τ1 (OLS/SDP)   paper τ2  ours τ2 (OLS/SDP)\n");
+    for f in &s.fitness {
+        let p = |j: usize| f.paper.map_or("    –".to_string(), |p| format!("{:5.1}", p[j]));
+        t += &format!(
+            "{:<16} {:>8}  {:6.2} / {:6.2}     {:>8}  {:6.2} / {:6.2}\n",
+            f.dataset,
+            p(0),
+            f.ols[0],
+            f.sdp[0],
+            p(1),
+            f.ols[1],
+            f.sdp[1]
+        );
+    }
+    t += &format!("base parameters: {}", s.base_parameters);
+    if let Some(pd) = s.pd_check.get("sdp") {
+        t += &format!(
+            "; SDP mass matrix PD over the workspace: {} (eigenvalues {:.3e} … {:.3e} kg·m²)",
+            if pd.positive_definite { "yes" } else { "NO" },
+            pd.min_eigenvalue,
+            pd.max_eigenvalue
+        );
+    }
+    if let Some(ts) = &s.timings_s {
+        t += &format!("\ntotal stage time: {:.2} s", ts.values().sum::<f64>());
+    }
+    t
+}

@@ -1,0 +1,77 @@
+//! `aras identify`: identification from any log in the documented format.
+
+use anyhow::{Context, Result};
+use aras_signal::{ReadOptions, SidecarSource, read_log};
+
+use crate::cli::IdentifyArgs;
+use crate::cmd::fit::{self, FitInput};
+use crate::identify::base_parameters;
+use crate::output::OutDir;
+use crate::robot::{nominal, paper_model};
+use crate::stages::Stages;
+
+/// The truth stored by the simulator in a sidecar (`truth.params`), if any.
+pub fn sidecar_truth(path: &std::path::Path) -> Option<aras_dyn::Params> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    aras_dyn::Params::from_value(v.get("truth")?.get("params")?).ok()
+}
+
+/// Read options with the sidecar choice of the command line.
+pub fn read_options(sidecar: Option<&std::path::Path>) -> ReadOptions {
+    ReadOptions {
+        sidecar: sidecar.map_or(SidecarSource::Auto, |p| SidecarSource::Path(p.to_path_buf())),
+        ..ReadOptions::default()
+    }
+}
+
+/// Runs `identify`.
+pub fn run(args: &IdentifyArgs) -> Result<()> {
+    let loaded = super::load_config(&args.common)?;
+    let cfg = loaded.config;
+    let out = OutDir::create(&args.out, args.common.force)?;
+    let mut stages = Stages::new(args.common.quiet);
+    let nominal = nominal(&cfg.robot, &loaded.dir)?;
+    let model = paper_model(&nominal)?;
+    let geometry = nominal.geometry()?;
+    let log = stages
+        .run("read log", |_| read_log(&args.data, &read_options(args.sidecar.as_deref())))
+        .with_context(|| format!("reading {}", args.data.display()))?;
+    let sidecar = args
+        .sidecar
+        .clone()
+        .unwrap_or_else(|| aras_dyn::sim::sidecar_path(&args.data));
+    let truth = sidecar_truth(&sidecar);
+    let base = stages.run("base parameters (58)", |_| base_parameters(&model, &geometry, &cfg))?;
+    let intro = format!(
+        "Identification of `{}` ({} rows, {:.1} s at {:.1} Hz){}.",
+        args.data.display(),
+        log.summary.rows,
+        log.summary.duration_s,
+        log.summary.sample_rate_hz,
+        if truth.is_some() { "; the sidecar holds the simulation's truth, so parameter errors are reported" } else { "" }
+    );
+    let summary = fit::run(
+        FitInput {
+            cfg: &cfg,
+            nominal: &nominal,
+            truth: truth.as_ref(),
+            cross_validate: false,
+            log: &log,
+            period: args.period,
+            design: None,
+            base: &base,
+            command: "identify",
+            seed: None,
+            noise: None,
+            reproducible: args.reproducible,
+            intro,
+        },
+        &out,
+        &mut stages,
+    )?;
+    let dir = out.commit()?;
+    println!("{}", fit::terminal_table(&summary));
+    println!("outputs in {}", dir.display());
+    Ok(())
+}

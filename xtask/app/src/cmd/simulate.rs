@@ -1,0 +1,45 @@
+//! `aras simulate`: the simulated robot tracking a trajectory file or (79).
+
+use anyhow::{Context, Result, bail};
+use aras_dyn::Sinusoid;
+use aras_excite::FourierTrajectory;
+
+use crate::cli::SimulateArgs;
+use crate::robot::{FourierPath, nominal};
+use crate::simulate::{run_and_write, sim_config, truth};
+use crate::stages::Stages;
+
+/// Runs `simulate`.
+pub fn run(args: &SimulateArgs) -> Result<()> {
+    let loaded = super::load_config(&args.common)?;
+    let mut cfg = loaded.config;
+    if let Some(s) = args.seed {
+        cfg.simulation.seed = s;
+    }
+    super::check_new_file(&args.out, args.common.force)?;
+    let mut stages = Stages::new(args.common.quiet);
+    let nominal = nominal(&cfg.robot, &loaded.dir)?;
+    let truth = truth(&cfg, &loaded.dir, &nominal)?;
+    let periods = cfg.simulation.periods as f64;
+    let log = match (&args.trajectory, args.frequency) {
+        (Some(path), _) => {
+            let tr = FourierTrajectory::load(path)
+                .with_context(|| format!("reading the trajectory {}", path.display()))?;
+            let sim = sim_config(&cfg, &nominal, periods * tr.period(), cfg.simulation.seed);
+            stages.run("simulate robot", |_| run_and_write(&truth, &FourierPath(&tr), &sim, &args.out))?
+        }
+        (None, Some(f)) => {
+            let tr = Sinusoid::paper_79(f).context("option --frequency")?;
+            let sim = sim_config(&cfg, &nominal, periods / f, cfg.simulation.seed);
+            stages.run("simulate robot", |_| run_and_write(&truth, &tr, &sim, &args.out))?
+        }
+        (None, None) => bail!("give --trajectory FILE (from `aras excite`) or --frequency HZ (trajectory (79))"),
+    };
+    println!(
+        "{} ({} rows) and {}",
+        args.out.display(),
+        log.len(),
+        aras_dyn::sim::sidecar_path(&args.out).display()
+    );
+    Ok(())
+}

@@ -1,0 +1,53 @@
+//! The excitation design stage (spec §5): `aras-excite`'s optimiser on the
+//! base regressor of the paper's model, configured from `[trajectory]`.
+
+use anyhow::{Context, Result};
+use aras_dyn::Params;
+use aras_excite::{Criterion, Design, DesignSettings, Limits};
+use aras_ident::BaseParameters;
+use aras_kin::Workspace;
+use nalgebra::Vector2;
+
+use crate::config::{Config, CriterionChoice};
+use crate::identify::projection;
+use crate::robot::{ModelRegressor, paper_model};
+
+/// The design's settings from the configuration.
+pub fn settings(cfg: &Config, nominal: &Params) -> Result<DesignSettings> {
+    let t = &cfg.trajectory;
+    let d = |v: [f64; 2]| Vector2::new(v[0].to_radians(), v[1].to_radians());
+    let workspace = Workspace::new(d(t.min_deg), d(t.max_deg), d(t.max_rate_deg_s))
+        .context("keys `trajectory.min_deg`, `max_deg`, `max_rate_deg_s`")?;
+    Ok(DesignSettings {
+        harmonics: t.harmonics,
+        omega_f: std::f64::consts::TAU / t.period_s,
+        limits: Limits {
+            workspace,
+            max_accel: d(t.max_accel_deg_s2),
+        },
+        geometry: nominal.geometry()?,
+        criterion: match t.criterion {
+            CriterionChoice::Condition => Criterion::Condition,
+            CriterionChoice::DOptimal => Criterion::DOptimal,
+        },
+        constraint_points: t.constraint_points,
+        criterion_points: t.criterion_points,
+        starts: t.starts,
+        seed: t.seed,
+        max_outer_iterations: t.max_outer_iterations,
+        max_inner_iterations: t.max_inner_iterations,
+        // The caller's stage spinner shows progress; two bars would fight.
+        progress: false,
+        ..DesignSettings::default()
+    })
+}
+
+/// Designs the excitation for the nominal robot's paper model.
+pub fn design(cfg: &Config, nominal: &Params, base: &BaseParameters) -> Result<Design> {
+    let reg = ModelRegressor {
+        model: paper_model(nominal)?,
+        geometry: nominal.geometry()?,
+    };
+    let settings = settings(cfg, nominal)?;
+    aras_excite::design(&reg, &projection(base), &settings).context("designing the excitation trajectory")
+}

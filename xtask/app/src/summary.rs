@@ -1,0 +1,201 @@
+//! `summary.json`: the machine-readable result of a run, and `base.json`.
+//!
+//! Deterministic: the same seed and settings give the same bytes, except
+//! the wall-clock stage timings, which live under the single key
+//! `"timings_s"` and are left out with `--reproducible`.
+
+use std::collections::BTreeMap;
+
+use aras_ident::SdpSolution;
+use serde::Serialize;
+
+use crate::identify::Identification;
+use crate::validate::{CrossValidation, ErrorSummary, PdSummary};
+
+/// Format tag of `summary.json`.
+pub const SUMMARY_FORMAT: &str = "aras-summary/1";
+/// Format tag of `base.json`.
+pub const BASE_FORMAT: &str = "aras-base/1";
+
+/// Fitness (78) per joint of the two estimates on one dataset.
+#[derive(Debug, Clone, Serialize)]
+pub struct Fitness {
+    /// Dataset: `"excitation"` or `"xv_<f>hz"`.
+    pub dataset: String,
+    /// Frequency of (79) (Hz), for cross-validation datasets.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frequency_hz: Option<f64>,
+    /// OLS, `[τ1, τ2]` (%).
+    pub ols: [f64; 2],
+    /// Physically consistent (SDP), `[τ1, τ2]` (%).
+    pub sdp: [f64; 2],
+    /// The paper's value for this dataset, when published (%).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub paper: Option<[f64; 2]>,
+}
+
+/// The SDP solver's report.
+#[derive(Debug, Clone, Serialize)]
+pub struct SdpReport {
+    /// Solver status.
+    pub status: String,
+    /// Interior-point iterations.
+    pub iterations: u32,
+    /// Residual norm `‖W_b β_b − T‖` of the SDP estimate (N·m).
+    pub residual_norm: f64,
+    /// The same for OLS (the unconstrained optimum).
+    pub ols_residual_norm: f64,
+    /// Link masses of the solution (kg).
+    pub masses: Vec<f64>,
+    /// Constraints active at the solution.
+    pub active: Vec<String>,
+}
+
+impl SdpReport {
+    /// From a solution.
+    pub fn new(s: &SdpSolution) -> Self {
+        Self {
+            status: s.status.clone(),
+            iterations: s.iterations,
+            residual_norm: s.residual_norm,
+            ols_residual_norm: s.ols_residual_norm,
+            masses: s.masses.clone(),
+            active: s
+                .active
+                .iter()
+                .map(|a| format!("{:?} {}", a.kind, a.name))
+                .collect(),
+        }
+    }
+}
+
+/// Pseudo-inertia smallest eigenvalues per link (kg·m²).
+#[derive(Debug, Clone, Serialize)]
+pub struct PseudoInertia {
+    /// OLS completed near the nominal robot.
+    pub ols: [f64; 4],
+    /// SDP.
+    pub sdp: [f64; 4],
+    /// The truth (simulated data only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth: Option<[f64; 4]>,
+}
+
+/// The whole summary.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// Always [`SUMMARY_FORMAT`].
+    pub format: &'static str,
+    /// The command that produced it.
+    pub command: String,
+    /// Seeds used (design, simulation), when simulated.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// Standard parameters of the identified model.
+    pub standard_parameters: usize,
+    /// Base parameters (numerical rank).
+    pub base_parameters: usize,
+    /// Condition number of the column-scaled excitation base regressor.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub excitation_condition_number: Option<f64>,
+    /// Samples used in the fit (per joint).
+    pub samples: usize,
+    /// Sensor noise of the simulated logs (N·m, per joint), if simulated.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub torque_noise_std_nm: Option<[f64; 2]>,
+    /// Fitness per dataset.
+    pub fitness: Vec<Fitness>,
+    /// Workspace PD check of the mass matrix (80), per estimate.
+    pub pd_check: BTreeMap<String, PdSummary>,
+    /// Pseudo-inertia eigenvalues.
+    pub pseudo_inertia_min_eigenvalue: PseudoInertia,
+    /// Base-parameter errors against the truth, per estimate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub parameter_errors: Option<BTreeMap<String, ErrorSummary>>,
+    /// The SDP solve.
+    pub sdp: SdpReport,
+    /// Wall-clock seconds per stage (absent with `--reproducible`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timings_s: Option<BTreeMap<String, f64>>,
+}
+
+/// Builds the fitness list from the excitation fit and cross-validation.
+pub fn fitness_list(id: &Identification, xv: &[CrossValidation], excitation_paper: bool) -> Vec<Fitness> {
+    let mut v = vec![Fitness {
+        dataset: "excitation".into(),
+        frequency_hz: None,
+        ols: id.fitness_ols,
+        sdp: id.fitness_sdp,
+        paper: excitation_paper.then_some(crate::paper::EXCITATION_FITNESS),
+    }];
+    for x in xv {
+        v.push(Fitness {
+            dataset: format!("xv_{}hz", x.frequency_hz),
+            frequency_hz: Some(x.frequency_hz),
+            ols: x.fitness[0],
+            sdp: x.fitness[1],
+            paper: crate::paper::table2(x.frequency_hz),
+        });
+    }
+    v
+}
+
+/// One base parameter in `base.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct BaseEntry {
+    /// `b1`, `b2`, …
+    pub name: String,
+    /// Its definition as a linear combination of standard parameters.
+    pub definition: String,
+    /// OLS value.
+    pub ols: f64,
+    /// OLS standard deviation (64).
+    pub sigma: f64,
+    /// σ% (65).
+    pub sigma_percent: f64,
+    /// SDP value.
+    pub sdp: f64,
+    /// The truth, when known.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth: Option<f64>,
+}
+
+/// `base.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct BaseFile {
+    /// Always [`BASE_FORMAT`].
+    pub format: &'static str,
+    /// Standard parameter names, in the order of the model.
+    pub standard: Vec<String>,
+    /// Standard parameters that never affect the torques.
+    pub unidentifiable: Vec<String>,
+    /// Residual variance σ²_ρ (66) (N²·m²).
+    pub residual_variance: f64,
+    /// Condition number of the fit's base regressor.
+    pub condition_number: f64,
+    /// The base parameters.
+    pub parameters: Vec<BaseEntry>,
+}
+
+/// Builds `base.json`'s content.
+pub fn base_file(id: &Identification, truth_base: Option<&[f64]>) -> BaseFile {
+    let o = &id.ols;
+    BaseFile {
+        format: BASE_FORMAT,
+        standard: id.names.clone(),
+        unidentifiable: id.base.unidentifiable().iter().map(|s| s.to_string()).collect(),
+        residual_variance: o.residual_variance,
+        condition_number: o.condition_number,
+        parameters: (0..id.base.n_base())
+            .map(|i| BaseEntry {
+                name: format!("b{}", i + 1),
+                definition: id.base.expression(i),
+                ols: o.estimate[i],
+                sigma: o.std_dev[i],
+                sigma_percent: o.rel_std_percent[i],
+                sdp: id.sdp.base[i],
+                truth: truth_base.map(|t| t[i]),
+            })
+            .collect(),
+    }
+}
