@@ -208,6 +208,8 @@ pub fn projection(base: &BaseParameters) -> DMatrix<f64> {
 
 /// Everything identification produced.
 pub struct Identification {
+    /// Rows used in the fit per joint (the rest were near rest).
+    pub rows_fitted: [usize; 2],
     /// The identified model's parameter names (standard).
     pub names: Vec<String>,
     /// Base parameters.
@@ -263,17 +265,33 @@ pub fn identify(
     let names = model.names();
     let bnames = base.base_names();
     let w_b = base.base_regressor(prepared.w_ref())?;
+    // Rows of joints moving at least `min_speed` (see the config docs).
+    let s = &prepared.processed.samples;
+    let n = prepared.n();
+    let v = cfg.identification.min_speed;
+    let rows: Vec<usize> = (0..2 * n)
+        .filter(|&r| s.theta_dot[r / n][r % n].abs() >= v)
+        .collect();
+    let n1 = rows.iter().filter(|&&r| r < n).count();
+    let n2 = rows.len() - n1;
+    if n1 < w_b.ncols() || n2 < w_b.ncols() {
+        bail!(
+            "only {n1} (joint 1) and {n2} (joint 2) samples move faster than              identification.min_speed = {v} rad/s; lower it or excite the joints more"
+        );
+    }
+    let w_fit = faer::Mat::from_fn(rows.len(), w_b.ncols(), |i, j| w_b[(rows[i], j)]);
+    let t_fit: Vec<f64> = rows.iter().map(|&r| prepared.t[r]).collect();
     let (ols, reduced) = match cfg.identification.weighting {
         Weighting::Ols => {
-            let r = ReducedLs::new(w_b.as_ref(), &prepared.t, &bnames)?;
+            let r = ReducedLs::new(w_fit.as_ref(), &t_fit, &bnames)?;
             (r.ols()?, r)
         }
         Weighting::Wls => {
             let e = aras_ident::wls(
-                w_b.as_ref(),
-                &prepared.t,
+                w_fit.as_ref(),
+                &t_fit,
                 &bnames,
-                &prepared.groups()?,
+                &RowGroups::contiguous(&[n1, n2])?,
                 NoiseVariances::FromResiduals,
             )?;
             (e.estimate, e.reduced)
@@ -328,6 +346,7 @@ pub fn identify(
     let fitness_ols = fitness_per_joint(&prepared.t, &predicted_ols)?;
     let fitness_sdp = fitness_per_joint(&prepared.t, &predicted_sdp)?;
     Ok(Identification {
+        rows_fitted: [n1, n2],
         names,
         base: base.clone(),
         ols,
