@@ -472,7 +472,8 @@ impl Config {
                     .map(|(k, _)| k.clone())
             });
             let (line, column) = offset.map(|o| line_col(text, o)).unzip();
-            let advice = if message.contains("unknown field") || message.contains("unknown variant") {
+            let advice = if message.contains("unknown field") || message.contains("unknown variant")
+            {
                 "; remove or rename it (see docs/config.md, or `aras pipeline --print-config`)"
             } else if message.contains("invalid type") {
                 "; see docs/config.md for the expected type and unit"
@@ -526,9 +527,15 @@ impl Config {
         };
         let r = &self.robot;
         if r.params.trim().is_empty() {
-            return bad("robot.params", "give \"default\" or a parameter file path".into());
+            return bad(
+                "robot.params",
+                "give \"default\" or a parameter file path".into(),
+            );
         }
-        for (k, v) in [("robot.alpha_deg", r.alpha_deg), ("robot.beta_deg", r.beta_deg)] {
+        for (k, v) in [
+            ("robot.alpha_deg", r.alpha_deg),
+            ("robot.beta_deg", r.beta_deg),
+        ] {
             if let Some(v) = v
                 && !(v > 0.0 && v < 180.0)
             {
@@ -538,7 +545,10 @@ impl Config {
         if let Some(g) = r.gravity
             && g.iter().any(|v| !v.is_finite())
         {
-            return bad("robot.gravity", "must be three finite numbers (m/s²)".into());
+            return bad(
+                "robot.gravity",
+                "must be three finite numbers (m/s²)".into(),
+            );
         }
         let t = &self.trajectory;
         if !(1..=20).contains(&t.harmonics) {
@@ -562,7 +572,9 @@ impl Config {
         }
         for i in 0..2 {
             let c = ["phi", "gamma"][i];
-            if !(t.min_deg[i].is_finite() && t.max_deg[i].is_finite() && t.min_deg[i] < t.max_deg[i])
+            if !(t.min_deg[i].is_finite()
+                && t.max_deg[i].is_finite()
+                && t.min_deg[i] < t.max_deg[i])
             {
                 return bad(
                     "trajectory.min_deg",
@@ -598,7 +610,11 @@ impl Config {
         if !(1..=aras_signal::MAX_ORDER).contains(&g.filter_order) {
             return bad(
                 "signal.filter_order",
-                format!("must be 1–{}, found {}", aras_signal::MAX_ORDER, g.filter_order),
+                format!(
+                    "must be 1–{}, found {}",
+                    aras_signal::MAX_ORDER,
+                    g.filter_order
+                ),
             );
         }
         nonneg("signal.cutoff_hz", g.cutoff_hz)?;
@@ -614,7 +630,9 @@ impl Config {
         nonneg("signal.settling_s", g.settling_s)?;
         pos("signal.max_period_spread", g.max_period_spread)?;
         if g.derivative == DerivativeChoice::SavitzkyGolay
-            && !(g.sg_half_window >= 1 && g.sg_poly_order >= 2 && g.sg_poly_order <= 2 * g.sg_half_window)
+            && !(g.sg_half_window >= 1
+                && g.sg_poly_order >= 2
+                && g.sg_poly_order <= 2 * g.sg_half_window)
         {
             return bad(
                 "signal.sg_poly_order",
@@ -649,7 +667,9 @@ impl Config {
         {
             return bad(
                 "identification.sdp.box_bounds",
-                format!("give [lower ≤ 1, upper ≥ 1] factors such as [0.8, 1.25], found [{lo}, {hi}]"),
+                format!(
+                    "give [lower ≤ 1, upper ≥ 1] factors such as [0.8, 1.25], found [{lo}, {hi}]"
+                ),
             );
         }
         pos("identification.sdp.regularisation", d.regularisation)?;
@@ -679,10 +699,16 @@ impl Config {
             return bad("validation.periods", "simulate at least 2 periods".into());
         }
         if v.pd_grid < 2 && v.pd_random == 0 {
-            return bad("validation.pd_grid", "the PD check needs points: pd_grid ≥ 2 or pd_random > 0".into());
+            return bad(
+                "validation.pd_grid",
+                "the PD check needs points: pd_grid ≥ 2 or pd_random > 0".into(),
+            );
         }
         if v.heatmap.iter().any(|&n| !(2..=400).contains(&n)) {
-            return bad("validation.heatmap", "each resolution must be 2–400 cells".into());
+            return bad(
+                "validation.heatmap",
+                "each resolution must be 2–400 cells".into(),
+            );
         }
         Ok(())
     }
@@ -693,7 +719,11 @@ fn offset_of(text: &str, line: usize, column: usize) -> Option<usize> {
     if line == 0 {
         return None;
     }
-    let start: usize = text.split_inclusive('\n').take(line - 1).map(str::len).sum();
+    let start: usize = text
+        .split_inclusive('\n')
+        .take(line - 1)
+        .map(str::len)
+        .sum();
     Some((start + column.saturating_sub(1)).min(text.len()))
 }
 
@@ -818,6 +848,15 @@ mod tests {
         let j = r#"{"signal": {"cutoff_hz": 5, "x": [1, {"a": 2}]}, "robot": {}}"#;
         let k = json_keys(j);
         let names: Vec<&str> = k.iter().map(|(p, _)| p.as_str()).collect();
-        assert_eq!(names, ["signal", "signal.cutoff_hz", "signal.x", "signal.x.a", "robot"]);
+        assert_eq!(
+            names,
+            [
+                "signal",
+                "signal.cutoff_hz",
+                "signal.x",
+                "signal.x.a",
+                "robot"
+            ]
+        );
     }
 }

@@ -49,5 +49,6 @@ pub fn design(cfg: &Config, nominal: &Params, base: &BaseParameters) -> Result<D
         geometry: nominal.geometry()?,
     };
     let settings = settings(cfg, nominal)?;
-    aras_excite::design(&reg, &projection(base), &settings).context("designing the excitation trajectory")
+    aras_excite::design(&reg, &projection(base), &settings)
+        .context("designing the excitation trajectory")
 }

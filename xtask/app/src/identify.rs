@@ -26,7 +26,11 @@ use nalgebra::{DMatrix, Vector2};
 use crate::config::{Config, DerivativeChoice, FilteringMode, Weighting};
 
 /// Processing options from the configuration (`period` overrides the sidecar).
-pub fn process_options(cfg: &Config, period: Option<f64>, logged_derivatives: bool) -> ProcessOptions {
+pub fn process_options(
+    cfg: &Config,
+    period: Option<f64>,
+    logged_derivatives: bool,
+) -> ProcessOptions {
     let s = &cfg.signal;
     ProcessOptions {
         filter: (s.cutoff_hz > 0.0).then_some(FilterSpec {
@@ -103,7 +107,8 @@ pub fn prepare(
             model.columns()
         );
     }
-    let mut w = stacked(model, geometry, s).with_context(|| format!("regressor of {}", log.name))?;
+    let mut w =
+        stacked(model, geometry, s).with_context(|| format!("regressor of {}", log.name))?;
     if mode == FilteringMode::Parallel
         && let Some(spec) = opts.filter
     {
@@ -118,7 +123,10 @@ pub fn prepare(
 /// The stacked regressor at the processed samples.
 pub fn stacked(model: &Model, geometry: &Geometry, s: &Samples) -> Result<DMatrix<f64>> {
     let v = |a: &[Vec<f64>; 2]| -> Vec<Vector2<f64>> {
-        a[0].iter().zip(&a[1]).map(|(p, g)| Vector2::new(*p, *g)).collect()
+        a[0].iter()
+            .zip(&a[1])
+            .map(|(p, g)| Vector2::new(*p, *g))
+            .collect()
     };
     Ok(model.stacked_from_states(geometry, &v(&s.x), &v(&s.x_dot), &v(&s.x_ddot))?)
 }
@@ -127,11 +135,19 @@ pub fn stacked(model: &Model, geometry: &Geometry, s: &Samples) -> Result<DMatri
 /// every column: the periodic form for an averaged record, otherwise
 /// forward–backward with the same padding rule as `aras-signal`
 /// (ten time constants of the slowest pole).
-fn filter_columns(w: &mut DMatrix<f64>, n: usize, spec: FilterSpec, fs: f64, periodic: bool) -> Result<()> {
+fn filter_columns(
+    w: &mut DMatrix<f64>,
+    n: usize,
+    spec: FilterSpec,
+    fs: f64,
+    periodic: bool,
+) -> Result<()> {
     let sos = Butterworth::lowpass(spec.order, spec.cutoff_hz, fs)?;
     let slowest = (std::f64::consts::PI / (2.0 * spec.order as f64)).sin();
     let tau = fs / (std::f64::consts::TAU * spec.cutoff_hz * slowest);
-    let pad = ((10.0 * tau).ceil() as usize).max(sos.padlen()).min(n.saturating_sub(1));
+    let pad = ((10.0 * tau).ceil() as usize)
+        .max(sos.padlen())
+        .min(n.saturating_sub(1));
     let mut scratch = Vec::new();
     for block in w.as_mut_slice().chunks_mut(n) {
         if block.iter().all(|v| *v == 0.0) {
@@ -160,11 +176,7 @@ fn halton(i: usize, base: usize) -> f64 {
 /// Base parameters (58)–(61) of `model` from `count` quasi-random samples
 /// of `(X, Ẋ, Ẍ)` filling the workspace box and the rate and acceleration
 /// limits (rich data, so only structural dependencies remain).
-pub fn base_parameters(
-    model: &Model,
-    geometry: &Geometry,
-    cfg: &Config,
-) -> Result<BaseParameters> {
+pub fn base_parameters(model: &Model, geometry: &Geometry, cfg: &Config) -> Result<BaseParameters> {
     let t = &cfg.trajectory;
     let d = f64::to_radians;
     let count = cfg.identification.base_samples;
@@ -242,7 +254,12 @@ pub fn fitness_per_joint(measured: &[f64], predicted: &[f64]) -> Result<[f64; 2]
 }
 
 /// Parameters `p` with the standard vector `beta` of `model` and `masses`.
-pub fn with_standard(p: &Params, model: &Model, beta: &[f64], masses: Option<&[f64]>) -> Result<Params> {
+pub fn with_standard(
+    p: &Params,
+    model: &Model,
+    beta: &[f64],
+    masses: Option<&[f64]>,
+) -> Result<Params> {
     let mut q = p.clone();
     q.extra = Default::default();
     q.set_standard_vector(model, beta)?;
@@ -308,7 +325,14 @@ pub fn identify(
     for k in 0..4 {
         let n = |s: &str| format!("L{}.{s}", k + 1);
         let idx = |s: &str| problem.index_of(&n(s));
-        let inertia = [idx("Ixx")?, idx("Ixy")?, idx("Ixz")?, idx("Iyy")?, idx("Iyz")?, idx("Izz")?];
+        let inertia = [
+            idx("Ixx")?,
+            idx("Ixy")?,
+            idx("Ixz")?,
+            idx("Iyy")?,
+            idx("Iyz")?,
+            idx("Izz")?,
+        ];
         let first = [idx("hx")?, idx("hy")?, idx("hz")?];
         let m = nominal.links[k].mass;
         if !(m.is_finite() && m > 0.0) {
@@ -337,7 +361,9 @@ pub fn identify(
         max_iter: sc.max_iter,
         ..SdpSettings::default()
     });
-    let sdp = problem.solve(base, &reduced).context("physically consistent fit (SDP)")?;
+    let sdp = problem
+        .solve(base, &reduced)
+        .context("physically consistent fit (SDP)")?;
     let ols_std = base.to_standard_near(&ols.estimate, &reference)?;
     let ols_params = with_standard(nominal, model, &ols_std, None)?;
     let sdp_params = with_standard(nominal, model, &sdp.standard, Some(&sdp.masses))?;

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use aras_dyn::Params;
-use aras_dyn::sim::{Controller, SimConfig, SimLog, Sensors};
+use aras_dyn::sim::{Controller, Sensors, SimConfig, SimLog};
 
 use crate::config::Config;
 

@@ -120,7 +120,11 @@ pub struct Summary {
 }
 
 /// Builds the fitness list from the excitation fit and cross-validation.
-pub fn fitness_list(id: &Identification, xv: &[CrossValidation], excitation_paper: bool) -> Vec<Fitness> {
+pub fn fitness_list(
+    id: &Identification,
+    xv: &[CrossValidation],
+    excitation_paper: bool,
+) -> Vec<Fitness> {
     let mut v = vec![Fitness {
         dataset: "excitation".into(),
         frequency_hz: None,
@@ -183,7 +187,12 @@ pub fn base_file(id: &Identification, truth_base: Option<&[f64]>) -> BaseFile {
     BaseFile {
         format: BASE_FORMAT,
         standard: id.names.clone(),
-        unidentifiable: id.base.unidentifiable().iter().map(|s| s.to_string()).collect(),
+        unidentifiable: id
+            .base
+            .unidentifiable()
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
         residual_variance: o.residual_variance,
         condition_number: o.condition_number,
         parameters: (0..id.base.n_base())

@@ -66,8 +66,9 @@ pub fn cross_validate(
         let duration = cfg.validation.periods as f64 / f;
         let seed = cfg.simulation.seed.wrapping_add(1000 + i as u64);
         let sim = simulate::sim_config(cfg, nominal, duration, seed);
-        let log = aras_dyn::sim::simulate(truth, &traj, &sim)
-            .with_context(|| format!("simulating the cross-validation trajectory (79) at {f} Hz"))?;
+        let log = aras_dyn::sim::simulate(truth, &traj, &sim).with_context(|| {
+            format!("simulating the cross-validation trajectory (79) at {f} Hz")
+        })?;
         let path = dir.join(format!("xv_{f}hz.csv"));
         aras_dyn::sim::write_log(&path, &log, true)?;
         let read = read_log(&path, &ReadOptions::default())?;
@@ -79,13 +80,7 @@ pub fn cross_validate(
         if (per_period - per_period.round()).abs() > 1e-6 * per_period {
             opts.period = aras_signal::PeriodSource::Off;
         }
-        let prep = prepare(
-            &read,
-            &opts,
-            cfg.identification.filtering,
-            model,
-            &geometry,
-        )?;
+        let prep = prepare(&read, &opts, cfg.identification.filtering, model, &geometry)?;
         let mut fitness = Vec::new();
         let mut predicted = Vec::new();
         for beta in candidates {
@@ -138,7 +133,11 @@ fn workspace_box(cfg: &Config) -> ([f64; 2], [f64; 2]) {
 
 /// Motor-space mass matrix `J⁻ᵀ M J⁻¹` (80) at pose `x`.
 fn mass_motor(dy: &Dynamics, x: &[f64; 2]) -> Result<[[f64; 2]; 2], aras_dyn::DynError> {
-    let s = dy.sample(&Vector2::new(x[0], x[1]), &Vector2::zeros(), &Vector2::zeros())?;
+    let s = dy.sample(
+        &Vector2::new(x[0], x[1]),
+        &Vector2::zeros(),
+        &Vector2::zeros(),
+    )?;
     let m = dy.mass_matrix_motor(&s);
     Ok([[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]])
 }
@@ -172,7 +171,10 @@ pub fn pd_check(params: &Params, cfg: &Config) -> Result<PdSummary> {
 
 /// The smallest mass-matrix eigenvalue on a `[φ, γ]` grid over the
 /// workspace: `(φ_deg, γ_deg, values[i][j])` for the heat map.
-pub fn min_eigen_grid(params: &Params, cfg: &Config) -> Result<(Vec<f64>, Vec<f64>, Vec<Vec<f64>>)> {
+pub fn min_eigen_grid(
+    params: &Params,
+    cfg: &Config,
+) -> Result<(Vec<f64>, Vec<f64>, Vec<Vec<f64>>)> {
     let dy = Dynamics::new(params)?;
     let (lo, hi) = workspace_box(cfg);
     let [nx, ny] = cfg.validation.heatmap;
@@ -234,8 +236,13 @@ pub fn parameter_errors(
         .filter(|e| e.truth.abs() > 1e-6 * scale)
         .map(|e| 100.0 * (e.error / e.truth).abs())
         .fold(0.0, f64::max);
-    let finite: Vec<f64> = entries.iter().map(|e| e.in_sigma).filter(|v| v.is_finite()).collect();
-    let rms_in_sigma = (finite.iter().map(|v| v * v).sum::<f64>() / finite.len().max(1) as f64).sqrt();
+    let finite: Vec<f64> = entries
+        .iter()
+        .map(|e| e.in_sigma)
+        .filter(|v| v.is_finite())
+        .collect();
+    let rms_in_sigma =
+        (finite.iter().map(|v| v * v).sum::<f64>() / finite.len().max(1) as f64).sqrt();
     Ok(ErrorSummary {
         max_relative_percent,
         rms_in_sigma,

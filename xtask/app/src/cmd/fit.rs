@@ -17,7 +17,9 @@ use crate::report::run::{RunData, build};
 use crate::robot::paper_model;
 use crate::stages::Stages;
 use crate::summary::{PseudoInertia, SdpReport, Summary, base_file, fitness_list};
-use crate::validate::{cross_validate, min_eigen_grid, parameter_errors, pd_check, pseudo_inertia_min};
+use crate::validate::{
+    cross_validate, min_eigen_grid, parameter_errors, pd_check, pseudo_inertia_min,
+};
 
 /// What the fit needs.
 pub struct FitInput<'a> {
@@ -73,11 +75,20 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
     let xv = match (input.truth, input.cross_validate) {
         (Some(truth), true) => {
             let dir = out.path("validation");
-            std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+            std::fs::create_dir_all(&dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
             let n = cfg.validation.frequencies_hz.len() as u64;
             let bar = stages.bar(n, "cross-validation");
             let r = stages.run("cross-validation (79)", |_| {
-                cross_validate(truth, input.nominal, &model, &[ols_std.clone(), sdp_std.clone()], cfg, &dir, &bar)
+                cross_validate(
+                    truth,
+                    input.nominal,
+                    &model,
+                    &[ols_std.clone(), sdp_std.clone()],
+                    cfg,
+                    &dir,
+                    &bar,
+                )
             })?;
             bar.finish_and_clear();
             r
@@ -101,7 +112,10 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
     let truth_std: Option<Vec<f64>> = input.truth.and_then(|t| {
         let mut paper = t.clone();
         paper.extra = Default::default();
-        paper.standard_vector(&model).ok().map(|v| v.as_slice().to_vec())
+        paper
+            .standard_vector(&model)
+            .ok()
+            .map(|v| v.as_slice().to_vec())
     });
     let truth_base = match &truth_std {
         Some(t) => Some(id.base.to_base(t)?),
@@ -110,8 +124,14 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
     let errors = match &truth_std {
         Some(t) => {
             let mut m = BTreeMap::new();
-            m.insert("ols".to_string(), parameter_errors(&id.base, &id.ols.estimate, &id.ols.std_dev, t)?);
-            m.insert("sdp".to_string(), parameter_errors(&id.base, &id.sdp.base, &id.ols.std_dev, t)?);
+            m.insert(
+                "ols".to_string(),
+                parameter_errors(&id.base, &id.ols.estimate, &id.ols.std_dev, t)?,
+            );
+            m.insert(
+                "sdp".to_string(),
+                parameter_errors(&id.base, &id.sdp.base, &id.ols.std_dev, t)?,
+            );
             Some(m)
         }
         None => None,
@@ -145,7 +165,10 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
     out.write_json("summary.json", &summary)?;
 
     let data = RunData {
-        title: format!("ARAS-Diamond identification report (`aras {}`)", input.command),
+        title: format!(
+            "ARAS-Diamond identification report (`aras {}`)",
+            input.command
+        ),
         intro: input.intro,
         timings: stages.timings(),
         design: input.design,
@@ -173,9 +196,14 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
 
 /// The short terminal table: paper vs ours.
 pub fn terminal_table(s: &Summary) -> String {
-    let mut t = String::from("dataset          paper τ1  ours τ1 (OLS/SDP)   paper τ2  ours τ2 (OLS/SDP)\n");
+    let mut t = String::from(
+        "dataset          paper τ1  ours τ1 (OLS/SDP)   paper τ2  ours τ2 (OLS/SDP)\n",
+    );
     for f in &s.fitness {
-        let p = |j: usize| f.paper.map_or("    –".to_string(), |p| format!("{:5.1}", p[j]));
+        let p = |j: usize| {
+            f.paper
+                .map_or("    –".to_string(), |p| format!("{:5.1}", p[j]))
+        };
         t += &format!(
             "{:<16} {:>8}  {:6.2} / {:6.2}     {:>8}  {:6.2} / {:6.2}\n",
             f.dataset,

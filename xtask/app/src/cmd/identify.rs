@@ -20,7 +20,9 @@ pub fn sidecar_truth(path: &std::path::Path) -> Option<aras_dyn::Params> {
 /// Read options with the sidecar choice of the command line.
 pub fn read_options(sidecar: Option<&std::path::Path>) -> ReadOptions {
     ReadOptions {
-        sidecar: sidecar.map_or(SidecarSource::Auto, |p| SidecarSource::Path(p.to_path_buf())),
+        sidecar: sidecar.map_or(SidecarSource::Auto, |p| {
+            SidecarSource::Path(p.to_path_buf())
+        }),
         ..ReadOptions::default()
     }
 }
@@ -35,21 +37,29 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
     let model = paper_model(&nominal)?;
     let geometry = nominal.geometry()?;
     let log = stages
-        .run("read log", |_| read_log(&args.data, &read_options(args.sidecar.as_deref())))
+        .run("read log", |_| {
+            read_log(&args.data, &read_options(args.sidecar.as_deref()))
+        })
         .with_context(|| format!("reading {}", args.data.display()))?;
     let sidecar = args
         .sidecar
         .clone()
         .unwrap_or_else(|| aras_dyn::sim::sidecar_path(&args.data));
     let truth = sidecar_truth(&sidecar);
-    let base = stages.run("base parameters (58)", |_| base_parameters(&model, &geometry, &cfg))?;
+    let base = stages.run("base parameters (58)", |_| {
+        base_parameters(&model, &geometry, &cfg)
+    })?;
     let intro = format!(
         "Identification of `{}` ({} rows, {:.1} s at {:.1} Hz){}.",
         args.data.display(),
         log.summary.rows,
         log.summary.duration_s,
         log.summary.sample_rate_hz,
-        if truth.is_some() { "; the sidecar holds the simulation's truth, so parameter errors are reported" } else { "" }
+        if truth.is_some() {
+            "; the sidecar holds the simulation's truth, so parameter errors are reported"
+        } else {
+            ""
+        }
     );
     let summary = fit::run(
         FitInput {

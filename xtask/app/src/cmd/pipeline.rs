@@ -31,20 +31,28 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
     let model = paper_model(&nominal)?;
     let geometry = nominal.geometry()?;
 
-    let base = stages.run("base parameters (58)", |_| base_parameters(&model, &geometry, &cfg))?;
+    let base = stages.run("base parameters (58)", |_| {
+        base_parameters(&model, &geometry, &cfg)
+    })?;
     let design = stages.run("excitation design (74)–(77)", |_| {
         crate::excite::design(&cfg, &nominal, &base)
     })?;
     out.write("trajectory.json", design.trajectory.to_json() + "\n")?;
 
     let period = design.trajectory.period();
-    let sim = sim_config(&cfg, &nominal, cfg.simulation.periods as f64 * period, cfg.simulation.seed);
+    let sim = sim_config(
+        &cfg,
+        &nominal,
+        cfg.simulation.periods as f64 * period,
+        cfg.simulation.seed,
+    );
     let noise = sim.sensors.torque_noise_std();
     let csv = out.path("log.csv");
     stages.run("simulate robot", |_| {
         run_and_write(&truth, &FourierPath(&design.trajectory), &sim, &csv)
     })?;
-    let log = stages.run("read log", |_| read_log(&csv, &ReadOptions::default()))
+    let log = stages
+        .run("read log", |_| read_log(&csv, &ReadOptions::default()))
         .context("reading back the simulated log")?;
     out.write("config.toml", cfg.to_toml())?;
 
@@ -53,7 +61,11 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
          Sensor noise: current σ = {:?} A → joint torque σ = [{:.4}, {:.4}] N·m, encoder resolution {:.3e} rad \
          (docs/simulator.md: a Maxon RE 35-class motor, 10 mA current-sense noise, 1024-line encoder, capstan 10:1). \
          PD control (Kp = {:?}, Kd = {:?}){}.",
-        if cfg.simulation.truth.is_some() { "truth from simulation.truth" } else { "truth = nominal robot" },
+        if cfg.simulation.truth.is_some() {
+            "truth from simulation.truth"
+        } else {
+            "truth = nominal robot"
+        },
         cfg.simulation.periods,
         cfg.simulation.rate_hz,
         cfg.simulation.seed,
@@ -63,7 +75,11 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
         sim.sensors.resolution()[0],
         cfg.simulation.kp,
         cfg.simulation.kd,
-        if cfg.simulation.feedforward { " with model feedforward" } else { "" },
+        if cfg.simulation.feedforward {
+            " with model feedforward"
+        } else {
+            ""
+        },
     );
     let summary = fit::run(
         FitInput {
@@ -86,6 +102,9 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
     )?;
     let dir = out.commit()?;
     println!("{}", fit::terminal_table(&summary));
-    println!("outputs in {} (report.html, report.md, summary.json, params.json, base.json)", dir.display());
+    println!(
+        "outputs in {} (report.html, report.md, summary.json, params.json, base.json)",
+        dir.display()
+    );
     Ok(())
 }

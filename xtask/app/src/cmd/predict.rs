@@ -19,7 +19,8 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config;
     super::check_new_file(&args.out, args.common.force)?;
-    let params = Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
+    let params =
+        Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
     // The parameter file's own model: extra effects in it are predicted too.
     let model = params.model()?;
     let beta = params.standard_vector(&model)?.as_slice().to_vec();
@@ -39,7 +40,13 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let mut csv = String::with_capacity(n * 48);
     csv.push_str("t,tau1,tau2\n");
     for i in 0..n {
-        let _ = writeln!(csv, "{},{},{}", prep.processed.samples.t[i], tau[i], tau[n + i]);
+        let _ = writeln!(
+            csv,
+            "{},{},{}",
+            prep.processed.samples.t[i],
+            tau[i],
+            tau[n + i]
+        );
     }
     write_atomic(&args.out, csv.as_bytes())?;
     println!(

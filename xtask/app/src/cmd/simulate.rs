@@ -26,14 +26,20 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
             let tr = FourierTrajectory::load(path)
                 .with_context(|| format!("reading the trajectory {}", path.display()))?;
             let sim = sim_config(&cfg, &nominal, periods * tr.period(), cfg.simulation.seed);
-            stages.run("simulate robot", |_| run_and_write(&truth, &FourierPath(&tr), &sim, &args.out))?
+            stages.run("simulate robot", |_| {
+                run_and_write(&truth, &FourierPath(&tr), &sim, &args.out)
+            })?
         }
         (None, Some(f)) => {
             let tr = Sinusoid::paper_79(f).context("option --frequency")?;
             let sim = sim_config(&cfg, &nominal, periods / f, cfg.simulation.seed);
-            stages.run("simulate robot", |_| run_and_write(&truth, &tr, &sim, &args.out))?
+            stages.run("simulate robot", |_| {
+                run_and_write(&truth, &tr, &sim, &args.out)
+            })?
         }
-        (None, None) => bail!("give --trajectory FILE (from `aras excite`) or --frequency HZ (trajectory (79))"),
+        (None, None) => {
+            bail!("give --trajectory FILE (from `aras excite`) or --frequency HZ (trajectory (79))")
+        }
     };
     println!(
         "{} ({} rows) and {}",

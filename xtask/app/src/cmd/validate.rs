@@ -34,16 +34,28 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
     let cfg = loaded.config;
     let out = OutDir::create(&args.out, args.common.force)?;
     let mut stages = Stages::new(args.common.quiet);
-    let params = Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
+    let params =
+        Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let truth = truth(&cfg, &loaded.dir, &nominal)?;
     let model = paper_model(&nominal)?;
     let mut paper_part = params.clone();
     paper_part.extra = Default::default();
     let beta = paper_part.standard_vector(&model)?.as_slice().to_vec();
-    let bar = stages.bar(cfg.validation.frequencies_hz.len() as u64, "cross-validation");
+    let bar = stages.bar(
+        cfg.validation.frequencies_hz.len() as u64,
+        "cross-validation",
+    );
     let xv = stages.run("cross-validation (79)", |_| {
-        cross_validate(&truth, &nominal, &model, &[beta], &cfg, &out.path("."), &bar)
+        cross_validate(
+            &truth,
+            &nominal,
+            &model,
+            &[beta],
+            &cfg,
+            &out.path("."),
+            &bar,
+        )
     })?;
     bar.finish_and_clear();
     let pd = stages.run("workspace PD check (80)", |_| pd_check(&params, &cfg))?;
@@ -64,7 +76,13 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
         .iter()
         .map(|(f, v, p)| {
             let ps = |j: usize| p.map_or("–".into(), |p: [f64; 2]| format!("{:.1}", p[j]));
-            vec![format!("{f} Hz"), ps(0), format!("{:.2}", v[0]), ps(1), format!("{:.2}", v[1])]
+            vec![
+                format!("{f} Hz"),
+                ps(0),
+                format!("{:.2}", v[0]),
+                ps(1),
+                format!("{:.2}", v[1]),
+            ]
         })
         .collect();
     r.table(&["f", "paper τ1", "ours τ1", "paper τ2", "ours τ2"], rows);
@@ -82,8 +100,15 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
     out.write("report.html", r.to_html())?;
     let dir = out.commit()?;
     for (f, v, p) in &summary.fitness {
-        println!("{f:>5} Hz  τ1 {:6.2} %  τ2 {:6.2} %  (paper {:?})", v[0], v[1], p);
+        println!(
+            "{f:>5} Hz  τ1 {:6.2} %  τ2 {:6.2} %  (paper {:?})",
+            v[0], v[1], p
+        );
     }
-    println!("mass matrix PD over the workspace: {}; outputs in {}", pd.positive_definite, dir.display());
+    println!(
+        "mass matrix PD over the workspace: {}; outputs in {}",
+        pd.positive_definite,
+        dir.display()
+    );
     Ok(())
 }

@@ -70,7 +70,9 @@ pub fn build(d: &RunData) -> Result<Report> {
     r.heading(1, "Summary: paper vs ours");
     let mut rows = Vec::new();
     for x in d.fitness {
-        let p = x.paper.map_or(["–".to_string(), "–".to_string()], |p| [f(p[0], 1), f(p[1], 1)]);
+        let p = x.paper.map_or(["–".to_string(), "–".to_string()], |p| {
+            [f(p[0], 1), f(p[1], 1)]
+        });
         rows.push(vec![
             x.dataset.clone(),
             p[0].clone(),
@@ -82,7 +84,15 @@ pub fn build(d: &RunData) -> Result<Report> {
         ]);
     }
     r.table(
-        &["dataset", "paper τ1", "OLS τ1", "SDP τ1", "paper τ2", "OLS τ2", "SDP τ2"],
+        &[
+            "dataset",
+            "paper τ1",
+            "OLS τ1",
+            "SDP τ1",
+            "paper τ2",
+            "OLS τ2",
+            "SDP τ2",
+        ],
         rows,
     );
     r.paragraph(
@@ -104,12 +114,24 @@ pub fn build(d: &RunData) -> Result<Report> {
             "t (s)",
             "angle (deg)",
             &[
-                Series { name: "φ".into(), x: &ts, y: &phi },
-                Series { name: "γ".into(), x: &ts, y: &gam },
+                Series {
+                    name: "φ".into(),
+                    x: &ts,
+                    y: &phi,
+                },
+                Series {
+                    name: "γ".into(),
+                    x: &ts,
+                    y: &gam,
+                },
             ],
             500,
         )?;
-        r.figure("excitation.svg", "Task coordinates φ, γ of the designed excitation", svg);
+        r.figure(
+            "excitation.svg",
+            "Task coordinates φ, γ of the designed excitation",
+            svg,
+        );
         r.list(vec![
             format!(
                 "{} harmonics, period {:.3} s, criterion {:?}: condition number of the column-scaled base regressor **{:.3}**",
@@ -131,8 +153,14 @@ pub fn build(d: &RunData) -> Result<Report> {
     r.heading(1, "Signal processing (§6)");
     let p = d.processing;
     let mut items = vec![
-        format!("{} input samples at {:.1} Hz → {} samples fitted", p.input_samples, p.sample_rate_hz, p.output_samples),
-        format!("angles from {}, torques from {}", p.angle_source, p.torque_source),
+        format!(
+            "{} input samples at {:.1} Hz → {} samples fitted",
+            p.input_samples, p.sample_rate_hz, p.output_samples
+        ),
+        format!(
+            "angles from {}, torques from {}",
+            p.angle_source, p.torque_source
+        ),
         format!("derivatives: {:?} ({})", p.derivative, p.derivative_source),
     ];
     if let Some(per) = &p.periods {
@@ -148,7 +176,10 @@ pub fn build(d: &RunData) -> Result<Report> {
         ));
     }
     if let Some(fl) = &p.filter {
-        items.push(format!("low-pass: Butterworth order {} at {} Hz, {}", fl.order, fl.cutoff_hz, fl.kind));
+        items.push(format!(
+            "low-pass: Butterworth order {} at {} Hz, {}",
+            fl.order, fl.cutoff_hz, fl.kind
+        ));
     }
     r.list(items);
 
@@ -161,9 +192,16 @@ pub fn build(d: &RunData) -> Result<Report> {
         r.heading(1, "Parameter errors against the simulation's truth");
         let mut rows = Vec::new();
         for (k, e) in errs {
-            rows.push(vec![k.clone(), f(e.max_relative_percent, 3), f(e.rms_in_sigma, 2)]);
+            rows.push(vec![
+                k.clone(),
+                f(e.max_relative_percent, 3),
+                f(e.rms_in_sigma, 2),
+            ]);
         }
-        r.table(&["estimate", "max |error|/|truth| (%)", "RMS error/σ"], rows);
+        r.table(
+            &["estimate", "max |error|/|truth| (%)", "RMS error/σ"],
+            rows,
+        );
         r.paragraph(
             "Over the base parameters (the only identifiable quantities). RMS error/σ near 1 means \
              the OLS standard deviations (64) are honest; the SDP is pulled towards the nominal robot \
@@ -180,21 +218,33 @@ pub fn build(d: &RunData) -> Result<Report> {
         ),
         format!(
             "masses (kg): {}",
-            s.masses.iter().map(|m| f(*m, 4)).collect::<Vec<_>>().join(", ")
+            s.masses
+                .iter()
+                .map(|m| f(*m, 4))
+                .collect::<Vec<_>>()
+                .join(", ")
         ),
         format!(
             "active constraints: {}",
             if s.active.is_empty() {
                 "none".to_string()
             } else {
-                s.active.iter().map(|a| format!("{:?} {}", a.kind, a.name)).collect::<Vec<_>>().join("; ")
+                s.active
+                    .iter()
+                    .map(|a| format!("{:?} {}", a.kind, a.name))
+                    .collect::<Vec<_>>()
+                    .join("; ")
             }
         ),
     ]);
 
     r.heading(1, "Timings");
     let total: f64 = d.timings.iter().map(|t| t.1).sum();
-    let mut rows: Vec<Vec<String>> = d.timings.iter().map(|(n, s)| vec![n.clone(), f(*s, 2)]).collect();
+    let mut rows: Vec<Vec<String>> = d
+        .timings
+        .iter()
+        .map(|(n, s)| vec![n.clone(), f(*s, 2)])
+        .collect();
     rows.push(vec!["**total**".into(), f(total, 2)]);
     r.table(&["stage", "wall-clock (s)"], rows);
     Ok(r)
@@ -213,13 +263,29 @@ fn torque_figures(r: &mut Report, d: &RunData) -> Result<()> {
             "t (s)",
             "τ (N·m)",
             &[
-                Series { name: "measured".into(), x: d.t, y: m },
-                Series { name: "OLS".into(), x: d.t, y: o },
-                Series { name: "SDP".into(), x: d.t, y: s },
+                Series {
+                    name: "measured".into(),
+                    x: d.t,
+                    y: m,
+                },
+                Series {
+                    name: "OLS".into(),
+                    x: d.t,
+                    y: o,
+                },
+                Series {
+                    name: "SDP".into(),
+                    x: d.t,
+                    y: s,
+                },
             ],
             800,
         )?;
-        r.figure(format!("torque{}.svg", j + 1), format!("Joint {}: measured and predicted torque", j + 1), svg);
+        r.figure(
+            format!("torque{}.svg", j + 1),
+            format!("Joint {}: measured and predicted torque", j + 1),
+            svg,
+        );
         let ro: Vec<f64> = m.iter().zip(o).map(|(a, b)| a - b).collect();
         let rs: Vec<f64> = m.iter().zip(s).map(|(a, b)| a - b).collect();
         let svg = lines(
@@ -227,12 +293,24 @@ fn torque_figures(r: &mut Report, d: &RunData) -> Result<()> {
             "t (s)",
             "τ − τ̂ (N·m)",
             &[
-                Series { name: "OLS".into(), x: d.t, y: &ro },
-                Series { name: "SDP".into(), x: d.t, y: &rs },
+                Series {
+                    name: "OLS".into(),
+                    x: d.t,
+                    y: &ro,
+                },
+                Series {
+                    name: "SDP".into(),
+                    x: d.t,
+                    y: &rs,
+                },
             ],
             800,
         )?;
-        r.figure(format!("residual{}.svg", j + 1), format!("Joint {}: residuals", j + 1), svg);
+        r.figure(
+            format!("residual{}.svg", j + 1),
+            format!("Joint {}: residuals", j + 1),
+            svg,
+        );
     }
     Ok(())
 }
@@ -254,9 +332,13 @@ fn base_table(r: &mut Report, d: &RunData) {
     let mut rows = Vec::new();
     for i in 0..id.base.n_base() {
         let def = id.base.expression(i);
-        let def = def.split_once(" = ").map_or(def.clone(), |(_, rhs)| rhs.to_string());
+        let def = def
+            .split_once(" = ")
+            .map_or(def.clone(), |(_, rhs)| rhs.to_string());
         let truth = d.truth_base.map_or("–".into(), |t| g(t[i]));
-        let (pv, ps) = paper::TABLE1.get(i).map_or(("–".into(), "–".into()), |(v, s)| (g(*v), f(*s, 2)));
+        let (pv, ps) = paper::TABLE1
+            .get(i)
+            .map_or(("–".into(), "–".into()), |(v, s)| (g(*v), f(*s, 2)));
         rows.push(vec![
             format!("b{}", i + 1),
             format!("`{def}`"),
@@ -269,12 +351,24 @@ fn base_table(r: &mut Report, d: &RunData) {
         ]);
     }
     r.table(
-        &["#", "definition", "OLS", "σ%", "SDP", "truth", "paper #", "paper σ%"],
+        &[
+            "#",
+            "definition",
+            "OLS",
+            "σ%",
+            "SDP",
+            "truth",
+            "paper #",
+            "paper σ%",
+        ],
         rows,
     );
     let un = id.base.unidentifiable();
     if !un.is_empty() {
-        r.paragraph(format!("Unidentifiable (no effect on the torques): {}.", un.join(", ")));
+        r.paragraph(format!(
+            "Unidentifiable (no effect on the torques): {}.",
+            un.join(", ")
+        ));
     }
     r.paragraph(format!(
         "Residual standard deviation σ_ρ = {:.3e} N·m (66); condition number of the base regressor {:.1}; largest σ% {:.2}.",
@@ -303,37 +397,77 @@ fn cross_validation(r: &mut Report, d: &RunData) -> Result<()> {
             f(x.fitness[1][1], 2),
         ]);
     }
-    r.table(&["f", "paper τ1", "OLS τ1", "SDP τ1", "paper τ2", "OLS τ2", "SDP τ2"], rows);
-    let cats: Vec<String> = d.xv.iter().map(|x| format!("{} Hz", x.frequency_hz)).collect();
+    r.table(
+        &[
+            "f",
+            "paper τ1",
+            "OLS τ1",
+            "SDP τ1",
+            "paper τ2",
+            "OLS τ2",
+            "SDP τ2",
+        ],
+        rows,
+    );
+    let cats: Vec<String> =
+        d.xv.iter()
+            .map(|x| format!("{} Hz", x.frequency_hz))
+            .collect();
     let mut series = Vec::new();
     for j in 0..2 {
         series.push((
             format!("paper τ{}", j + 1),
-            d.xv.iter().map(|x| paper::table2(x.frequency_hz).map_or(0.0, |p| p[j])).collect(),
+            d.xv.iter()
+                .map(|x| paper::table2(x.frequency_hz).map_or(0.0, |p| p[j]))
+                .collect(),
         ));
-        series.push((format!("SDP τ{}", j + 1), d.xv.iter().map(|x| x.fitness[1][j]).collect()));
+        series.push((
+            format!("SDP τ{}", j + 1),
+            d.xv.iter().map(|x| x.fitness[1][j]).collect(),
+        ));
     }
     let svg = bars("Cross-validation fitness", "fitness (%)", &cats, &series)?;
-    r.figure("cross_validation.svg", "Fitness (78) per frequency: paper Table 2 vs ours (SDP)", svg);
+    r.figure(
+        "cross_validation.svg",
+        "Fitness (78) per frequency: paper Table 2 vs ours (SDP)",
+        svg,
+    );
     if let Some(x) = d.xv.last() {
         let n = x.traces.t.len();
         let mut ys = Vec::new();
         for j in 0..2 {
-            ys.push((format!("measured τ{}", j + 1), &x.traces.measured[j * n..(j + 1) * n]));
-            ys.push((format!("SDP τ{}", j + 1), &x.traces.predicted[1][j * n..(j + 1) * n]));
+            ys.push((
+                format!("measured τ{}", j + 1),
+                &x.traces.measured[j * n..(j + 1) * n],
+            ));
+            ys.push((
+                format!("SDP τ{}", j + 1),
+                &x.traces.predicted[1][j * n..(j + 1) * n],
+            ));
         }
         let series: Vec<Series> = ys
             .iter()
-            .map(|(name, y)| Series { name: name.clone(), x: &x.traces.t, y })
+            .map(|(name, y)| Series {
+                name: name.clone(),
+                x: &x.traces.t,
+                y,
+            })
             .collect();
         let svg = lines(
-            &format!("Cross-validation at {} Hz (one averaged period)", x.frequency_hz),
+            &format!(
+                "Cross-validation at {} Hz (one averaged period)",
+                x.frequency_hz
+            ),
             "t (s)",
             "τ (N·m)",
             &series,
             600,
         )?;
-        r.figure("cross_validation_fastest.svg", "Measured vs SDP-predicted torque on the fastest cross-validation trajectory", svg);
+        r.figure(
+            "cross_validation_fastest.svg",
+            "Measured vs SDP-predicted torque on the fastest cross-validation trajectory",
+            svg,
+        );
     }
     Ok(())
 }
@@ -349,20 +483,45 @@ fn mass_matrix(r: &mut Report, d: &RunData) -> Result<()> {
             format!("({:.1}°, {:.1}°)", p.argmin_deg[0], p.argmin_deg[1]),
             format!("{:.4e}", p.max_eigenvalue),
             format!("({:.1}°, {:.1}°)", p.argmax_deg[0], p.argmax_deg[1]),
-            if p.positive_definite { "yes".into() } else { format!("**no** ({} points)", p.non_positive + p.failures) },
+            if p.positive_definite {
+                "yes".into()
+            } else {
+                format!("**no** ({} points)", p.non_positive + p.failures)
+            },
         ]);
     }
-    r.table(&["estimate", "points", "min eig (kg·m²)", "at (φ, γ)", "max eig (kg·m²)", "at (φ, γ)", "PD everywhere"], rows);
+    r.table(
+        &[
+            "estimate",
+            "points",
+            "min eig (kg·m²)",
+            "at (φ, γ)",
+            "max eig (kg·m²)",
+            "at (φ, γ)",
+            "PD everywhere",
+        ],
+        rows,
+    );
     r.paragraph("Motor-space mass matrix `J⁻ᵀ M J⁻¹` at rest, on a grid plus random points of the box (77).");
     if let Some((xs, ys, v)) = d.heat {
-        let svg = heatmap("Smallest mass-matrix eigenvalue (SDP), kg·m²", "φ (deg)", "γ (deg)", xs, ys, v)?;
+        let svg = heatmap(
+            "Smallest mass-matrix eigenvalue (SDP), kg·m²",
+            "φ (deg)",
+            "γ (deg)",
+            xs,
+            ys,
+            v,
+        )?;
         r.figure("mass_eigen.svg", "Smallest eigenvalue of the motor-space mass matrix of the SDP estimate over the workspace", svg);
     }
     Ok(())
 }
 
 fn pseudo_inertia(r: &mut Report, d: &RunData) {
-    r.heading(1, "Pseudo-inertia minimum eigenvalues (physical consistency)");
+    r.heading(
+        1,
+        "Pseudo-inertia minimum eigenvalues (physical consistency)",
+    );
     let p = d.pseudo;
     let rows = (0..4)
         .map(|k| {
@@ -374,7 +533,10 @@ fn pseudo_inertia(r: &mut Report, d: &RunData) {
             ]
         })
         .collect();
-    r.table(&["link", "OLS (completed near nominal)", "SDP", "truth"], rows);
+    r.table(
+        &["link", "OLS (completed near nominal)", "SDP", "truth"],
+        rows,
+    );
     r.paragraph(
         "Smallest eigenvalue of `𝒥_k = [[½tr(I)·1 − I, h], [hᵀ, m]]` (kg·m² and kg mixed, as in the spec's NOTE); \
          positive ⇔ (67)–(69) hold. OLS only fixes the base combinations; its standard set is the one closest to \

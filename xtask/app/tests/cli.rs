@@ -1,0 +1,234 @@
+//! End-to-end tests of the `aras` binary on a short configuration.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn aras(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_aras"))
+        .args(args)
+        .output()
+        .expect("the aras binary runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("aras-app-test-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// A short but still meaningful run: 6 periods, 2 design starts, two
+/// validation frequencies (the slowest and the fastest of Table 2).
+const SHORT: &str = "[trajectory]\nstarts = 2\n[simulation]\nperiods = 6\n\
+                     [validation]\nfrequencies_hz = [0.5, 2.5]\nperiods = 6\npd_grid = 21\npd_random = 2000\n";
+
+#[test]
+fn pipeline_identify_predict_end_to_end() {
+    let dir = scratch("pipeline");
+    let cfg = dir.join("short.toml");
+    std::fs::write(&cfg, SHORT).unwrap();
+    let out = dir.join("out");
+    let (c, o) = (cfg.to_str().unwrap(), out.to_str().unwrap());
+    let r = aras(&[
+        "pipeline",
+        "--config",
+        c,
+        "--out",
+        o,
+        "--quiet",
+        "--reproducible",
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(stdout.contains("xv_2.5hz"), "terminal table: {stdout}");
+    for f in [
+        "trajectory.json",
+        "log.csv",
+        "log.json",
+        "params.json",
+        "params_ols.json",
+        "base.json",
+        "summary.json",
+        "report.md",
+        "report.html",
+        "excitation.svg",
+        "mass_eigen.svg",
+        "torque1.svg",
+    ] {
+        assert!(out.join(f).is_file(), "missing {f}");
+    }
+    let s = json(&out.join("summary.json"));
+    assert!(
+        s.get("timings_s").is_none(),
+        "--reproducible leaves timings out"
+    );
+    // With g ⟂ a the paper model has 23 base parameters (spec §4 NOTE).
+    assert_eq!(s["base_parameters"], 23);
+    // Every cross-validation entry beats the paper's Table 2 (OLS and SDP).
+    let fit = s["fitness"].as_array().unwrap();
+    assert_eq!(fit.len(), 3);
+    for f in fit {
+        let paper = f["paper"].as_array().unwrap();
+        for est in ["ols", "sdp"] {
+            for j in 0..2 {
+                let ours = f[est][j].as_f64().unwrap();
+                let p = paper[j].as_f64().unwrap();
+                assert!(
+                    ours > p,
+                    "{} {est} τ{}: {ours} ≤ paper {p}",
+                    f["dataset"],
+                    j + 1
+                );
+            }
+        }
+    }
+    // The SDP's mass matrix is PD over the workspace, its links consistent.
+    assert_eq!(s["pd_check"]["sdp"]["positive_definite"], true);
+    for v in s["pseudo_inertia_min_eigenvalue"]["sdp"]
+        .as_array()
+        .unwrap()
+    {
+        assert!(v.as_f64().unwrap() > 0.0);
+    }
+    // The well-excited base parameters are close to the truth: the
+    // friction levels within 25 % (the near-rest creep of the smooth
+    // simulated friction biases them a little), the gravity terms within 5 %.
+    let base = json(&out.join("base.json"));
+    for p in base["parameters"].as_array().unwrap() {
+        let def = p["definition"].as_str().unwrap();
+        let (sdp, truth) = (p["sdp"].as_f64().unwrap(), p["truth"].as_f64().unwrap());
+        let tol = if def.ends_with("Fc1") || def.ends_with("Fc2") {
+            0.25
+        } else if def.contains(".hx") {
+            0.05
+        } else {
+            continue;
+        };
+        assert!(
+            (sdp - truth).abs() <= tol * truth.abs(),
+            "{def}: {sdp} vs {truth}"
+        );
+    }
+    let params =
+        aras_dyn::Params::load(out.join("params.json")).expect("params.json is a parameter file");
+    assert!(params.links.iter().all(|l| l.mass > 0.0));
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(
+        html.contains("<svg") && !html.contains("src=\""),
+        "self-contained HTML"
+    );
+
+    // identify on the pipeline's log, as a lab would on its own log.
+    let ident = dir.join("ident");
+    let log = out.join("log.csv");
+    let r = aras(&[
+        "identify",
+        "--data",
+        log.to_str().unwrap(),
+        "--out",
+        ident.to_str().unwrap(),
+        "-q",
+        "--config",
+        c,
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let si = json(&ident.join("summary.json"));
+    let ex = &si["fitness"][0];
+    assert_eq!(ex["dataset"], "excitation");
+    assert_eq!(
+        ex["sdp"], s["fitness"][0]["sdp"],
+        "identify and pipeline agree on the same log"
+    );
+    assert!(
+        si["parameter_errors"]["sdp"].is_object(),
+        "truth found in the sidecar"
+    );
+
+    // predict with the identified parameters on a cross-validation log.
+    let pred = dir.join("pred.csv");
+    let xv = out.join("validation").join("xv_0.5hz.csv");
+    let p = ident.join("params.json");
+    let r = aras(&[
+        "predict",
+        "--params",
+        p.to_str().unwrap(),
+        "--data",
+        xv.to_str().unwrap(),
+        "--out",
+        pred.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let text = std::fs::read_to_string(&pred).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t,tau1,tau2"));
+    assert_eq!(
+        lines.count(),
+        12000,
+        "one row per log row (6 periods of 2 s at 1 kHz)"
+    );
+    let msg = String::from_utf8_lossy(&r.stdout);
+    let fit1: f64 = msg
+        .split("τ1 ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        fit1 > 85.2,
+        "predict fitness {fit1} on (79) at 0.5 Hz: {msg}"
+    );
+    // An existing output is refused without --force.
+    let r = aras(&[
+        "predict",
+        "--params",
+        p.to_str().unwrap(),
+        "--data",
+        xv.to_str().unwrap(),
+        "--out",
+        pred.to_str().unwrap(),
+    ]);
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("--force"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn existing_output_directory_is_refused_without_force() {
+    let dir = scratch("force");
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("keep.txt"), "mine").unwrap();
+    let err = aras_app::output::OutDir::create(&out, false)
+        .err()
+        .expect("refused");
+    assert!(err.to_string().contains("--force"), "{err}");
+    let o = aras_app::output::OutDir::create(&out, true).unwrap();
+    o.write("new.txt", "x").unwrap();
+    assert!(
+        out.join("keep.txt").exists(),
+        "nothing is removed before commit"
+    );
+    o.commit().unwrap();
+    assert!(out.join("new.txt").exists() && !out.join("keep.txt").exists());
+    let r = aras(&["pipeline", "--out", out.to_str().unwrap(), "-q"]);
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("already exists"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn print_config_prints_parseable_defaults() {
+    let r = aras(&["pipeline", "--print-config"]);
+    assert!(r.status.success());
+    let text = String::from_utf8(r.stdout).unwrap();
+    let c =
+        aras_app::config::Config::parse(&text, aras_app::config::Format::Toml, "printed").unwrap();
+    assert_eq!(c, aras_app::config::Config::default());
+}
