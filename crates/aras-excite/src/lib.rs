@@ -1,1 +1,80 @@
-//! placeholder
+//! Optimal excitation trajectories for identifying the dynamics of the
+//! ARAS-Diamond (or any 2-DOF robot with task coordinates `X = [φ, γ]`),
+//! spec §5, equations (74)–(77).
+//!
+//! * [`FourierTrajectory`]: finite Fourier series (74)–(76) per coordinate,
+//!   exact `X`, `Ẋ`, `Ẍ`, JSON I/O (`docs/excitation.md`), sampling in task
+//!   space and, through `aras-kin`, in motor space (θ, θ̇, θ̈) for the log
+//!   format.
+//! * [`design`]: minimises the condition number of the column-scaled stacked
+//!   *base* regressor ([`Criterion::Condition`]) or a D-optimality criterion
+//!   ([`Criterion::DOptimal`]) over the coefficients, subject to the box and
+//!   rate limits (77), an acceleration limit and zero velocity at the period
+//!   boundary, from several random feasible starts.
+//! * [`Regressor`]: the one thing the design needs from a dynamic model, its
+//!   2 × n regressor rows at `(X, Ẋ, Ẍ)`, generic over [`aras_kin::Scalar`]
+//!   so dual numbers give their exact derivatives.
+//!
+//! # Conventions
+//!
+//! SI units and radians everywhere (rad, rad/s, rad/s², s); degrees appear
+//! only in messages. Coordinate 0 is φ, 1 is γ. The base projection `E`
+//! (`n × b`, `W_b = W E`) comes from the base-parameter analysis
+//! (`aras-ident`), so the design criterion is on the identifiable
+//! combinations only.
+//!
+//! # Guarantees
+//!
+//! * Constraints hold in **continuous time**, not only on the grid: the grid
+//!   bounds are tightened by a margin from Bernstein's inequality (see
+//!   [`constraints`]).
+//! * Gradients are exact: `X, Ẋ, Ẍ` are linear in the coefficients, the
+//!   regressor is differentiated by forward-mode dual numbers, and the
+//!   criteria by their SVD (see [`criterion`]); tests check them against
+//!   finite differences.
+//! * Deterministic for a seed (no time limits by default); bad settings are
+//!   [`ExciteError`]s naming the setting, never panics or NaN.
+//!
+//! # Dependencies, and why
+//!
+//! * `optimization_engine` (OpEn): a maintained, pure-Rust constrained
+//!   optimiser: augmented Lagrangian (ALM) for the linear path constraints,
+//!   PANOC (L-BFGS forward–backward) inside, with user gradients.
+//! * `num-dual` (through `aras-kin`'s `dual` feature): exact derivatives of
+//!   the regressor with respect to `(X, Ẋ, Ẍ)`.
+//! * `faer`: the thin SVD of the stacked base regressor.
+//! * `nalgebra`: the small fixed-size vectors of the kinematics API, and the
+//!   projection matrix `E` at the API edge.
+//! * `rand`: seeded random feasible starts (`Xoshiro256PlusPlus`, portable).
+//! * `rayon`: the starts run in parallel; `indicatif`: the progress bar.
+//! * `serde`/`serde_json`: the trajectory file format; `thiserror`: errors.
+//! * `aras-dyn`: the robot's regressor ([`DynRegressor`]) and the
+//!   simulator's `Trajectory` trait, implemented by [`FourierTrajectory`].
+
+#![warn(missing_docs)]
+
+pub mod constraints;
+pub mod criterion;
+mod design;
+mod dyn_model;
+mod error;
+mod fourier;
+mod param;
+mod regressor;
+
+pub use constraints::{DEFAULT_MAX_ACCEL_DEG, Limits, Margins};
+pub use criterion::{Assessment, Criterion};
+pub use design::{Design, DesignSettings, StartReport, assess, design, random_feasible};
+pub use dyn_model::DynRegressor;
+pub use error::ExciteError;
+pub use fourier::{
+    DEFAULT_HARMONICS, DEFAULT_OMEGA_F, FORMAT, FourierTrajectory, MotorRow, TaskRow, TaskState,
+};
+pub use regressor::Regressor;
+
+// Lets the shared test helpers name this crate the same way in unit tests,
+// integration tests and benches.
+#[cfg(test)]
+extern crate self as aras_excite;
+#[cfg(test)]
+pub(crate) mod test_support;

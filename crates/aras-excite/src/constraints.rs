@@ -1,0 +1,357 @@
+//! Motion limits: the workspace box and rate limits (77), an acceleration
+//! limit, and their enforcement on a time grid with a rigorous margin.
+//!
+//! # Why a finite grid is enough
+//!
+//! Every constrained signal `f` (a coordinate's `X_i`, `Ẋ_i` or `Ẍ_i`) is a
+//! trigonometric polynomial of degree at most `L·ω_f`. Bernstein's inequality
+//! gives `‖f''‖∞ ≤ (L ω_f)² ‖f − c‖∞` for any constant `c`. At an extremum `t*`
+//! of `f` (where `f' = 0`) the nearest point of a periodic grid with spacing
+//! `h = T/N` is at most `h/2` away, so `|f(t*) − f(t_j)| ≤ q ‖f − c‖∞` with
+//! `q = ½ (π L / N)²`. If the grid values stay inside the bounds tightened by
+//! `δ = q R` on each side (`R` = half the allowed range, `c` its centre), then
+//! the continuous signal stays inside the original bounds. The design
+//! tightens by `1.01·q R` to absorb rounding.
+
+use aras_kin::Workspace;
+use nalgebra::Vector2;
+
+use crate::FourierTrajectory;
+use crate::error::{ExciteError, check_finite};
+use crate::param::{Grid, Layout, dot};
+
+/// Default acceleration limit, 800°/s² per task coordinate (rad/s²).
+///
+/// The paper gives none. At the default period (10 s) and L = 5 the highest
+/// harmonic turns at π rad/s, so the rate limit of 200°/s alone would allow
+/// about 630°/s²; 800°/s² keeps motor torques of the capstan-driven links
+/// modest while leaving the rate limit the usual active constraint.
+pub const DEFAULT_MAX_ACCEL_DEG: f64 = 800.0;
+
+/// The limits an excitation trajectory must respect at every instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// Task-space box and rate limits, spec (77).
+    pub workspace: Workspace,
+    /// Acceleration limit `|Ẍ_i| ≤ max_accel_i` (rad/s²).
+    pub max_accel: Vector2<f64>,
+}
+
+impl Limits {
+    /// The paper's box and rates (77) and [`DEFAULT_MAX_ACCEL_DEG`].
+    pub fn paper() -> Self {
+        let a = DEFAULT_MAX_ACCEL_DEG.to_radians();
+        Self {
+            workspace: Workspace::paper(),
+            max_accel: Vector2::new(a, a),
+        }
+    }
+
+    /// Errors if the acceleration limit is not finite and positive (the
+    /// workspace validates itself on construction).
+    pub fn validate(&self) -> Result<(), ExciteError> {
+        for i in 0..2 {
+            check_finite(|| format!("max_accel[{i}]"), self.max_accel[i])?;
+            if self.max_accel[i] <= 0.0 {
+                return Err(ExciteError::InvalidSetting {
+                    name: "max_accel",
+                    value: self.max_accel[i],
+                    reason: "the acceleration limit must be positive (rad/s²)".into(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Per coordinate and kind (0 = position, 1 = velocity, 2 = acceleration)
+    /// the centre and half-width of the allowed range.
+    fn ranges(&self) -> [[(f64, f64); 3]; 2] {
+        let w = &self.workspace;
+        std::array::from_fn(|i| {
+            [
+                (
+                    0.5 * (w.min()[i] + w.max()[i]),
+                    0.5 * (w.max()[i] - w.min()[i]),
+                ),
+                (0.0, w.max_rate()[i]),
+                (0.0, self.max_accel[i]),
+            ]
+        })
+    }
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self::paper()
+    }
+}
+
+/// How close a trajectory comes to its limits, sampled on a grid.
+///
+/// Each margin is the smallest distance to the nearest bound over the grid
+/// (rad, rad/s, rad/s²): positive means inside, negative a violation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Margins {
+    /// Position margins `[φ, γ]` (rad).
+    pub position: Vector2<f64>,
+    /// Velocity margins (rad/s).
+    pub velocity: Vector2<f64>,
+    /// Acceleration margins (rad/s²).
+    pub acceleration: Vector2<f64>,
+    /// The smallest margin relative to its allowed half-range
+    /// (dimensionless; 0 = touching a limit, negative = violated).
+    pub worst_relative: f64,
+    /// Number of grid points per period the margins were measured on.
+    pub points: usize,
+}
+
+impl Margins {
+    /// Measures the margins of `trajectory` on `points` equally spaced
+    /// instants of one period (the trajectory is periodic, so one period
+    /// covers all time).
+    pub fn measure(trajectory: &FourierTrajectory, limits: &Limits, points: usize) -> Self {
+        let ranges = limits.ranges();
+        let mut m = [[f64::INFINITY; 3]; 2];
+        for row in trajectory.sample(points.max(1), 1) {
+            let v = [row.state.x, row.state.x_dot, row.state.x_ddot];
+            for i in 0..2 {
+                for k in 0..3 {
+                    let (c, r) = ranges[i][k];
+                    m[i][k] = m[i][k].min(r - (v[k][i] - c).abs());
+                }
+            }
+        }
+        let mut worst = f64::INFINITY;
+        for i in 0..2 {
+            for k in 0..3 {
+                worst = worst.min(m[i][k] / ranges[i][k].1);
+            }
+        }
+        Self {
+            position: Vector2::new(m[0][0], m[1][0]),
+            velocity: Vector2::new(m[0][1], m[1][1]),
+            acceleration: Vector2::new(m[0][2], m[1][2]),
+            worst_relative: worst,
+            points,
+        }
+    }
+}
+
+/// The tightening factor `q = ½ (π L / N)²` of the module docs.
+pub(crate) fn grid_factor(harmonics: usize, points: usize) -> f64 {
+    let r = std::f64::consts::PI * harmonics as f64 / points as f64;
+    0.5 * r * r
+}
+
+/// The constraints on a grid as `F1(p) ∈ [lo, hi]`, linear in the decision
+/// vector. `F1` is laid out in blocks of `N` values: for coordinate `i` and
+/// kind `k` (position, velocity, acceleration) the block index is `3 i + k`.
+#[derive(Debug, Clone)]
+pub(crate) struct GridConstraints {
+    pub grid: Grid,
+    pub lo: Vec<f64>,
+    pub hi: Vec<f64>,
+    /// Tightened `(centre, half-range)` per coordinate and kind.
+    tight: [[(f64, f64); 3]; 2],
+}
+
+impl GridConstraints {
+    /// Constraints on `points` instants of a period, tightened so that grid
+    /// feasibility implies continuous feasibility.
+    pub fn new(layout: Layout, limits: &Limits, points: usize) -> Self {
+        let grid = Grid::new(layout, points, 0.0);
+        let q = 1.01 * grid_factor(layout.harmonics, points);
+        let tight = limits.ranges().map(|r| r.map(|(c, h)| (c, h * (1.0 - q))));
+        let mut lo = Vec::with_capacity(6 * points);
+        let mut hi = Vec::with_capacity(6 * points);
+        for coord in &tight {
+            for &(c, h) in coord {
+                lo.extend(std::iter::repeat_n(c - h, points));
+                hi.extend(std::iter::repeat_n(c + h, points));
+            }
+        }
+        Self {
+            grid,
+            lo,
+            hi,
+            tight,
+        }
+    }
+
+    /// Number of constraint values (6N).
+    pub fn len(&self) -> usize {
+        self.lo.len()
+    }
+
+    fn basis(&self, k: usize) -> &[f64] {
+        match k {
+            0 => &self.grid.pos,
+            1 => &self.grid.vel,
+            _ => &self.grid.acc,
+        }
+    }
+
+    /// `F1(p)`.
+    pub fn map(&self, p: &[f64], out: &mut [f64]) {
+        let n = self.grid.len();
+        let w = self.grid.layout.per_coord();
+        for i in 0..2 {
+            let block = &p[i * w..(i + 1) * w];
+            for k in 0..3 {
+                let b = self.basis(k);
+                let o = &mut out[(3 * i + k) * n..(3 * i + k + 1) * n];
+                for (j, v) in o.iter_mut().enumerate() {
+                    *v = dot(&b[j * w..(j + 1) * w], block);
+                }
+            }
+        }
+    }
+
+    /// `J_F1ᵀ d` (exact: `F1` is linear).
+    pub fn jacobian_t(&self, d: &[f64], out: &mut [f64]) {
+        let n = self.grid.len();
+        let w = self.grid.layout.per_coord();
+        out.iter_mut().for_each(|v| *v = 0.0);
+        for i in 0..2 {
+            let g = &mut out[i * w..(i + 1) * w];
+            for k in 0..3 {
+                let b = self.basis(k);
+                let dk = &d[(3 * i + k) * n..(3 * i + k + 1) * n];
+                for (j, &dj) in dk.iter().enumerate() {
+                    for (gv, bv) in g.iter_mut().zip(&b[j * w..(j + 1) * w]) {
+                        *gv += dj * bv;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Largest violation of the tightened grid bounds (0 if feasible).
+    #[cfg(test)]
+    pub fn violation(&self, p: &[f64]) -> f64 {
+        let mut f = vec![0.0; self.len()];
+        self.map(p, &mut f);
+        f.iter()
+            .zip(self.lo.iter().zip(&self.hi))
+            .map(|(v, (lo, hi))| (lo - v).max(v - hi).max(0.0))
+            .fold(0.0, f64::max)
+    }
+
+    /// Scales each coordinate's motion about the centre of its tightened
+    /// box, `X ← c + s (X − c)`, `Ẋ ← s Ẋ`, `Ẍ ← s Ẍ`, with the largest `s`
+    /// that keeps every grid value within the tightened bounds. With `centre`
+    /// the motion is first shifted so its excursion is centred in the box;
+    /// with `grow` the scale may exceed 1 (to touch the limits). Keeps
+    /// `Ẋ(0) = 0`. Returns the smallest scale applied.
+    pub fn scale_to_fit(&self, p: &mut [f64], centre: bool, grow: bool) -> f64 {
+        let n = self.grid.len();
+        let w = self.grid.layout.per_coord();
+        let mut f = vec![0.0; self.len()];
+        let mut smallest = f64::INFINITY;
+        for i in 0..2 {
+            self.map(p, &mut f);
+            let block = |k: usize| &f[(3 * i + k) * n..(3 * i + k + 1) * n];
+            let (c, r_pos) = self.tight[i][0];
+            if centre {
+                let (lo, hi) = block(0)
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                        (a.min(v), b.max(v))
+                    });
+                p[i * w] += c - 0.5 * (lo + hi);
+                self.map(p, &mut f);
+            }
+            let block = |k: usize| &f[(3 * i + k) * n..(3 * i + k + 1) * n];
+            let mut s = f64::INFINITY;
+            for k in 0..3 {
+                let (ck, rk) = if k == 0 { (c, r_pos) } else { self.tight[i][k] };
+                let peak = block(k).iter().map(|v| (v - ck).abs()).fold(0.0, f64::max);
+                if peak > 0.0 {
+                    s = s.min(rk / peak);
+                }
+            }
+            if !s.is_finite() {
+                s = 1.0; // no motion and centred: nothing to scale
+            }
+            if !grow {
+                s = s.min(1.0);
+            }
+            let b = &mut p[i * w..(i + 1) * w];
+            b[0] = c + s * (b[0] - c);
+            b[1..].iter_mut().for_each(|v| *v *= s);
+            smallest = smallest.min(s);
+        }
+        smallest
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn layout() -> Layout {
+        Layout {
+            harmonics: 5,
+            omega_f: std::f64::consts::TAU / 10.0,
+        }
+    }
+
+    proptest! {
+        // The grid margin theorem: any point scaled onto the tightened grid
+        // bounds of a coarse grid (N = 60, so q ≈ 3.4 %) satisfies the true
+        // limits on a grid 50× finer, with the limits touched on the coarse grid.
+        #[test]
+        fn coarse_grid_feasibility_is_continuous_feasibility(
+            p in proptest::collection::vec(-1.0..1.0f64, 20),
+        ) {
+            let limits = Limits::paper();
+            let c = GridConstraints::new(layout(), &limits, 60);
+            let mut p = p;
+            c.scale_to_fit(&mut p, true, true);
+            prop_assert!(c.violation(&p) < 1e-12);
+            let f = layout().trajectory(&p).unwrap();
+            let m = Margins::measure(&f, &limits, 3000);
+            prop_assert!(m.worst_relative >= 0.0, "{m:?}");
+        }
+
+        // Jᵀ is the transpose of the linear map F1: ⟨F1(p), d⟩ = ⟨p, Jᵀd⟩
+        // for a map with no constant term (offsets zero).
+        #[test]
+        fn jacobian_transpose_is_adjoint(
+            p in proptest::collection::vec(-1.0..1.0f64, 20),
+            d in proptest::collection::vec(-1.0..1.0f64, 6 * 16),
+        ) {
+            let c = GridConstraints::new(layout(), &Limits::paper(), 16);
+            let mut f = vec![0.0; c.len()];
+            c.map(&p, &mut f);
+            let mut jt = vec![0.0; 20];
+            c.jacobian_t(&d, &mut jt);
+            let lhs = dot(&f, &d);
+            let rhs = dot(&p, &jt);
+            prop_assert!((lhs - rhs).abs() < 1e-10 * (1.0 + lhs.abs()));
+        }
+    }
+
+    #[test]
+    fn acceleration_limit_is_validated() {
+        let mut l = Limits::paper();
+        l.max_accel[1] = 0.0;
+        assert!(l.validate().unwrap_err().to_string().contains("max_accel"));
+        l.max_accel[1] = f64::NAN;
+        assert!(l.validate().is_err());
+    }
+
+    #[test]
+    fn margins_see_a_violation() {
+        let f = FourierTrajectory::new(
+            1.0,
+            [1.5, 1.0],
+            [vec![5.0], vec![0.0]],
+            [vec![0.0], vec![0.0]],
+        )
+        .unwrap();
+        let m = Margins::measure(&f, &Limits::paper(), 100);
+        assert!(m.velocity[0] < 0.0 && m.worst_relative < 0.0);
+    }
+}

@@ -1,0 +1,603 @@
+//! The optimal-excitation design: multi-start constrained optimisation of the
+//! Fourier coefficients with `optimization_engine` (ALM + PANOC).
+//!
+//! Problem, per start:
+//!
+//! ```text
+//! minimise    c(p)                    ln κ or −ln det, on the criterion grid
+//! subject to  F1(p) ∈ [lo, hi]        X, Ẋ, Ẍ on the constraint grid, tightened (77)
+//!             p ∈ U                   a box implied by the limits (for PANOC's projection)
+//! ```
+//!
+//! `F1` is linear and handled by the augmented Lagrangian (ALM) outer loop;
+//! PANOC (an L-BFGS forward–backward method) solves the inner problems with
+//! the exact gradients of [`criterion`](crate::criterion). The best start's
+//! point is finally pulled exactly onto the tightened grid bounds by scaling
+//! its motion about the box centre (a no-op up to the ALM tolerance), so the
+//! grid theorem of [`constraints`](crate::constraints) guarantees the limits
+//! in continuous time.
+
+use std::cell::RefCell;
+use std::io::IsTerminal;
+use std::time::{Duration, Instant};
+
+use aras_kin::{Geometry, evaluate};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use nalgebra::{DMatrix, Vector2};
+use optimization_engine::alm::{
+    AlmCache, AlmFactory, AlmOptimizer, AlmProblem, NO_JACOBIAN_MAPPING, NO_MAPPING,
+};
+use optimization_engine::constraints::Rectangle;
+use optimization_engine::core::ExitStatus;
+use optimization_engine::panoc::PANOCCache;
+use optimization_engine::{FunctionCallResult, SolverError};
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+use rayon::prelude::*;
+
+use crate::constraints::{GridConstraints, Limits, Margins, grid_factor};
+use crate::criterion::{Assessment, Criterion, Evaluator, check_projection};
+use crate::error::{ExciteError, check_finite};
+use crate::fourier::{COORDS, DEFAULT_HARMONICS, DEFAULT_OMEGA_F, check_omega};
+use crate::param::{Grid, Layout};
+use crate::{FourierTrajectory, Regressor};
+
+/// Settings of [`design`]. `Default` gives the paper's problem (L = 5,
+/// ω_f = 2π/10, box and rates (77)) with the documented defaults below.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DesignSettings {
+    /// Number of harmonics L ≥ 1 (default 5).
+    pub harmonics: usize,
+    /// Base frequency ω_f (rad/s, default 2π/10).
+    pub omega_f: f64,
+    /// Box, rate and acceleration limits (default [`Limits::paper`]).
+    pub limits: Limits,
+    /// Robot geometry, used to check the box is reachable and non-singular
+    /// (default ARAS-Diamond, α = β = 45°).
+    pub geometry: Geometry,
+    /// What to minimise (default [`Criterion::Condition`]).
+    pub criterion: Criterion,
+    /// Constraint grid points per period (default 200; the limits are
+    /// tightened by `q = ½(πL/N)²` of their half-range, 0.3 % at the
+    /// defaults, which makes grid feasibility imply continuous feasibility).
+    pub constraint_points: usize,
+    /// Regressor samples per period for the criterion (default 100, offset
+    /// by half a step so no sample sits at the velocity reversal at `t = 0`).
+    pub criterion_points: usize,
+    /// Number of random feasible starts (default 8).
+    pub starts: usize,
+    /// Seed of the start generator (default 1). Results are a deterministic
+    /// function of the settings, the regressor and the projection.
+    pub seed: u64,
+    /// Smallest useful peak-to-peak excursion of each coordinate (rad,
+    /// default 1°); limits that allow less are an error.
+    pub min_excursion: f64,
+    /// PANOC tolerance on the inner problems' optimality (default 1e-5).
+    pub tolerance: f64,
+    /// Tolerance on the constraint infeasibility of the ALM (default 1e-5,
+    /// in constraint units; the final point is repaired exactly anyway).
+    pub infeasibility_tolerance: f64,
+    /// Outer (ALM) iteration limit per start (default 20).
+    pub max_outer_iterations: usize,
+    /// Inner (PANOC) iteration limit per outer iteration (default 200).
+    pub max_inner_iterations: usize,
+    /// Optional wall-clock limit per start. Off by default: a time limit
+    /// makes the result depend on machine speed, breaking determinism.
+    pub max_time_per_start: Option<Duration>,
+    /// Worker threads for the starts (0 = rayon's global pool).
+    pub threads: usize,
+    /// Show a progress bar on stderr (only when stderr is a terminal).
+    pub progress: bool,
+}
+
+impl Default for DesignSettings {
+    fn default() -> Self {
+        Self {
+            harmonics: DEFAULT_HARMONICS,
+            omega_f: DEFAULT_OMEGA_F,
+            limits: Limits::paper(),
+            geometry: Geometry::aras_diamond(),
+            criterion: Criterion::Condition,
+            constraint_points: 200,
+            criterion_points: 100,
+            starts: 8,
+            seed: 1,
+            min_excursion: 1f64.to_radians(),
+            tolerance: 1e-5,
+            infeasibility_tolerance: 1e-5,
+            max_outer_iterations: 20,
+            max_inner_iterations: 200,
+            max_time_per_start: None,
+            threads: 0,
+            progress: true,
+        }
+    }
+}
+
+impl DesignSettings {
+    /// Checks every setting; errors name the setting, its value and the fix.
+    pub fn validate(&self) -> Result<(), ExciteError> {
+        if self.harmonics == 0 {
+            return Err(ExciteError::InvalidSetting {
+                name: "harmonics",
+                value: 0.0,
+                reason: "the trajectory needs at least one harmonic (L ≥ 1; the paper uses 5)"
+                    .into(),
+            });
+        }
+        check_omega(self.omega_f)?;
+        self.limits.validate()?;
+        let q = grid_factor(self.harmonics, self.constraint_points.max(1));
+        if q > 0.1 {
+            return Err(ExciteError::InvalidSetting {
+                name: "constraint_points",
+                value: self.constraint_points as f64,
+                reason: format!(
+                    "too coarse for {} harmonics: use at least {} points per period",
+                    self.harmonics,
+                    (std::f64::consts::PI * self.harmonics as f64 / 0.2f64.sqrt()).ceil()
+                ),
+            });
+        }
+        if self.criterion_points < 2 * self.harmonics + 1 {
+            return Err(ExciteError::InvalidSetting {
+                name: "criterion_points",
+                value: self.criterion_points as f64,
+                reason: format!(
+                    "use at least 2L + 1 = {} samples per period",
+                    2 * self.harmonics + 1
+                ),
+            });
+        }
+        if self.starts == 0 {
+            return Err(ExciteError::InvalidSetting {
+                name: "starts",
+                value: 0.0,
+                reason: "at least one start is needed".into(),
+            });
+        }
+        for (name, v) in [
+            ("tolerance", self.tolerance),
+            ("infeasibility_tolerance", self.infeasibility_tolerance),
+        ] {
+            check_finite(|| name.into(), v)?;
+            if v <= 0.0 {
+                return Err(ExciteError::InvalidSetting {
+                    name,
+                    value: v,
+                    reason: "must be positive".into(),
+                });
+            }
+        }
+        check_finite(|| "min_excursion".into(), self.min_excursion)?;
+        if self.max_outer_iterations == 0 || self.max_inner_iterations == 0 {
+            return Err(ExciteError::InvalidSetting {
+                name: "max_outer_iterations/max_inner_iterations",
+                value: 0.0,
+                reason: "iteration limits must be at least 1".into(),
+            });
+        }
+        self.check_motion()?;
+        self.check_box()
+    }
+
+    /// Errors if the limits leave a coordinate less than `min_excursion`
+    /// of peak-to-peak motion. The fundamental harmonic moves most per unit
+    /// of rate and acceleration: `2v/ω_f` and `2a/ω_f²` peak to peak.
+    fn check_motion(&self) -> Result<(), ExciteError> {
+        let w = &self.limits.workspace;
+        for (i, coordinate) in COORDS.into_iter().enumerate() {
+            let width = w.max()[i] - w.min()[i];
+            let (v, a) = (w.max_rate()[i], self.limits.max_accel[i]);
+            let reach = width
+                .min(2.0 * v / self.omega_f)
+                .min(2.0 * a / (self.omega_f * self.omega_f));
+            if reach < self.min_excursion {
+                return Err(ExciteError::TooLittleMotion {
+                    coordinate,
+                    reach,
+                    max_rate: v,
+                    max_accel: a,
+                    width,
+                    omega: self.omega_f,
+                    required: self.min_excursion,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Errors if any pose of the box (on a 41 × 41 grid including its edges
+    /// and corners) is unreachable or singular for the geometry.
+    fn check_box(&self) -> Result<(), ExciteError> {
+        let w = &self.limits.workspace;
+        let (lo, hi) = (w.min(), w.max());
+        const K: usize = 41;
+        for i in 0..K {
+            for j in 0..K {
+                let f = |k: usize, c: usize| lo[c] + (hi[c] - lo[c]) * k as f64 / (K - 1) as f64;
+                let x = Vector2::new(f(i, 0), f(j, 1));
+                let z = Vector2::zeros();
+                if let Err(source) = evaluate(&self.geometry, &x, &z, &z) {
+                    return Err(ExciteError::InfeasibleBox {
+                        lo: [lo[0], lo[1]],
+                        hi: [hi[0], hi[1]],
+                        at: [x[0], x[1]],
+                        source,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn layout(&self) -> Layout {
+        Layout {
+            harmonics: self.harmonics,
+            omega_f: self.omega_f,
+        }
+    }
+}
+
+/// How one start of the multi-start went.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StartReport {
+    /// Criterion value at the random feasible start.
+    pub initial_value: f64,
+    /// Criterion value at the (repaired, feasible) end point, or why the
+    /// start failed.
+    pub outcome: Result<f64, String>,
+    /// Whether the ALM reported convergence.
+    pub converged: bool,
+    /// ALM outer iterations.
+    pub outer_iterations: usize,
+    /// PANOC iterations in total.
+    pub inner_iterations: usize,
+    /// Scale applied to pull the end point onto the tightened bounds
+    /// (1 = already feasible).
+    pub repair_scale: f64,
+    /// Wall-clock time of the start.
+    pub time: Duration,
+}
+
+/// The result of [`design`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Design {
+    /// The best trajectory found (zero velocity at `t = 0`).
+    pub trajectory: FourierTrajectory,
+    /// The criterion that was minimised.
+    pub criterion: Criterion,
+    /// Its value at `trajectory` (κ for [`Criterion::Condition`]).
+    pub value: f64,
+    /// Condition number of the column-scaled base regressor.
+    pub condition_number: f64,
+    /// Full assessment of the base regressor at `trajectory`.
+    pub assessment: Assessment,
+    /// Limit margins on a grid 10× finer than the constraint grid.
+    pub margins: Margins,
+    /// Index of the winning start.
+    pub best_start: usize,
+    /// Every start, in order.
+    pub starts: Vec<StartReport>,
+    /// Total wall-clock time.
+    pub elapsed: Duration,
+}
+
+/// Assesses the base regressor along any trajectory, sampled at
+/// `points` instants per period (offset by half a step), without clamping.
+///
+/// `projection` is the base projection `E` (`n × b`, `W_b = W E`).
+pub fn assess<R: Regressor>(
+    regressor: &R,
+    projection: &DMatrix<f64>,
+    trajectory: &FourierTrajectory,
+    points: usize,
+) -> Result<Assessment, ExciteError> {
+    check_projection(projection, regressor.columns())?;
+    let points = points.max(1);
+    let mut ev = Evaluator::new(regressor, projection, Criterion::Condition, points, None);
+    let h = trajectory.period() / points as f64;
+    ev.fill_values(|s| {
+        let st = trajectory.eval((s as f64 + 0.5) * h);
+        [st.x, st.x_dot, st.x_ddot]
+    })?;
+    Ok(ev.analyse(false)?.assessment)
+}
+
+/// `count` random feasible trajectories of the design's form (the starts of
+/// the multi-start use the same generator): coefficients uniform in
+/// [−1, 1], then each coordinate centred in the box and scaled up until a
+/// limit is touched on the (tightened) constraint grid, so every one
+/// satisfies the limits in continuous time. Deterministic for a seed.
+pub fn random_feasible(
+    settings: &DesignSettings,
+    count: usize,
+    seed: u64,
+) -> Result<Vec<FourierTrajectory>, ExciteError> {
+    settings.validate()?;
+    let layout = settings.layout();
+    let cons = GridConstraints::new(layout, &settings.limits, settings.constraint_points);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    (0..count)
+        .map(|_| layout.trajectory(&random_point(&cons, &mut rng)))
+        .collect()
+}
+
+fn random_point(cons: &GridConstraints, rng: &mut Xoshiro256PlusPlus) -> Vec<f64> {
+    let layout = cons.grid.layout;
+    let w = layout.per_coord();
+    let mut p: Vec<f64> = (0..layout.dim())
+        .map(|k| {
+            if k % w == 0 {
+                0.0
+            } else {
+                rng.random_range(-1.0..1.0)
+            }
+        })
+        .collect();
+    cons.scale_to_fit(&mut p, true, true);
+    p
+}
+
+/// Designs an optimal excitation trajectory (spec §5): minimises the
+/// criterion of the stacked base regressor `W_b = W E` over the Fourier
+/// coefficients, subject to the limits at every instant and `Ẋ(0) = 0`.
+///
+/// `projection` is the base projection `E` (`n × b`) from the base-parameter
+/// analysis. Runs `settings.starts` starts from random feasible points
+/// (in parallel, deterministically for `settings.seed`) and returns the best.
+pub fn design<R: Regressor>(
+    regressor: &R,
+    projection: &DMatrix<f64>,
+    settings: &DesignSettings,
+) -> Result<Design, ExciteError> {
+    let started = Instant::now();
+    settings.validate()?;
+    check_projection(projection, regressor.columns())?;
+    let layout = settings.layout();
+    let cons = GridConstraints::new(layout, &settings.limits, settings.constraint_points);
+    let grid = Grid::new(layout, settings.criterion_points, 0.5);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed);
+    let points: Vec<Vec<f64>> = (0..settings.starts)
+        .map(|_| {
+            let mut p = random_point(&cons, &mut rng);
+            // Start strictly inside, so the first iterations need no repair.
+            cons.scale_to_fit(&mut p, false, false);
+            scale_motion(&cons, &mut p, 0.9);
+            p
+        })
+        .collect();
+
+    let bar = if settings.progress && std::io::stderr().is_terminal() {
+        ProgressBar::with_draw_target(Some(points.len() as u64), ProgressDrawTarget::stderr())
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template("excitation design {bar:30} {pos}/{len} starts, {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let run = || -> Vec<(Vec<f64>, StartReport)> {
+        points
+            .par_iter()
+            .map(|p0| {
+                let r = run_start(regressor, projection, settings, &cons, &grid, p0.clone());
+                bar.inc(1);
+                r
+            })
+            .collect()
+    };
+    let outcomes = if settings.threads > 0 {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(settings.threads)
+            .build()
+            .map(|pool| pool.install(run))
+            .unwrap_or_else(|_| run())
+    } else {
+        run()
+    };
+    bar.finish_and_clear();
+
+    let mut best: Option<(usize, f64)> = None;
+    for (k, (_, rep)) in outcomes.iter().enumerate() {
+        if let Ok(v) = rep.outcome
+            && best.is_none_or(|(_, b)| v < b)
+        {
+            best = Some((k, v));
+        }
+    }
+    let Some((best_start, _)) = best else {
+        let last = outcomes
+            .iter()
+            .rev()
+            .find_map(|(_, r)| r.outcome.clone().err())
+            .unwrap_or_default();
+        return Err(ExciteError::NoDesign {
+            starts: outcomes.len(),
+            last,
+        });
+    };
+    let trajectory = layout.trajectory(&outcomes[best_start].0)?;
+    let assessment = assess(
+        regressor,
+        projection,
+        &trajectory,
+        settings.criterion_points,
+    )?;
+    let margins = Margins::measure(
+        &trajectory,
+        &settings.limits,
+        10 * settings.constraint_points,
+    );
+    Ok(Design {
+        trajectory,
+        criterion: settings.criterion,
+        value: assessment.value(settings.criterion),
+        condition_number: assessment.condition_number,
+        assessment,
+        margins,
+        best_start,
+        starts: outcomes.into_iter().map(|(_, r)| r).collect(),
+        elapsed: started.elapsed(),
+    })
+}
+
+/// Scales the motion of both coordinates by `s` about the box centre.
+fn scale_motion(cons: &GridConstraints, p: &mut [f64], s: f64) {
+    let w = cons.grid.layout.per_coord();
+    for i in 0..2 {
+        let c = 0.5 * (cons.lo[3 * i * cons.grid.len()] + cons.hi[3 * i * cons.grid.len()]);
+        let b = &mut p[i * w..(i + 1) * w];
+        b[0] = c + s * (b[0] - c);
+        b[1..].iter_mut().for_each(|v| *v *= s);
+    }
+}
+
+/// One start: ALM/PANOC from `p`, then exact repair onto the tightened bounds.
+fn run_start<R: Regressor>(
+    regressor: &R,
+    projection: &DMatrix<f64>,
+    settings: &DesignSettings,
+    cons: &GridConstraints,
+    grid: &Grid,
+    mut p: Vec<f64>,
+) -> (Vec<f64>, StartReport) {
+    let t0 = Instant::now();
+    let ws = &settings.limits.workspace;
+    let ev = RefCell::new(Evaluator::new(
+        regressor,
+        projection,
+        settings.criterion,
+        grid.len(),
+        Some((ws.min(), ws.max())),
+    ));
+    let failure: RefCell<Option<ExciteError>> = RefCell::new(None);
+    let mut report = StartReport {
+        initial_value: f64::NAN,
+        outcome: Err(String::new()),
+        converged: false,
+        outer_iterations: 0,
+        inner_iterations: 0,
+        repair_scale: 1.0,
+        time: Duration::ZERO,
+    };
+    let value_at = |p: &[f64]| ev.borrow_mut().objective(grid, p).map(|a| a.assessment);
+    match value_at(&p) {
+        Ok(a) => report.initial_value = a.value(settings.criterion),
+        Err(e) => {
+            report.outcome = Err(e.to_string());
+            report.time = t0.elapsed();
+            return (p, report);
+        }
+    }
+
+    let record = |e: ExciteError| {
+        *failure.borrow_mut() = Some(e);
+        SolverError::Cost("criterion evaluation failed")
+    };
+    let f = |u: &[f64], cost: &mut f64| -> FunctionCallResult {
+        *cost = ev
+            .borrow_mut()
+            .objective(grid, u)
+            .map_err(record)?
+            .objective;
+        Ok(())
+    };
+    let df = |u: &[f64], grad: &mut [f64]| -> FunctionCallResult {
+        ev.borrow_mut().gradient(grid, u, grad).map_err(record)?;
+        Ok(())
+    };
+    let f1 = |u: &[f64], out: &mut [f64]| -> FunctionCallResult {
+        cons.map(u, out);
+        Ok(())
+    };
+    let jf1t = |_u: &[f64], d: &[f64], out: &mut [f64]| -> FunctionCallResult {
+        cons.jacobian_t(d, out);
+        Ok(())
+    };
+
+    let dim = p.len();
+    let n1 = cons.len();
+    let w = cons.grid.layout.per_coord();
+    let (mut umin, mut umax) = (vec![0.0; dim], vec![0.0; dim]);
+    for i in 0..2 {
+        let v = 2.0 * ws.max_rate()[i];
+        for m in 0..w {
+            let k = i * w + m;
+            (umin[k], umax[k]) = if m == 0 {
+                (ws.min()[i], ws.max()[i])
+            } else {
+                (-v, v)
+            };
+        }
+    }
+    let bounds = Rectangle::new(Some(&umin), Some(&umax));
+    let set_c = Rectangle::new(Some(&cons.lo), Some(&cons.hi));
+    let ymax = vec![1e12; n1];
+    let ymin = vec![-1e12; n1];
+    let set_y = Rectangle::new(Some(&ymin), Some(&ymax));
+    let factory = AlmFactory::new(
+        f,
+        df,
+        Some(f1),
+        Some(jf1t),
+        NO_MAPPING,
+        NO_JACOBIAN_MAPPING,
+        Some(set_c),
+        0,
+    );
+    let problem = AlmProblem::new(
+        bounds,
+        Some(set_c),
+        Some(set_y),
+        |u: &[f64], xi: &[f64], cost: &mut f64| -> FunctionCallResult { factory.psi(u, xi, cost) },
+        |u: &[f64], xi: &[f64], grad: &mut [f64]| -> FunctionCallResult {
+            factory.d_psi(u, xi, grad)
+        },
+        Some(f1),
+        NO_MAPPING,
+        n1,
+        0,
+    );
+    let mut cache = AlmCache::new(PANOCCache::new(dim, settings.tolerance, 10), n1, 0);
+    let mut opt = AlmOptimizer::new(&mut cache, problem)
+        .with_delta_tolerance(settings.infeasibility_tolerance)
+        .with_epsilon_tolerance(settings.tolerance)
+        .with_max_outer_iterations(settings.max_outer_iterations)
+        .with_max_inner_iterations(settings.max_inner_iterations)
+        .with_initial_penalty(10.0)
+        .with_penalty_update_factor(5.0)
+        .with_initial_inner_tolerance(1e-2);
+    if let Some(t) = settings.max_time_per_start {
+        opt = opt.with_max_duration(t);
+    }
+    let start = p.clone();
+    match opt.solve(&mut p) {
+        Ok(status) => {
+            report.converged = status.exit_status() == ExitStatus::Converged;
+            report.outer_iterations = status.num_outer_iterations();
+            report.inner_iterations = status.num_inner_iterations();
+        }
+        Err(e) => {
+            let why = failure
+                .borrow_mut()
+                .take()
+                .map(|e| e.to_string())
+                .unwrap_or_else(|| e.to_string());
+            report.outcome = Err(format!("optimiser stopped: {why}"));
+            report.time = t0.elapsed();
+            return (start, report);
+        }
+    }
+    if p.iter().any(|v| !v.is_finite()) {
+        report.outcome = Err("optimiser returned a non-finite point".into());
+        report.time = t0.elapsed();
+        return (start, report);
+    }
+    report.repair_scale = cons.scale_to_fit(&mut p, false, false);
+    report.outcome = value_at(&p)
+        .map(|a| a.value(settings.criterion))
+        .map_err(|e| e.to_string());
+    report.time = t0.elapsed();
+    (p, report)
+}

@@ -1,0 +1,174 @@
+//! Typed errors of the excitation design.
+
+use std::path::PathBuf;
+
+use aras_kin::KinError;
+
+/// Everything that can go wrong when building, reading, sampling or designing
+/// an excitation trajectory.
+///
+/// Messages name the offending setting or key, its value, the limit it broke
+/// and how to fix it. Angles are shown in degrees in messages; fields are SI
+/// (rad, rad/s, rad/s²).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ExciteError {
+    /// A number that must be finite is NaN or infinite.
+    #[error("{name} is not finite ({value}); give a finite number")]
+    NonFinite {
+        /// Setting or key path (e.g. `"a[1][3]"`, `"max_accel[0]"`).
+        name: String,
+        /// The offending value.
+        value: f64,
+    },
+    /// A setting is outside its admissible range.
+    #[error("{name} = {value} is invalid: {reason}")]
+    InvalidSetting {
+        /// Setting name (e.g. `"harmonics"`, `"omega_f"`).
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+        /// What it must satisfy, and how to fix it.
+        reason: String,
+    },
+    /// Per-coordinate coefficient lists of a trajectory disagree in length.
+    #[error(
+        "coefficient list {name} has {found} entries but the trajectory has {expected} harmonics; \
+         give one value per harmonic l = 1..L for each coordinate"
+    )]
+    CoefficientLength {
+        /// Key path of the list (e.g. `"b[1]"`).
+        name: String,
+        /// Its length.
+        found: usize,
+        /// The number of harmonics L.
+        expected: usize,
+    },
+    /// The workspace box contains poses the mechanism cannot reach or that are
+    /// (numerically) singular, so no trajectory inside it can be evaluated.
+    #[error(
+        "the workspace box φ ∈ [{phi_lo:.3}°, {phi_hi:.3}°], γ ∈ [{gamma_lo:.3}°, {gamma_hi:.3}°] is \
+         infeasible: at φ = {phi:.3}°, γ = {gamma:.3}° the kinematics fail ({source}); shrink the \
+         box so it stays inside the reachable, non-singular region",
+        phi_lo = lo[0].to_degrees(), phi_hi = hi[0].to_degrees(),
+        gamma_lo = lo[1].to_degrees(), gamma_hi = hi[1].to_degrees(),
+        phi = at[0].to_degrees(), gamma = at[1].to_degrees()
+    )]
+    InfeasibleBox {
+        /// Lower corner (rad).
+        lo: [f64; 2],
+        /// Upper corner (rad).
+        hi: [f64; 2],
+        /// The failing pose (rad).
+        at: [f64; 2],
+        /// What the kinematics reported.
+        source: KinError,
+    },
+    /// The rate or acceleration limits leave too little room for any useful
+    /// motion of a coordinate.
+    #[error(
+        "{coordinate} can move at most {reach:.4}° peak to peak under the limits (velocity \
+         {vel:.4}°/s, acceleration {acc:.4}°/s², box width {width:.4}°, ω_f = {omega:.4} rad/s), \
+         less than the required {need:.4}°; raise the velocity/acceleration limits, widen the box, \
+         or lower min_excursion",
+        reach = reach.to_degrees(), vel = max_rate.to_degrees(), acc = max_accel.to_degrees(),
+        width = width.to_degrees(), need = required.to_degrees()
+    )]
+    TooLittleMotion {
+        /// `"phi"` or `"gamma"`.
+        coordinate: &'static str,
+        /// Largest peak-to-peak excursion the limits allow (rad).
+        reach: f64,
+        /// The velocity limit (rad/s).
+        max_rate: f64,
+        /// The acceleration limit (rad/s²).
+        max_accel: f64,
+        /// Box width (rad).
+        width: f64,
+        /// The base frequency (rad/s).
+        omega: f64,
+        /// The required excursion (rad).
+        required: f64,
+    },
+    /// The base projection does not fit the regressor.
+    #[error(
+        "base projection E is {rows}×{cols} but the regressor has {columns} columns; E must be \
+         (columns × base parameters) with at least one base parameter"
+    )]
+    ProjectionShape {
+        /// Rows of E.
+        rows: usize,
+        /// Columns of E.
+        cols: usize,
+        /// Columns of the regressor.
+        columns: usize,
+    },
+    /// The kinematics failed while sampling a trajectory.
+    #[error("kinematics failed at t = {t:.6} s: {source}")]
+    Kinematics {
+        /// Sample time (s).
+        t: f64,
+        /// What the kinematics reported.
+        source: KinError,
+    },
+    /// The user's regressor failed at a sample.
+    #[error("the regressor failed at φ = {phi:.4}°, γ = {gamma:.4}°: {message}",
+        phi = at[0].to_degrees(), gamma = at[1].to_degrees())]
+    Regressor {
+        /// Pose of the failing sample (rad).
+        at: [f64; 2],
+        /// The regressor's own message.
+        message: String,
+    },
+    /// The stacked base regressor along a trajectory is degenerate
+    /// (a zero column or numerically rank-deficient).
+    #[error("the base regressor along the trajectory is degenerate: {reason}")]
+    Degenerate {
+        /// What was found.
+        reason: String,
+    },
+    /// No start of the multi-start gave a usable design.
+    #[error(
+        "none of the {starts} starts produced a finite criterion (last failure: {last}); the \
+         trajectory form cannot excite every base parameter: raise the number of harmonics or \
+         the limits, or check the base projection"
+    )]
+    NoDesign {
+        /// Number of starts tried.
+        starts: usize,
+        /// The last failure message.
+        last: String,
+    },
+    /// A trajectory JSON document is malformed.
+    #[error("{origin}: line {line}, column {column}: {message}")]
+    Json {
+        /// File path, or `"<string>"`.
+        origin: String,
+        /// Line (1-based, 0 if unknown).
+        line: usize,
+        /// Column (1-based, 0 if unknown).
+        column: usize,
+        /// What serde reported.
+        message: String,
+    },
+    /// Reading or writing a file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+}
+
+/// Errors on a non-finite value with its name.
+pub(crate) fn check_finite(name: impl FnOnce() -> String, value: f64) -> Result<(), ExciteError> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(ExciteError::NonFinite {
+            name: name(),
+            value,
+        })
+    }
+}

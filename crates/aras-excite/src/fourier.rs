@@ -1,0 +1,475 @@
+//! Finite Fourier-series trajectories in task space, spec (74)–(76).
+
+use std::path::Path;
+
+use aras_kin::{Geometry, evaluate};
+use nalgebra::Vector2;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{ExciteError, check_finite};
+
+/// Format tag written into (and required in) every trajectory JSON document.
+pub const FORMAT: &str = "aras-fourier/1";
+
+/// Default number of harmonics L (spec §5).
+pub const DEFAULT_HARMONICS: usize = 5;
+
+/// Default base frequency ω_f = 2π/10 rad/s, a 10 s period (spec §5).
+pub const DEFAULT_OMEGA_F: f64 = std::f64::consts::TAU / 10.0;
+
+/// Names of the task coordinates, for messages and key paths.
+pub(crate) const COORDS: [&str; 2] = ["phi", "gamma"];
+
+/// Position, velocity and acceleration in task space at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TaskState {
+    /// `X = [φ, γ]` (rad).
+    pub x: Vector2<f64>,
+    /// `Ẋ` (rad/s).
+    pub x_dot: Vector2<f64>,
+    /// `Ẍ` (rad/s²).
+    pub x_ddot: Vector2<f64>,
+}
+
+/// One sample of a trajectory in task space: `t, φ, γ, φ̇, γ̇, φ̈, γ̈`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TaskRow {
+    /// Time (s).
+    pub t: f64,
+    /// The state at `t`.
+    pub state: TaskState,
+}
+
+impl TaskRow {
+    /// `[t, φ, γ, φ̇, γ̇, φ̈, γ̈]` (s, rad, rad/s, rad/s²).
+    pub fn to_array(&self) -> [f64; 7] {
+        let s = &self.state;
+        [
+            self.t,
+            s.x[0],
+            s.x[1],
+            s.x_dot[0],
+            s.x_dot[1],
+            s.x_ddot[0],
+            s.x_ddot[1],
+        ]
+    }
+}
+
+/// One sample mapped to motor space by the kinematics: `t, θ, θ̇, θ̈`, the
+/// columns of the log format (`t, theta1, theta2`, and the optional
+/// `dtheta*`, `ddtheta*`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotorRow {
+    /// Time (s).
+    pub t: f64,
+    /// Motor angles `θ` (rad), spec (1)–(2).
+    pub theta: Vector2<f64>,
+    /// Motor rates `θ̇ = J Ẋ` (rad/s).
+    pub theta_dot: Vector2<f64>,
+    /// Motor accelerations `θ̈ = J Ẍ + J̇ Ẋ` (rad/s²).
+    pub theta_ddot: Vector2<f64>,
+}
+
+impl MotorRow {
+    /// `[t, θ1, θ2, θ̇1, θ̇2, θ̈1, θ̈2]` (s, rad, rad/s, rad/s²).
+    pub fn to_array(&self) -> [f64; 7] {
+        [
+            self.t,
+            self.theta[0],
+            self.theta[1],
+            self.theta_dot[0],
+            self.theta_dot[1],
+            self.theta_ddot[0],
+            self.theta_ddot[1],
+        ]
+    }
+}
+
+/// A periodic task-space trajectory, one finite Fourier series per coordinate
+/// `i ∈ {φ, γ}`, spec (74)–(76):
+///
+/// ```text
+/// X_i(t) = X_i0 + Σ_l  a_l^i/(ω_f l) sin(ω_f l t) − b_l^i/(ω_f l) cos(ω_f l t)
+/// Ẋ_i(t) =        Σ_l  a_l^i cos(ω_f l t) + b_l^i sin(ω_f l t)
+/// Ẍ_i(t) =        Σ_l −a_l^i ω_f l sin(ω_f l t) + b_l^i ω_f l cos(ω_f l t)
+/// ```
+///
+/// The coefficients `a`, `b` are velocity amplitudes (rad/s), `X_i0` is in
+/// rad, `ω_f` in rad/s. `X_i0` is the mean of `X_i` over a period (every
+/// sine and cosine averages to zero); it is not the *initial* position,
+/// `X_i(0) = X_i0 − Σ_l b_l^i/(ω_f l)`.
+///
+/// Always valid: finite numbers, `ω_f > 0`, `L ≥ 1`, equal lengths.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "FourierJson", into = "FourierJson")]
+pub struct FourierTrajectory {
+    omega_f: f64,
+    offset: [f64; 2],
+    a: [Vec<f64>; 2],
+    b: [Vec<f64>; 2],
+}
+
+/// The JSON shape of a trajectory (see `docs/excitation.md`).
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FourierJson {
+    format: String,
+    omega_f: f64,
+    offset: [f64; 2],
+    a: [Vec<f64>; 2],
+    b: [Vec<f64>; 2],
+}
+
+impl TryFrom<FourierJson> for FourierTrajectory {
+    type Error = ExciteError;
+
+    fn try_from(j: FourierJson) -> Result<Self, ExciteError> {
+        if j.format != FORMAT {
+            return Err(ExciteError::Json {
+                origin: "format".into(),
+                line: 0,
+                column: 0,
+                message: format!("format is {:?}; expected {FORMAT:?}", j.format),
+            });
+        }
+        Self::new(j.omega_f, j.offset, j.a, j.b)
+    }
+}
+
+impl From<FourierTrajectory> for FourierJson {
+    fn from(f: FourierTrajectory) -> Self {
+        Self {
+            format: FORMAT.into(),
+            omega_f: f.omega_f,
+            offset: f.offset,
+            a: f.a,
+            b: f.b,
+        }
+    }
+}
+
+impl FourierTrajectory {
+    /// A trajectory from its coefficients: base frequency `omega_f` (rad/s,
+    /// positive), offsets `[φ0, γ0]` (rad), and per coordinate the `a` and `b`
+    /// coefficients of harmonics 1..L (rad/s). Errors name the bad value.
+    pub fn new(
+        omega_f: f64,
+        offset: [f64; 2],
+        a: [Vec<f64>; 2],
+        b: [Vec<f64>; 2],
+    ) -> Result<Self, ExciteError> {
+        check_omega(omega_f)?;
+        let l = a[0].len();
+        if l == 0 {
+            return Err(ExciteError::InvalidSetting {
+                name: "harmonics",
+                value: 0.0,
+                reason: "a Fourier trajectory needs at least one harmonic (L ≥ 1)".into(),
+            });
+        }
+        for i in 0..2 {
+            check_finite(|| format!("offset[{i}]"), offset[i])?;
+            for (name, list) in [("a", &a[i]), ("b", &b[i])] {
+                if list.len() != l {
+                    return Err(ExciteError::CoefficientLength {
+                        name: format!("{name}[{i}]"),
+                        found: list.len(),
+                        expected: l,
+                    });
+                }
+                for (k, &v) in list.iter().enumerate() {
+                    check_finite(|| format!("{name}[{i}][{k}]"), v)?;
+                }
+            }
+        }
+        Ok(Self {
+            omega_f,
+            offset,
+            a,
+            b,
+        })
+    }
+
+    /// The motionless trajectory at `x0` with `harmonics` zero coefficients.
+    pub fn at_rest(omega_f: f64, harmonics: usize, x0: Vector2<f64>) -> Result<Self, ExciteError> {
+        let z = vec![0.0; harmonics];
+        Self::new(
+            omega_f,
+            [x0[0], x0[1]],
+            [z.clone(), z.clone()],
+            [z.clone(), z],
+        )
+    }
+
+    /// Number of harmonics L.
+    pub fn harmonics(&self) -> usize {
+        self.a[0].len()
+    }
+
+    /// Base frequency ω_f (rad/s).
+    pub fn omega_f(&self) -> f64 {
+        self.omega_f
+    }
+
+    /// Period `2π/ω_f` (s).
+    pub fn period(&self) -> f64 {
+        std::f64::consts::TAU / self.omega_f
+    }
+
+    /// Offsets `[φ0, γ0]` (rad): the mean position over a period.
+    pub fn offset(&self) -> Vector2<f64> {
+        Vector2::new(self.offset[0], self.offset[1])
+    }
+
+    /// The `a` coefficients of coordinate `i` (0 = φ, 1 = γ), harmonics 1..L (rad/s).
+    ///
+    /// # Panics
+    /// If `i > 1`.
+    pub fn a(&self, i: usize) -> &[f64] {
+        &self.a[i]
+    }
+
+    /// The `b` coefficients of coordinate `i` (0 = φ, 1 = γ), harmonics 1..L (rad/s).
+    ///
+    /// # Panics
+    /// If `i > 1`.
+    pub fn b(&self, i: usize) -> &[f64] {
+        &self.b[i]
+    }
+
+    /// Exact position, velocity and acceleration at time `t` (s), spec
+    /// (74)–(76). No allocation.
+    pub fn eval(&self, t: f64) -> TaskState {
+        let mut x = self.offset();
+        let mut xd = Vector2::zeros();
+        let mut xdd = Vector2::zeros();
+        for l in 0..self.harmonics() {
+            let w = self.omega_f * (l + 1) as f64;
+            let (s, c) = (w * t).sin_cos();
+            for i in 0..2 {
+                let (a, b) = (self.a[i][l], self.b[i][l]);
+                x[i] += (a * s - b * c) / w;
+                xd[i] += a * c + b * s;
+                xdd[i] += w * (b * c - a * s);
+            }
+        }
+        TaskState {
+            x,
+            x_dot: xd,
+            x_ddot: xdd,
+        }
+    }
+
+    /// Samples `points_per_period` equally spaced instants per period, for
+    /// `periods` periods, starting at `t = 0` (the grid excludes the end).
+    pub fn sample(&self, points_per_period: usize, periods: usize) -> Vec<TaskRow> {
+        let h = self.period() / points_per_period.max(1) as f64;
+        (0..points_per_period * periods)
+            .map(|j| {
+                let t = j as f64 * h;
+                TaskRow {
+                    t,
+                    state: self.eval(t),
+                }
+            })
+            .collect()
+    }
+
+    /// Samples the trajectory at `times` (s) and maps every sample to motor
+    /// space with the kinematics (θ, θ̇, θ̈), the quantities of the log format.
+    ///
+    /// Errors (naming the time) if a sample is unreachable or singular.
+    pub fn motor_samples(
+        &self,
+        geometry: &Geometry,
+        times: &[f64],
+    ) -> Result<Vec<MotorRow>, ExciteError> {
+        times
+            .iter()
+            .map(|&t| {
+                check_finite(|| "t".into(), t)?;
+                let s = self.eval(t);
+                let k = evaluate(geometry, &s.x, &s.x_dot, &s.x_ddot)
+                    .map_err(|source| ExciteError::Kinematics { t, source })?;
+                Ok(MotorRow {
+                    t,
+                    theta: k.theta,
+                    theta_dot: k.theta_dot,
+                    theta_ddot: k.theta_ddot,
+                })
+            })
+            .collect()
+    }
+
+    /// Parses the JSON format documented in `docs/excitation.md`.
+    pub fn from_json(text: &str) -> Result<Self, ExciteError> {
+        parse_json(text, "<string>")
+    }
+
+    /// Serialises to pretty JSON (shortest round-trip floats, so reading it
+    /// back gives the identical trajectory).
+    pub fn to_json(&self) -> String {
+        // Serialising plain finite numbers and strings cannot fail.
+        serde_json::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// Reads a trajectory JSON file.
+    pub fn load(path: &Path) -> Result<Self, ExciteError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ExciteError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        parse_json(&text, &path.display().to_string())
+    }
+
+    /// Writes the trajectory as JSON.
+    pub fn save(&self, path: &Path) -> Result<(), ExciteError> {
+        std::fs::write(path, self.to_json() + "\n").map_err(|source| ExciteError::Io {
+            path: path.to_owned(),
+            source,
+        })
+    }
+}
+
+fn parse_json(text: &str, origin: &str) -> Result<FourierTrajectory, ExciteError> {
+    serde_json::from_str(text).map_err(|e| ExciteError::Json {
+        origin: origin.into(),
+        line: e.line(),
+        column: e.column(),
+        message: e.to_string(),
+    })
+}
+
+/// Checks a base frequency: finite and positive.
+pub(crate) fn check_omega(omega_f: f64) -> Result<(), ExciteError> {
+    check_finite(|| "omega_f".into(), omega_f)?;
+    if omega_f <= 0.0 {
+        return Err(ExciteError::InvalidSetting {
+            name: "omega_f",
+            value: omega_f,
+            reason: "the base frequency must be positive (rad/s); the paper uses 2π/10".into(),
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn traj(seed: &[f64]) -> FourierTrajectory {
+        let l = seed.len() / 4;
+        FourierTrajectory::new(
+            0.7,
+            [1.2, 1.0],
+            [seed[..l].to_vec(), seed[l..2 * l].to_vec()],
+            [seed[2 * l..3 * l].to_vec(), seed[3 * l..4 * l].to_vec()],
+        )
+        .unwrap()
+    }
+
+    proptest! {
+        // Velocity and acceleration are the exact derivatives of (74): a
+        // central difference with h = 1e-5 has truncation error ~h²·|X⃛| ≈ 1e-9
+        // and rounding ~1e-16/h ≈ 1e-11, so 1e-7 is a safe, tight bound.
+        #[test]
+        fn derivatives_match_finite_differences(
+            c in proptest::collection::vec(-1.0..1.0f64, 12),
+            t in 0.0..20.0f64,
+        ) {
+            let f = traj(&c);
+            let h = 1e-5;
+            let (p, m, s) = (f.eval(t + h), f.eval(t - h), f.eval(t));
+            let v = (p.x - m.x) / (2.0 * h);
+            let a = (p.x_dot - m.x_dot) / (2.0 * h);
+            prop_assert!((v - s.x_dot).norm() < 1e-7);
+            prop_assert!((a - s.x_ddot).norm() < 1e-7);
+        }
+
+        // Periodic with 2π/ω_f, and the offset is the mean over a period
+        // (the mean of 64 equally spaced samples of a degree-3 trig polynomial
+        // is exact up to rounding).
+        #[test]
+        fn periodic_and_offset_is_mean(c in proptest::collection::vec(-1.0..1.0f64, 12), t in 0.0..10.0f64) {
+            let f = traj(&c);
+            let (x0, x1) = (f.eval(t), f.eval(t + f.period()));
+            prop_assert!((x0.x - x1.x).norm() < 1e-12);
+            let rows = f.sample(64, 1);
+            let mean = rows.iter().map(|r| r.state.x).sum::<Vector2<f64>>() / 64.0;
+            prop_assert!((mean - f.offset()).norm() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn json_round_trip_is_exact() {
+        let f = traj(&[
+            0.1,
+            -0.2,
+            0.3,
+            0.4,
+            0.5,
+            -0.6,
+            0.7,
+            0.8,
+            1.0 / 3.0,
+            0.2,
+            0.1,
+            0.0,
+        ]);
+        let back = FourierTrajectory::from_json(&f.to_json()).unwrap();
+        assert_eq!(back, f);
+    }
+
+    #[test]
+    fn json_errors_name_the_problem() {
+        let f = traj(&[0.1; 12]);
+        let bad = f.to_json().replace("\"omega_f\"", "\"omega\"");
+        let e = FourierTrajectory::from_json(&bad).unwrap_err().to_string();
+        assert!(e.contains("omega") && e.contains("line"), "{e}");
+        let short = r#"{"format":"aras-fourier/1","omega_f":1.0,"offset":[1,1],"a":[[1,2],[1]],"b":[[1,2],[1,2]]}"#;
+        let e = FourierTrajectory::from_json(short).unwrap_err().to_string();
+        assert!(e.contains("a[1]") && e.contains("1 entries"), "{e}");
+        let neg = r#"{"format":"aras-fourier/1","omega_f":-1.0,"offset":[1,1],"a":[[1],[1]],"b":[[1],[1]]}"#;
+        let e = FourierTrajectory::from_json(neg).unwrap_err().to_string();
+        assert!(e.contains("omega_f = -1"), "{e}");
+        let fmt = r#"{"format":"x","omega_f":1.0,"offset":[1,1],"a":[[1],[1]],"b":[[1],[1]]}"#;
+        assert!(FourierTrajectory::from_json(fmt).is_err());
+    }
+
+    #[test]
+    fn constructor_rejects_bad_values() {
+        let one = || [vec![0.1], vec![0.1]];
+        assert!(FourierTrajectory::new(0.0, [1.0, 1.0], one(), one()).is_err());
+        assert!(FourierTrajectory::new(f64::NAN, [1.0, 1.0], one(), one()).is_err());
+        assert!(FourierTrajectory::new(1.0, [f64::INFINITY, 1.0], one(), one()).is_err());
+        assert!(
+            FourierTrajectory::new(1.0, [1.0, 1.0], [vec![], vec![]], [vec![], vec![]]).is_err()
+        );
+        let e = FourierTrajectory::new(1.0, [1.0, 1.0], [vec![0.1], vec![f64::NAN]], one())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("a[1][0]"), "{e}");
+    }
+
+    #[test]
+    fn motor_samples_follow_the_kinematics() {
+        let g = Geometry::aras_diamond();
+        let f = traj(&[
+            0.1, -0.2, 0.1, 0.05, 0.2, -0.1, 0.1, 0.1, 0.05, 0.1, 0.1, 0.0,
+        ]);
+        let rows = f.motor_samples(&g, &[0.0, 1.3, 4.0]).unwrap();
+        for r in &rows {
+            let s = f.eval(r.t);
+            let ik = aras_kin::inverse(&g, &s.x).unwrap();
+            assert!((ik.theta - r.theta).norm() < 1e-14);
+            // θ1 + θ2 = 2φ, spec (7), so the rates add up the same way.
+            assert!((r.theta_dot.sum() - 2.0 * s.x_dot[0]).abs() < 1e-12);
+            assert!((r.theta_ddot.sum() - 2.0 * s.x_ddot[0]).abs() < 1e-12);
+        }
+        let far = FourierTrajectory::at_rest(1.0, 1, Vector2::new(1.0, 2.0)).unwrap();
+        let e = far.motor_samples(&g, &[0.5]).unwrap_err().to_string();
+        assert!(e.contains("t = 0.5"), "{e}");
+    }
+}
