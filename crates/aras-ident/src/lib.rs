@@ -34,6 +34,8 @@
 //! * `rayon`: parallel tall-skinny QR and workspace scans.
 //! * `serde`: results serialise for reports; `thiserror`: the error type.
 #![warn(missing_docs)]
+// Dense linear algebra on small fixed matrices reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
 
 // Links the system OpenBLAS that clarabel's PSD cones call (LAPACK).
 use openblas_src as _;
@@ -53,6 +55,6 @@ pub use error::IdentError;
 pub use groups::RowGroups;
 pub use ls::{NoiseVariances, OlsEstimate, ReducedLs, WlsEstimate, ols, wls};
 pub use sdp::{
-    ActiveConstraint, ConsistentLs, ConstraintKind, LinkLayout, LinkReport, SdpSettings, SdpSolution,
-    pseudo_inertia_min_eigenvalue,
+    ActiveConstraint, ConsistentLs, ConstraintKind, LinkLayout, LinkReport, SdpSettings,
+    SdpSolution, pseudo_inertia_min_eigenvalue,
 };
