@@ -73,15 +73,26 @@ fn ensure_system_libraries() -> Result<(), String> {
             missing.join(", ")
         ));
     }
-    eprintln!("xtask: installing {} (needed by the SDP solver)…", missing.join(", "));
+    eprintln!(
+        "xtask: installing {} (needed by the SDP solver)…",
+        missing.join(", ")
+    );
     let ok = Command::new("sh")
         .arg("-c")
-        .arg(format!("DEBIAN_FRONTEND=noninteractive {install} >/dev/null"))
+        .arg(format!(
+            "DEBIAN_FRONTEND=noninteractive {install} >/dev/null"
+        ))
         .status()
         .map(|s| s.success())
         .unwrap_or(false);
-    if !ok || required_libraries().iter().any(|(lib, _)| !linker_finds(lib)) {
-        return Err(format!("installing the system packages failed; run by hand:\n    {install}"));
+    if !ok
+        || required_libraries()
+            .iter()
+            .any(|(lib, _)| !linker_finds(lib))
+    {
+        return Err(format!(
+            "installing the system packages failed; run by hand:\n    {install}"
+        ));
     }
     Ok(())
 }
@@ -118,13 +129,23 @@ fn main() -> ExitCode {
         "deps" => ExitCode::SUCCESS,
         "test" => {
             let mut cmd = cargo();
-            cmd.args(["test", "--workspace", "--release"]).args(&args[1..]);
+            cmd.args(["test", "--workspace", "--release"])
+                .args(&args[1..]);
             run(cmd)
         }
         _ => {
             let mut cmd = cargo();
-            cmd.args(["run", "--quiet", "--release", "--package", "aras-app", "--bin", "aras", "--"])
-                .args(&args);
+            cmd.args([
+                "run",
+                "--quiet",
+                "--release",
+                "--package",
+                "aras-app",
+                "--bin",
+                "aras",
+                "--",
+            ])
+            .args(&args);
             run(cmd)
         }
     }

@@ -25,7 +25,11 @@ pub enum AssemblyMode {
 ///
 /// The result is checked as in [`inverse`](crate::inverse): a pose at a
 /// singularity (e.g. `γ = 0` on the degenerate branch) is an error.
-pub fn forward(g: &Geometry, theta: &Vector2<f64>, mode: AssemblyMode) -> Result<Vector2<f64>, KinError> {
+pub fn forward(
+    g: &Geometry,
+    theta: &Vector2<f64>,
+    mode: AssemblyMode,
+) -> Result<Vector2<f64>, KinError> {
     check_finite("theta1", theta[0])?;
     check_finite("theta2", theta[1])?;
     let phi = 0.5 * (theta[0] + theta[1]);
@@ -47,6 +51,14 @@ pub fn forward(g: &Geometry, theta: &Vector2<f64>, mode: AssemblyMode) -> Result
         AssemblyMode::Minus => -disc.sqrt(),
     };
     let gamma = 2.0 * (g.sa * cos_a + root).atan2(g.ca + g.cb);
+    if gamma.sin() < g.singularity_tolerance() {
+        // The degenerate branch (e.g. γ = 0 for α = β): d on the motor axis.
+        return Err(KinError::Singular {
+            which: crate::Singularity::PolarAxis,
+            value: gamma.sin(),
+            limit: g.singularity_tolerance(),
+        });
+    }
     let x = Vector2::new(phi, gamma);
     let pose = Pose::new(g, &x)?;
     // With A outside (0, π) the triangle closes on the mirrored side: the

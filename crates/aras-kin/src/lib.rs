@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! Kinematics of the ARAS-Diamond coaxial spherical parallel robot.
 //!
 //! A 2-DOF spherical five-bar: two coaxial motors on axis `a` drive the
@@ -47,7 +48,9 @@
 //! # Dependencies
 //!
 //! Only `nalgebra` (fixed-size stack types, so per-sample evaluation does not
-//! allocate) and `thiserror`.
+//! allocate) and `thiserror`. The optional feature `dual` adds `num-dual`
+//! (forward-mode dual numbers) so every quantity can be differentiated
+//! exactly; see [`Scalar`].
 
 mod error;
 mod forward;
@@ -57,6 +60,7 @@ mod jacobian;
 pub mod links;
 mod pose;
 mod sample;
+mod scalar;
 mod workspace;
 
 pub use error::KinError;
@@ -67,4 +71,5 @@ pub use jacobian::{Jacobian, jacobian};
 pub use links::{LINKS, link_frames, link_jacobians};
 pub use pose::Singularity;
 pub use sample::{KinematicSample, evaluate};
+pub use scalar::Scalar;
 pub use workspace::{SingularityDistance, Workspace, singularity_distance};

@@ -26,34 +26,33 @@
 use nalgebra::{Matrix3, Matrix3x2, Vector2, Vector3};
 
 use crate::pose::Pose;
-use crate::{Geometry, KinError};
+use crate::{Geometry, KinError, Scalar};
 
 /// Number of links.
 pub const LINKS: usize = 4;
 
 /// Frame `R = [x y z]` from a joint axis `z` and the next axis `n` whose
 /// arc to `z` has sine `s` (so `|z × n| = s`).
-fn frame(z: &Vector3<f64>, n: &Vector3<f64>, s: f64) -> Matrix3<f64> {
+fn frame<T: Scalar>(z: &Vector3<T>, n: &Vector3<T>, s: T) -> Matrix3<T> {
     let y = z.cross(n) / s;
     let x = y.cross(z);
     Matrix3::from_columns(&[x, y, *z])
 }
 
-impl Pose {
-    pub(crate) fn frames(&self, g: &Geometry) -> [Matrix3<f64>; LINKS] {
-        let rz = |t: f64| {
-            let (s, c) = t.sin_cos();
-            Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
-        };
+impl<T: Scalar> Pose<T> {
+    pub(crate) fn frames(&self, g: &Geometry) -> [Matrix3<T>; LINKS] {
+        let (z, o) = (T::zero(), T::one());
+        let rz = |(s, c): (T, T)| Matrix3::new(c, -s, z, s, c, z, z, z, o);
+        let sb = T::lift(g.sb);
         [
-            rz(self.theta2),
-            rz(self.theta1),
-            frame(&self.b, &self.d, g.sb),
-            frame(&self.c, &self.d, g.sb),
+            rz(self.sc2),
+            rz(self.sc1),
+            frame(&self.b, &self.d, sb),
+            frame(&self.c, &self.d, sb),
         ]
     }
 
-    pub(crate) fn link_jacobians(&self) -> [Matrix3x2<f64>; LINKS] {
+    pub(crate) fn link_jacobians(&self) -> [Matrix3x2<T>; LINKS] {
         let a = Vector3::z();
         let ka = a * self.k;
         [
@@ -65,15 +64,15 @@ impl Pose {
     }
 
     /// `J̇_ωk` along a motion with rate `x_dot` (only the γ column varies).
-    pub(crate) fn link_jacobian_rates(&self, x_dot: &Vector2<f64>) -> [Matrix3x2<f64>; LINKS] {
+    pub(crate) fn link_jacobian_rates(&self, x_dot: &Vector2<T>) -> [Matrix3x2<T>; LINKS] {
         let gd = x_dot[1];
         let td1 = x_dot[0] + self.k * gd;
         let td2 = x_dot[0] - self.k * gd;
         let a = Vector3::z();
         let kpa = a * (self.k_prime * gd);
         // ḃ = θ̇2 a × b, ċ = θ̇1 a × c.
-        let b_dot = Vector3::new(-self.b[1], self.b[0], 0.0) * td2;
-        let c_dot = Vector3::new(-self.c[1], self.c[0], 0.0) * td1;
+        let b_dot = Vector3::new(-self.b[1], self.b[0], T::zero()) * td2;
+        let c_dot = Vector3::new(-self.c[1], self.c[0], T::zero()) * td1;
         let col3 = -kpa + self.b * (self.mu_prime * gd) + b_dot * self.mu;
         let col4 = kpa - self.c * (self.mu_prime * gd) - c_dot * self.mu;
         let z = Vector3::zeros();

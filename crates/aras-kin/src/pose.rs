@@ -8,34 +8,38 @@
 
 use nalgebra::{Vector2, Vector3};
 
-use crate::{Geometry, KinError, SingularityDistance};
+use crate::{Geometry, KinError, Scalar, SingularityDistance};
 
 /// All position-level scalars and unit vectors at one pose.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Pose {
-    pub sin_gamma: f64,
-    pub cos_gamma: f64,
+pub(crate) struct Pose<T: Scalar = f64> {
+    pub sin_gamma: T,
+    pub cos_gamma: T,
     /// Angle A at `a` (rad), spec (1).
-    pub a: f64,
-    pub sin_a: f64,
-    pub sin_b: f64,
-    pub cos_b: f64,
+    pub a: T,
+    pub sin_a: T,
+    pub sin_b: T,
+    pub cos_b: T,
     /// K = dA/dγ, spec (8)–(11) with the sign NOTE.
-    pub k: f64,
+    pub k: T,
     /// dK/dγ.
-    pub k_prime: f64,
+    pub k_prime: T,
     /// μ: elbow rate of the distal link on `b` per unit γ̇ (Ω3 = θ̇2 a + μ γ̇ b).
-    pub mu: f64,
+    pub mu: T,
     /// dμ/dγ.
-    pub mu_prime: f64,
-    pub theta1: f64,
-    pub theta2: f64,
-    pub b: Vector3<f64>,
-    pub c: Vector3<f64>,
-    pub d: Vector3<f64>,
+    pub mu_prime: T,
+    pub theta1: T,
+    pub theta2: T,
+    /// (sin θ1, cos θ1) and (sin θ2, cos θ2), reused by the proximal frames.
+    pub sc1: (T, T),
+    pub sc2: (T, T),
+    pub b: Vector3<T>,
+    pub c: Vector3<T>,
+    pub d: Vector3<T>,
 }
 
-pub(crate) fn check_finite(name: &'static str, value: f64) -> Result<(), KinError> {
+pub(crate) fn check_finite<T: Scalar>(name: &'static str, value: T) -> Result<(), KinError> {
+    let value = value.value();
     if value.is_finite() {
         Ok(())
     } else {
@@ -43,9 +47,9 @@ pub(crate) fn check_finite(name: &'static str, value: f64) -> Result<(), KinErro
     }
 }
 
-impl Pose {
+impl<T: Scalar> Pose<T> {
     /// Evaluates the pose and rejects unreachable or singular ones.
-    pub fn new(g: &Geometry, x: &Vector2<f64>) -> Result<Self, KinError> {
+    pub fn new(g: &Geometry, x: &Vector2<T>) -> Result<Self, KinError> {
         let pose = Self::unchecked(g, x)?;
         pose.distance().check(g.singularity_tolerance())?;
         Ok(pose)
@@ -53,47 +57,49 @@ impl Pose {
 
     pub fn distance(&self) -> SingularityDistance {
         SingularityDistance {
-            sin_a: self.sin_a,
-            sin_gamma: self.sin_gamma,
-            sin_b: self.sin_b,
-            parallel: self.k.abs(),
+            sin_a: self.sin_a.value(),
+            sin_gamma: self.sin_gamma.value(),
+            sin_b: self.sin_b.value(),
+            parallel: self.k.value().abs(),
         }
     }
 
     /// Evaluates the pose; only reachability and finiteness are checked.
     /// At a singularity some derived scalars are infinite.
-    pub fn unchecked(g: &Geometry, x: &Vector2<f64>) -> Result<Self, KinError> {
+    pub fn unchecked(g: &Geometry, x: &Vector2<T>) -> Result<Self, KinError> {
         let (phi, gamma) = (x[0], x[1]);
         check_finite("phi", phi)?;
         check_finite("gamma", gamma)?;
         let (lo, hi) = g.reachable_gamma();
-        if gamma < lo || gamma > hi {
+        if gamma.value() < lo || gamma.value() > hi {
             return Err(KinError::Unreachable {
-                gamma,
+                gamma: gamma.value(),
                 min: lo,
                 max: hi,
             });
         }
-        let (sa, ca, sb, cb) = (g.sa, g.ca, g.sb, g.cb);
+        let c = T::lift;
+        let (sa, ca, sb, cb) = (c(g.sa), c(g.ca), c(g.sb), c(g.cb));
+        let (zero, one, two) = (T::zero(), T::one(), c(2.0));
         let (sg, cg) = gamma.sin_cos();
         let (sphi, cphi) = phi.sin_cos();
 
         // Spherical cosine rule, spec (1) and (4). Rounding can push the
         // cosines a hair past ±1 at the reach limits; the sines are then 0
         // and the singularity check rejects the pose.
-        let cos_a = ((cb - cg * ca) / (sg * sa)).clamp(-1.0, 1.0);
-        let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
-        let cos_b = ((cg - cb * ca) / (sb * sa)).clamp(-1.0, 1.0);
-        let sin_b = (1.0 - cos_b * cos_b).max(0.0).sqrt();
+        let cos_a = ((cb - cg * ca) / (sg * sa)).clamp(-one, one);
+        let sin_a = (one - cos_a * cos_a).max(zero).sqrt();
+        let cos_b = ((cg - cb * ca) / (sb * sa)).clamp(-one, one);
+        let sin_b = (one - cos_b * cos_b).max(zero).sqrt();
         let a = sin_a.atan2(cos_a);
 
         // K = dA/dγ = −P/(sα s²γ sA), P = cα − cβ cγ (equal to the spec's
         // −(cot α − cos A cot γ)/sin A).
         let p = ca - cb * cg;
         let dp = cb * sg;
-        let u = 1.0 / (sa * sg * sg * sin_a);
+        let u = one / (sa * sg * sg * sin_a);
         let k = -p * u;
-        let k_prime = u * (-dp + p * (2.0 * cg / sg + k * cos_a / sin_a));
+        let k_prime = u * (-dp + p * (two * cg / sg + k * cos_a / sin_a));
         // μ = (b×d)·(∂d/∂γ + K a×d)/s²β in closed form.
         let s2b = sb * sb;
         let mu = (-sa * sin_a + k * p) / s2b;
@@ -115,6 +121,8 @@ impl Pose {
             mu_prime,
             theta1: phi + a,
             theta2: phi - a,
+            sc1: (st1, ct1),
+            sc2: (st2, ct2),
             b: Vector3::new(sa * ct2, sa * st2, ca),
             c: Vector3::new(sa * ct1, sa * st1, ca),
             d: Vector3::new(sg * cphi, sg * sphi, cg),

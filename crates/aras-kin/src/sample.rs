@@ -4,7 +4,7 @@ use nalgebra::{Matrix2, Matrix3, Matrix3x2, Vector2, Vector3};
 
 use crate::links::LINKS;
 use crate::pose::{Pose, check_finite};
-use crate::{Geometry, Jacobian, KinError, SingularityDistance};
+use crate::{Geometry, Jacobian, KinError, Scalar, SingularityDistance};
 
 /// Kinematics of the whole mechanism at one sample `(X, Ẋ, Ẍ)`.
 ///
@@ -13,33 +13,33 @@ use crate::{Geometry, Jacobian, KinError, SingularityDistance};
 /// [`links`](crate::links) for the numbering). Built only by [`evaluate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
-pub struct KinematicSample {
+pub struct KinematicSample<T: Scalar = f64> {
     /// Task pose `X = [φ, γ]`.
-    pub x: Vector2<f64>,
+    pub x: Vector2<T>,
     /// Task rate `Ẋ`.
-    pub x_dot: Vector2<f64>,
+    pub x_dot: Vector2<T>,
     /// Task acceleration `Ẍ`.
-    pub x_ddot: Vector2<f64>,
+    pub x_ddot: Vector2<T>,
     /// Motor angles `θ`, spec (1)–(2).
-    pub theta: Vector2<f64>,
+    pub theta: Vector2<T>,
     /// Motor rates `θ̇ = J Ẋ`.
-    pub theta_dot: Vector2<f64>,
+    pub theta_dot: Vector2<T>,
     /// Motor accelerations `θ̈ = J Ẍ + J̇ Ẋ`.
-    pub theta_ddot: Vector2<f64>,
+    pub theta_ddot: Vector2<T>,
     /// Motor Jacobian `J`, spec (8)–(11).
-    pub jacobian: Jacobian,
+    pub jacobian: Jacobian<T>,
     /// `J̇` along the sample's motion.
-    pub jacobian_dot: Matrix2<f64>,
+    pub jacobian_dot: Matrix2<T>,
     /// Link rotations `R_k`.
-    pub rotations: [Matrix3<f64>; LINKS],
+    pub rotations: [Matrix3<T>; LINKS],
     /// Link Jacobians `J_ωk`.
-    pub link_jacobians: [Matrix3x2<f64>; LINKS],
+    pub link_jacobians: [Matrix3x2<T>; LINKS],
     /// Their time derivatives `J̇_ωk` along the sample's motion.
-    pub link_jacobian_dots: [Matrix3x2<f64>; LINKS],
+    pub link_jacobian_dots: [Matrix3x2<T>; LINKS],
     /// Link angular velocities `Ω_k = J_ωk Ẋ`, spec (12)–(21).
-    pub omega: [Vector3<f64>; LINKS],
+    pub omega: [Vector3<T>; LINKS],
     /// Link angular accelerations `Ω̇_k = J_ωk Ẍ + J̇_ωk Ẋ`, spec (22)–(25).
-    pub omega_dot: [Vector3<f64>; LINKS],
+    pub omega_dot: [Vector3<T>; LINKS],
     /// Distance to each singularity.
     pub singularity: SingularityDistance,
 }
@@ -51,12 +51,16 @@ pub struct KinematicSample {
 /// the geometry's tolerance of a singularity. The workspace box (77) is *not*
 /// enforced here (validation trajectories such as (47) leave it); use
 /// [`Workspace`](crate::Workspace) for that.
-pub fn evaluate(
+///
+/// Generic over the [`Scalar`]: `f64` for ordinary use, or forward-mode dual
+/// numbers (feature `dual`) to get exact derivatives of everything with
+/// respect to the inputs.
+pub fn evaluate<T: Scalar>(
     g: &Geometry,
-    x: &Vector2<f64>,
-    x_dot: &Vector2<f64>,
-    x_ddot: &Vector2<f64>,
-) -> Result<KinematicSample, KinError> {
+    x: &Vector2<T>,
+    x_dot: &Vector2<T>,
+    x_ddot: &Vector2<T>,
+) -> Result<KinematicSample<T>, KinError> {
     check_finite("phi_dot", x_dot[0])?;
     check_finite("gamma_dot", x_dot[1])?;
     check_finite("phi_ddot", x_ddot[0])?;
@@ -64,7 +68,7 @@ pub fn evaluate(
     let p = Pose::new(g, x)?;
     let jac = Jacobian::from_k(p.k);
     let kd = p.k_prime * x_dot[1];
-    let jacobian_dot = Matrix2::new(0.0, kd, 0.0, -kd);
+    let jacobian_dot = Matrix2::new(T::zero(), kd, T::zero(), -kd);
     let theta_dot = jac.apply(x_dot);
     let theta_ddot = jac.apply(x_ddot) + jacobian_dot * x_dot;
     let link_jacobians = p.link_jacobians();

@@ -19,24 +19,30 @@ pub struct SingularityDistance {
 }
 
 impl SingularityDistance {
-    /// The smallest distance and which singularity it belongs to.
-    pub fn min(&self) -> (Singularity, f64) {
+    fn all(&self) -> [(Singularity, f64); 4] {
         [
             (Singularity::ProximalAligned, self.sin_a),
             (Singularity::PolarAxis, self.sin_gamma),
             (Singularity::ElbowStretched, self.sin_b),
             (Singularity::Parallel, self.parallel),
         ]
-        .into_iter()
-        .fold((Singularity::ProximalAligned, f64::INFINITY), |m, c| {
-            if c.1 < m.1 { c } else { m }
-        })
     }
 
-    /// Errors with the nearest singularity if any distance is below `tol`.
+    /// The smallest distance and which singularity it belongs to
+    /// (a NaN distance, from a degenerate pose, counts as the smallest).
+    pub fn min(&self) -> (Singularity, f64) {
+        self.all()
+            .into_iter()
+            .fold((Singularity::ProximalAligned, f64::INFINITY), |m, c| {
+                if c.1.is_nan() || c.1 < m.1 { c } else { m }
+            })
+    }
+
+    /// Errors with the nearest singularity if any distance is below `tol`
+    /// or not a number.
     pub fn check(&self, tol: f64) -> Result<(), KinError> {
         let (which, value) = self.min();
-        if value < tol || !value.is_finite() {
+        if value.is_nan() || value < tol {
             return Err(KinError::Singular {
                 which,
                 value,
@@ -49,7 +55,10 @@ impl SingularityDistance {
 
 /// Distance of a reachable pose to every singularity; unlike the other
 /// functions this does not reject singular poses (it measures them).
-pub fn singularity_distance(g: &Geometry, x: &Vector2<f64>) -> Result<SingularityDistance, KinError> {
+pub fn singularity_distance(
+    g: &Geometry,
+    x: &Vector2<f64>,
+) -> Result<SingularityDistance, KinError> {
     Ok(Pose::unchecked(g, x)?.distance())
 }
 
@@ -64,7 +73,11 @@ pub struct Workspace {
 impl Workspace {
     /// A box `min ≤ X ≤ max` with rate limits `|Ẋ| ≤ max_rate`.
     /// Bounds must be finite, ordered, and the rates positive.
-    pub fn new(min: Vector2<f64>, max: Vector2<f64>, max_rate: Vector2<f64>) -> Result<Self, KinError> {
+    pub fn new(
+        min: Vector2<f64>,
+        max: Vector2<f64>,
+        max_rate: Vector2<f64>,
+    ) -> Result<Self, KinError> {
         let names = [("phi", "phi_dot"), ("gamma", "gamma_dot")];
         for i in 0..2 {
             check_finite(names[i].0, min[i])?;

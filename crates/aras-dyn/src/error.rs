@@ -1,0 +1,203 @@
+//! Typed errors: parameter files ([`ParamError`]), dynamics ([`DynError`])
+//! and the simulator ([`SimError`]).
+
+use std::path::PathBuf;
+
+use aras_kin::KinError;
+
+/// A parameter file or [`Params`](crate::Params) value is not acceptable.
+///
+/// Keys are given as paths into the JSON object, e.g. `links.3.Ixy` or
+/// `gravity[1]`, so a user can find the entry to fix.
+#[derive(Debug, thiserror::Error)]
+pub enum ParamError {
+    /// The text is not valid JSON.
+    #[error("invalid JSON at line {line}, column {column}: {message}; fix the syntax there")]
+    Syntax {
+        /// 1-based line of the error.
+        line: usize,
+        /// 1-based column of the error.
+        column: usize,
+        /// The parser's description.
+        message: String,
+    },
+    /// A required key is absent.
+    #[error("missing key `{key}`: add it ({expected})")]
+    Missing {
+        /// Path of the missing key.
+        key: String,
+        /// What the key should hold.
+        expected: &'static str,
+    },
+    /// A key that the format does not define.
+    #[error("unknown key `{key}`: remove or rename it; allowed here: {allowed}")]
+    Unknown {
+        /// Path of the unexpected key.
+        key: String,
+        /// The keys allowed at that level, comma separated.
+        allowed: String,
+    },
+    /// A value of the wrong JSON type.
+    #[error("`{key}` must be {expected}, found {found}")]
+    WrongType {
+        /// Path of the value.
+        key: String,
+        /// What was expected.
+        expected: &'static str,
+        /// A short rendering of what was found.
+        found: String,
+    },
+    /// A number that is NaN or infinite.
+    #[error("`{key}` = {value} is not finite: every parameter must be a finite number")]
+    NonFinite {
+        /// Path of the value.
+        key: String,
+        /// The offending value.
+        value: f64,
+    },
+    /// A finite value outside its admissible range.
+    #[error("`{key}` = {value} is invalid: {reason}")]
+    Invalid {
+        /// Path of the value.
+        key: String,
+        /// The offending value.
+        value: f64,
+        /// The rule it broke and how to fix it.
+        reason: &'static str,
+    },
+    /// The file could not be read or written.
+    #[error("cannot access parameter file {}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating-system error.
+        source: std::io::Error,
+    },
+    /// An error inside a named file.
+    #[error("in parameter file {}: {source}", path.display())]
+    InFile {
+        /// The file.
+        path: PathBuf,
+        /// What was wrong in it.
+        source: Box<ParamError>,
+    },
+}
+
+/// Errors of the model, regressor and dynamics.
+#[derive(Debug, thiserror::Error)]
+pub enum DynError {
+    /// The kinematics rejected the pose or its rates.
+    #[error("kinematics: {0}")]
+    Kin(#[from] KinError),
+    /// The parameters are not acceptable.
+    #[error("parameters: {0}")]
+    Param(#[from] ParamError),
+    /// A buffer or vector has the wrong length for the model.
+    #[error(
+        "{what} has length {found}, but the model needs {expected}; size it with Model::columns()"
+    )]
+    Length {
+        /// Which argument.
+        what: &'static str,
+        /// Length required by the model.
+        expected: usize,
+        /// Length given.
+        found: usize,
+    },
+    /// The same effect appears twice in a model.
+    #[error("effect `{id}` appears twice in the model; list every effect once")]
+    DuplicateEffect {
+        /// The repeated effect identifier.
+        id: &'static str,
+    },
+    /// An effect setting is out of range.
+    #[error("effect `{id}`: setting `{setting}` = {value} is invalid: {reason}")]
+    InvalidSetting {
+        /// The effect identifier.
+        id: &'static str,
+        /// The setting's name.
+        setting: &'static str,
+        /// The offending value.
+        value: f64,
+        /// The rule it broke.
+        reason: &'static str,
+    },
+    /// The parameters hold an effect with other settings than the model's.
+    #[error(
+        "effect `{id}`: the parameters use {setting} = {params_value} but the model uses \
+         {model_value}; use the same setting in both"
+    )]
+    SettingMismatch {
+        /// The effect identifier.
+        id: &'static str,
+        /// The setting's name.
+        setting: &'static str,
+        /// Value in the parameters.
+        params_value: f64,
+        /// Value in the model.
+        model_value: f64,
+    },
+    /// The mass matrix is not positive definite (inconsistent parameters).
+    #[error(
+        "mass matrix is not positive definite at phi = {phi_deg:.4}°, gamma = {gamma_deg:.4}° \
+         (determinant {det:.3e}, M11 {m11:.3e}); the inertial parameters are not physically consistent"
+    )]
+    NotPositiveDefinite {
+        /// φ of the pose (degrees).
+        phi_deg: f64,
+        /// γ of the pose (degrees).
+        gamma_deg: f64,
+        /// det M.
+        det: f64,
+        /// `M[0,0]`.
+        m11: f64,
+    },
+    /// An input was not finite.
+    #[error("{name} = {value} is not finite; every input must be a finite number")]
+    NonFinite {
+        /// Name of the input.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+}
+
+/// Errors of the simulator and the log writer.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// A configuration value is out of range.
+    #[error("simulator setting `{key}` = {value} is invalid: {reason}")]
+    Config {
+        /// The setting's name.
+        key: &'static str,
+        /// The offending value.
+        value: f64,
+        /// The rule it broke and how to fix it.
+        reason: &'static str,
+    },
+    /// The dynamics failed during the run (e.g. the robot left the reachable
+    /// workspace or hit a singularity).
+    #[error("simulation failed at t = {t:.6} s: {source}")]
+    Dynamics {
+        /// Simulated time of the failure (s).
+        t: f64,
+        /// The underlying error.
+        source: DynError,
+    },
+    /// The desired trajectory is not evaluable.
+    #[error("desired trajectory at t = {t:.6} s: {source}")]
+    Trajectory {
+        /// Time of the failure (s).
+        t: f64,
+        /// The underlying error.
+        source: DynError,
+    },
+    /// Writing the log failed.
+    #[error("cannot write log {}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating-system error.
+        source: std::io::Error,
+    },
+}

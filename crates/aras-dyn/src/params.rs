@@ -1,0 +1,609 @@
+//! Standard parameters of the robot and their JSON file format
+//! (`docs/parameter-format.md`).
+//!
+//! Per link (1–4, paper numbering): the inertia tensor about the RCM in the
+//! link frame and the first moment of mass `h = m ρ`, spec (28)–(30), (46),
+//! plus the mass for consistency checks only (the links only rotate about the
+//! RCM, so `m` never enters the dynamics); friction (49), elasticity (50),
+//! gravity, geometry, and optional parameters of the extra effects.
+
+use std::path::Path;
+
+use aras_kin::Geometry;
+use nalgebra::{Matrix3, Matrix4, Vector3};
+use serde::ser::SerializeMap;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use serde_json::Value;
+
+use crate::ParamError;
+use crate::json::{Obj, finite, parse};
+
+/// Inertial parameters of one link, in its frame, about the RCM.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LinkParams {
+    /// `I[0,0]` (kg·m²).
+    pub ixx: f64,
+    /// `I[0,1]` (kg·m²), a tensor entry: `−Σ m x y`.
+    pub ixy: f64,
+    /// `I[0,2]` (kg·m²).
+    pub ixz: f64,
+    /// `I[1,1]` (kg·m²).
+    pub iyy: f64,
+    /// `I[1,2]` (kg·m²).
+    pub iyz: f64,
+    /// `I[2,2]` (kg·m²).
+    pub izz: f64,
+    /// First moment of mass `h = m ρ` (kg·m), `ρ` the centre of mass.
+    pub h: Vector3<f64>,
+    /// Mass (kg); not in the dynamics, only for consistency checks.
+    pub mass: f64,
+}
+
+/// JSON keys of a link, in file order (`mass` last).
+pub(crate) const LINK_KEYS: [&str; 10] = [
+    "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz", "hx", "hy", "hz", "mass",
+];
+
+impl LinkParams {
+    /// The inertia tensor about the RCM (symmetric 3×3, link frame).
+    pub fn inertia(&self) -> Matrix3<f64> {
+        Matrix3::new(
+            self.ixx, self.ixy, self.ixz, self.ixy, self.iyy, self.iyz, self.ixz, self.iyz,
+            self.izz,
+        )
+    }
+
+    /// Sets the six entries from a symmetric tensor (upper triangle read).
+    pub fn set_inertia(&mut self, i: &Matrix3<f64>) {
+        self.ixx = i[(0, 0)];
+        self.ixy = i[(0, 1)];
+        self.ixz = i[(0, 2)];
+        self.iyy = i[(1, 1)];
+        self.iyz = i[(1, 2)];
+        self.izz = i[(2, 2)];
+    }
+
+    /// The 9 standard parameters `[Ixx Ixy Ixz Iyy Iyz Izz hx hy hz]`, (46).
+    pub fn standard(&self) -> [f64; 9] {
+        [
+            self.ixx, self.ixy, self.ixz, self.iyy, self.iyz, self.izz, self.h.x, self.h.y,
+            self.h.z,
+        ]
+    }
+
+    /// Sets the 9 standard parameters (mass unchanged).
+    pub fn set_standard(&mut self, v: &[f64; 9]) {
+        [
+            self.ixx, self.ixy, self.ixz, self.iyy, self.iyz, self.izz, self.h.x, self.h.y,
+            self.h.z,
+        ] = *v;
+    }
+
+    /// Pseudo-inertia `𝒥 = [[½tr(I)·1 − I, h], [hᵀ, m]]` (Wensing et al.
+    /// 2017): `𝒥 ≻ 0` exactly when the link is physically consistent
+    /// (positive mass, positive-definite COM inertia, triangle inequality),
+    /// spec (67)–(69) and the convexity NOTE.
+    pub fn pseudo_inertia(&self) -> Matrix4<f64> {
+        let i = self.inertia();
+        let s = Matrix3::identity() * (0.5 * i.trace()) - i;
+        let mut p = Matrix4::zeros();
+        p.fixed_view_mut::<3, 3>(0, 0).copy_from(&s);
+        p.fixed_view_mut::<3, 1>(0, 3).copy_from(&self.h);
+        p.fixed_view_mut::<1, 3>(3, 0)
+            .copy_from(&self.h.transpose());
+        p[(3, 3)] = self.mass;
+        p
+    }
+
+    /// The inertia about the centre of mass, `I_G = I_O − m[ρ]×ᵀ[ρ]×`
+    /// (inverse of (28)); `None` if the mass is not positive.
+    pub fn inertia_about_com(&self) -> Option<Matrix3<f64>> {
+        if self.mass <= 0.0 {
+            return None;
+        }
+        let rho = self.h / self.mass;
+        Some(
+            self.inertia()
+                - (Matrix3::identity() * rho.norm_squared() - rho * rho.transpose()) * self.mass,
+        )
+    }
+}
+
+/// Viscous and Coulomb friction per actuator, spec (49).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Friction {
+    /// Viscous coefficients `[Fv1, Fv2]` (N·m·s/rad).
+    pub viscous: [f64; 2],
+    /// Coulomb levels `[Fc1, Fc2]` (N·m).
+    pub coulomb: [f64; 2],
+}
+
+/// Stribeck friction: `τ_j = Fs_j sign(θ̇_j) exp(−(θ̇_j/v_s)²)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stribeck {
+    /// Shape velocity `v_s` (rad/s, > 0), a fixed non-linear setting.
+    pub v_s: f64,
+    /// Levels `[Fs1, Fs2]` (N·m).
+    pub level: [f64; 2],
+}
+
+/// Cogging torque per joint: `Σ_h Cs_jh sin(h n_c θ_j) + Cc_jh cos(h n_c θ_j)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cogging {
+    /// Cycles per joint revolution `n_c` (> 0).
+    pub cycles_per_rev: f64,
+    /// Sine amplitudes per joint, one per harmonic (N·m); both joints have
+    /// the same number of harmonics (the order).
+    pub sin: [Vec<f64>; 2],
+    /// Cosine amplitudes per joint (N·m), same lengths as `sin`.
+    pub cos: [Vec<f64>; 2],
+}
+
+impl Cogging {
+    /// Number of harmonics.
+    pub fn order(&self) -> usize {
+        self.sin[0].len()
+    }
+}
+
+/// Parameters of the optional extra effects (see [`Effect`](crate::Effect)).
+/// `None` means the effect is absent (zero).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Extras {
+    /// Constant torque offsets `[tau0_1, tau0_2]` (N·m).
+    pub torque_offset: Option<[f64; 2]>,
+    /// Coulomb asymmetry `[Fca1, Fca2]` (N·m): the Coulomb level is
+    /// `Fc + Fca` moving forward and `Fc − Fca` moving backward.
+    pub coulomb_asymmetry: Option<[f64; 2]>,
+    /// Stribeck friction.
+    pub stribeck_friction: Option<Stribeck>,
+    /// Viscous friction in the passive hinges `[Fpb, Fpc, Fpd]` (N·m·s/rad).
+    pub passive_joint_viscous: Option<[f64; 3]>,
+    /// Cogging torque.
+    pub cogging: Option<Cogging>,
+    /// Quadratic damping `[Fq1, Fq2]` (N·m·s²/rad²): `τ = Fq θ̇|θ̇|`.
+    pub quadratic_damping: Option<[f64; 2]>,
+}
+
+impl Extras {
+    /// True if no extra effect is present.
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
+/// The robot's standard parameters: the JSON parameter file in memory.
+///
+/// Fields are public for convenience; every consumer calls
+/// [`Params::validate`] (file reading does it), so non-finite values are
+/// reported, never propagated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Params {
+    /// Proximal arc α (degrees), as in the file.
+    pub alpha_deg: f64,
+    /// Distal arc β (degrees).
+    pub beta_deg: f64,
+    /// Gravity in the base frame {0} (m/s²); default `[0, −9.81, 0]`.
+    pub gravity: Vector3<f64>,
+    /// Links 1–4 (paper numbering) at index 0–3.
+    pub links: [LinkParams; 4],
+    /// Viscous + Coulomb friction (49).
+    pub friction: Friction,
+    /// Capstan elasticity `[Ke1, Ke2]` (N·m/rad), (50).
+    pub elasticity: [f64; 2],
+    /// Optional extra effects.
+    pub extra: Extras,
+}
+
+/// Default gravity `[0, −9.81, 0]` m/s²: the real robot's axis `a` is horizontal.
+pub const DEFAULT_GRAVITY: [f64; 3] = [0.0, -9.81, 0.0];
+
+impl Params {
+    /// All-zero parameters on the given geometry (degrees) with default gravity.
+    pub fn zero(alpha_deg: f64, beta_deg: f64) -> Self {
+        Self {
+            alpha_deg,
+            beta_deg,
+            gravity: Vector3::from(DEFAULT_GRAVITY),
+            links: [LinkParams::default(); 4],
+            friction: Friction::default(),
+            elasticity: [0.0; 2],
+            extra: Extras::default(),
+        }
+    }
+
+    /// The validated geometry.
+    pub fn geometry(&self) -> Result<Geometry, ParamError> {
+        for (key, v) in [
+            ("geometry.alpha_deg", self.alpha_deg),
+            ("geometry.beta_deg", self.beta_deg),
+        ] {
+            finite(v, key)?;
+            if !(v > 0.0 && v < 180.0) {
+                return Err(ParamError::Invalid {
+                    key: key.into(),
+                    value: v,
+                    reason: "arc angles must lie strictly between 0 and 180 degrees",
+                });
+            }
+        }
+        Geometry::from_degrees(self.alpha_deg, self.beta_deg).map_err(|_| ParamError::Invalid {
+            key: "geometry".into(),
+            value: self.alpha_deg,
+            reason: "the arcs do not form a valid geometry",
+        })
+    }
+
+    /// Pseudo-inertia of link `k` (1–4, paper numbering; index `k − 1`),
+    /// see [`LinkParams::pseudo_inertia`]. Panics only for `k` outside 1–4.
+    pub fn pseudo_inertia(&self, k: usize) -> Matrix4<f64> {
+        assert!((1..=4).contains(&k), "links are numbered 1 to 4, got {k}");
+        self.links[k - 1].pseudo_inertia()
+    }
+
+    /// Checks every value: finite numbers, valid geometry, valid effect
+    /// settings. Errors name the key path as in the file.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        self.geometry()?;
+        for (i, g) in self.gravity.iter().enumerate() {
+            finite(*g, &format!("gravity[{i}]"))?;
+        }
+        for (k, l) in self.links.iter().enumerate() {
+            let vals = l.standard();
+            for (key, v) in LINK_KEYS.iter().zip(vals.iter().chain([l.mass].iter())) {
+                finite(*v, &format!("links.{}.{key}", k + 1))?;
+            }
+        }
+        for j in 0..2 {
+            finite(self.friction.viscous[j], &format!("friction.Fv{}", j + 1))?;
+            finite(self.friction.coulomb[j], &format!("friction.Fc{}", j + 1))?;
+            finite(self.elasticity[j], &format!("elasticity.Ke{}", j + 1))?;
+        }
+        let e = &self.extra;
+        let check = |sec: &str, names: &[&str], v: &[f64]| -> Result<(), ParamError> {
+            for (n, x) in names.iter().zip(v) {
+                finite(*x, &format!("extra.{sec}.{n}"))?;
+            }
+            Ok(())
+        };
+        if let Some(v) = &e.torque_offset {
+            check("torque_offset", &["tau0_1", "tau0_2"], v)?;
+        }
+        if let Some(v) = &e.coulomb_asymmetry {
+            check("coulomb_asymmetry", &["Fca1", "Fca2"], v)?;
+        }
+        if let Some(s) = &e.stribeck_friction {
+            check(
+                "stribeck_friction",
+                &["v_s", "Fs1", "Fs2"],
+                &[s.v_s, s.level[0], s.level[1]],
+            )?;
+            if s.v_s <= 0.0 {
+                return Err(ParamError::Invalid {
+                    key: "extra.stribeck_friction.v_s".into(),
+                    value: s.v_s,
+                    reason: "the Stribeck velocity must be positive (rad/s)",
+                });
+            }
+        }
+        if let Some(v) = &e.passive_joint_viscous {
+            check("passive_joint_viscous", &["Fpb", "Fpc", "Fpd"], v)?;
+        }
+        if let Some(c) = &e.cogging {
+            let key = "extra.cogging.cycles_per_rev";
+            finite(c.cycles_per_rev, key)?;
+            if c.cycles_per_rev <= 0.0 {
+                return Err(ParamError::Invalid {
+                    key: key.into(),
+                    value: c.cycles_per_rev,
+                    reason: "the number of cogging cycles per revolution must be positive",
+                });
+            }
+            let n = c.order();
+            if n == 0 || n > MAX_COGGING_ORDER {
+                return Err(ParamError::Invalid {
+                    key: "extra.cogging.order".into(),
+                    value: n as f64,
+                    reason: "the cogging order must be between 1 and 16",
+                });
+            }
+            for j in 0..2 {
+                for (kind, v) in [("Cs", &c.sin[j]), ("Cc", &c.cos[j])] {
+                    if v.len() != n {
+                        return Err(ParamError::Invalid {
+                            key: format!("extra.cogging.{kind}{}_*", j + 1),
+                            value: v.len() as f64,
+                            reason: "every joint needs one sine and one cosine amplitude per harmonic",
+                        });
+                    }
+                    for (h, x) in v.iter().enumerate() {
+                        finite(*x, &format!("extra.cogging.{kind}{}_{}", j + 1, h + 1))?;
+                    }
+                }
+            }
+        }
+        if let Some(v) = &e.quadratic_damping {
+            check("quadratic_damping", &["Fq1", "Fq2"], v)?;
+        }
+        Ok(())
+    }
+
+    /// Reads and validates a parameter file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, ParamError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| ParamError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_json_str(&text).map_err(|e| ParamError::InFile {
+            path: path.to_path_buf(),
+            source: Box::new(e),
+        })
+    }
+
+    /// Writes the parameter file (pretty JSON, shortest round-trip numbers),
+    /// atomically: a temporary file in the same directory, then a rename.
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<(), ParamError> {
+        let path = path.as_ref();
+        self.validate()?;
+        let io = |source| ParamError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let mut text = self.to_json_string();
+        text.push('\n');
+        let tmp = path.with_extension("json.tmp");
+        std::fs::write(&tmp, text).map_err(io)?;
+        std::fs::rename(&tmp, path).map_err(io)
+    }
+
+    /// Pretty JSON text of the parameter file.
+    pub fn to_json_string(&self) -> String {
+        serde_json::to_string_pretty(self).expect("parameters always serialise")
+    }
+
+    /// Parses and validates parameter-file text.
+    pub fn from_json_str(text: &str) -> Result<Self, ParamError> {
+        Self::from_value(&parse(text)?)
+    }
+
+    /// Reads and validates a parsed JSON value (strict: every key required
+    /// except `gravity` and `extra`, no unknown keys, finite numbers).
+    pub fn from_value(v: &Value) -> Result<Self, ParamError> {
+        let top = Obj::new(v, "")?;
+        top.only(&[
+            "geometry",
+            "gravity",
+            "links",
+            "friction",
+            "elasticity",
+            "extra",
+        ])?;
+        let geo = top.obj("geometry")?;
+        geo.only(&["alpha_deg", "beta_deg"])?;
+        let mut p = Self::zero(geo.num("alpha_deg")?, geo.num("beta_deg")?);
+        if top.opt("gravity").is_some() {
+            p.gravity = Vector3::from(top.nums::<3>("gravity")?);
+        }
+        let links = top.obj("links")?;
+        links.only(&["1", "2", "3", "4"])?;
+        for (k, l) in p.links.iter_mut().enumerate() {
+            let o = links.obj(&(k + 1).to_string())?;
+            o.only(&LINK_KEYS)?;
+            let mut std9 = [0.0; 9];
+            for (s, key) in std9.iter_mut().zip(LINK_KEYS) {
+                *s = o.num(key)?;
+            }
+            l.set_standard(&std9);
+            l.mass = o.num("mass")?;
+        }
+        let f = top.obj("friction")?;
+        f.only(&["Fv1", "Fc1", "Fv2", "Fc2"])?;
+        p.friction = Friction {
+            viscous: [f.num("Fv1")?, f.num("Fv2")?],
+            coulomb: [f.num("Fc1")?, f.num("Fc2")?],
+        };
+        let e = top.obj("elasticity")?;
+        e.only(&["Ke1", "Ke2"])?;
+        p.elasticity = [e.num("Ke1")?, e.num("Ke2")?];
+        if top.opt("extra").is_some() {
+            p.extra = read_extras(&top.obj("extra")?)?;
+        }
+        p.validate()?;
+        Ok(p)
+    }
+}
+
+/// Largest cogging order accepted.
+pub const MAX_COGGING_ORDER: usize = 16;
+
+fn pair(o: &Obj, a: &str, b: &str) -> Result<[f64; 2], ParamError> {
+    o.only(&[a, b])?;
+    Ok([o.num(a)?, o.num(b)?])
+}
+
+fn read_extras(x: &Obj) -> Result<Extras, ParamError> {
+    x.only(&[
+        "torque_offset",
+        "coulomb_asymmetry",
+        "stribeck_friction",
+        "passive_joint_viscous",
+        "cogging",
+        "quadratic_damping",
+    ])?;
+    let mut e = Extras::default();
+    let has = |k: &str| x.opt(k).is_some();
+    if has("torque_offset") {
+        e.torque_offset = Some(pair(&x.obj("torque_offset")?, "tau0_1", "tau0_2")?);
+    }
+    if has("coulomb_asymmetry") {
+        e.coulomb_asymmetry = Some(pair(&x.obj("coulomb_asymmetry")?, "Fca1", "Fca2")?);
+    }
+    if has("stribeck_friction") {
+        let o = x.obj("stribeck_friction")?;
+        o.only(&["v_s", "Fs1", "Fs2"])?;
+        e.stribeck_friction = Some(Stribeck {
+            v_s: o.num("v_s")?,
+            level: [o.num("Fs1")?, o.num("Fs2")?],
+        });
+    }
+    if has("passive_joint_viscous") {
+        let o = x.obj("passive_joint_viscous")?;
+        o.only(&["Fpb", "Fpc", "Fpd"])?;
+        e.passive_joint_viscous = Some([o.num("Fpb")?, o.num("Fpc")?, o.num("Fpd")?]);
+    }
+    if has("cogging") {
+        let o = x.obj("cogging")?;
+        let order_v = o.num("order")?;
+        if order_v.fract() != 0.0 || order_v < 1.0 || order_v > MAX_COGGING_ORDER as f64 {
+            return Err(ParamError::Invalid {
+                key: o.key_path("order"),
+                value: order_v,
+                reason: "the cogging order must be an integer between 1 and 16",
+            });
+        }
+        let order = order_v as usize;
+        let mut keys = vec!["cycles_per_rev".to_string(), "order".to_string()];
+        keys.extend(cogging_names(order));
+        o.only(&keys.iter().map(String::as_str).collect::<Vec<_>>())?;
+        let mut c = Cogging {
+            cycles_per_rev: o.num("cycles_per_rev")?,
+            sin: [vec![0.0; order], vec![0.0; order]],
+            cos: [vec![0.0; order], vec![0.0; order]],
+        };
+        for j in 0..2 {
+            for h in 0..order {
+                c.sin[j][h] = o.num(&format!("Cs{}_{}", j + 1, h + 1))?;
+                c.cos[j][h] = o.num(&format!("Cc{}_{}", j + 1, h + 1))?;
+            }
+        }
+        e.cogging = Some(c);
+    }
+    if has("quadratic_damping") {
+        e.quadratic_damping = Some(pair(&x.obj("quadratic_damping")?, "Fq1", "Fq2")?);
+    }
+    Ok(e)
+}
+
+/// Parameter names of the cogging effect for an order, in column order:
+/// joint 1 then joint 2; per harmonic `h`: `Cs{j}_{h}` (sine), `Cc{j}_{h}` (cosine).
+pub(crate) fn cogging_names(order: usize) -> Vec<String> {
+    let mut v = Vec::with_capacity(4 * order);
+    for j in 1..=2 {
+        for h in 1..=order {
+            v.push(format!("Cs{j}_{h}"));
+            v.push(format!("Cc{j}_{h}"));
+        }
+    }
+    v
+}
+
+/// Serialises an ordered list of (key, number) pairs as a map.
+struct Flat<'a>(&'a [(&'a str, f64)]);
+
+impl Serialize for Flat<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+struct Links<'a>(&'a [LinkParams; 4]);
+
+impl Serialize for Links<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(4))?;
+        for (k, l) in self.0.iter().enumerate() {
+            let v = l.standard();
+            let mut kv: Vec<(&str, f64)> = LINK_KEYS[..9].iter().copied().zip(v).collect();
+            kv.push(("mass", l.mass));
+            m.serialize_entry(&(k + 1).to_string(), &Flat(&kv))?;
+        }
+        m.end()
+    }
+}
+
+struct ExtrasSer<'a>(&'a Extras);
+
+impl Serialize for ExtrasSer<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let e = self.0;
+        let mut m = s.serialize_map(None)?;
+        if let Some([a, b]) = e.torque_offset {
+            m.serialize_entry("torque_offset", &Flat(&[("tau0_1", a), ("tau0_2", b)]))?;
+        }
+        if let Some([a, b]) = e.coulomb_asymmetry {
+            m.serialize_entry("coulomb_asymmetry", &Flat(&[("Fca1", a), ("Fca2", b)]))?;
+        }
+        if let Some(st) = &e.stribeck_friction {
+            let kv = [("v_s", st.v_s), ("Fs1", st.level[0]), ("Fs2", st.level[1])];
+            m.serialize_entry("stribeck_friction", &Flat(&kv))?;
+        }
+        if let Some([a, b, c]) = e.passive_joint_viscous {
+            let kv = [("Fpb", a), ("Fpc", b), ("Fpd", c)];
+            m.serialize_entry("passive_joint_viscous", &Flat(&kv))?;
+        }
+        if let Some(c) = &e.cogging {
+            let names = cogging_names(c.order());
+            let mut kv: Vec<(&str, f64)> = vec![
+                ("cycles_per_rev", c.cycles_per_rev),
+                ("order", c.order() as f64),
+            ];
+            let mut vals = Vec::with_capacity(names.len());
+            for j in 0..2 {
+                for h in 0..c.order() {
+                    vals.push(c.sin[j][h]);
+                    vals.push(c.cos[j][h]);
+                }
+            }
+            kv.extend(names.iter().map(String::as_str).zip(vals));
+            m.serialize_entry("cogging", &Flat(&kv))?;
+        }
+        if let Some([a, b]) = e.quadratic_damping {
+            m.serialize_entry("quadratic_damping", &Flat(&[("Fq1", a), ("Fq2", b)]))?;
+        }
+        m.end()
+    }
+}
+
+impl Serialize for Params {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(None)?;
+        m.serialize_entry(
+            "geometry",
+            &Flat(&[("alpha_deg", self.alpha_deg), ("beta_deg", self.beta_deg)]),
+        )?;
+        m.serialize_entry("gravity", &[self.gravity.x, self.gravity.y, self.gravity.z])?;
+        m.serialize_entry("links", &Links(&self.links))?;
+        let f = &self.friction;
+        m.serialize_entry(
+            "friction",
+            &Flat(&[
+                ("Fv1", f.viscous[0]),
+                ("Fc1", f.coulomb[0]),
+                ("Fv2", f.viscous[1]),
+                ("Fc2", f.coulomb[1]),
+            ]),
+        )?;
+        m.serialize_entry(
+            "elasticity",
+            &Flat(&[("Ke1", self.elasticity[0]), ("Ke2", self.elasticity[1])]),
+        )?;
+        if !self.extra.is_empty() {
+            m.serialize_entry("extra", &ExtrasSer(&self.extra))?;
+        }
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for Params {
+    /// Strict: the same checks as [`Params::from_value`], with the key path
+    /// in the message.
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Value::deserialize(d)?;
+        Self::from_value(&v).map_err(serde::de::Error::custom)
+    }
+}

@@ -1,0 +1,358 @@
+//! The simulated robot: the stand-in for hardware (spec §6, §8).
+//!
+//! * **Plant state** `(X, Ẋ)` in task space (rad, rad/s), integrated by
+//!   classical RK4 at `output_rate_hz × substeps` (default 1 kHz × 2 =
+//!   2 kHz), motor torque held constant between controller ticks (zero-order
+//!   hold, as a digital amplifier does). Motor angles come from the inverse
+//!   kinematics, so no forward kinematics is needed.
+//! * **Plant torques**: the truth [`Params`] — rigid links (33), viscous +
+//!   Coulomb friction with `sign` smoothed by `tanh(θ̇/w)` (no chattering, no
+//!   event handling; `w` far below the encoder's velocity resolution),
+//!   capstan elasticity (50), and every extra effect present in the
+//!   parameters (`Params::extra`), with the same smoothing.
+//! * **Controller** at the output rate: PD in motor space on the quantised
+//!   encoder angles, the velocity from a low-pass-filtered backward
+//!   difference, optional model feedforward, torque limits.
+//! * **Sensors**: encoder quantisation (`counts_per_rev × gear_ratio` counts
+//!   per joint revolution), Gaussian current noise times torque constant
+//!   times gear ratio on the measured torque, an optional sample delay of the
+//!   torque against the angles. Seeded; the same seed gives the same bytes.
+//!
+//! Defaults and why they are realistic: `docs/simulator.md`.
+
+mod log;
+
+use aras_kin::{Geometry, evaluate};
+use nalgebra::Vector2;
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::Serialize;
+
+use crate::regressor::Sign;
+use crate::{DynError, Dynamics, Params, SimError, Trajectory};
+
+pub use log::{Excitation, Noise, SensorInfo, Sidecar, SimLog, Truth, sidecar_path, write_log};
+
+/// Motor-side sensors and drive of each joint.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Sensors {
+    /// Encoder counts per motor revolution (after quadrature decoding).
+    pub counts_per_rev: [u32; 2],
+    /// Drive (capstan) ratio: motor revolutions per joint revolution.
+    pub gear_ratios: [f64; 2],
+    /// Motor torque constants (N·m/A).
+    pub torque_constants: [f64; 2],
+    /// Standard deviation of the current measurement noise (A).
+    pub current_noise_std: [f64; 2],
+}
+
+impl Default for Sensors {
+    /// 4096 counts/rev (1024-line quadrature encoder), capstan ratio 10,
+    /// `K_t` = 30.2 mN·m/A (a Maxon RE 35-class motor), 10 mA current noise
+    /// (≈ 3 mN·m joint torque noise).
+    fn default() -> Self {
+        Self {
+            counts_per_rev: [4096; 2],
+            gear_ratios: [10.0; 2],
+            torque_constants: [0.0302; 2],
+            current_noise_std: [0.010; 2],
+        }
+    }
+}
+
+impl Sensors {
+    /// Joint-angle resolution `2π/(counts · ratio)` (rad).
+    pub fn resolution(&self) -> [f64; 2] {
+        std::array::from_fn(|j| {
+            2.0 * std::f64::consts::PI / (self.counts_per_rev[j] as f64 * self.gear_ratios[j])
+        })
+    }
+
+    /// Joint torque noise `σ_i K_t N` (N·m).
+    pub fn torque_noise_std(&self) -> [f64; 2] {
+        std::array::from_fn(|j| {
+            self.current_noise_std[j] * self.torque_constants[j] * self.gear_ratios[j]
+        })
+    }
+}
+
+/// PD controller in motor space with optional model feedforward.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Controller {
+    /// Proportional gains (N·m/rad).
+    pub kp: [f64; 2],
+    /// Derivative gains (N·m·s/rad).
+    pub kd: [f64; 2],
+    /// Cut-off of the first-order low-pass on the differentiated encoder
+    /// angle (Hz).
+    pub velocity_cutoff_hz: f64,
+    /// Model for feedforward `τ_ff = Y(X_d, Ẋ_d, Ẍ_d) β` (friction with the
+    /// exact sign of the desired velocity); `None` for pure PD (the paper).
+    pub feedforward: Option<Params>,
+}
+
+impl Default for Controller {
+    /// `Kp = 30 N·m/rad`, `Kd = 0.3 N·m·s/rad`, 30 Hz velocity filter, no
+    /// feedforward: about 9 Hz closed-loop bandwidth on the ≈ 0.01 kg·m²
+    /// motor-space inertia, well below the 1 kHz control rate.
+    fn default() -> Self {
+        Self {
+            kp: [30.0; 2],
+            kd: [0.3; 2],
+            velocity_cutoff_hz: 30.0,
+            feedforward: None,
+        }
+    }
+}
+
+/// Everything about a simulation run except the robot and the trajectory.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SimConfig {
+    /// Simulated time (s); the log has `floor(duration · rate)` samples.
+    pub duration_s: f64,
+    /// Controller and log rate (Hz).
+    pub output_rate_hz: f64,
+    /// RK4 steps per output sample (internal rate = output rate × substeps).
+    pub substeps: usize,
+    /// The controller.
+    pub controller: Controller,
+    /// Symmetric motor torque limits at the joint (N·m).
+    pub torque_limit: [f64; 2],
+    /// Width `w` of the `tanh(θ̇/w)` friction smoothing (rad/s).
+    pub friction_smoothing: f64,
+    /// Sensors and drives.
+    pub sensors: Sensors,
+    /// Torque samples lag the angle samples by this many samples.
+    pub torque_delay_samples: usize,
+    /// Seed of the noise generator.
+    pub seed: u64,
+}
+
+impl Default for SimConfig {
+    /// 160 s (16 periods of the paper's 10 s excitation) at 1 kHz, 2 RK4
+    /// substeps, 2.4 N·m limit (8 A × 30.2 mN·m/A × 10), 0.03 rad/s friction
+    /// smoothing, default sensors, no delay, seed 1.
+    fn default() -> Self {
+        Self {
+            duration_s: 160.0,
+            output_rate_hz: 1000.0,
+            substeps: 2,
+            controller: Controller::default(),
+            torque_limit: [2.4; 2],
+            friction_smoothing: 0.03,
+            sensors: Sensors::default(),
+            torque_delay_samples: 0,
+            seed: 1,
+        }
+    }
+}
+
+fn positive(key: &'static str, value: f64) -> Result<(), SimError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(SimError::Config {
+            key,
+            value,
+            reason: "must be a positive finite number",
+        })
+    }
+}
+
+fn non_negative(key: &'static str, value: f64) -> Result<(), SimError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(SimError::Config {
+            key,
+            value,
+            reason: "must be a finite number ≥ 0",
+        })
+    }
+}
+
+impl SimConfig {
+    /// Checks every setting; errors name the setting and the rule.
+    pub fn validate(&self) -> Result<(), SimError> {
+        positive("duration_s", self.duration_s)?;
+        positive("output_rate_hz", self.output_rate_hz)?;
+        if self.substeps == 0 || self.substeps > 1000 {
+            return Err(SimError::Config {
+                key: "substeps",
+                value: self.substeps as f64,
+                reason: "must be between 1 and 1000",
+            });
+        }
+        let n = (self.duration_s * self.output_rate_hz).floor();
+        if !(2.0..=1e9).contains(&n) || self.torque_delay_samples as f64 >= n {
+            return Err(SimError::Config {
+                key: "duration_s",
+                value: self.duration_s,
+                reason: "must give at least 2 samples (and more than the torque delay), at most 1e9",
+            });
+        }
+        let c = &self.controller;
+        for j in 0..2 {
+            non_negative("controller.kp", c.kp[j])?;
+            non_negative("controller.kd", c.kd[j])?;
+            positive("torque_limit", self.torque_limit[j])?;
+            positive("sensors.gear_ratios", self.sensors.gear_ratios[j])?;
+            positive("sensors.torque_constants", self.sensors.torque_constants[j])?;
+            non_negative(
+                "sensors.current_noise_std",
+                self.sensors.current_noise_std[j],
+            )?;
+            positive(
+                "sensors.counts_per_rev",
+                self.sensors.counts_per_rev[j] as f64,
+            )?;
+        }
+        positive("controller.velocity_cutoff_hz", c.velocity_cutoff_hz)?;
+        positive("friction_smoothing", self.friction_smoothing)?;
+        Ok(())
+    }
+}
+
+/// The plant: truth dynamics with smooth friction.
+struct Plant<'a> {
+    dy: &'a Dynamics,
+    geometry: Geometry,
+    sign: Sign,
+}
+
+impl Plant<'_> {
+    /// `Ẍ` at `(X, Ẋ)` under the motor torque `tau`.
+    fn accel(
+        &self,
+        x: &Vector2<f64>,
+        v: &Vector2<f64>,
+        tau: &Vector2<f64>,
+    ) -> Result<Vector2<f64>, DynError> {
+        let s = evaluate(&self.geometry, x, v, &Vector2::zeros())?;
+        let other = self.dy.friction_torque(&s.theta_dot, self.sign)
+            + self.dy.elastic_torque(&s.theta)
+            + self.dy.extra_torque(&s, self.sign);
+        self.dy.forward_links(&s, &(tau - other))
+    }
+
+    /// One classical RK4 step of length `h`.
+    fn rk4(
+        &self,
+        x: &mut Vector2<f64>,
+        v: &mut Vector2<f64>,
+        tau: &Vector2<f64>,
+        h: f64,
+    ) -> Result<(), DynError> {
+        let a1 = self.accel(x, v, tau)?;
+        let (x2, v2) = (*x + *v * (0.5 * h), *v + a1 * (0.5 * h));
+        let a2 = self.accel(&x2, &v2, tau)?;
+        let (x3, v3) = (*x + v2 * (0.5 * h), *v + a2 * (0.5 * h));
+        let a3 = self.accel(&x3, &v3, tau)?;
+        let (x4, v4) = (*x + v3 * h, *v + a3 * h);
+        let a4 = self.accel(&x4, &v4, tau)?;
+        *x += (*v + (v2 + v3) * 2.0 + v4) * (h / 6.0);
+        *v += (a1 + (a2 + a3) * 2.0 + a4) * (h / 6.0);
+        Ok(())
+    }
+}
+
+/// Simulates the robot `truth` tracking `traj` and returns the log.
+///
+/// The robot starts on the trajectory (`X(0) = X_d(0)`, `Ẋ(0) = Ẋ_d(0)`).
+/// Row `k` holds `t_k = k / rate`, the quantised angles at `t_k`, the
+/// measured torque of sample `k − delay` (rows before the delay are
+/// dropped), and the exact `θ̇`, `θ̈` at `t_k` (`θ̈` just after the
+/// controller's update).
+pub fn simulate(
+    truth: &Params,
+    traj: &dyn Trajectory,
+    cfg: &SimConfig,
+) -> Result<SimLog, SimError> {
+    cfg.validate()?;
+    let at0 = |source| SimError::Dynamics { t: 0.0, source };
+    let dy = Dynamics::new(truth).map_err(at0)?;
+    let ff = match &cfg.controller.feedforward {
+        Some(p) => Some(Dynamics::new(p).map_err(at0)?),
+        None => None,
+    };
+    let plant = Plant {
+        dy: &dy,
+        geometry: *dy.geometry(),
+        sign: Sign::Tanh(cfg.friction_smoothing),
+    };
+    let g = plant.geometry;
+    let n = (cfg.duration_s * cfg.output_rate_hz).floor() as usize;
+    let dt = 1.0 / cfg.output_rate_hz;
+    let h = dt / cfg.substeps as f64;
+    let res = cfg.sensors.resolution();
+    let noise = cfg.sensors.torque_noise_std();
+    let alpha = 1.0 - (-2.0 * std::f64::consts::PI * cfg.controller.velocity_cutoff_hz * dt).exp();
+    let c = &cfg.controller;
+    let mut rng = StdRng::seed_from_u64(cfg.seed);
+
+    let desired = |t: f64| -> Result<aras_kin::KinematicSample, SimError> {
+        let (x, v, a) = traj.eval(t);
+        evaluate(&g, &x, &v, &a).map_err(|e| SimError::Trajectory {
+            t,
+            source: e.into(),
+        })
+    };
+    let d0 = desired(0.0)?;
+    let (mut x, mut v) = (d0.x, d0.x_dot);
+    let quantise = |th: &Vector2<f64>| {
+        Vector2::new(
+            (th[0] / res[0]).round() * res[0],
+            (th[1] / res[1]).round() * res[1],
+        )
+    };
+    let mut theta_prev = quantise(&d0.theta);
+    let mut vel_est = d0.theta_dot;
+
+    let mut log = SimLog::with_capacity(n);
+    let mut tau_hist: Vec<[f64; 2]> = Vec::with_capacity(n);
+    for k in 0..n {
+        let t = k as f64 * dt;
+        let at = |source| SimError::Dynamics { t, source };
+        let s = evaluate(&g, &x, &v, &Vector2::zeros()).map_err(|e| at(e.into()))?;
+        let theta_meas = quantise(&s.theta);
+        if k > 0 {
+            let raw = (theta_meas - theta_prev) / dt;
+            vel_est += (raw - vel_est) * alpha;
+        }
+        theta_prev = theta_meas;
+        let d = if k == 0 { d0 } else { desired(t)? };
+        let mut tau = Vector2::zeros();
+        if let Some(f) = &ff {
+            tau += f.inverse(&d);
+        }
+        for j in 0..2 {
+            tau[j] +=
+                c.kp[j] * (d.theta[j] - theta_meas[j]) + c.kd[j] * (d.theta_dot[j] - vel_est[j]);
+            tau[j] = tau[j].clamp(-cfg.torque_limit[j], cfg.torque_limit[j]);
+        }
+        let xdd = plant.accel(&x, &v, &tau).map_err(at)?;
+        let theta_ddot = s.jacobian.matrix() * xdd + s.jacobian_dot * v;
+        let mut measured = [0.0; 2];
+        for j in 0..2 {
+            let z: f64 = StandardNormal.sample(&mut rng);
+            measured[j] = tau[j] + noise[j] * z;
+        }
+        tau_hist.push(measured);
+        if k >= cfg.torque_delay_samples {
+            log.push(
+                t,
+                [theta_meas[0], theta_meas[1]],
+                tau_hist[k - cfg.torque_delay_samples],
+                [s.theta_dot[0], s.theta_dot[1]],
+                [theta_ddot[0], theta_ddot[1]],
+            );
+        }
+        for _ in 0..cfg.substeps {
+            plant.rk4(&mut x, &mut v, &tau, h).map_err(at)?;
+        }
+    }
+    log.sidecar =
+        Sidecar::new(truth, traj, cfg).map_err(|e| SimError::Dynamics { t: 0.0, source: e })?;
+    Ok(log)
+}

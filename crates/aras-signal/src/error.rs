@@ -1,0 +1,452 @@
+//! Typed errors. Every message says what was wrong, where (file, line,
+//! column, key, value) and how to fix it, so callers can print them as-is.
+
+use std::path::PathBuf;
+
+/// `x` rounded to 9 significant digits and printed shortest, so differences
+/// of logged times print as `0.004`, not `0.0040000000000000036`.
+pub(crate) fn sig(x: f64) -> f64 {
+    format!("{x:.8e}").parse().unwrap_or(x)
+}
+
+/// Errors of filter design and filtering.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FilterError {
+    /// Filter order outside `1..=max`.
+    #[error("filter order {order} is invalid: use an order from 1 to {max}")]
+    InvalidOrder {
+        /// The requested order.
+        order: usize,
+        /// Largest supported order.
+        max: usize,
+    },
+    /// Sample rate not a positive finite number.
+    #[error("sample rate {value} Hz is invalid: it must be a positive finite number")]
+    InvalidSampleRate {
+        /// The offending value (Hz).
+        value: f64,
+    },
+    /// Cut-off outside (0, Nyquist).
+    #[error(
+        "cut-off {cutoff_hz} Hz is invalid: it must lie strictly between 0 and the Nyquist \
+         frequency {nyquist_hz} Hz (half the sample rate {sample_rate_hz} Hz)"
+    )]
+    InvalidCutoff {
+        /// The requested cut-off (Hz).
+        cutoff_hz: f64,
+        /// Half the sample rate (Hz).
+        nyquist_hz: f64,
+        /// The sample rate (Hz).
+        sample_rate_hz: f64,
+    },
+    /// A filter coefficient row is unusable.
+    #[error("filter section {section} is invalid: {reason}")]
+    InvalidSection {
+        /// Index of the section (0 for a transfer function).
+        section: usize,
+        /// What is wrong and how to fix it.
+        reason: String,
+    },
+    /// Signal not longer than the odd-extension pad length (scipy raises too).
+    #[error(
+        "signal of {len} samples is too short for zero-phase filtering: it must be longer than \
+         padlen = {padlen} (as scipy's sosfiltfilt/filtfilt require); use a lower filter order \
+         or a longer record"
+    )]
+    TooShort {
+        /// Length of the signal.
+        len: usize,
+        /// Required minimum length minus one.
+        padlen: usize,
+    },
+    /// A sample of the input is NaN or infinite.
+    #[error("sample {index} of the signal is not finite ({value}): filter only finite data")]
+    NonFinite {
+        /// Index of the first non-finite sample.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// Output buffer length differs from the input length.
+    #[error("output buffer has {output} samples but the input has {input}: give equal lengths")]
+    LengthMismatch {
+        /// Input length.
+        input: usize,
+        /// Output length.
+        output: usize,
+    },
+}
+
+/// Errors of reading and validating a log (CSV plus optional JSON sidecar).
+///
+/// `file` is the display name given to the reader (the path for
+/// [`read_log`](crate::read_log)); `line` and `column` are 1-based, the
+/// column being the field's position in the row.
+#[derive(Debug, thiserror::Error)]
+pub enum LogError {
+    /// The file could not be opened or read.
+    #[error("{file}: cannot read: {source}")]
+    Io {
+        /// File name.
+        file: String,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A line is not valid UTF-8 text.
+    #[error(
+        "{file}:{line}: the line is not valid UTF-8 text; save the log as UTF-8 (plain ASCII numbers)"
+    )]
+    NotUtf8 {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+    },
+    /// No header line at all.
+    #[error(
+        "{file}: no header line: the log is empty or only comments; the first non-comment line \
+         must name the columns, e.g. `t,theta1,theta2,tau1,tau2`"
+    )]
+    NoHeader {
+        /// File name.
+        file: String,
+    },
+    /// The header is separated by semicolons.
+    #[error(
+        "{file}:{line}: the header is separated by ';' but aras logs are comma-separated: \
+         replace every ';' by ',' (and decimal commas by points)"
+    )]
+    Semicolon {
+        /// File name.
+        file: String,
+        /// Line of the header.
+        line: u64,
+    },
+    /// A header field is empty.
+    #[error(
+        "{file}:{line}:{column}: column {column} of the header has no name: name it or remove the empty field"
+    )]
+    EmptyColumnName {
+        /// File name.
+        file: String,
+        /// Line of the header.
+        line: u64,
+        /// 1-based column.
+        column: usize,
+    },
+    /// A column name appears twice.
+    #[error(
+        "{file}:{line}:{column}: column `{name}` appears twice (columns {first} and {column}): remove or rename one"
+    )]
+    DuplicateColumn {
+        /// File name.
+        file: String,
+        /// Line of the header.
+        line: u64,
+        /// Column of the second occurrence.
+        column: usize,
+        /// Column of the first occurrence.
+        first: usize,
+        /// The duplicated name.
+        name: String,
+    },
+    /// A required column is missing.
+    #[error(
+        "{file}:{line}: required column `{name}` is missing (the header has: {header}); {hint}"
+    )]
+    MissingColumn {
+        /// File name.
+        file: String,
+        /// Line of the header.
+        line: u64,
+        /// The missing column.
+        name: String,
+        /// The header's column names, comma-separated.
+        header: String,
+        /// How to fix it.
+        hint: String,
+    },
+    /// Only one of a pair of optional columns is present.
+    #[error(
+        "{file}:{line}: column `{present}` is present but `{missing}` is not: give both or neither"
+    )]
+    UnpairedColumn {
+        /// File name.
+        file: String,
+        /// Line of the header.
+        line: u64,
+        /// The column that is there.
+        present: String,
+        /// Its missing partner.
+        missing: String,
+    },
+    /// A row has a different number of fields than the header.
+    #[error(
+        "{file}:{line}: the row has {found} fields but the header has {expected}: every row needs one value per column"
+    )]
+    FieldCount {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// Number of header columns.
+        expected: usize,
+        /// Number of fields found.
+        found: usize,
+    },
+    /// A value is not a number.
+    #[error("{file}:{line}:{column}: `{name}` value {text:?} is not a number{hint}")]
+    NotANumber {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// 1-based column.
+        column: usize,
+        /// Column name.
+        name: String,
+        /// The text found.
+        text: String,
+        /// Extra advice (may be empty).
+        hint: String,
+    },
+    /// A value is NaN or infinite.
+    #[error(
+        "{file}:{line}:{column}: `{name}` value {text:?} is not finite: logs must hold finite numbers only (drop or repair the row)"
+    )]
+    NonFinite {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// 1-based column.
+        column: usize,
+        /// Column name.
+        name: String,
+        /// The text found.
+        text: String,
+    },
+    /// Time does not strictly increase.
+    #[error(
+        "{file}:{line}:{column}: time does not increase: t = {t} s follows t = {previous} s; rows \
+         must be sorted by strictly increasing time without repeats"
+    )]
+    TimeNotIncreasing {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// Column of `t`.
+        column: usize,
+        /// Previous time.
+        previous: f64,
+        /// This row's time.
+        t: f64,
+    },
+    /// Fewer data rows than needed.
+    #[error("{file}: only {rows} data rows, at least {needed} are needed: record a longer log")]
+    TooFewRows {
+        /// File name.
+        file: String,
+        /// Rows found.
+        rows: usize,
+        /// Rows needed.
+        needed: usize,
+    },
+    /// The sampling step varies beyond the tolerance.
+    #[error(
+        "{file}:{line}: irregular sampling: the worst step, {s} s ending at t = {t} s, is \
+         {ratio:.3}× the nominal step {n} s (tolerance ±{percent}%); resample the log to a \
+         uniform rate, or raise ReadOptions::step_tolerance"
+    , percent = tolerance * 100.0, s = sig(*step), n = sig(*nominal))]
+    IrregularSampling {
+        /// File name.
+        file: String,
+        /// Line ending the worst step.
+        line: u64,
+        /// Time ending the worst step.
+        t: f64,
+        /// The step (s).
+        step: f64,
+        /// step / nominal.
+        ratio: f64,
+        /// Nominal step (s).
+        nominal: f64,
+        /// Relative tolerance.
+        tolerance: f64,
+    },
+    /// Angle columns hold degrees.
+    #[error(
+        "{file}: angles look like degrees (max |{name}| = {max:.1}): convert to radians (largest value on line {line})"
+    )]
+    Degrees {
+        /// File name.
+        file: String,
+        /// Column name.
+        name: String,
+        /// Largest magnitude found.
+        max: f64,
+        /// Line of that value.
+        line: u64,
+    },
+    /// Angle columns hold values that are neither radians nor degrees.
+    #[error(
+        "{file}: `{name}` reaches {max:.1} (line {line}), which is neither a plausible angle in \
+         radians nor in degrees; if these are encoder counts name the columns enc1, enc2 and give \
+         sensors.counts_per_rev"
+    )]
+    ImplausibleAngle {
+        /// File name.
+        file: String,
+        /// Column name.
+        name: String,
+        /// Largest magnitude found.
+        max: f64,
+        /// Line of that value.
+        line: u64,
+    },
+    /// The sidecar JSON is malformed or has an unknown key.
+    #[error("{file}:{line}:{column}: {message}")]
+    Sidecar {
+        /// Sidecar file name.
+        file: String,
+        /// Line (1-based, 0 if unknown).
+        line: usize,
+        /// Column (1-based, 0 if unknown).
+        column: usize,
+        /// What is wrong and how to fix it.
+        message: String,
+    },
+    /// A sidecar value is out of range.
+    #[error("{file}: {key} = {value} is invalid: {reason}")]
+    SidecarValue {
+        /// Sidecar file name (or "options" for command-line overrides).
+        file: String,
+        /// Dotted key, e.g. `sensors.gear_ratios[1]`.
+        key: String,
+        /// The offending value.
+        value: String,
+        /// What is allowed.
+        reason: String,
+    },
+    /// A conversion needs a sensor constant nobody gave.
+    #[error(
+        "{file}: the log has columns {columns} but no {key} is given: add \"{key}\" to the \
+         sidecar {sidecar} or set it in ReadOptions::sensors (command line)"
+    )]
+    MissingSensor {
+        /// Log file name.
+        file: String,
+        /// The columns needing the constant.
+        columns: String,
+        /// Dotted key, e.g. `sensors.torque_constants`.
+        key: String,
+        /// Where the sidecar was looked for.
+        sidecar: String,
+    },
+    /// An option value is invalid.
+    #[error("invalid read option {name} = {value}: {reason}")]
+    InvalidOption {
+        /// Option name.
+        name: &'static str,
+        /// Its value.
+        value: String,
+        /// What is allowed.
+        reason: String,
+    },
+    /// A sidecar file given explicitly does not exist.
+    #[error("sidecar {path} cannot be read: {source}")]
+    SidecarIo {
+        /// The path.
+        path: PathBuf,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// Errors of [`process`](crate::process).
+#[derive(Debug, thiserror::Error)]
+pub enum ProcessError {
+    /// Filter design or filtering failed.
+    #[error("{context}: {source}")]
+    Filter {
+        /// What was being filtered.
+        context: String,
+        /// The filter error.
+        #[source]
+        source: FilterError,
+    },
+    /// An option value is invalid.
+    #[error("invalid process option {name} = {value}: {reason}")]
+    InvalidOption {
+        /// Option name.
+        name: &'static str,
+        /// Its value.
+        value: String,
+        /// What is allowed.
+        reason: String,
+    },
+    /// The record is too short for what was asked.
+    #[error("{what}: the record has {have} samples but {need} are needed; {hint}")]
+    TooShort {
+        /// The step that needs more data.
+        what: String,
+        /// Samples available.
+        have: usize,
+        /// Samples needed.
+        need: usize,
+        /// How to fix it.
+        hint: String,
+    },
+    /// The period is not a whole number of samples.
+    #[error(
+        "period {period_s} s is {samples:.4} samples at the log's step {step_s} s, not a whole \
+         number: the periods would drift by {drift:.2} samples over the record; check \
+         excitation.period_s or resample the log"
+    )]
+    PeriodNotWhole {
+        /// Period (s).
+        period_s: f64,
+        /// Samples per period (fractional).
+        samples: f64,
+        /// Sample step (s).
+        step_s: f64,
+        /// Accumulated drift over all periods (samples).
+        drift: f64,
+    },
+    /// One period differs too much from the average.
+    #[error(
+        "period {index} (t = {t_start:.3}–{t_end:.3} s) of {channel} differs from the average \
+         period by {relative_percent:.1}% RMS (limit {limit_percent:.1}%): the motion is not \
+         periodic with period {period_s} s; check excitation.period_s and the settling time"
+    , relative_percent = relative * 100.0, limit_percent = limit * 100.0)]
+    PeriodsDisagree {
+        /// Channel name.
+        channel: &'static str,
+        /// 0-based index of the period.
+        index: usize,
+        /// Its first time.
+        t_start: f64,
+        /// Its last time.
+        t_end: f64,
+        /// RMS deviation relative to the channel's variation.
+        relative: f64,
+        /// The limit.
+        limit: f64,
+        /// The period (s).
+        period_s: f64,
+    },
+    /// Kinematics failed at a sample.
+    #[error("kinematics at t = {t} s (sample {index}): {source}")]
+    Kinematics {
+        /// Sample index in the output.
+        index: usize,
+        /// Its time.
+        t: f64,
+        /// The kinematic error.
+        #[source]
+        source: aras_kin::KinError,
+    },
+}

@@ -1,0 +1,71 @@
+//! Small wrapper around `rustfft` for operations on one period of a periodic
+//! signal: multiply the spectrum by a real or imaginary factor and transform
+//! back. Used by the circular zero-phase filter and the spectral derivative.
+
+use std::sync::Arc;
+
+use rustfft::num_complex::Complex64;
+use rustfft::{Fft, FftPlanner};
+
+/// Forward/inverse FFT plans and buffers for one record length.
+///
+/// Build once per length and reuse: planning and the buffers are the only
+/// allocations, applying a multiplier allocates nothing.
+pub(crate) struct Fourier {
+    forward: Arc<dyn Fft<f64>>,
+    inverse: Arc<dyn Fft<f64>>,
+    buf: Vec<Complex64>,
+    scratch: Vec<Complex64>,
+}
+
+impl Fourier {
+    /// Plans transforms of length `n` (any `n ≥ 1`; rustfft handles every
+    /// size in O(n log n)).
+    pub fn new(n: usize) -> Self {
+        let mut planner = FftPlanner::new();
+        let forward = planner.plan_fft_forward(n);
+        let inverse = planner.plan_fft_inverse(n);
+        let len = forward
+            .get_inplace_scratch_len()
+            .max(inverse.get_inplace_scratch_len());
+        Self {
+            forward,
+            inverse,
+            buf: vec![Complex64::new(0.0, 0.0); n],
+            scratch: vec![Complex64::new(0.0, 0.0); len],
+        }
+    }
+
+    /// Record length.
+    pub fn len(&self) -> usize {
+        self.buf.len()
+    }
+
+    /// Replaces `x` by `IDFT(m(k) · DFT(x))`, where `m(k)` gets the signed
+    /// frequency index `k ∈ (−n/2, n/2]` of each bin. For an even `n` the
+    /// Nyquist bin is passed as `+n/2`; the caller decides what an odd
+    /// (imaginary) multiplier does there.
+    pub fn apply(&mut self, x: &mut [f64], m: impl Fn(i64) -> Complex64) {
+        debug_assert_eq!(x.len(), self.len());
+        let n = self.len();
+        for (b, &v) in self.buf.iter_mut().zip(x.iter()) {
+            *b = Complex64::new(v, 0.0);
+        }
+        self.forward
+            .process_with_scratch(&mut self.buf, &mut self.scratch);
+        for (k, b) in self.buf.iter_mut().enumerate() {
+            let signed = if 2 * k <= n {
+                k as i64
+            } else {
+                k as i64 - n as i64
+            };
+            *b *= m(signed);
+        }
+        self.inverse
+            .process_with_scratch(&mut self.buf, &mut self.scratch);
+        let scale = 1.0 / n as f64;
+        for (v, b) in x.iter_mut().zip(self.buf.iter()) {
+            *v = b.re * scale;
+        }
+    }
+}

@@ -1,0 +1,576 @@
+//! The streaming CSV reader: rows are parsed, converted to SI and checked in
+//! chunks, so arbitrarily long logs can be consumed in bounded memory.
+
+use std::fs::File;
+use std::io::{ErrorKind, Read};
+use std::ops::Range;
+use std::path::Path;
+
+use serde::Serialize;
+
+use super::checks::{Checks, StepDeviation, Warning};
+use super::header::{
+    AngleSource, CURRENT, DDTHETA, DTHETA, ENC, Layout, NAMES, SLOTS, T, TAU_, THETA, TorqueSource,
+};
+use super::number::parse_f64;
+use super::sidecar::Sidecar;
+use super::{ReadOptions, SidecarSource};
+use crate::error::LogError;
+
+/// Rows of a log in SI units, structure-of-arrays.
+///
+/// Filled by [`LogReader::read_rows`], which appends; `theta_dot` and
+/// `theta_ddot` stay empty when the log has no such columns.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Columns {
+    /// Time (s).
+    pub t: Vec<f64>,
+    /// Joint angles θ1, θ2 (rad).
+    pub theta: [Vec<f64>; 2],
+    /// Joint torques τ1, τ2 (N·m).
+    pub tau: [Vec<f64>; 2],
+    /// Logged joint rates (rad/s), if the log has `dtheta1, dtheta2`.
+    pub theta_dot: [Vec<f64>; 2],
+    /// Logged joint accelerations (rad/s²), if the log has `ddtheta1, ddtheta2`.
+    pub theta_ddot: [Vec<f64>; 2],
+}
+
+impl Columns {
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// True if there are no rows.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// Removes all rows, keeping the allocations.
+    pub fn clear(&mut self) {
+        self.t.clear();
+        for v in self
+            .theta
+            .iter_mut()
+            .chain(self.tau.iter_mut())
+            .chain(self.theta_dot.iter_mut())
+            .chain(self.theta_ddot.iter_mut())
+        {
+            v.clear();
+        }
+    }
+}
+
+/// What the reader learnt about the whole log, available once it is read.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LogSummary {
+    /// Display name of the log.
+    pub file: String,
+    /// Data rows.
+    pub rows: usize,
+    /// Nominal sample step (s): the median of the first
+    /// [`NOMINAL_WINDOW`](crate::NOMINAL_WINDOW) steps, or
+    /// [`ReadOptions::nominal_step`] if given.
+    pub nominal_step_s: f64,
+    /// `1 / nominal_step_s` (Hz).
+    pub sample_rate_hz: f64,
+    /// Last time minus first time (s).
+    pub duration_s: f64,
+    /// The step furthest from the nominal one (within tolerance, or reading
+    /// would have failed).
+    pub worst_step: Option<StepDeviation>,
+    /// `"theta columns (rad)"` or `"encoder counts"`.
+    pub angle_source: String,
+    /// `"tau columns (N·m)"` or `"motor currents"`.
+    pub torque_source: String,
+    /// `[min, max]` of θ1 and θ2 (rad).
+    pub theta_range: [[f64; 2]; 2],
+    /// `[min, max]` of τ1 and τ2 (N·m).
+    pub tau_range: [[f64; 2]; 2],
+    /// Where the sidecar came from, if any.
+    pub sidecar: Option<String>,
+}
+
+/// Summary, notes and warnings from [`LogReader::finish`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct LogReport {
+    /// What was read.
+    pub summary: LogSummary,
+    /// Informational notes (ignored columns, data sources).
+    pub notes: Vec<String>,
+    /// Warnings (saturation).
+    pub warnings: Vec<Warning>,
+}
+
+/// Splits the input into lines without copying, growing its buffer only for
+/// lines longer than it.
+struct Lines<R> {
+    src: R,
+    buf: Vec<u8>,
+    start: usize,
+    end: usize,
+    eof: bool,
+    line: u64,
+}
+
+impl<R: Read> Lines<R> {
+    fn new(src: R) -> Self {
+        Self {
+            src,
+            buf: vec![0; 1 << 20],
+            start: 0,
+            end: 0,
+            eof: false,
+            line: 0,
+        }
+    }
+
+    /// The next line (without `\n` or `\r\n`), as a range of `self.buf`.
+    fn next(&mut self) -> std::io::Result<Option<Range<usize>>> {
+        let mut scanned = self.start;
+        loop {
+            if let Some(pos) = find_byte(&self.buf[scanned..self.end], b'\n') {
+                let nl = scanned + pos;
+                let mut stop = nl;
+                if stop > self.start && self.buf[stop - 1] == b'\r' {
+                    stop -= 1;
+                }
+                let r = self.start..stop;
+                self.start = nl + 1;
+                self.line += 1;
+                return Ok(Some(r));
+            }
+            if self.eof {
+                if self.start < self.end {
+                    let mut stop = self.end;
+                    if self.buf[stop - 1] == b'\r' {
+                        stop -= 1;
+                    }
+                    let r = self.start..stop;
+                    self.start = self.end;
+                    self.line += 1;
+                    return Ok(Some(r));
+                }
+                return Ok(None);
+            }
+            let done = self.end - self.start;
+            if self.start > 0 {
+                self.buf.copy_within(self.start..self.end, 0);
+                self.end -= self.start;
+                self.start = 0;
+            }
+            if self.end == self.buf.len() {
+                self.buf.resize(2 * self.buf.len(), 0);
+            }
+            scanned = done;
+            match self.src.read(&mut self.buf[self.end..]) {
+                Ok(0) => self.eof = true,
+                Ok(n) => self.end += n,
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+    }
+}
+
+/// Streaming reader of one log.
+///
+/// ```no_run
+/// use aras_signal::{Columns, LogReader, ReadOptions};
+/// # fn main() -> Result<(), aras_signal::LogError> {
+/// let mut reader = LogReader::open("run.csv".as_ref(), &ReadOptions::default())?;
+/// let mut chunk = Columns::default();
+/// while reader.read_rows(&mut chunk, 65_536)? > 0 {
+///     // ... use chunk.t, chunk.theta, chunk.tau ...
+///     chunk.clear();
+/// }
+/// let report = reader.finish()?; // end-of-log checks: sampling, degrees, saturation
+/// # Ok(()) }
+/// ```
+///
+/// Per-row defects (bad numbers, time going backwards) are reported by
+/// [`read_rows`](Self::read_rows) at the row; defects that need the whole
+/// log (irregular sampling against the nominal step, degrees, too few rows,
+/// saturation warnings) by [`finish`](Self::finish).
+pub struct LogReader<R> {
+    lines: Lines<R>,
+    name: String,
+    layout: Layout,
+    sidecar: Sidecar,
+    sidecar_name: Option<String>,
+    checks: Checks,
+    opts: ReadOptions,
+    done: bool,
+}
+
+impl LogReader<File> {
+    /// Opens a log file. With [`SidecarSource::Auto`] the sidecar is the
+    /// file of the same name with extension `.json`, if it exists.
+    pub fn open(path: &Path, opts: &ReadOptions) -> Result<Self, LogError> {
+        let name = path.display().to_string();
+        let file = File::open(path).map_err(|source| LogError::Io {
+            file: name.clone(),
+            source,
+        })?;
+        let sidecar = match &opts.sidecar {
+            SidecarSource::Auto => {
+                let candidate = path.with_extension("json");
+                if candidate.is_file() {
+                    Some((Sidecar::read(&candidate)?, candidate.display().to_string()))
+                } else {
+                    None
+                }
+            }
+            other => load_sidecar(other)?,
+        };
+        Self::with_sidecar(file, name, opts, sidecar)
+    }
+}
+
+fn load_sidecar(src: &SidecarSource) -> Result<Option<(Sidecar, String)>, LogError> {
+    Ok(match src {
+        SidecarSource::Auto | SidecarSource::None => None,
+        SidecarSource::Path(p) => Some((Sidecar::read(p)?, p.display().to_string())),
+        SidecarSource::Text { name, json } => Some((Sidecar::parse(json, name)?, name.clone())),
+    })
+}
+
+impl<R: Read> LogReader<R> {
+    /// Reader over any byte source; `name` labels messages.
+    /// [`SidecarSource::Auto`] means no sidecar here (there is no path to
+    /// look next to).
+    pub fn new(src: R, name: &str, opts: &ReadOptions) -> Result<Self, LogError> {
+        let sidecar = load_sidecar(&opts.sidecar)?;
+        Self::with_sidecar(src, name.to_string(), opts, sidecar)
+    }
+
+    fn with_sidecar(
+        src: R,
+        name: String,
+        opts: &ReadOptions,
+        sidecar: Option<(Sidecar, String)>,
+    ) -> Result<Self, LogError> {
+        opts.validate()?;
+        opts.sensors.validate("ReadOptions::sensors")?;
+        let (sidecar, sidecar_name) = match sidecar {
+            Some((s, n)) => (s, Some(n)),
+            None => (Sidecar::default(), None),
+        };
+        let sensors = sidecar.sensors.overridden_by(&opts.sensors);
+        let mut lines = Lines::new(src);
+        let io = |source| LogError::Io {
+            file: name.clone(),
+            source,
+        };
+        let where_sidecar = sidecar_name
+            .clone()
+            .unwrap_or_else(|| "(none found: LOG.json next to LOG.csv)".into());
+        let layout = loop {
+            let Some(r) = lines.next().map_err(io)? else {
+                return Err(LogError::NoHeader { file: name });
+            };
+            let mut bytes = &lines.buf[r];
+            if lines.line == 1 && bytes.starts_with(&[0xEF, 0xBB, 0xBF]) {
+                bytes = &bytes[3..];
+            }
+            let text = std::str::from_utf8(bytes).map_err(|_| LogError::NotUtf8 {
+                file: name.clone(),
+                line: lines.line,
+            })?;
+            let trimmed = text.trim();
+            if trimmed.is_empty() || trimmed.starts_with('#') {
+                continue;
+            }
+            break Layout::parse(trimmed, &name, lines.line, &sensors, &where_sidecar)?;
+        };
+        let mut notes = layout.notes.clone();
+        if opts.sensors != Default::default() {
+            notes.push("sensor constants from ReadOptions override the sidecar".into());
+        }
+        let checks = Checks::new(opts.nominal_step, opts.saturation_samples);
+        let mut layout = layout;
+        layout.notes = notes;
+        Ok(Self {
+            lines,
+            name,
+            layout,
+            sidecar,
+            sidecar_name,
+            checks,
+            opts: opts.clone(),
+            done: false,
+        })
+    }
+
+    /// The log's display name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The sidecar (default if none).
+    pub fn sidecar(&self) -> &Sidecar {
+        &self.sidecar
+    }
+
+    /// Column names of the header, trimmed and lower-cased, in file order.
+    pub fn columns(&self) -> &[String] {
+        &self.layout.names
+    }
+
+    /// True if the log has `dtheta1, dtheta2`.
+    pub fn has_velocity(&self) -> bool {
+        self.layout.has_velocity
+    }
+
+    /// True if the log has `ddtheta1, ddtheta2`.
+    pub fn has_acceleration(&self) -> bool {
+        self.layout.has_acceleration
+    }
+
+    /// Notes so far (ignored columns, data sources).
+    pub fn notes(&self) -> &[String] {
+        &self.layout.notes
+    }
+
+    /// Appends up to `max_rows` rows to `out`; returns how many (0 at the
+    /// end of the log). Stops at the first defective row with its error.
+    pub fn read_rows(&mut self, out: &mut Columns, max_rows: usize) -> Result<usize, LogError> {
+        let mut count = 0;
+        let mut vals = [0.0f64; SLOTS];
+        while count < max_rows && !self.done {
+            let Some(r) = self.lines.next().map_err(|source| LogError::Io {
+                file: self.name.clone(),
+                source,
+            })?
+            else {
+                self.done = true;
+                break;
+            };
+            let line = self.lines.line;
+            let bytes = trim(&self.lines.buf[r]);
+            if bytes.is_empty() || bytes[0] == b'#' {
+                continue;
+            }
+            parse_row(bytes, &self.layout, &self.name, line, &mut vals)?;
+            let t = vals[T];
+            let theta = match self.layout.angles {
+                AngleSource::Theta => [vals[THETA[0]], vals[THETA[1]]],
+                AngleSource::Encoder { scale } => {
+                    [vals[ENC[0]] * scale[0], vals[ENC[1]] * scale[1]]
+                }
+            };
+            let tau = match self.layout.torques {
+                TorqueSource::Tau => [vals[TAU_[0]], vals[TAU_[1]]],
+                TorqueSource::Current { scale } => {
+                    [vals[CURRENT[0]] * scale[0], vals[CURRENT[1]] * scale[1]]
+                }
+            };
+            self.checks
+                .row(&self.name, line, self.layout.column_of[T], t, theta, tau)?;
+            out.t.push(t);
+            for c in 0..2 {
+                out.theta[c].push(theta[c]);
+                out.tau[c].push(tau[c]);
+                if self.layout.has_velocity {
+                    out.theta_dot[c].push(vals[DTHETA[c]]);
+                }
+                if self.layout.has_acceleration {
+                    out.theta_ddot[c].push(vals[DDTHETA[c]]);
+                }
+            }
+            count += 1;
+        }
+        Ok(count)
+    }
+
+    /// Runs the end-of-log checks (reading any rows not yet read, without
+    /// keeping them) and returns the summary, notes and warnings.
+    pub fn finish(mut self) -> Result<LogReport, LogError> {
+        let mut sink = Columns::default();
+        while self.read_rows(&mut sink, 65_536)? > 0 {
+            sink.clear();
+        }
+        let check_degrees = self.opts.check_degrees && self.layout.angles == AngleSource::Theta;
+        let rows = self.checks.rows;
+        let res = self.checks.finish(
+            &self.name,
+            self.opts.min_rows,
+            self.opts.step_tolerance,
+            check_degrees,
+        )?;
+        let summary = LogSummary {
+            file: self.name.clone(),
+            rows,
+            nominal_step_s: res.nominal_step,
+            sample_rate_hz: 1.0 / res.nominal_step,
+            duration_s: res.duration,
+            worst_step: res.worst_step,
+            angle_source: match self.layout.angles {
+                AngleSource::Theta => "theta columns (rad)".into(),
+                AngleSource::Encoder { .. } => "encoder counts".into(),
+            },
+            torque_source: match self.layout.torques {
+                TorqueSource::Tau => "tau columns (N·m)".into(),
+                TorqueSource::Current { .. } => "motor currents".into(),
+            },
+            theta_range: res.theta_range,
+            tau_range: res.tau_range,
+            sidecar: self.sidecar_name.clone(),
+        };
+        Ok(LogReport {
+            summary,
+            notes: self.layout.notes,
+            warnings: res.warnings,
+        })
+    }
+}
+
+/// Position of the first `needle` in `hay`, eight bytes at a time (SWAR):
+/// a byte of `w ^ needle·0x01…01` is zero exactly where `needle` is, and
+/// `(v − 0x01…01) & !v & 0x80…80` flags the first zero byte exactly (borrows
+/// only propagate above it). Logs are scanned twice per byte (newline, then
+/// comma), so this matters for reading speed.
+#[inline]
+fn find_byte(hay: &[u8], needle: u8) -> Option<usize> {
+    const LO: u64 = 0x0101_0101_0101_0101;
+    const HI: u64 = 0x8080_8080_8080_8080;
+    let pattern = LO * u64::from(needle);
+    let mut chunks = hay.chunks_exact(8);
+    let mut offset = 0;
+    for c in &mut chunks {
+        let w = u64::from_le_bytes(c.try_into().expect("8 bytes")) ^ pattern;
+        let found = w.wrapping_sub(LO) & !w & HI;
+        if found != 0 {
+            return Some(offset + (found.trailing_zeros() / 8) as usize);
+        }
+        offset += 8;
+    }
+    chunks
+        .remainder()
+        .iter()
+        .position(|&b| b == needle)
+        .map(|p| offset + p)
+}
+
+/// Fields of a row: `split(',')` with [`find_byte`].
+struct Fields<'a> {
+    rest: Option<&'a [u8]>,
+}
+
+impl<'a> Iterator for Fields<'a> {
+    type Item = &'a [u8];
+
+    #[inline]
+    fn next(&mut self) -> Option<&'a [u8]> {
+        let r = self.rest?;
+        match find_byte(r, b',') {
+            Some(p) => {
+                self.rest = Some(&r[p + 1..]);
+                Some(&r[..p])
+            }
+            None => {
+                self.rest = None;
+                Some(r)
+            }
+        }
+    }
+}
+
+#[inline]
+fn trim(mut b: &[u8]) -> &[u8] {
+    while let [first, rest @ ..] = b {
+        if first.is_ascii_whitespace() {
+            b = rest;
+        } else {
+            break;
+        }
+    }
+    while let [rest @ .., last] = b {
+        if last.is_ascii_whitespace() {
+            b = rest;
+        } else {
+            break;
+        }
+    }
+    b
+}
+
+/// Parses the used fields of one data row into `vals`.
+#[inline]
+fn parse_row(
+    bytes: &[u8],
+    layout: &Layout,
+    file: &str,
+    line: u64,
+    vals: &mut [f64; SLOTS],
+) -> Result<(), LogError> {
+    let mut found = 0;
+    for (j, field) in (Fields { rest: Some(bytes) }).enumerate() {
+        found = j + 1;
+        if j >= layout.fields {
+            continue;
+        }
+        let Some(slot) = layout.slot_of[j] else {
+            continue;
+        };
+        let f = trim(field);
+        match parse_f64(f) {
+            Some(v) if v.is_finite() => vals[slot] = v,
+            Some(_) => {
+                return Err(LogError::NonFinite {
+                    file: file.into(),
+                    line,
+                    column: j + 1,
+                    name: NAMES[slot].into(),
+                    text: String::from_utf8_lossy(f).into_owned(),
+                });
+            }
+            None => {
+                let hint = if f.contains(&b';') {
+                    ": the separator must be ',' not ';'"
+                } else if f.is_empty() {
+                    ": the field is empty; every row needs a value in every column"
+                } else {
+                    ""
+                };
+                return Err(LogError::NotANumber {
+                    file: file.into(),
+                    line,
+                    column: j + 1,
+                    name: NAMES[slot].into(),
+                    text: String::from_utf8_lossy(f).into_owned(),
+                    hint: hint.into(),
+                });
+            }
+        }
+    }
+    if found != layout.fields {
+        return Err(LogError::FieldCount {
+            file: file.into(),
+            line,
+            expected: layout.fields,
+            found,
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn find_byte_equals_position(hay in proptest::collection::vec(any::<u8>(), 0..40), needle in any::<u8>()) {
+            prop_assert_eq!(find_byte(&hay, needle), hay.iter().position(|&b| b == needle));
+        }
+
+        #[test]
+        fn fields_equal_split(hay in proptest::collection::vec(prop_oneof![Just(b','), Just(b'1'), any::<u8>()], 0..40)) {
+            let ours: Vec<&[u8]> = (Fields { rest: Some(&hay) }).collect();
+            let std: Vec<&[u8]> = hay.split(|&b| b == b',').collect();
+            prop_assert_eq!(ours, std);
+        }
+    }
+}

@@ -1,0 +1,187 @@
+//! The optional JSON sidecar `LOG.json` next to `LOG.csv` (see
+//! `docs/log-format.md`): sensor constants and the excitation period.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::LogError;
+
+/// The format tag this reader understands.
+pub const FORMAT: &str = "aras-log/1";
+
+/// Contents of a log's JSON sidecar. Every key is optional.
+///
+/// Unknown keys are errors (a misspelt `gear_ratio` must not silently leave
+/// the default in place), except the top-level `truth` and `notes`, which
+/// belong to whoever wrote the log (the simulator stores its ground truth in
+/// `truth`) and are skipped unread.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sidecar {
+    /// Format tag; if present it must be `"aras-log/1"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub format: Option<String>,
+    /// Sensor constants for currents and encoder counts.
+    #[serde(default)]
+    pub sensors: Sensors,
+    /// What the robot was made to do.
+    #[serde(default)]
+    pub excitation: Excitation,
+    #[serde(default, skip_serializing)]
+    truth: Option<serde::de::IgnoredAny>,
+    #[serde(default, skip_serializing)]
+    notes: Option<serde::de::IgnoredAny>,
+}
+
+/// Sensor constants, per actuator `[motor 1, motor 2]`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sensors {
+    /// Motor torque constants (N·m/A at the motor shaft).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torque_constants: Option<[f64; 2]>,
+    /// Gear ratios: motor turns per joint turn (capstan drive).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gear_ratios: Option<[f64; 2]>,
+    /// Encoder counts per motor revolution.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub counts_per_rev: Option<[f64; 2]>,
+}
+
+/// Excitation description.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Excitation {
+    /// Period of a periodic excitation (s), enabling period averaging.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period_s: Option<f64>,
+}
+
+impl Sidecar {
+    /// Parses sidecar JSON text; `file` names it in error messages.
+    pub fn parse(text: &str, file: &str) -> Result<Self, LogError> {
+        let sidecar: Sidecar = serde_json::from_str(text).map_err(|e| {
+            let full = e.to_string();
+            let suffix = format!(" at line {} column {}", e.line(), e.column());
+            let message = full.strip_suffix(&suffix).unwrap_or(&full).to_string();
+            let advice = if message.starts_with("unknown field") {
+                "; remove or rename the key (only `truth` and `notes` may hold extra data)"
+            } else if e.is_syntax() || e.is_eof() {
+                "; the sidecar must be one JSON object"
+            } else {
+                ""
+            };
+            LogError::Sidecar {
+                file: file.to_string(),
+                line: e.line(),
+                column: e.column(),
+                message: format!("{message}{advice}"),
+            }
+        })?;
+        sidecar.validate(file)?;
+        Ok(sidecar)
+    }
+
+    /// Reads and parses a sidecar file.
+    pub fn read(path: &Path) -> Result<Self, LogError> {
+        let text = std::fs::read_to_string(path).map_err(|source| LogError::SidecarIo {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// Checks every present value's range.
+    fn validate(&self, file: &str) -> Result<(), LogError> {
+        if let Some(f) = &self.format
+            && f != FORMAT
+        {
+            return Err(LogError::SidecarValue {
+                file: file.into(),
+                key: "format".into(),
+                value: format!("{f:?}"),
+                reason: format!("this reader understands only {FORMAT:?}"),
+            });
+        }
+        self.sensors.validate(file)?;
+        if let Some(p) = self.excitation.period_s
+            && !(p.is_finite() && p > 0.0)
+        {
+            return Err(LogError::SidecarValue {
+                file: file.into(),
+                key: "excitation.period_s".into(),
+                value: p.to_string(),
+                reason: "the period must be a positive number of seconds".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+impl Sensors {
+    /// Checks present values: finite everywhere; gear ratios and counts per
+    /// revolution positive. Torque constants may be zero here (a placeholder
+    /// when the log has torque columns); they are checked when used.
+    pub(crate) fn validate(&self, file: &str) -> Result<(), LogError> {
+        let check = |key: &str, v: Option<[f64; 2]>, positive: bool| {
+            for (i, x) in v.iter().flatten().enumerate() {
+                let ok = x.is_finite() && (!positive || *x > 0.0);
+                if !ok {
+                    return Err(LogError::SidecarValue {
+                        file: file.into(),
+                        key: format!("sensors.{key}[{i}]"),
+                        value: x.to_string(),
+                        reason: if positive {
+                            "it must be a positive finite number".into()
+                        } else {
+                            "it must be a finite number".into()
+                        },
+                    });
+                }
+            }
+            Ok(())
+        };
+        check("torque_constants", self.torque_constants, false)?;
+        check("gear_ratios", self.gear_ratios, true)?;
+        check("counts_per_rev", self.counts_per_rev, true)
+    }
+
+    /// These constants with every value present in `over` replacing ours.
+    pub(crate) fn overridden_by(&self, over: &Sensors) -> Sensors {
+        Sensors {
+            torque_constants: over.torque_constants.or(self.torque_constants),
+            gear_ratios: over.gear_ratios.or(self.gear_ratios),
+            counts_per_rev: over.counts_per_rev.or(self.counts_per_rev),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn full_example_parses_and_ignores_truth() {
+        let s = Sidecar::parse(
+            r#"{"format": "aras-log/1",
+                "sensors": {"torque_constants": [0.05, 0.06], "gear_ratios": [10.0, 12.0], "counts_per_rev": [4096, 4096]},
+                "excitation": {"period_s": 10.0},
+                "truth": {"anything": [1, 2, {"deep": null}]}, "notes": "free text"}"#,
+            "x.json",
+        )
+        .unwrap();
+        assert_eq!(s.sensors.gear_ratios, Some([10.0, 12.0]));
+        assert_eq!(s.sensors.counts_per_rev, Some([4096.0, 4096.0]));
+        assert_eq!(s.excitation.period_s, Some(10.0));
+        assert_eq!(Sidecar::parse("{}", "e.json").unwrap(), Sidecar::default());
+    }
+
+    #[test]
+    fn nested_unknown_key_is_named_with_position() {
+        let e = Sidecar::parse("{\n \"sensors\": {\"gear_ratio\": [1, 1]}}", "s.json").unwrap_err();
+        let m = e.to_string();
+        assert!(m.starts_with("s.json:2:"), "{m}");
+        assert!(m.contains("unknown field `gear_ratio`"), "{m}");
+    }
+}
