@@ -1,1 +1,65 @@
-//! placeholder
+//! # aras-ident: base parameters, least squares and physically consistent identification
+//!
+//! Robot-agnostic identification of a dynamic model that is linear in its
+//! parameters, `T = W β` (spec §4, §7). The crate works on plain stacked
+//! matrices, so any robot project can use it:
+//!
+//! 1. [`BaseParameters`] (58)–(61): from a stacked regressor on rich data,
+//!    the numerical rank, the map `β_b = K β`, the base regressor
+//!    `W_b = W E`, readable definitions (`b7 = L1.Izz + L2.Izz + 0.5·L3.Ixx`)
+//!    and the unidentifiable parameters.
+//! 2. [`ReducedLs`], [`ols`], [`wls`] (62)–(66): least squares by QR (never the
+//!    normal equations), σ% per parameter, residual variance, condition
+//!    number; weighted LS with per-joint noise variances. Data that do not
+//!    excite some base parameters give [`IdentError::NotExcited`] naming them.
+//! 3. [`ConsistentLs`] (67)–(73): the physically consistent estimate as one
+//!    convex SDP over the links' pseudo-inertias.
+//! 4. [`validate`]: fitness (78), workspace positive definiteness of the mass
+//!    matrix (80), parameter errors against a known truth.
+//! 5. [`robot`]: the adapter to the ARAS-Diamond crates (stacked regressor
+//!    from `aras-dyn` and `aras-signal`, parallel filtering, the four links'
+//!    SDP layout, results back into `aras_dyn::Params`).
+//!
+//! ## Conventions
+//! SI units and radians throughout. A stacked regressor has one row per
+//! (sample, joint) and one named column per parameter; which rows belong to
+//! which joint is a [`RowGroups`]. Inertia parameters are tensor entries about
+//! the link's pivot in the link frame (`Ixy = I[0,1] = −Σ m x y`), first
+//! moments `h = m ρ`. Matrices enter as faer views (`faer::MatRef`), which any
+//! column-major buffer can provide (`MatRef::from_column_major_slice`).
+//!
+//! ## Dependencies, and why
+//! * `faer`: fast blocked QR and SVD of tall regressors (hundreds of
+//!   thousands of rows).
+//! * `clarabel`: interior-point conic solver with PSD cones for the SDP; its
+//!   PSD cones call LAPACK, provided by the system OpenBLAS through
+//!   `openblas-src` (see `docs/blas.md`).
+//! * `aras-kin`, `aras-dyn`, `aras-signal`, `nalgebra`: only in [`robot`].
+//! * `rayon`: parallel tall-skinny QR and workspace scans.
+//! * `serde`: results serialise for reports; `thiserror`: the error type.
+#![warn(missing_docs)]
+// Dense linear algebra on small fixed matrices reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
+// Links the system OpenBLAS that clarabel's PSD cones call (LAPACK).
+use openblas_src as _;
+
+mod base;
+mod dense;
+mod error;
+mod groups;
+mod ls;
+mod rank;
+pub mod robot;
+mod sdp;
+pub mod validate;
+
+pub use base::{BaseParameters, COEFFICIENT_CLEAN, DEFAULT_RANK_TOLERANCE, RankMargin};
+pub use dense::symmetric_eigenvalues;
+pub use error::IdentError;
+pub use groups::RowGroups;
+pub use ls::{NoiseVariances, OlsEstimate, ReducedLs, WlsEstimate, ols, wls};
+pub use sdp::{
+    ActiveConstraint, ConsistentLs, ConstraintKind, LinkLayout, LinkReport, SdpSettings,
+    SdpSolution, pseudo_inertia_min_eigenvalue,
+};
