@@ -1,18 +1,18 @@
 //! Benchmarks: trajectory evaluation per sample, one criterion assessment,
-//! and the whole default design (target ≤ 30 s). Until the real model is
-//! wired in, the regressor is the test-only stand-in.
+//! and the whole default design (target ≤ 30 s) on the paper's 42-column
+//! model; the base projection comes from the test-only QR helper.
 
 #[path = "../src/test_support.rs"]
 mod test_support;
 
 use std::hint::black_box;
 
-use aras_excite::{DesignSettings, assess, design, random_feasible};
+use aras_excite::{DesignSettings, DynRegressor, assess, design, random_feasible};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn benches(c: &mut Criterion) {
-    let reg = test_support::StandIn::default();
-    let e = test_support::base_projection(&reg, 300, 7);
+    let reg = DynRegressor::aras_diamond().unwrap();
+    let e = test_support::base_projection(&reg, 400, 7);
     let settings = DesignSettings {
         progress: false,
         ..DesignSettings::default()
@@ -26,12 +26,13 @@ fn benches(c: &mut Criterion) {
             black_box(traj.eval(black_box(t)))
         })
     });
-    c.bench_function("assess stand-in, 100 samples", |b| {
-        b.iter(|| assess(&reg, &e, black_box(&traj), 100).unwrap())
-    });
+    c.bench_function(
+        "assess paper model (42 columns, 23 base), 100 samples",
+        |b| b.iter(|| assess(&reg, &e, black_box(&traj), 100).unwrap()),
+    );
     let mut g = c.benchmark_group("design");
     g.sample_size(10);
-    g.bench_function("default design, stand-in regressor", |b| {
+    g.bench_function("default design, paper model", |b| {
         b.iter(|| design(&reg, &e, black_box(&settings)).unwrap())
     });
     g.finish();

@@ -222,7 +222,10 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         let ns = self.samples;
         let norms: Vec<f64> = (0..b).map(|j| wb.col(j).norm_l2()).collect();
         let degenerate = |reason: String| ExciteError::Degenerate { reason };
-        if let Some(j) = norms.iter().position(|v| v.is_nan() || *v <= 0.0 || !v.is_finite()) {
+        if let Some(j) = norms
+            .iter()
+            .position(|v| v.is_nan() || *v <= 0.0 || !v.is_finite())
+        {
             return Err(degenerate(format!(
                 "base column {j} is zero (or not finite) along the trajectory: the motion does \
                  not excite it"

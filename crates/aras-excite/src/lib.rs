@@ -48,12 +48,15 @@
 //! * `rand`: seeded random feasible starts (`Xoshiro256PlusPlus`, portable).
 //! * `rayon`: the starts run in parallel; `indicatif`: the progress bar.
 //! * `serde`/`serde_json`: the trajectory file format; `thiserror`: errors.
+//! * `aras-dyn`: the robot's regressor ([`DynRegressor`]) and the
+//!   simulator's `Trajectory` trait, implemented by [`FourierTrajectory`].
 
 #![warn(missing_docs)]
 
 pub mod constraints;
 pub mod criterion;
 mod design;
+mod dyn_model;
 mod error;
 mod fourier;
 mod param;
@@ -62,6 +65,7 @@ mod regressor;
 pub use constraints::{DEFAULT_MAX_ACCEL_DEG, Limits, Margins};
 pub use criterion::{Assessment, Criterion};
 pub use design::{Design, DesignSettings, StartReport, assess, design, random_feasible};
+pub use dyn_model::DynRegressor;
 pub use error::ExciteError;
 pub use fourier::{
     DEFAULT_HARMONICS, DEFAULT_OMEGA_F, FORMAT, FourierTrajectory, MotorRow, TaskRow, TaskState,

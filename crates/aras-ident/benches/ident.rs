@@ -1,5 +1,6 @@
 //! Benchmarks against the targets of issue 6: OLS on 320 000 × 23 ≤ 50 ms,
 //! the SDP ≤ 200 ms, the workspace PD scan on 1e5 points ≤ 100 ms.
+#![allow(clippy::needless_range_loop)]
 
 use aras_ident::validate::{PdRegion, check_positive_definite};
 use aras_ident::{BaseParameters, ConsistentLs, LinkLayout, ReducedLs};
@@ -30,7 +31,12 @@ fn bench_ols(c: &mut Criterion) {
     let t: Vec<f64> = (0..m).map(|i| w[(i, 0)] + 0.1 * g.n()).collect();
     let names: Vec<String> = (1..=b).map(|i| format!("b{i}")).collect();
     c.bench_function("ols_320000x23", |bch| {
-        bch.iter(|| ReducedLs::new(black_box(w.as_ref()), black_box(&t), &names).unwrap().ols().unwrap())
+        bch.iter(|| {
+            ReducedLs::new(black_box(w.as_ref()), black_box(&t), &names)
+                .unwrap()
+                .ols()
+                .unwrap()
+        })
     });
 }
 
@@ -66,12 +72,29 @@ fn bench_sdp(c: &mut Criterion) {
     // Truth: slightly non-physical first body (so a PSD constraint binds).
     let body = |m: f64, r: [f64; 3], ig: [f64; 3]| -> Vec<f64> {
         let r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-        let e = |a: usize, bb: usize| m * ((if a == bb { r2 } else { 0.0 }) - r[a] * r[bb]) + if a == bb { ig[a] } else { 0.0 };
-        vec![e(0, 0), e(0, 1), e(0, 2), e(1, 1), e(1, 2), e(2, 2), m * r[0], m * r[1], m * r[2]]
+        let e = |a: usize, bb: usize| {
+            m * ((if a == bb { r2 } else { 0.0 }) - r[a] * r[bb])
+                + if a == bb { ig[a] } else { 0.0 }
+        };
+        vec![
+            e(0, 0),
+            e(0, 1),
+            e(0, 2),
+            e(1, 1),
+            e(1, 2),
+            e(2, 2),
+            m * r[0],
+            m * r[1],
+            m * r[2],
+        ]
     };
     let mut truth = Vec::new();
     for k in 0..4 {
-        truth.extend(body(0.1 + 0.02 * k as f64, [0.1, 0.0, 0.25], [6e-4, 6e-4, 2e-5]));
+        truth.extend(body(
+            0.1 + 0.02 * k as f64,
+            [0.1, 0.0, 0.25],
+            [6e-4, 6e-4, 2e-5],
+        ));
     }
     truth.extend([0.03, 0.08, 0.01, 0.3, 0.02, 0.1]);
     let reference = truth.clone();
@@ -84,18 +107,41 @@ fn bench_sdp(c: &mut Criterion) {
     let mut p = ConsistentLs::new(&names, reference).unwrap();
     for k in 0..4 {
         let o = 9 * k;
-        p.link(LinkLayout::new(format!("L{}", k + 1), [o, o + 1, o + 2, o + 3, o + 4, o + 5], [o + 6, o + 7, o + 8], 0.1 + 0.02 * k as f64))
-            .unwrap();
+        p.link(LinkLayout::new(
+            format!("L{}", k + 1),
+            [o, o + 1, o + 2, o + 3, o + 4, o + 5],
+            [o + 6, o + 7, o + 8],
+            0.1 + 0.02 * k as f64,
+        ))
+        .unwrap();
     }
-    p.nonnegative(&["p36", "p37", "p38", "p39", "p40", "p41"]).unwrap();
+    p.nonnegative(&["p36", "p37", "p38", "p39", "p40", "p41"])
+        .unwrap();
     let sol = p.solve(&base, &red).unwrap();
-    eprintln!("SDP on 42 standard / {} base parameters: {sol}", base.n_base());
-    c.bench_function("sdp_4_links_42_params", |bch| bch.iter(|| p.solve(black_box(&base), black_box(&red)).unwrap()));
+    eprintln!(
+        "SDP on 42 standard / {} base parameters: {sol}",
+        base.n_base()
+    );
+    c.bench_function("sdp_4_links_42_params", |bch| {
+        bch.iter(|| p.solve(black_box(&base), black_box(&red)).unwrap())
+    });
 }
 
 fn rows(om: [f64; 3], od: [f64; 3], g: [f64; 3]) -> [[f64; 9]; 3] {
-    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-    let l = |w: [f64; 3]| [[w[0], w[1], w[2], 0.0, 0.0, 0.0], [0.0, w[0], 0.0, w[1], w[2], 0.0], [0.0, 0.0, w[0], 0.0, w[1], w[2]]];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let l = |w: [f64; 3]| {
+        [
+            [w[0], w[1], w[2], 0.0, 0.0, 0.0],
+            [0.0, w[0], 0.0, w[1], w[2], 0.0],
+            [0.0, 0.0, w[0], 0.0, w[1], w[2]],
+        ]
+    };
     let (ld, lo) = (l(od), l(om));
     let mut out = [[0.0; 9]; 3];
     for c in 0..6 {
@@ -118,7 +164,10 @@ fn rows(om: [f64; 3], od: [f64; 3], g: [f64; 3]) -> [[f64; 9]; 3] {
 /// A closed-form 2×2 mass matrix of a 2-DOF arm-like mechanism (stand-in
 /// until aras-dyn provides (80)).
 fn bench_pd(c: &mut Criterion) {
-    let region = PdRegion::new([30f64.to_radians(), 40f64.to_radians()], [140f64.to_radians(), 80f64.to_radians()]);
+    let region = PdRegion::new(
+        [30f64.to_radians(), 40f64.to_radians()],
+        [140f64.to_radians(), 80f64.to_radians()],
+    );
     let mut r = region.clone();
     r.grid_per_axis = 0;
     r.random = 100_000;
@@ -129,8 +178,13 @@ fn bench_pd(c: &mut Criterion) {
         Ok([[m11, m12], [m12, 0.008 + 0.002 * s * s]])
     };
     let rep = check_positive_definite(m, &r);
-    eprintln!("PD scan: {} points, λ ∈ [{:.4e}, {:.4e}], min at {:?}", rep.points, rep.min_eigenvalue, rep.max_eigenvalue, rep.argmin);
-    c.bench_function("pd_scan_1e5", |bch| bch.iter(|| check_positive_definite(m, black_box(&r))));
+    eprintln!(
+        "PD scan: {} points, λ ∈ [{:.4e}, {:.4e}], min at {:?}",
+        rep.points, rep.min_eigenvalue, rep.max_eigenvalue, rep.argmin
+    );
+    c.bench_function("pd_scan_1e5", |bch| {
+        bch.iter(|| check_positive_definite(m, black_box(&r)))
+    });
 }
 
 criterion_group!(benches, bench_ols, bench_sdp, bench_pd);

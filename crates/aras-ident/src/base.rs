@@ -85,12 +85,18 @@ impl BaseParameters {
         }
         check_finite_mat("regressor", w, &names)?;
         if w.nrows() == 0 || w.ncols() == 0 {
-            return Err(IdentError::NoExcitation { what: "base parameters", rows: w.nrows() });
+            return Err(IdentError::NoExcitation {
+                what: "base parameters",
+                rows: w.nrows(),
+            });
         }
         let r = crate::dense::compress(w);
         let a = analyse(r.as_ref(), tol);
         if a.independent.is_empty() {
-            return Err(IdentError::NoExcitation { what: "base parameters", rows: w.nrows() });
+            return Err(IdentError::NoExcitation {
+                what: "base parameters",
+                rows: w.nrows(),
+            });
         }
         let k = combinations(r.as_ref(), &a, COEFFICIENT_CLEAN);
         let margin = RankMargin {
@@ -137,13 +143,19 @@ impl BaseParameters {
     /// Standard parameters that do not enter the data at all (zero columns):
     /// they cannot be identified and appear in no base parameter.
     pub fn unidentifiable(&self) -> Vec<&str> {
-        self.unidentifiable.iter().map(|&j| self.names[j].as_str()).collect()
+        self.unidentifiable
+            .iter()
+            .map(|&j| self.names[j].as_str())
+            .collect()
     }
 
     /// Standard parameters identifiable only in combination: folded into
     /// base parameters named after an earlier column.
     pub fn grouped(&self) -> Vec<&str> {
-        self.grouped.iter().map(|&j| self.names[j].as_str()).collect()
+        self.grouped
+            .iter()
+            .map(|&j| self.names[j].as_str())
+            .collect()
     }
 
     /// The `b × n` map `K` of `β_b = K β`.
@@ -179,7 +191,11 @@ impl BaseParameters {
     pub fn to_base(&self, beta: &[f64]) -> Result<Vec<f64>, IdentError> {
         self.check_len("standard parameter vector", beta, self.n_standard())?;
         Ok((0..self.n_base())
-            .map(|i| (0..self.n_standard()).map(|j| self.k[(i, j)] * beta[j]).sum())
+            .map(|i| {
+                (0..self.n_standard())
+                    .map(|j| self.k[(i, j)] * beta[j])
+                    .sum()
+            })
             .collect())
     }
 
@@ -200,9 +216,17 @@ impl BaseParameters {
     /// parameters of different units are compared fairly. Unidentifiable
     /// parameters keep their reference values. With `reference = 0` this is
     /// the (torque-weighted) minimum-norm completion.
-    pub fn to_standard_near(&self, beta_b: &[f64], reference: &[f64]) -> Result<Vec<f64>, IdentError> {
+    pub fn to_standard_near(
+        &self,
+        beta_b: &[f64],
+        reference: &[f64],
+    ) -> Result<Vec<f64>, IdentError> {
         self.check_len("base parameter vector", beta_b, self.n_base())?;
-        self.check_len("reference standard parameters", reference, self.n_standard())?;
+        self.check_len(
+            "reference standard parameters",
+            reference,
+            self.n_standard(),
+        )?;
         let kref = self.to_base(reference)?;
         let rhs: Vec<f64> = beta_b.iter().zip(&kref).map(|(a, b)| a - b).collect();
         // Minimum-norm solution of K̃ δ̃ = rhs via the QR of K̃ᵀ (n × b, full
@@ -248,7 +272,9 @@ impl BaseParameters {
                 hint: "the regressor must have one column per standard parameter, in the order of the base analysis",
             });
         }
-        Ok(Mat::from_fn(w.nrows(), self.n_base(), |i, j| w[(i, self.independent[j])]))
+        Ok(Mat::from_fn(w.nrows(), self.n_base(), |i, j| {
+            w[(i, self.independent[j])]
+        }))
     }
 
     /// The readable definition of base parameter `i` (0-based), e.g.
@@ -328,7 +354,11 @@ impl fmt::Display for BaseParameters {
             writeln!(f, "  grouped into the above: {}", self.grouped().join(", "))?;
         }
         if !self.unidentifiable.is_empty() {
-            writeln!(f, "  unidentifiable (no effect on the data): {}", self.unidentifiable().join(", "))?;
+            writeln!(
+                f,
+                "  unidentifiable (no effect on the data): {}",
+                self.unidentifiable().join(", ")
+            )?;
         }
         Ok(())
     }

@@ -10,7 +10,9 @@
 //! rank-deficient is redone with the plain QR.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::qr::no_pivoting::factor::{qr_in_place, qr_in_place_scratch, recommended_block_size};
+use faer::linalg::qr::no_pivoting::factor::{
+    qr_in_place, qr_in_place_scratch, recommended_block_size,
+};
 use faer::{Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
@@ -66,7 +68,11 @@ impl HouseholderQr {
     /// The `min(m, n) × n` upper-triangular factor.
     pub(crate) fn r(&self) -> Mat<f64> {
         let k = self.m.min(self.n);
-        Mat::from_fn(k, self.n, |i, j| if i <= j { self.a[j * self.m + i] } else { 0.0 })
+        Mat::from_fn(
+            k,
+            self.n,
+            |i, j| if i <= j { self.a[j * self.m + i] } else { 0.0 },
+        )
     }
 
     /// Overwrites `x` (length `m`) with `Q x`.
@@ -143,7 +149,13 @@ where
         HouseholderQr::new(data, total, n).r()
     };
     // Pad to n × n so callers always get a square factor.
-    Mat::from_fn(n, n, |i, j| if i < stacked.nrows() { stacked[(i, j)] } else { 0.0 })
+    Mat::from_fn(n, n, |i, j| {
+        if i < stacked.nrows() {
+            stacked[(i, j)]
+        } else {
+            0.0
+        }
+    })
 }
 
 /// `R` factor (`min(rows, n) × n`) of one block by faer's QR, or `None` if
@@ -156,8 +168,20 @@ fn faer_block_r(mut a: Mat<f64>) -> Option<Mat<f64>> {
     }
     let bs = recommended_block_size::<f64>(rows, n);
     let mut h = Mat::<f64>::zeros(bs, k);
-    let mut mem = MemBuffer::new(qr_in_place_scratch::<f64>(rows, n, bs, Par::Seq, Default::default()));
-    let info = qr_in_place(a.as_mut(), h.as_mut(), Par::Seq, MemStack::new(&mut mem), Default::default());
+    let mut mem = MemBuffer::new(qr_in_place_scratch::<f64>(
+        rows,
+        n,
+        bs,
+        Par::Seq,
+        Default::default(),
+    ));
+    let info = qr_in_place(
+        a.as_mut(),
+        h.as_mut(),
+        Par::Seq,
+        MemStack::new(&mut mem),
+        Default::default(),
+    );
     (info.rank == k).then(|| Mat::from_fn(k, n, |i, j| if i <= j { a[(i, j)] } else { 0.0 }))
 }
 
@@ -209,6 +233,17 @@ pub fn symmetric_eigenvalues<const D: usize>(a: &[[f64; D]; D]) -> [f64; D] {
             m[i][j] = 0.5 * (a[i][j] + a[j][i]);
         }
     }
+    if D == 2 {
+        // Closed form, the common case (2-DOF mass matrices in hot scans):
+        // mean ± hypot(half-difference, off-diagonal), without cancellation
+        // in the discriminant.
+        let mean = 0.5 * (m[0][0] + m[1][1]);
+        let r = (0.5 * (m[0][0] - m[1][1])).hypot(m[0][1]);
+        let mut ev = [0.0; D];
+        ev[0] = mean - r;
+        ev[1] = mean + r;
+        return ev;
+    }
     let scale: f64 = m.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
     if scale > 0.0 {
         // Jacobi converges quadratically: 30 sweeps are far more than enough
@@ -255,6 +290,15 @@ pub fn symmetric_eigenvalues<const D: usize>(a: &[[f64; D]; D]) -> [f64; D] {
     }
     ev.sort_by(f64::total_cmp);
     ev
+}
+
+impl HouseholderQr {
+    /// Overwrites `x` (length `m`) with `Qᵀ x`.
+    pub(crate) fn apply_qt(&self, x: &mut [f64]) {
+        for j in 0..self.tau.len() {
+            self.reflect(j, x);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -312,15 +356,6 @@ mod tests {
             for i in 0..m {
                 assert!((x[i] - data[j * m + i]).abs() < 1e-12);
             }
-        }
-    }
-}
-
-impl HouseholderQr {
-    /// Overwrites `x` (length `m`) with `Qᵀ x`.
-    pub(crate) fn apply_qt(&self, x: &mut [f64]) {
-        for j in 0..self.tau.len() {
-            self.reflect(j, x);
         }
     }
 }

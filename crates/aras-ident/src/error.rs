@@ -149,6 +149,14 @@ pub enum IdentError {
         /// Iterations done.
         iterations: u32,
     },
+    /// An error from the robot crates (kinematics, dynamics, signal processing).
+    #[error("{context}: {message}")]
+    Adapter {
+        /// What was being done.
+        context: String,
+        /// The underlying error's message.
+        message: String,
+    },
     /// The measured signal is constant, so the fitness (78) is undefined.
     #[error(
         "fitness of group {group}: the measured signal is constant (zero variance over {len} \

@@ -16,6 +16,9 @@
 //!    convex SDP over the links' pseudo-inertias.
 //! 4. [`validate`]: fitness (78), workspace positive definiteness of the mass
 //!    matrix (80), parameter errors against a known truth.
+//! 5. [`robot`]: the adapter to the ARAS-Diamond crates (stacked regressor
+//!    from `aras-dyn` and `aras-signal`, parallel filtering, the four links'
+//!    SDP layout, results back into `aras_dyn::Params`).
 //!
 //! ## Conventions
 //! SI units and radians throughout. A stacked regressor has one row per
@@ -31,9 +34,12 @@
 //! * `clarabel`: interior-point conic solver with PSD cones for the SDP; its
 //!   PSD cones call LAPACK, provided by the system OpenBLAS through
 //!   `openblas-src` (see `docs/blas.md`).
+//! * `aras-kin`, `aras-dyn`, `aras-signal`, `nalgebra`: only in [`robot`].
 //! * `rayon`: parallel tall-skinny QR and workspace scans.
 //! * `serde`: results serialise for reports; `thiserror`: the error type.
 #![warn(missing_docs)]
+// Dense linear algebra on small fixed matrices reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
 
 // Links the system OpenBLAS that clarabel's PSD cones call (LAPACK).
 use openblas_src as _;
@@ -44,6 +50,7 @@ mod error;
 mod groups;
 mod ls;
 mod rank;
+pub mod robot;
 mod sdp;
 pub mod validate;
 
@@ -53,6 +60,6 @@ pub use error::IdentError;
 pub use groups::RowGroups;
 pub use ls::{NoiseVariances, OlsEstimate, ReducedLs, WlsEstimate, ols, wls};
 pub use sdp::{
-    ActiveConstraint, ConsistentLs, ConstraintKind, LinkLayout, LinkReport, SdpSettings, SdpSolution,
-    pseudo_inertia_min_eigenvalue,
+    ActiveConstraint, ConsistentLs, ConstraintKind, LinkLayout, LinkReport, SdpSettings,
+    SdpSolution, pseudo_inertia_min_eigenvalue,
 };

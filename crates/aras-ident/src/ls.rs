@@ -31,7 +31,11 @@ pub struct ReducedLs {
 impl ReducedLs {
     /// Reduces `min ‖W x − T‖` (`w`: rows = samples, one named column per
     /// unknown).
-    pub fn new<S: AsRef<str>>(w: MatRef<'_, f64>, t: &[f64], names: &[S]) -> Result<Self, IdentError> {
+    pub fn new<S: AsRef<str>>(
+        w: MatRef<'_, f64>,
+        t: &[f64],
+        names: &[S],
+    ) -> Result<Self, IdentError> {
         Self::build(w, t, names, None)
     }
 
@@ -87,10 +91,18 @@ impl ReducedLs {
             });
         }
         if b == 0 {
-            return Err(IdentError::NoExcitation { what: "least squares", rows: m });
+            return Err(IdentError::NoExcitation {
+                what: "least squares",
+                rows: m,
+            });
         }
         if m <= b {
-            return Err(IdentError::TooFewRows { what: "least squares", rows: m, columns: b, needed: b + 1 });
+            return Err(IdentError::TooFewRows {
+                what: "least squares",
+                rows: m,
+                columns: b,
+                needed: b + 1,
+            });
         }
         check_finite_mat("regressor", w, &names)?;
         check_finite_vec("torque vector T", t)?;
@@ -98,7 +110,9 @@ impl ReducedLs {
         // block in cache and in parallel; see `dense::compress_with`.
         let raug = crate::dense::compress_with(m, b + 1, |start, mut blk| {
             let rows = blk.nrows();
-            blk.as_mut().subcols_mut(0, b).copy_from(w.subrows(start, rows));
+            blk.as_mut()
+                .subcols_mut(0, b)
+                .copy_from(w.subrows(start, rows));
             for i in 0..rows {
                 blk[(i, b)] = t[start + i];
             }
@@ -114,7 +128,13 @@ impl ReducedLs {
         let r = Mat::from_fn(b, b, |i, j| raug[(i, j)]);
         let z = (0..b).map(|i| raug[(i, b)]).collect();
         let rss = raug[(b, b)] * raug[(b, b)];
-        Ok(Self { names, r, z, rss, rows: m })
+        Ok(Self {
+            names,
+            r,
+            z,
+            rss,
+            rows: m,
+        })
     }
 
     /// Column names (the unknowns).
@@ -186,15 +206,23 @@ impl ReducedLs {
         let var = self.rss / dof as f64;
         let rinv = crate::dense::inverse_upper(self.r.as_ref());
         let covariance = Mat::from_fn(b, b, |i, j| {
-            var * (i.max(j)..b).map(|k| rinv[(i, k)] * rinv[(j, k)]).sum::<f64>()
+            var * (i.max(j)..b)
+                .map(|k| rinv[(i, k)] * rinv[(j, k)])
+                .sum::<f64>()
         });
         let std_dev: Vec<f64> = (0..b).map(|i| covariance[(i, i)].sqrt()).collect();
-        let rel_std_percent =
-            beta.iter().zip(&std_dev).map(|(x, s)| 100.0 * s / x.abs()).collect();
-        let mut singular_values = self
-            .r
-            .singular_values()
-            .map_err(|_| IdentError::SolverFailed { status: "SVD did not converge".into(), iterations: 0 })?;
+        let rel_std_percent = beta
+            .iter()
+            .zip(&std_dev)
+            .map(|(x, s)| 100.0 * s / x.abs())
+            .collect();
+        let mut singular_values =
+            self.r
+                .singular_values()
+                .map_err(|_| IdentError::SolverFailed {
+                    status: "SVD did not converge".into(),
+                    iterations: 0,
+                })?;
         singular_values.sort_by(|x, y| y.total_cmp(x));
         let condition_number = singular_values[0] / singular_values[b - 1];
         Ok(OlsEstimate {
@@ -240,7 +268,11 @@ pub struct OlsEstimate {
 
 /// OLS on a stacked base regressor `w_b` and torques `t`: a shortcut for
 /// [`ReducedLs::new`] followed by [`ReducedLs::ols`].
-pub fn ols<S: AsRef<str>>(w_b: MatRef<'_, f64>, t: &[f64], names: &[S]) -> Result<OlsEstimate, IdentError> {
+pub fn ols<S: AsRef<str>>(
+    w_b: MatRef<'_, f64>,
+    t: &[f64],
+    names: &[S],
+) -> Result<OlsEstimate, IdentError> {
     ReducedLs::new(w_b, t, names)?.ols()
 }
 
@@ -325,8 +357,17 @@ pub fn wls<S: AsRef<str>>(
             (v, Some(first))
         }
     };
-    let weights: Vec<f64> = groups.labels().iter().map(|&g| 1.0 / variances[g].sqrt()).collect();
+    let weights: Vec<f64> = groups
+        .labels()
+        .iter()
+        .map(|&g| 1.0 / variances[g].sqrt())
+        .collect();
     let reduced = ReducedLs::weighted(w_b, t, names, &weights)?;
     let estimate = reduced.ols()?;
-    Ok(WlsEstimate { estimate, variances, first_pass, reduced })
+    Ok(WlsEstimate {
+        estimate,
+        variances,
+        first_pass,
+        reduced,
+    })
 }

@@ -32,11 +32,17 @@ pub(crate) struct ColumnAnalysis {
 impl ColumnAnalysis {
     /// Smallest sine among the kept columns (how far from losing rank).
     pub(crate) fn smallest_kept(&self) -> f64 {
-        self.independent.iter().map(|&j| self.sines[j]).fold(f64::INFINITY, f64::min)
+        self.independent
+            .iter()
+            .map(|&j| self.sines[j])
+            .fold(f64::INFINITY, f64::min)
     }
     /// Largest sine among the dropped non-zero columns (how far from being kept).
     pub(crate) fn largest_dropped(&self) -> f64 {
-        self.dependent.iter().map(|&j| self.sines[j]).fold(0.0, f64::max)
+        self.dependent
+            .iter()
+            .map(|&j| self.sines[j])
+            .fold(0.0, f64::max)
     }
 }
 
@@ -113,7 +119,11 @@ pub(crate) fn combinations(r: MatRef<'_, f64>, a: &ColumnAnalysis, clean: f64) -
         for (i, &si) in s.iter().enumerate() {
             let g = rhs[i];
             // Undo the unit-norm scaling: W_j = Σ γ̃_i (‖W_j‖/‖W_si‖) W_si.
-            gamma[(i, j)] = if g.abs() < clean { 0.0 } else { g * a.norms[j] / a.norms[si] };
+            gamma[(i, j)] = if g.abs() < clean {
+                0.0
+            } else {
+                g * a.norms[j] / a.norms[si]
+            };
         }
     }
     gamma

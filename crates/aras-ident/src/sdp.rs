@@ -69,7 +69,12 @@ pub struct LinkLayout {
 
 impl LinkLayout {
     /// A link with mass bounds `±20 %` around the reference mass.
-    pub fn new(name: impl Into<String>, inertia: [usize; 6], first_moment: [usize; 3], mass_reference: f64) -> Self {
+    pub fn new(
+        name: impl Into<String>,
+        inertia: [usize; 6],
+        first_moment: [usize; 3],
+        mass_reference: f64,
+    ) -> Self {
         Self {
             name: name.into(),
             inertia,
@@ -234,40 +239,72 @@ impl ConsistentLs {
 
     /// Index of a standard parameter by name.
     pub fn index_of(&self, name: &str) -> Result<usize, IdentError> {
-        self.names.iter().position(|n| n == name).ok_or_else(|| IdentError::UnknownParameter {
-            name: name.to_owned(),
-            known: self.names.join(", "),
-        })
+        self.names
+            .iter()
+            .position(|n| n == name)
+            .ok_or_else(|| IdentError::UnknownParameter {
+                name: name.to_owned(),
+                known: self.names.join(", "),
+            })
     }
 
     fn check_index(&self, what: &str, i: usize) -> Result<(), IdentError> {
         if i >= self.names.len() {
-            return Err(IdentError::IndexOutOfRange { what: what.to_owned(), index: i, count: self.names.len() });
+            return Err(IdentError::IndexOutOfRange {
+                what: what.to_owned(),
+                index: i,
+                count: self.names.len(),
+            });
         }
         Ok(())
     }
 
     /// Adds a link. Its indices must be in range and belong to no other link.
     pub fn link(&mut self, layout: LinkLayout) -> Result<&mut Self, IdentError> {
-        let bad = |reason: String| IdentError::InvalidLayout { link: layout.name.clone(), reason };
-        let idx: Vec<usize> = layout.inertia.iter().chain(&layout.first_moment).copied().collect();
+        let bad = |reason: String| IdentError::InvalidLayout {
+            link: layout.name.clone(),
+            reason,
+        };
+        let idx: Vec<usize> = layout
+            .inertia
+            .iter()
+            .chain(&layout.first_moment)
+            .copied()
+            .collect();
         for &i in &idx {
             self.check_index(&format!("link `{}`", layout.name), i)?;
         }
         for (a, &i) in idx.iter().enumerate() {
             if idx[..a].contains(&i) {
-                return Err(bad(format!("parameter `{}` is listed twice", self.names[i])));
+                return Err(bad(format!(
+                    "parameter `{}` is listed twice",
+                    self.names[i]
+                )));
             }
-            if let Some(other) = self.links.iter().find(|l| l.inertia.contains(&i) || l.first_moment.contains(&i)) {
-                return Err(bad(format!("parameter `{}` already belongs to link `{}`", self.names[i], other.name)));
+            if let Some(other) = self
+                .links
+                .iter()
+                .find(|l| l.inertia.contains(&i) || l.first_moment.contains(&i))
+            {
+                return Err(bad(format!(
+                    "parameter `{}` already belongs to link `{}`",
+                    self.names[i], other.name
+                )));
             }
         }
         if !(layout.mass_reference.is_finite() && layout.mass_reference > 0.0) {
-            return Err(bad(format!("reference mass {} must be positive and finite", layout.mass_reference)));
+            return Err(bad(format!(
+                "reference mass {} must be positive and finite",
+                layout.mass_reference
+            )));
         }
         let (lo, hi) = layout.mass_bounds;
         if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-            return Err(IdentError::InvalidBounds { name: format!("mass of {}", layout.name), lower: lo, upper: hi });
+            return Err(IdentError::InvalidBounds {
+                name: format!("mass of {}", layout.name),
+                lower: lo,
+                upper: hi,
+            });
         }
         if hi <= 0.0 {
             return Err(bad(format!("mass upper bound {hi} must be positive")));
@@ -300,7 +337,11 @@ impl ConsistentLs {
     pub fn bound(&mut self, index: usize, lower: f64, upper: f64) -> Result<&mut Self, IdentError> {
         self.check_index("box bound", index)?;
         if !(lower.is_finite() && upper.is_finite() && lower <= upper) {
-            return Err(IdentError::InvalidBounds { name: self.names[index].clone(), lower, upper });
+            return Err(IdentError::InvalidBounds {
+                name: self.names[index].clone(),
+                lower,
+                upper,
+            });
         }
         self.boxes.push((index, lower, upper));
         Ok(self)
@@ -310,7 +351,12 @@ impl ConsistentLs {
     /// swapped for a negative reference), e.g. `lo = 0.8, hi = 1.25`.
     /// Parameters whose reference is exactly zero are left free, since (73)
     /// would pin them to zero.
-    pub fn box_around_reference(&mut self, indices: &[usize], lo: f64, hi: f64) -> Result<&mut Self, IdentError> {
+    pub fn box_around_reference(
+        &mut self,
+        indices: &[usize],
+        lo: f64,
+        hi: f64,
+    ) -> Result<&mut Self, IdentError> {
         for &i in indices {
             self.check_index("box bound", i)?;
             let r = self.reference[i];
@@ -349,7 +395,11 @@ impl ConsistentLs {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(IdentError::InvalidSetting { name, value: v, reason: "must be positive and finite" })
+                Err(IdentError::InvalidSetting {
+                    name,
+                    value: v,
+                    reason: "must be positive and finite",
+                })
             }
         };
         pos("regularisation", s.regularisation)?;
@@ -371,7 +421,11 @@ impl ConsistentLs {
         let r = &self.reference;
         let tr = r[l.inertia[0]] + r[l.inertia[3]] + r[l.inertia[5]];
         let len = (tr / (2.0 * l.mass_reference)).sqrt();
-        if len.is_finite() && len > 0.0 { len } else { 1.0 }
+        if len.is_finite() && len > 0.0 {
+            len
+        } else {
+            1.0
+        }
     }
 
     /// Solves the SDP for the base map `base` and the reduced (weighted)
@@ -404,9 +458,17 @@ impl ConsistentLs {
         // A = R K (b × n): the objective's matrix in standard-parameter space.
         let k = base.k();
         let r = ls.r();
-        let a = faer::Mat::from_fn(b, n, |i, j| (i..b).map(|l| r[(i, l)] * k[(l, j)]).sum::<f64>());
-        let mut d: Vec<f64> = (0..n).map(|j| (0..b).map(|i| a[(i, j)] * a[(i, j)]).sum::<f64>().sqrt()).collect();
-        let dmin = d.iter().copied().filter(|&v| v > 0.0).fold(f64::INFINITY, f64::min);
+        let a = faer::Mat::from_fn(b, n, |i, j| {
+            (i..b).map(|l| r[(i, l)] * k[(l, j)]).sum::<f64>()
+        });
+        let mut d: Vec<f64> = (0..n)
+            .map(|j| (0..b).map(|i| a[(i, j)] * a[(i, j)]).sum::<f64>().sqrt())
+            .collect();
+        let dmin = d
+            .iter()
+            .copied()
+            .filter(|&v| v > 0.0)
+            .fold(f64::INFINITY, f64::min);
         let dmin = if dmin.is_finite() { dmin } else { 1.0 };
         let lens: Vec<f64> = self.links.iter().map(|l| self.length_scale(l)).collect();
         let dm: Vec<f64> = self
@@ -463,15 +525,28 @@ impl ConsistentLs {
         for (kk, l) in self.links.iter().enumerate() {
             push(row, n + kk, -1.0);
             rhs.push(-l.mass_bounds.0);
-            lin.push((ConstraintKind::MassLower, l.name.clone(), n + kk, l.mass_reference));
+            lin.push((
+                ConstraintKind::MassLower,
+                l.name.clone(),
+                n + kk,
+                l.mass_reference,
+            ));
             row += 1;
             push(row, n + kk, 1.0);
             rhs.push(l.mass_bounds.1);
-            lin.push((ConstraintKind::MassUpper, l.name.clone(), n + kk, l.mass_reference));
+            lin.push((
+                ConstraintKind::MassUpper,
+                l.name.clone(),
+                n + kk,
+                l.mass_reference,
+            ));
             row += 1;
         }
         for &(j, lo, hi) in &self.boxes {
-            let scale = (hi - lo).abs().max(self.reference[j].abs()).max(f64::MIN_POSITIVE);
+            let scale = (hi - lo)
+                .abs()
+                .max(self.reference[j].abs())
+                .max(f64::MIN_POSITIVE);
             push(row, j, -1.0);
             rhs.push(-lo);
             lin.push((ConstraintKind::BoxLower, self.names[j].clone(), j, scale));
@@ -484,7 +559,12 @@ impl ConsistentLs {
         for &j in &self.nonnegative {
             push(row, j, -1.0);
             rhs.push(0.0);
-            lin.push((ConstraintKind::NonNegative, self.names[j].clone(), j, self.reference[j].abs()));
+            lin.push((
+                ConstraintKind::NonNegative,
+                self.names[j].clone(),
+                j,
+                self.reference[j].abs(),
+            ));
             row += 1;
         }
         if row > lin_start {
@@ -534,9 +614,17 @@ impl ConsistentLs {
             .tol_gap_rel(s.tolerance)
             .tol_feas(s.tolerance)
             .build()
-            .map_err(|e| IdentError::SolverFailed { status: format!("settings: {e}"), iterations: 0 })?;
-        let mut solver = DefaultSolver::new(&p, &q, &amat, &rhs, &cones, settings)
-            .map_err(|e| IdentError::SolverFailed { status: format!("set-up: {e}"), iterations: 0 })?;
+            .map_err(|e| IdentError::SolverFailed {
+                status: format!("settings: {e}"),
+                iterations: 0,
+            })?;
+        let mut solver =
+            DefaultSolver::new(&p, &q, &amat, &rhs, &cones, settings).map_err(|e| {
+                IdentError::SolverFailed {
+                    status: format!("set-up: {e}"),
+                    iterations: 0,
+                }
+            })?;
         solver.solve();
         let sol = &solver.solution;
         let status = format!("{:?}", sol.status);
@@ -545,7 +633,12 @@ impl ConsistentLs {
             SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
                 return Err(IdentError::Infeasible { status });
             }
-            _ => return Err(IdentError::SolverFailed { status, iterations: sol.iterations }),
+            _ => {
+                return Err(IdentError::SolverFailed {
+                    status,
+                    iterations: sol.iterations,
+                });
+            }
         }
         let x = &sol.x;
         let standard = x[..n].to_vec();
@@ -558,7 +651,11 @@ impl ConsistentLs {
             let slack = sol.s[lin_start + kk];
             let scale = scale.max(x[*var].abs());
             if slack <= tol * scale || (scale == 0.0 && slack <= 0.0) {
-                active.push(ActiveConstraint { kind: *kind, name: name.clone(), slack });
+                active.push(ActiveConstraint {
+                    kind: *kind,
+                    name: name.clone(),
+                    slack,
+                });
             }
         }
         let mut links = Vec::with_capacity(nl);
@@ -603,7 +700,12 @@ impl ConsistentLs {
 }
 
 /// The pseudo-inertia `𝒥` of a link and its scaled form `T𝒥T`.
-fn pseudo_inertia(beta: &[f64], l: &LinkLayout, m: f64, len: f64) -> ([[f64; 4]; 4], [[f64; 4]; 4]) {
+fn pseudo_inertia(
+    beta: &[f64],
+    l: &LinkLayout,
+    m: f64,
+    len: f64,
+) -> ([[f64; 4]; 4], [[f64; 4]; 4]) {
     let [ixx, ixy, ixz, iyy, iyz, izz] = l.inertia.map(|i| beta[i]);
     let h = l.first_moment.map(|i| beta[i]);
     let tr = 0.5 * (ixx + iyy + izz);
@@ -624,9 +726,22 @@ fn pseudo_inertia(beta: &[f64], l: &LinkLayout, m: f64, len: f64) -> ([[f64; 4];
 
 /// Smallest eigenvalue of a link's pseudo-inertia `𝒥` (spec §4 NOTE) for a
 /// standard parameter vector and mass: ≥ 0 iff (67)–(69) hold.
-pub fn pseudo_inertia_min_eigenvalue(beta: &[f64], layout: &LinkLayout, mass: f64) -> Result<f64, IdentError> {
-    if let Some(&i) = layout.inertia.iter().chain(&layout.first_moment).find(|&&i| i >= beta.len()) {
-        return Err(IdentError::IndexOutOfRange { what: format!("link `{}`", layout.name), index: i, count: beta.len() });
+pub fn pseudo_inertia_min_eigenvalue(
+    beta: &[f64],
+    layout: &LinkLayout,
+    mass: f64,
+) -> Result<f64, IdentError> {
+    if let Some(&i) = layout
+        .inertia
+        .iter()
+        .chain(&layout.first_moment)
+        .find(|&&i| i >= beta.len())
+    {
+        return Err(IdentError::IndexOutOfRange {
+            what: format!("link `{}`", layout.name),
+            index: i,
+            count: beta.len(),
+        });
     }
     Ok(symmetric_eigenvalues(&pseudo_inertia(beta, layout, mass, 1.0).0)[0])
 }
@@ -652,14 +767,22 @@ impl fmt::Display for SdpSolution {
                 l.min_eigenvalue,
                 l.min_eigenvalue_scaled,
                 l.margin,
-                if l.psd_near_singular { " [PSD active]" } else { "" }
+                if l.psd_near_singular {
+                    " [PSD active]"
+                } else {
+                    ""
+                }
             )?;
         }
         if self.active.is_empty() {
             writeln!(f, "  no active constraints")?;
         } else {
             for a in &self.active {
-                writeln!(f, "  active: {:?} `{}` (slack {:.2e})", a.kind, a.name, a.slack)?;
+                writeln!(
+                    f,
+                    "  active: {:?} `{}` (slack {:.2e})",
+                    a.kind, a.name, a.slack
+                )?;
             }
         }
         Ok(())

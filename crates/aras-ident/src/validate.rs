@@ -46,11 +46,20 @@ fn fitness_group(measured: &[f64], estimated: &[f64], group: usize) -> Result<f6
     check_finite_vec("estimated torques", estimated)?;
     let n = measured.len();
     let mean = measured.iter().sum::<f64>() / n.max(1) as f64;
-    let den: f64 = measured.iter().map(|m| (m - mean) * (m - mean)).sum::<f64>().sqrt();
+    let den: f64 = measured
+        .iter()
+        .map(|m| (m - mean) * (m - mean))
+        .sum::<f64>()
+        .sqrt();
     if n == 0 || den == 0.0 {
         return Err(IdentError::ConstantSignal { group, len: n });
     }
-    let num: f64 = measured.iter().zip(estimated).map(|(m, e)| (m - e) * (m - e)).sum::<f64>().sqrt();
+    let num: f64 = measured
+        .iter()
+        .zip(estimated)
+        .map(|(m, e)| (m - e) * (m - e))
+        .sum::<f64>()
+        .sqrt();
     Ok(100.0 * (1.0 - num / den))
 }
 
@@ -95,11 +104,21 @@ impl<const D: usize> PdRegion<D> {
     /// A box with the defaults: 101 points per axis when `D = 2` (10 201
     /// grid points) and 100 000 random points, seed 0.
     pub fn new(lower: [f64; D], upper: [f64; D]) -> Self {
-        Self { lower, upper, grid_per_axis: if D <= 2 { 101 } else { 11 }, random: 100_000, seed: 0 }
+        Self {
+            lower,
+            upper,
+            grid_per_axis: if D <= 2 { 101 } else { 11 },
+            random: 100_000,
+            seed: 0,
+        }
     }
 
     fn grid_points(&self) -> usize {
-        if self.grid_per_axis == 0 { 0 } else { self.grid_per_axis.pow(D as u32) }
+        if self.grid_per_axis == 0 {
+            0
+        } else {
+            self.grid_per_axis.pow(D as u32)
+        }
     }
 
     /// Total number of points tested.
@@ -117,7 +136,11 @@ impl<const D: usize> PdRegion<D> {
             for d in 0..D {
                 let idx = k % n;
                 k /= n;
-                let u = if n == 1 { 0.5 } else { idx as f64 / (n - 1) as f64 };
+                let u = if n == 1 {
+                    0.5
+                } else {
+                    idx as f64 / (n - 1) as f64
+                };
                 x[d] = self.lower[d] + u * (self.upper[d] - self.lower[d]);
             }
         } else {
@@ -267,7 +290,13 @@ where
             acc
         })
         .reduce(Acc::<D>::empty, Acc::merge);
-    let at = |i: usize| if i < n { region.point(i) } else { [f64::NAN; D] };
+    let at = |i: usize| {
+        if i < n {
+            region.point(i)
+        } else {
+            [f64::NAN; D]
+        }
+    };
     PdReport {
         points: n,
         min_eigenvalue: acc.min.0,
@@ -305,7 +334,11 @@ pub fn parameter_errors<S: AsRef<str>>(
     truth: &[f64],
 ) -> Result<Vec<ParameterError>, IdentError> {
     let n = names.len();
-    for (what, v) in [("estimate", estimate), ("standard deviations", std_dev), ("truth", truth)] {
+    for (what, v) in [
+        ("estimate", estimate),
+        ("standard deviations", std_dev),
+        ("truth", truth),
+    ] {
         if v.len() != n {
             return Err(IdentError::DimensionMismatch {
                 what: "parameter vector for the error table",
@@ -322,8 +355,18 @@ pub fn parameter_errors<S: AsRef<str>>(
     Ok((0..n)
         .map(|i| {
             let error = estimate[i] - truth[i];
-            let in_sigma = if error == 0.0 { 0.0 } else { error / std_dev[i] };
-            ParameterError { name: names[i].as_ref().to_owned(), estimate: estimate[i], truth: truth[i], error, in_sigma }
+            let in_sigma = if error == 0.0 {
+                0.0
+            } else {
+                error / std_dev[i]
+            };
+            ParameterError {
+                name: names[i].as_ref().to_owned(),
+                estimate: estimate[i],
+                truth: truth[i],
+                error,
+                in_sigma,
+            }
         })
         .collect())
 }

@@ -1,4 +1,5 @@
 //! Base parameters on constructed regressors with known structure.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 
@@ -13,7 +14,11 @@ fn constructed(rows: usize) -> (Mat<f64>, Vec<String>) {
     let w = Mat::from_fn(rows, 6, |_, _| 0.0);
     let mut w = w;
     for i in 0..rows {
-        let (c0, c1, c3) = (common::normal(&mut r), 3.0 * common::normal(&mut r), 0.01 * common::normal(&mut r));
+        let (c0, c1, c3) = (
+            common::normal(&mut r),
+            3.0 * common::normal(&mut r),
+            0.01 * common::normal(&mut r),
+        );
         w[(i, 0)] = c0;
         w[(i, 1)] = c1;
         w[(i, 2)] = c0 + 0.5 * c1;
@@ -32,12 +37,18 @@ fn constructed_rank_deficiency_is_found_and_named() {
     assert_eq!(base.independent(), &[0, 1, 3]);
     assert_eq!(base.unidentifiable(), vec!["p4"]);
     assert_eq!(base.grouped(), vec!["p2", "p5"]);
-    assert_eq!(base.expressions(), vec!["b1 = p0 + p2", "b2 = p1 + 0.5·p2 - p5", "b3 = p3 + 2·p5"]);
+    assert_eq!(
+        base.expressions(),
+        vec!["b1 = p0 + p2", "b2 = p1 + 0.5·p2 - p5", "b3 = p3 + 2·p5"]
+    );
     // The rank decision is far from the tolerance on both sides.
     let m = base.rank_margin();
     assert!(m.smallest_kept > 1e-2 && m.largest_dropped < 1e-13, "{m:?}");
     let text = base.to_string();
-    assert!(text.contains("unidentifiable (no effect on the data): p4"), "{text}");
+    assert!(
+        text.contains("unidentifiable (no effect on the data): p4"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -51,7 +62,10 @@ fn base_regressor_reproduces_every_torque() {
         let full: f64 = (0..6).map(|j| w[(i, j)] * beta[j]).sum();
         let red: f64 = (0..3).map(|j| wb[(i, j)] * bb[j]).sum();
         // Relative 1e-12: a handful of roundings on O(10) values.
-        assert!((full - red).abs() <= 1e-12 * (1.0 + full.abs()), "row {i}: {full} vs {red}");
+        assert!(
+            (full - red).abs() <= 1e-12 * (1.0 + full.abs()),
+            "row {i}: {full} vs {red}"
+        );
     }
 }
 
@@ -71,7 +85,12 @@ fn standard_representatives_map_back() {
     // The unidentifiable parameter keeps its reference value.
     assert_eq!(near[4], 7.0);
     // Nearer to the reference than the zero-completion.
-    let dist = |v: &[f64]| v.iter().zip(&reference).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+    let dist = |v: &[f64]| {
+        v.iter()
+            .zip(&reference)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+    };
     assert!(dist(&near) < dist(&e));
 }
 

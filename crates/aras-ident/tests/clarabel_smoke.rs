@@ -1,8 +1,11 @@
 //! Proves that clarabel's PSD cones link (OpenBLAS) and solve here, and pins
 //! the packing convention the SDP module relies on.
+#![allow(clippy::needless_range_loop)]
 
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+};
 
 /// min tr X subject to X ⪰ C, with C = [[2, 1], [1, 2]] ≻ 0: the optimum is X = C.
 /// Variables (X11, X12, X22); the cone slack is svec(X − C) =
@@ -16,7 +19,10 @@ fn tiny_sdp_solves_with_the_documented_packing() {
     let a = CscMatrix::from(&[[-1.0, 0.0, 0.0], [0.0, -r2, 0.0], [0.0, 0.0, -1.0]]);
     let b = [-2.0, -r2, -2.0];
     let cones = [SupportedConeT::PSDTriangleConeT(2)];
-    let settings = DefaultSettingsBuilder::default().verbose(false).build().unwrap();
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .build()
+        .unwrap();
     let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings).unwrap();
     solver.solve();
     let s = &solver.solution;

@@ -1,4 +1,5 @@
 //! OLS / WLS on synthetic data with known parameters and noise.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 
@@ -30,11 +31,21 @@ fn estimates_lie_within_three_sigma() {
     }
     // σ²_ρ estimates the noise variance 0.04: relative standard error
     // √(2/2994) ≈ 2.6 %, so 10 % is ~4 standard errors.
-    assert!((est.residual_variance / 0.04 - 1.0).abs() < 0.1, "{}", est.residual_variance);
+    assert!(
+        (est.residual_variance / 0.04 - 1.0).abs() < 0.1,
+        "{}",
+        est.residual_variance
+    );
     assert_eq!(est.dof, 2994);
-    assert!((est.rel_std_percent[1] - 100.0 * est.std_dev[1] / est.estimate[1].abs()).abs() < 1e-12);
+    assert!(
+        (est.rel_std_percent[1] - 100.0 * est.std_dev[1] / est.estimate[1].abs()).abs() < 1e-12
+    );
     // Column scales 1…6 and random rows: condition number close to 6.
-    assert!(est.condition_number > 4.0 && est.condition_number < 9.0, "{}", est.condition_number);
+    assert!(
+        est.condition_number > 4.0 && est.condition_number < 9.0,
+        "{}",
+        est.condition_number
+    );
     assert_eq!(est.singular_values.len(), 6);
 }
 
@@ -62,9 +73,16 @@ fn sigma_formula_matches_monte_carlo() {
         let emp = ((sum2[i] / runs as f64 - mean * mean) * runs as f64 / (runs - 1) as f64).sqrt();
         // A sample standard deviation over 400 runs has relative standard
         // error 1/√798 ≈ 3.5 %: 12 % is ~3.4 standard errors.
-        assert!((predicted[i] / emp - 1.0).abs() < 0.12, "param {i}: formula {} vs MC {emp}", predicted[i]);
+        assert!(
+            (predicted[i] / emp - 1.0).abs() < 0.12,
+            "param {i}: formula {} vs MC {emp}",
+            predicted[i]
+        );
         // Unbiased: mean within 4 standard errors of the truth.
-        assert!((mean - beta[i]).abs() < 4.0 * emp / (runs as f64).sqrt(), "param {i}: mean {mean}");
+        assert!(
+            (mean - beta[i]).abs() < 4.0 * emp / (runs as f64).sqrt(),
+            "param {i}: mean {mean}"
+        );
     }
 }
 
@@ -80,7 +98,11 @@ fn noise_free_data_are_recovered_exactly() {
     let est = red.ols().unwrap();
     for i in 0..6 {
         // Condition ≈ 6 and rounding ≈ 1e-16 per entry: 1e-12 relative.
-        assert!((est.estimate[i] - beta[i]).abs() <= 1e-12 * beta[i].abs().max(1.0), "{i}: {}", est.estimate[i]);
+        assert!(
+            (est.estimate[i] - beta[i]).abs() <= 1e-12 * beta[i].abs().max(1.0),
+            "{i}: {}",
+            est.estimate[i]
+        );
     }
     assert!(est.residual_norm < 1e-10, "{}", est.residual_norm);
 }
@@ -96,7 +118,11 @@ fn non_exciting_data_name_the_lost_parameters() {
     let n = 500;
     let mut w = Mat::zeros(3 * n, 9);
     for s in 0..n {
-        let (th, om, od) = (common::normal(&mut r) * 2.0, common::normal(&mut r), common::normal(&mut r));
+        let (th, om, od) = (
+            common::normal(&mut r) * 2.0,
+            common::normal(&mut r),
+            common::normal(&mut r),
+        );
         let g = [-9.81 * th.sin(), -9.81 * th.cos(), 0.0];
         let rows = common::body_rows([0.0, 0.0, om], [0.0, 0.0, od], g);
         for a in 0..3 {
@@ -110,14 +136,19 @@ fn non_exciting_data_name_the_lost_parameters() {
     let wb = base.base_regressor(w.as_ref()).unwrap();
     let err = ols(wb.as_ref(), &t, &base.base_names()).unwrap_err();
     match &err {
-        IdentError::NotExcited { lost_names, rank, .. } => {
+        IdentError::NotExcited {
+            lost_names, rank, ..
+        } => {
             assert_eq!(lost_names, &["b1", "b2", "b4"]);
             assert_eq!(*rank, 6);
         }
         e => panic!("unexpected {e}"),
     }
     let msg = err.to_string();
-    assert!(msg.contains("b1, b2, b4") && msg.contains("richer excitation"), "{msg}");
+    assert!(
+        msg.contains("b1, b2, b4") && msg.contains("richer excitation"),
+        "{msg}"
+    );
     // b1, b2, b4 are Ixx, Ixy, Iyy.
     assert_eq!(base.expression(3), "b4 = L1.Iyy");
 }
@@ -136,7 +167,14 @@ fn weighted_least_squares_estimates_per_joint_noise() {
         .map(|(i, v)| v + if i < n { s1 } else { s2 } * common::normal(&mut r))
         .collect();
     let groups = RowGroups::contiguous(&[n, n]).unwrap();
-    let est = wls(w.as_ref(), &t, &names(4), &groups, NoiseVariances::FromResiduals).unwrap();
+    let est = wls(
+        w.as_ref(),
+        &t,
+        &names(4),
+        &groups,
+        NoiseVariances::FromResiduals,
+    )
+    .unwrap();
     // Variance estimates from 4000 residuals each: relative error ~2.2 %,
     // 10 % allowed for the noisy joint. The quiet joint's first-pass
     // residuals also carry the OLS parameter error, which the noisy joint
@@ -145,10 +183,18 @@ fn weighted_least_squares_estimates_per_joint_noise() {
     // iterating once); a ratio in [0.9, 3] is therefore expected.
     let ratio = est.variances[0] / (s1 * s1);
     assert!((0.9..3.0).contains(&ratio), "{:?}", est.variances);
-    assert!((est.variances[1] / (s2 * s2) - 1.0).abs() < 0.1, "{:?}", est.variances);
+    assert!(
+        (est.variances[1] / (s2 * s2) - 1.0).abs() < 0.1,
+        "{:?}",
+        est.variances
+    );
     // The weighted system's residual variance is ≈ 1 when the weights are
     // right (here slightly below, because joint 1's weight is a bit low).
-    assert!((est.estimate.residual_variance - 1.0).abs() < 0.2, "{}", est.estimate.residual_variance);
+    assert!(
+        (est.estimate.residual_variance - 1.0).abs() < 0.2,
+        "{}",
+        est.estimate.residual_variance
+    );
     let first = est.first_pass.as_ref().unwrap();
     for i in 0..4 {
         // Down-weighting the noisy joint shrinks every σ markedly (OLS is
@@ -158,7 +204,14 @@ fn weighted_least_squares_estimates_per_joint_noise() {
         assert!(z.abs() < 3.0, "{i}: z = {z}");
     }
     // Known variances give the same estimate.
-    let known = wls(w.as_ref(), &t, &names(4), &groups, NoiseVariances::Known(est.variances.clone())).unwrap();
+    let known = wls(
+        w.as_ref(),
+        &t,
+        &names(4),
+        &groups,
+        NoiseVariances::Known(est.variances.clone()),
+    )
+    .unwrap();
     for i in 0..4 {
         assert!((known.estimate.estimate[i] - est.estimate.estimate[i]).abs() < 1e-12);
     }
@@ -167,14 +220,29 @@ fn weighted_least_squares_estimates_per_joint_noise() {
 #[test]
 fn bad_inputs_are_errors() {
     let w = well_conditioned(1, 5, 6);
-    assert!(matches!(ols(w.as_ref(), &[0.0; 5], &names(6)), Err(IdentError::TooFewRows { .. })));
+    assert!(matches!(
+        ols(w.as_ref(), &[0.0; 5], &names(6)),
+        Err(IdentError::TooFewRows { .. })
+    ));
     let w = well_conditioned(1, 50, 3);
-    assert!(matches!(ols(w.as_ref(), &[0.0; 49], &names(3)), Err(IdentError::DimensionMismatch { .. })));
+    assert!(matches!(
+        ols(w.as_ref(), &[0.0; 49], &names(3)),
+        Err(IdentError::DimensionMismatch { .. })
+    ));
     let mut t = vec![0.0; 50];
     t[7] = f64::INFINITY;
     let e = ols(w.as_ref(), &t, &names(3)).unwrap_err();
     assert!(e.to_string().contains("row 7"), "{e}");
     let groups = RowGroups::contiguous(&[25, 24]).unwrap();
-    assert!(wls(w.as_ref(), &[0.0; 50], &names(3), &groups, NoiseVariances::FromResiduals).is_err());
+    assert!(
+        wls(
+            w.as_ref(),
+            &[0.0; 50],
+            &names(3),
+            &groups,
+            NoiseVariances::FromResiduals
+        )
+        .is_err()
+    );
     assert!(RowGroups::from_labels(vec![0, 2, 2]).is_err());
 }

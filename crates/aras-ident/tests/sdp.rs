@@ -1,4 +1,5 @@
 //! The physically consistent SDP on synthetic rigid bodies with known answers.
+#![allow(clippy::needless_range_loop)]
 
 mod common;
 
@@ -28,12 +29,23 @@ fn problem(seed: u64, beta: &[f64], bodies: usize, shared: bool, sigma: f64) -> 
     let t = common::torques(&w, beta, sigma, &mut r);
     let wb = base.base_regressor(w.as_ref()).unwrap();
     let red = ReducedLs::new(wb.as_ref(), &t, &base.base_names()).unwrap();
-    Problem { w, names, base, red }
+    Problem {
+        w,
+        names,
+        base,
+        red,
+    }
 }
 
 fn one_body_problem(p: &Problem, reference: Vec<f64>, mass_ref: f64) -> ConsistentLs {
     let mut c = ConsistentLs::new(&p.names, reference).unwrap();
-    c.link(LinkLayout::new("L1", [0, 1, 2, 3, 4, 5], [6, 7, 8], mass_ref)).unwrap();
+    c.link(LinkLayout::new(
+        "L1",
+        [0, 1, 2, 3, 4, 5],
+        [6, 7, 8],
+        mass_ref,
+    ))
+    .unwrap();
     c.nonnegative(&FRICTION).unwrap();
     c
 }
@@ -53,7 +65,9 @@ fn feasible_ols_is_reproduced() {
     let ols = p.red.ols().unwrap();
     // CAD-like reference: 10 % heavier body (still physical), other friction.
     let reference = with_friction(truth_body().iter().map(|v| 1.1 * v).collect(), [0.05; 6]);
-    let sol = one_body_problem(&p, reference, 0.55).solve(&p.base, &p.red).unwrap();
+    let sol = one_body_problem(&p, reference, 0.55)
+        .solve(&p.base, &p.red)
+        .unwrap();
     assert_eq!(sol.status, "Solved");
     assert!(sol.active.is_empty(), "{sol}");
     for i in 0..p.base.n_base() {
@@ -83,17 +97,31 @@ fn pseudo_inertia_violation_is_repaired_at_the_boundary() {
         assert!(pseudo_inertia_min_eigenvalue(&ols.estimate, &layout, m).unwrap() < 0.0);
     }
     let reference = with_friction(truth_body(), [0.05; 6]);
-    let sol = one_body_problem(&p, reference.clone(), 0.5).solve(&p.base, &p.red).unwrap();
+    let sol = one_body_problem(&p, reference.clone(), 0.5)
+        .solve(&p.base, &p.red)
+        .unwrap();
     assert_eq!(sol.status, "Solved");
     let link = &sol.links[0];
     assert!(link.psd_near_singular, "{sol}");
-    assert!(kinds(&sol).contains(&(ConstraintKind::PseudoInertia, "L1".into())), "{sol}");
+    assert!(
+        kinds(&sol).contains(&(ConstraintKind::PseudoInertia, "L1".into())),
+        "{sol}"
+    );
     // Feasible, at the margin (to solver accuracy).
-    assert!(link.min_eigenvalue_scaled >= link.margin * (1.0 - 1e-3), "{sol}");
+    assert!(
+        link.min_eigenvalue_scaled >= link.margin * (1.0 - 1e-3),
+        "{sol}"
+    );
     assert!(link.min_eigenvalue >= 0.0);
     // Optimality: no worse than the best feasible point on the segment from
     // the (feasible) reference towards OLS, found by bisection.
-    let point = |a: f64| -> Vec<f64> { reference.iter().zip(&ols.estimate).map(|(r, o)| r + a * (o - r)).collect() };
+    let point = |a: f64| -> Vec<f64> {
+        reference
+            .iter()
+            .zip(&ols.estimate)
+            .map(|(r, o)| r + a * (o - r))
+            .collect()
+    };
     let (mut lo, mut hi) = (0.0, 1.0);
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
@@ -103,8 +131,16 @@ fn pseudo_inertia_violation_is_repaired_at_the_boundary() {
             hi = mid;
         }
     }
-    let seg = p.red.rss(&p.base.to_base(&point(lo)).unwrap()).unwrap().sqrt();
-    assert!(sol.residual_norm <= seg * 1.001, "SDP {} vs segment {seg}", sol.residual_norm);
+    let seg = p
+        .red
+        .rss(&p.base.to_base(&point(lo)).unwrap())
+        .unwrap()
+        .sqrt();
+    assert!(
+        sol.residual_norm <= seg * 1.001,
+        "SDP {} vs segment {seg}",
+        sol.residual_norm
+    );
     assert!(sol.residual_norm > ols.residual_norm);
 }
 
@@ -114,11 +150,22 @@ fn mass_upper_bound_binds_when_the_first_moment_needs_more_mass() {
     // (67)–(69) need m ≥ hᵀΣ_O⁻¹h ≈ 0.47 kg for this body.
     let beta = with_friction(truth_body(), [0.03, 0.08, 0.01, 0.3, 0.02, 0.1]);
     let p = problem(3, &beta, 1, false, 1e-4);
-    let reference = with_friction(common::body_params(0.3, [0.1, 0.02, 0.3], [4e-3, 5e-3, 2e-3]), [0.05; 6]);
-    let sol = one_body_problem(&p, reference, 0.3).solve(&p.base, &p.red).unwrap();
+    let reference = with_friction(
+        common::body_params(0.3, [0.1, 0.02, 0.3], [4e-3, 5e-3, 2e-3]),
+        [0.05; 6],
+    );
+    let sol = one_body_problem(&p, reference, 0.3)
+        .solve(&p.base, &p.red)
+        .unwrap();
     let k = kinds(&sol);
-    assert!(k.contains(&(ConstraintKind::MassUpper, "L1".into())), "{sol}");
-    assert!(k.contains(&(ConstraintKind::PseudoInertia, "L1".into())), "{sol}");
+    assert!(
+        k.contains(&(ConstraintKind::MassUpper, "L1".into())),
+        "{sol}"
+    );
+    assert!(
+        k.contains(&(ConstraintKind::PseudoInertia, "L1".into())),
+        "{sol}"
+    );
     assert!((sol.masses[0] - 0.36).abs() < 1e-6, "{}", sol.masses[0]);
 }
 
@@ -132,8 +179,14 @@ fn sign_constraint_binds_on_negative_friction() {
     let ols = p.red.ols().unwrap();
     assert!(ols.estimate[10] < -0.04);
     let reference = with_friction(truth_body(), [0.05; 6]);
-    let sol = one_body_problem(&p, reference, 0.5).solve(&p.base, &p.red).unwrap();
-    assert_eq!(kinds(&sol), vec![(ConstraintKind::NonNegative, "Fc1".to_string())], "{sol}");
+    let sol = one_body_problem(&p, reference, 0.5)
+        .solve(&p.base, &p.red)
+        .unwrap();
+    assert_eq!(
+        kinds(&sol),
+        vec![(ConstraintKind::NonNegative, "Fc1".to_string())],
+        "{sol}"
+    );
     assert!(sol.standard[10].abs() < 1e-7, "{}", sol.standard[10]);
 }
 
@@ -144,7 +197,12 @@ fn grouped_parameters_split_towards_the_reference() {
     // data's correction to the reference sum is shared equally.
     let a = common::body_params(0.5, [0.1, 0.02, 0.3], [4e-3, 5e-3, 2e-3]);
     let b = common::body_params(0.3, [-0.05, 0.0, 0.2], [2e-3, 2e-3, 1e-3]);
-    let beta: Vec<f64> = a.iter().chain(&b).copied().chain([0.03, 0.08, 0.01, 0.3, 0.02, 0.1]).collect();
+    let beta: Vec<f64> = a
+        .iter()
+        .chain(&b)
+        .copied()
+        .chain([0.03, 0.08, 0.01, 0.3, 0.02, 0.1])
+        .collect();
     let p = problem(5, &beta, 2, true, 1e-3);
     assert_eq!(p.base.n_base(), 15);
     let ols = p.red.ols().unwrap();
@@ -168,7 +226,12 @@ fn grouped_parameters_split_towards_the_reference() {
         0.52,
     )
     .unwrap()
-    .link(LinkLayout::new("L2", [9, 10, 11, 12, 13, 14], [15, 16, 17], 0.3))
+    .link(LinkLayout::new(
+        "L2",
+        [9, 10, 11, 12, 13, 14],
+        [15, 16, 17],
+        0.3,
+    ))
     .unwrap()
     .nonnegative(&FRICTION)
     .unwrap();
@@ -185,7 +248,12 @@ fn grouped_parameters_split_towards_the_reference() {
             let expect = rk + 0.5 * delta;
             // Solver accuracy on a direction the data do not see: 1e-4 of the
             // parameter's scale.
-            assert!((sol.standard[k] - expect).abs() < 1e-4 * scale, "{}: {} vs {expect}", p.names[k], sol.standard[k]);
+            assert!(
+                (sol.standard[k] - expect).abs() < 1e-4 * scale,
+                "{}: {} vs {expect}",
+                p.names[k],
+                sol.standard[k]
+            );
         }
     }
     assert!(sol.links.iter().all(|l| l.min_eigenvalue_scaled > l.margin));
@@ -199,7 +267,12 @@ fn contradictory_bounds_are_reported_infeasible() {
     let p = problem(6, &beta, 1, false, 1e-3);
     let mut c = one_body_problem(&p, with_friction(truth_body(), [0.05; 6]), 0.5);
     // Pin Ixx ≫ Iyy + Izz: no physical body has that.
-    c.bound(0, 1.0, 1.0).unwrap().bound(3, 0.01, 0.01).unwrap().bound(5, 0.01, 0.01).unwrap();
+    c.bound(0, 1.0, 1.0)
+        .unwrap()
+        .bound(3, 0.01, 0.01)
+        .unwrap()
+        .bound(5, 0.01, 0.01)
+        .unwrap();
     let e = c.solve(&p.base, &p.red).unwrap_err();
     assert!(matches!(e, IdentError::Infeasible { .. }), "{e}");
     assert!(e.to_string().contains("widen the mass bounds"), "{e}");
@@ -209,13 +282,22 @@ fn contradictory_bounds_are_reported_infeasible() {
 fn layout_mistakes_are_named() {
     let names = common::body_names("L1");
     let mut c = ConsistentLs::new(&names, vec![0.0; 9]).unwrap();
-    let e = c.link(LinkLayout::new("L1", [0, 1, 2, 3, 4, 4], [6, 7, 8], 0.5)).unwrap_err();
+    let e = c
+        .link(LinkLayout::new("L1", [0, 1, 2, 3, 4, 4], [6, 7, 8], 0.5))
+        .unwrap_err();
     assert!(e.to_string().contains("`L1.Iyz` is listed twice"), "{e}");
-    let e = c.link(LinkLayout::new("L1", [0, 1, 2, 3, 4, 5], [6, 7, 9], 0.5)).unwrap_err();
-    assert!(matches!(e, IdentError::IndexOutOfRange { index: 9, .. }), "{e}");
+    let e = c
+        .link(LinkLayout::new("L1", [0, 1, 2, 3, 4, 5], [6, 7, 9], 0.5))
+        .unwrap_err();
+    assert!(
+        matches!(e, IdentError::IndexOutOfRange { index: 9, .. }),
+        "{e}"
+    );
     let e = c.nonnegative(&["Fv9"]).unwrap_err();
     assert!(e.to_string().contains("unknown parameter `Fv9`"), "{e}");
-    let e = c.link(LinkLayout::new("L1", [0, 1, 2, 3, 4, 5], [6, 7, 8], -1.0)).unwrap_err();
+    let e = c
+        .link(LinkLayout::new("L1", [0, 1, 2, 3, 4, 5], [6, 7, 8], -1.0))
+        .unwrap_err();
     assert!(matches!(e, IdentError::InvalidLayout { .. }), "{e}");
     assert!(c.bound(2, 1.0, 0.0).is_err());
 }

@@ -1,4 +1,5 @@
 //! Validation helpers: fitness (78), workspace PD scan, parameter errors.
+#![allow(clippy::needless_range_loop)]
 
 use aras_ident::validate::{
     PdRegion, check_positive_definite, fitness, fitness_per_group, parameter_errors, predict,
@@ -13,22 +14,35 @@ fn fitness_has_the_documented_anchors() {
     assert_eq!(fitness(&m, &m).unwrap(), 100.0);
     assert!(fitness(&m, &[2.5; 4]).unwrap().abs() < 1e-12);
     // Error of half the spread: 50 %.
-    let e: Vec<f64> = m.iter().zip([1.0, -1.0, 1.0, -1.0]).map(|(a, s)| a + s * 0.5 * 1.118_033_988_749_895).collect();
+    let e: Vec<f64> = m
+        .iter()
+        .zip([1.0, -1.0, 1.0, -1.0])
+        .map(|(a, s)| a + s * 0.5 * 1.118_033_988_749_895)
+        .collect();
     assert!((fitness(&m, &e).unwrap() - 50.0).abs() < 1e-9);
-    assert!(matches!(fitness(&[1.0; 3], &[1.0; 3]), Err(IdentError::ConstantSignal { .. })));
+    assert!(matches!(
+        fitness(&[1.0; 3], &[1.0; 3]),
+        Err(IdentError::ConstantSignal { .. })
+    ));
     let g = RowGroups::contiguous(&[4, 3]).unwrap();
     let meas = [1.0, 2.0, 3.0, 4.0, 7.0, 7.0, 7.0];
     let e = fitness_per_group(&meas, &meas, &g).unwrap_err();
     assert!(e.to_string().contains("group 1"), "{e}");
     let g = RowGroups::interleaved(6, 2).unwrap();
     let meas = [1.0, 10.0, 2.0, 20.0, 3.0, 30.0];
-    assert_eq!(fitness_per_group(&meas, &meas, &g).unwrap(), vec![100.0, 100.0]);
+    assert_eq!(
+        fitness_per_group(&meas, &meas, &g).unwrap(),
+        vec![100.0, 100.0]
+    );
 }
 
 #[test]
 fn predict_is_w_times_beta() {
     let w = Mat::from_fn(3, 2, |i, j| (i + 2 * j) as f64);
-    assert_eq!(predict(w.as_ref(), &[1.0, 2.0]).unwrap(), vec![4.0, 7.0, 10.0]);
+    assert_eq!(
+        predict(w.as_ref(), &[1.0, 2.0]).unwrap(),
+        vec![4.0, 7.0, 10.0]
+    );
     assert!(predict(w.as_ref(), &[1.0]).is_err());
 }
 
@@ -63,12 +77,21 @@ fn pd_scan_finds_the_known_minimum() {
 fn pd_scan_reports_failures_and_indefinite_points() {
     let mut region = PdRegion::new([0.0, 0.0], [std::f64::consts::PI, 1.0]);
     region.random = 1000;
-    let rep = check_positive_definite(|x: &[f64; 2]| Ok::<_, String>([[x[0].cos(), 0.0], [0.0, 1.0]]), &region);
+    let rep = check_positive_definite(
+        |x: &[f64; 2]| Ok::<_, String>([[x[0].cos(), 0.0], [0.0, 1.0]]),
+        &region,
+    );
     assert!(!rep.positive_definite());
     assert!(rep.non_positive > 0);
     assert!(rep.min_eigenvalue <= -0.999);
     let rep = check_positive_definite(
-        |x: &[f64; 2]| if x[0] > 3.0 { Err("outside the reachable set".to_string()) } else { Ok([[1.0, 0.0], [0.0, 1.0]]) },
+        |x: &[f64; 2]| {
+            if x[0] > 3.0 {
+                Err("outside the reachable set".to_string())
+            } else {
+                Ok([[1.0, 0.0], [0.0, 1.0]])
+            }
+        },
         &region,
     );
     assert!(rep.failures > 0 && !rep.positive_definite());

@@ -30,6 +30,39 @@ pub fn forward(
     theta: &Vector2<f64>,
     mode: AssemblyMode,
 ) -> Result<Vector2<f64>, KinError> {
+    Ok(forward_pose(g, theta, mode)?.0)
+}
+
+/// Task-space motion from motor-space motion: forward kinematics (6)–(7)
+/// with `Ẋ = J⁻¹ θ̇` and `Ẍ = J⁻¹ (θ̈ − J̇ Ẋ)`, `J̇ Ẋ = [K′γ̇², −K′γ̇²]`.
+///
+/// Returns `[X, Ẋ, Ẍ]`. This is what turns measured encoder angles and
+/// their derivatives into the task-space inputs of the dynamics; it skips
+/// the link frames [`evaluate`](crate::evaluate) would also build.
+pub fn forward_motion(
+    g: &Geometry,
+    theta: &Vector2<f64>,
+    theta_dot: &Vector2<f64>,
+    theta_ddot: &Vector2<f64>,
+    mode: AssemblyMode,
+) -> Result<[Vector2<f64>; 3], KinError> {
+    check_finite("theta1_dot", theta_dot[0])?;
+    check_finite("theta2_dot", theta_dot[1])?;
+    check_finite("theta1_ddot", theta_ddot[0])?;
+    check_finite("theta2_ddot", theta_ddot[1])?;
+    let (x, pose) = forward_pose(g, theta, mode)?;
+    let inv = |v: Vector2<f64>| Vector2::new(0.5 * (v[0] + v[1]), 0.5 * (v[0] - v[1]) / pose.k);
+    let x_dot = inv(*theta_dot);
+    let jd = pose.k_prime * x_dot[1] * x_dot[1];
+    let x_ddot = inv(theta_ddot - Vector2::new(jd, -jd));
+    Ok([x, x_dot, x_ddot])
+}
+
+fn forward_pose(
+    g: &Geometry,
+    theta: &Vector2<f64>,
+    mode: AssemblyMode,
+) -> Result<(Vector2<f64>, Pose), KinError> {
     check_finite("theta1", theta[0])?;
     check_finite("theta2", theta[1])?;
     let phi = 0.5 * (theta[0] + theta[1]);
@@ -71,5 +104,5 @@ pub fn forward(
             reach: 2.0 * pose.a,
         });
     }
-    Ok(x)
+    Ok((x, pose))
 }

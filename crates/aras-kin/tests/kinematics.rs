@@ -168,6 +168,16 @@ proptest! {
     }
 
     #[test]
+    fn forward_motion_inverts_the_motor_motion(x in pose(), xd in rate(), xdd in rate()) {
+        let g = Geometry::aras_diamond();
+        let s = evaluate(&g, &x, &xd, &xdd).unwrap();
+        let [x2, xd2, xdd2] = aras_kin::forward_motion(&g, &s.theta, &s.theta_dot, &s.theta_ddot, AssemblyMode::Plus).unwrap();
+        prop_assert!((x2 - x).norm() < 1e-12);
+        prop_assert!((xd2 - xd).norm() < 1e-11 * (1.0 + xd.norm()));
+        prop_assert!((xdd2 - xdd).norm() < 1e-10 * (1.0 + xdd.norm() + xd.norm_squared()));
+    }
+
+    #[test]
     fn sample_agrees_with_single_functions(x in pose(), xd in rate(), xdd in rate()) {
         let g = Geometry::aras_diamond();
         let s = evaluate(&g, &x, &xd, &xdd).unwrap();

@@ -443,79 +443,30 @@ fn filter_all(
     Ok(())
 }
 
-/// `K = dA/dγ` and `K' = dK/dγ` at motor half-difference `A` and polar
-/// angle `γ`, spec (8)–(11) with the sign NOTE:
-/// `K = −N/sin A`, `N = cot α − cos A cot γ`, differentiated once more with
-/// `dA/dγ = K`. Computed here (a few flops) rather than through
-/// `aras_kin::evaluate`, which also builds every link frame and Jacobian
-/// and would dominate `process`; `tests` check both against `aras-kin`.
-#[inline]
-pub(crate) fn k_and_k_prime(cot_alpha: f64, a: f64, gamma: f64) -> (f64, f64) {
-    let (sa, ca) = a.sin_cos();
-    let (sg, cg) = gamma.sin_cos();
-    let cot_g = cg / sg;
-    let n = cot_alpha - ca * cot_g;
-    let k = -n / sa;
-    let n_prime = sa * k * cot_g + ca / (sg * sg);
-    let k_prime = -(n_prime * sa - n * ca * k) / (sa * sa);
-    (k, k_prime)
-}
-
-/// Fills X, Ẋ, Ẍ from θ, θ̇, θ̈, spec (6)–(11): `X = forward(θ)` (which
-/// rejects unreachable and near-singular poses), `Ẋ = J⁻¹θ̇`,
-/// `Ẍ = J⁻¹(θ̈ − J̇Ẋ)` with `J̇Ẋ = [K'γ̇², −K'γ̇²]`.
+/// Fills X, Ẋ, Ẍ from θ, θ̇, θ̈ through `aras_kin::forward_motion`,
+/// spec (6)–(11): `X = forward(θ)` (which rejects unreachable and
+/// near-singular poses), `Ẋ = J⁻¹θ̇`, `Ẍ = J⁻¹(θ̈ − J̇Ẋ)`, so θ̇ = JẊ holds
+/// exactly at every sample.
 fn task_space(s: &mut Samples, g: &aras_kin::Geometry) -> Result<(), ProcessError> {
-    let cot_alpha = 1.0 / g.alpha().tan();
     for i in 0..s.len() {
-        let theta = Vector2::new(s.theta[0][i], s.theta[1][i]);
-        let x = aras_kin::forward(g, &theta, aras_kin::AssemblyMode::Plus).map_err(|source| {
-            ProcessError::Kinematics {
-                index: i,
-                t: s.t[i],
-                source,
-            }
+        let col = |c: &[Vec<f64>; 2]| Vector2::new(c[0][i], c[1][i]);
+        let [x, xd, xdd] = aras_kin::forward_motion(
+            g,
+            &col(&s.theta),
+            &col(&s.theta_dot),
+            &col(&s.theta_ddot),
+            aras_kin::AssemblyMode::Plus,
+        )
+        .map_err(|source| ProcessError::Kinematics {
+            index: i,
+            t: s.t[i],
+            source,
         })?;
-        let (k, kp) = k_and_k_prime(cot_alpha, 0.5 * (theta[0] - theta[1]), x[1]);
-        let (td1, td2) = (s.theta_dot[0][i], s.theta_dot[1][i]);
-        let phi_dot = 0.5 * (td1 + td2);
-        let gamma_dot = 0.5 * (td1 - td2) / k;
-        let jd = kp * gamma_dot * gamma_dot;
-        let (r1, r2) = (s.theta_ddot[0][i] - jd, s.theta_ddot[1][i] + jd);
-        s.x[0][i] = x[0];
-        s.x[1][i] = x[1];
-        s.x_dot[0][i] = phi_dot;
-        s.x_dot[1][i] = gamma_dot;
-        s.x_ddot[0][i] = 0.5 * (r1 + r2);
-        s.x_ddot[1][i] = 0.5 * (r1 - r2) / k;
-    }
-    Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn k_and_k_prime_agree_with_aras_kin() {
-        let g = aras_kin::Geometry::aras_diamond();
-        let cot_alpha = 1.0 / g.alpha().tan();
-        for i in 0..200 {
-            let phi = (30.0 + 110.0 * (i as f64 * 0.37).fract()).to_radians();
-            let gamma = (40.0 + 40.0 * (i as f64 * 0.61).fract()).to_radians();
-            let x = Vector2::new(phi, gamma);
-            let xd = Vector2::new(0.3 - 0.004 * i as f64, 1.1 - 0.01 * i as f64);
-            let e = aras_kin::evaluate(&g, &x, &xd, &Vector2::zeros()).unwrap();
-            let a = 0.5 * (e.theta[0] - e.theta[1]);
-            let (k, kp) = k_and_k_prime(cot_alpha, a, gamma);
-            // Same closed forms evaluated in a different order: rounding only.
-            assert!((k - e.jacobian.k()).abs() < 1e-12 * k.abs().max(1.0));
-            let jd = e.theta_ddot; // = J̇Ẋ since Ẍ = 0
-            let ours = kp * xd[1] * xd[1];
-            assert!(
-                (jd[0] - ours).abs() < 1e-12 * ours.abs().max(1.0),
-                "{jd} vs {ours}"
-            );
-            assert!((jd[1] + ours).abs() < 1e-12 * ours.abs().max(1.0));
+        for j in 0..2 {
+            s.x[j][i] = x[j];
+            s.x_dot[j][i] = xd[j];
+            s.x_ddot[j][i] = xdd[j];
         }
     }
+    Ok(())
 }

@@ -7,7 +7,10 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 
     /// A constant passes unchanged: unit DC gain and steady-state initial
-    /// conditions leave no start-up transient. Rounding only: 1e-12 relative.
+    /// conditions leave no start-up transient. Rounding only: 1e-12 relative,
+    /// growing as 1/f for very low cut-offs, whose poles sit within ~2π·f/fs
+    /// of the unit circle and amplify rounding accordingly (observed: 2.3e-12
+    /// at order 6 and f = 0.001·fs).
     #[test]
     fn constant_in_constant_out(
         order in 1usize..=8,
@@ -18,7 +21,7 @@ proptest! {
         let fs = 1000.0;
         let sos = Butterworth::lowpass(order, frac * fs, fs).unwrap();
         let x = vec![c; sos.padlen() + extra];
-        let tol = 1e-12 * c.abs().max(1.0);
+        let tol = 1e-12 * c.abs().max(1.0) * (1.0 + 0.01 / frac);
         for y in sos.filtfilt(&x).unwrap() {
             prop_assert!((y - c).abs() <= tol, "{y} vs {c}");
         }

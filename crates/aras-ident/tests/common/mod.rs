@@ -1,4 +1,5 @@
 //! Synthetic problems with known answers, shared by the integration tests.
+#![allow(clippy::needless_range_loop)]
 #![allow(dead_code)]
 
 use faer::Mat;
@@ -33,11 +34,25 @@ pub fn body_params(m: f64, rho: [f64; 3], ig: [f64; 3]) -> Vec<f64> {
             i[a][b] = m * (r2 * delta - rho[a] * rho[b]) + if a == b { ig[a] } else { 0.0 };
         }
     }
-    vec![i[0][0], i[0][1], i[0][2], i[1][1], i[1][2], i[2][2], m * rho[0], m * rho[1], m * rho[2]]
+    vec![
+        i[0][0],
+        i[0][1],
+        i[0][2],
+        i[1][1],
+        i[1][2],
+        i[2][2],
+        m * rho[0],
+        m * rho[1],
+        m * rho[2],
+    ]
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 /// The 3 × 9 regressor rows of a body turning about a fixed point (the
@@ -83,7 +98,13 @@ pub fn random_gravity(r: &mut StdRng) -> [f64; 3] {
 /// the same 3 rows (joint-major: all x rows, then y, then z), plus optional
 /// friction-like columns `Fv` (random velocity) and `Fc` (its sign) per
 /// row axis. Returns W (3N × 9·bodies + 6·friction) and names.
-pub fn multi_body(r: &mut StdRng, samples: usize, bodies: usize, shared_motion: bool, friction: bool) -> (Mat<f64>, Vec<String>) {
+pub fn multi_body(
+    r: &mut StdRng,
+    samples: usize,
+    bodies: usize,
+    shared_motion: bool,
+    friction: bool,
+) -> (Mat<f64>, Vec<String>) {
     let nb = 9 * bodies;
     let nf = if friction { 6 } else { 0 };
     let mut w = Mat::zeros(3 * samples, nb + nf);
@@ -94,7 +115,10 @@ pub fn multi_body(r: &mut StdRng, samples: usize, bodies: usize, shared_motion: 
             let (om, od) = match (shared_motion, motion) {
                 (true, Some(m)) => m,
                 _ => {
-                    let m = ([normal(r), normal(r), normal(r)], [normal(r), normal(r), normal(r)]);
+                    let m = (
+                        [normal(r), normal(r), normal(r)],
+                        [normal(r), normal(r), normal(r)],
+                    );
                     motion = Some(m);
                     m
                 }
@@ -114,7 +138,9 @@ pub fn multi_body(r: &mut StdRng, samples: usize, bodies: usize, shared_motion: 
             }
         }
     }
-    let mut names: Vec<String> = (0..bodies).flat_map(|k| body_names(&format!("L{}", k + 1))).collect();
+    let mut names: Vec<String> = (0..bodies)
+        .flat_map(|k| body_names(&format!("L{}", k + 1)))
+        .collect();
     if friction {
         for a in 1..=3 {
             names.push(format!("Fv{a}"));
