@@ -663,7 +663,7 @@ impl Config {
             );
         }
         if let Some([lo, hi]) = d.box_bounds
-            && !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= 1.0 && hi >= 1.0)
+            && !(hi.is_finite() && (0.0..=1.0).contains(&lo) && hi >= 1.0)
         {
             return bad(
                 "identification.sdp.box_bounds",

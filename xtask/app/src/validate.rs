@@ -169,12 +169,12 @@ pub fn pd_check(params: &Params, cfg: &Config) -> Result<PdSummary> {
     })
 }
 
+/// A heat-map grid: `φ` (deg), `γ` (deg) and `values[i][j]` at `(φ_i, γ_j)`.
+pub type EigenGrid = (Vec<f64>, Vec<f64>, Vec<Vec<f64>>);
+
 /// The smallest mass-matrix eigenvalue on a `[φ, γ]` grid over the
 /// workspace: `(φ_deg, γ_deg, values[i][j])` for the heat map.
-pub fn min_eigen_grid(
-    params: &Params,
-    cfg: &Config,
-) -> Result<(Vec<f64>, Vec<f64>, Vec<Vec<f64>>)> {
+pub fn min_eigen_grid(params: &Params, cfg: &Config) -> Result<EigenGrid> {
     let dy = Dynamics::new(params)?;
     let (lo, hi) = workspace_box(cfg);
     let [nx, ny] = cfg.validation.heatmap;

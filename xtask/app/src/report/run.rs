@@ -39,7 +39,7 @@ pub struct RunData<'a> {
     /// PD checks per estimate.
     pub pd: &'a BTreeMap<String, PdSummary>,
     /// Heat map of the SDP mass matrix's smallest eigenvalue.
-    pub heat: Option<&'a (Vec<f64>, Vec<f64>, Vec<Vec<f64>>)>,
+    pub heat: Option<&'a crate::validate::EigenGrid>,
     /// Pseudo-inertia eigenvalues.
     pub pseudo: &'a PseudoInertia,
     /// Parameter errors, when the truth is known.
