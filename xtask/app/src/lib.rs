@@ -6,11 +6,19 @@
 //! identification → validation → diagnosis) and writes reports. It holds no
 //! mathematics of its own.
 //!
+//! Conventions: SI units and radians everywhere except config keys ending
+//! in `_deg` and report labels; torques are motor (joint) torques; stacked
+//! data put joint 1's rows first. Outputs are written atomically into a
+//! staged directory that replaces the target only at the end (`--force`).
+//! See `docs/architecture.md` (data flow, module map) and `docs/config.md`.
+//!
 //! Dependencies beyond the workspace crates: `clap` (command line),
 //! `toml`/`serde_json` (config files), `plotters` (SVG plots), `indicatif`
 //! (progress bars), `anyhow` (error context across the many file and stage
 //! boundaries of an application; the libraries use `thiserror`), `faer`
 //! (views of the stacked regressor for `aras-ident`).
+
+#![warn(missing_docs)]
 
 pub mod cli;
 pub mod cmd;
