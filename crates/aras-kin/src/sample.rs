@@ -55,6 +55,7 @@ pub struct KinematicSample<T: Scalar = f64> {
 /// Generic over the [`Scalar`]: `f64` for ordinary use, or forward-mode dual
 /// numbers (feature `dual`) to get exact derivatives of everything with
 /// respect to the inputs.
+#[inline]
 pub fn evaluate<T: Scalar>(
     g: &Geometry,
     x: &Vector2<T>,
