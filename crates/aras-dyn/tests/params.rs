@@ -76,7 +76,13 @@ fn cad_conversion_reproduced() {
         let back = l.inertia_about_com().unwrap();
         assert!((back - Matrix3::from_diagonal(&Vector3::from(ig))).norm() <= 1e-12 * io.norm());
         // Physically consistent: pseudo-inertia positive definite.
-        assert!(p.pseudo_inertia(k + 1).unwrap().symmetric_eigenvalues().min() > 0.0);
+        assert!(
+            p.pseudo_inertia(k + 1)
+                .unwrap()
+                .symmetric_eigenvalues()
+                .min()
+                > 0.0
+        );
     }
     assert_eq!(p.friction.viscous, [0.034321, 0.008779]);
     assert_eq!(p.friction.coulomb, [0.076031, 0.28876]);
