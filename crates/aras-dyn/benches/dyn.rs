@@ -88,7 +88,7 @@ fn stacked(c: &mut Criterion) {
         })
     });
     grp.bench_function("from samples, fresh allocation", |b| {
-        b.iter(|| model.stacked(black_box(&samples)))
+        b.iter(|| model.stacked(black_box(&samples)).unwrap())
     });
     grp.finish();
 }

@@ -235,10 +235,18 @@ impl Params {
     }
 
     /// Pseudo-inertia of link `k` (1–4, paper numbering; index `k − 1`),
-    /// see [`LinkParams::pseudo_inertia`]. Panics only for `k` outside 1–4.
-    pub fn pseudo_inertia(&self, k: usize) -> Matrix4<f64> {
-        assert!((1..=4).contains(&k), "links are numbered 1 to 4, got {k}");
-        self.links[k - 1].pseudo_inertia()
+    /// see [`LinkParams::pseudo_inertia`]. A link number outside 1–4 is a
+    /// [`ParamError::Invalid`] (it used to panic: a caller's off-by-one
+    /// must not abort a long identification run).
+    pub fn pseudo_inertia(&self, k: usize) -> Result<Matrix4<f64>, ParamError> {
+        match k.checked_sub(1).and_then(|i| self.links.get(i)) {
+            Some(l) => Ok(l.pseudo_inertia()),
+            None => Err(ParamError::Invalid {
+                key: "link".into(),
+                value: k as f64,
+                reason: "links are numbered 1 to 4 (paper numbering); use 1..=4",
+            }),
+        }
     }
 
     /// Checks every value: finite numbers, valid geometry, valid effect

@@ -237,12 +237,12 @@ impl Model {
 
     /// Stacked joint-major regressor (`2N × n`) of many samples, in parallel
     /// (rayon) over blocks of samples. Allocates the result; see
-    /// [`Model::stacked_into`] to reuse a buffer.
-    pub fn stacked(&self, samples: &[KinematicSample]) -> DMatrix<f64> {
+    /// [`Model::stacked_into`] to reuse a buffer. Errors (rather than
+    /// panicking) with [`Model::stacked_into`]'s shape check.
+    pub fn stacked(&self, samples: &[KinematicSample]) -> Result<DMatrix<f64>, DynError> {
         let mut out = DMatrix::zeros(2 * samples.len(), self.columns());
-        self.stacked_into(samples, &mut out)
-            .expect("the buffer was sized for the samples");
-        out
+        self.stacked_into(samples, &mut out)?;
+        Ok(out)
     }
 
     /// [`Model::stacked`] into a caller's `2N × n` matrix (reusing its memory:

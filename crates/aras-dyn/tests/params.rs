@@ -76,7 +76,13 @@ fn cad_conversion_reproduced() {
         let back = l.inertia_about_com().unwrap();
         assert!((back - Matrix3::from_diagonal(&Vector3::from(ig))).norm() <= 1e-12 * io.norm());
         // Physically consistent: pseudo-inertia positive definite.
-        assert!(p.pseudo_inertia(k + 1).symmetric_eigenvalues().min() > 0.0);
+        assert!(
+            p.pseudo_inertia(k + 1)
+                .unwrap()
+                .symmetric_eigenvalues()
+                .min()
+                > 0.0
+        );
     }
     assert_eq!(p.friction.viscous, [0.034321, 0.008779]);
     assert_eq!(p.friction.coulomb, [0.076031, 0.28876]);
@@ -278,4 +284,14 @@ fn arc_helper_matches_discretised_arc() {
     )
     .unwrap_err();
     assert!(e.to_string().contains("arc_robot.links.2.arc_mass"), "{e}");
+}
+
+#[test]
+fn pseudo_inertia_rejects_link_numbers_outside_1_to_4() {
+    let p = Params::aras_diamond();
+    for k in [0, 5, usize::MAX] {
+        let e = p.pseudo_inertia(k).unwrap_err().to_string();
+        assert!(e.contains("1 to 4"), "{e}");
+    }
+    assert!(p.pseudo_inertia(4).is_ok());
 }

@@ -178,7 +178,7 @@ fn stacked_layout_is_joint_major() {
     let samples: Vec<_> = (0..n)
         .map(|i| evaluate(&g, &xs[i], &vs[i], &as_[i]).unwrap())
         .collect();
-    let w = m.stacked(&samples);
+    let w = m.stacked(&samples).unwrap();
     let w2 = m.stacked_from_states(&g, &xs, &vs, &as_).unwrap();
     assert_eq!(w, w2);
     assert_eq!(w.shape(), (2 * n, m.columns()));

@@ -266,6 +266,43 @@ pub struct OlsEstimate {
     pub covariance: Mat<f64>,
 }
 
+impl OlsEstimate {
+    /// Makes the uncertainty honest for data whose noise was low-pass
+    /// filtered (e.g. the zero-phase filter of parallel filtering) before the
+    /// fit; `noise_gain` is the filter's noise power gain `g = Σ h_k²`
+    /// (`robot::noise_gain`).
+    ///
+    /// (64)–(66) assume white residuals. Filtering white noise of variance
+    /// `σ²` leaves variance `g σ²`, correlated over about `1/g` samples, so
+    /// the residual variance underestimates `σ²` by `g` while the data hold
+    /// only about `g·rows` independent samples. When the regressor's content
+    /// lies inside the pass band (the filter leaves `W` unchanged), the true
+    /// covariance is `σ² (WᵀW)⁻¹` with `σ² = σ²_ρ / g`: the covariance is
+    /// divided by `g`, standard deviations and σ% by `√g`, and
+    /// `residual_variance` becomes the estimated pre-filter variance.
+    /// Period averaging needs no correction (it keeps the noise white).
+    pub fn with_filtered_noise(mut self, noise_gain: f64) -> Result<Self, IdentError> {
+        if !(noise_gain.is_finite() && noise_gain > 0.0 && noise_gain <= 1.0) {
+            return Err(IdentError::InvalidSetting {
+                name: "filter noise gain",
+                value: noise_gain,
+                reason: "must lie in (0, 1]: Σ h_k² of a low-pass filter's impulse response",
+            });
+        }
+        let s = noise_gain.sqrt();
+        self.residual_variance /= noise_gain;
+        self.std_dev.iter_mut().for_each(|v| *v /= s);
+        self.rel_std_percent.iter_mut().for_each(|v| *v /= s);
+        let b = self.covariance.nrows();
+        for j in 0..b {
+            for i in 0..b {
+                self.covariance[(i, j)] /= noise_gain;
+            }
+        }
+        Ok(self)
+    }
+}
+
 /// OLS on a stacked base regressor `w_b` and torques `t`: a shortcut for
 /// [`ReducedLs::new`] followed by [`ReducedLs::ols`].
 pub fn ols<S: AsRef<str>>(

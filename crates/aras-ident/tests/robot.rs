@@ -128,6 +128,7 @@ fn default_robot_ols_and_sdp_round_trip() {
         assert!(
             identified
                 .pseudo_inertia(k + 1)
+                .unwrap()
                 .symmetric_eigenvalues()
                 .min()
                 >= 0.0
