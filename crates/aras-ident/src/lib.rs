@@ -46,6 +46,7 @@ use openblas_src as _;
 
 mod base;
 mod dense;
+pub mod diagnose;
 mod error;
 mod groups;
 mod ls;

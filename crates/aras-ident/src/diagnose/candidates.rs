@@ -1,0 +1,189 @@
+//! The candidate library: effects the paper's model may be missing, each
+//! with a stable identifier, a physical explanation and the grid over which
+//! its non-linear setting is scanned. Every candidate except `time_delay`
+//! is an [`aras_dyn::Effect`], so the extended model is an ordinary
+//! [`aras_dyn::Model`] that identification and prediction use unchanged.
+
+use aras_dyn::Effect;
+use serde::Serialize;
+
+/// Stable identifiers of the candidates, in the order they are tried.
+pub const CANDIDATE_IDS: [&str; 7] = [
+    "torque_offset",
+    "coulomb_asymmetry",
+    "stribeck_friction",
+    "passive_joint_viscous",
+    "cogging",
+    "quadratic_damping",
+    "time_delay",
+];
+
+/// One candidate with one value of its non-linear setting.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Candidate {
+    /// A model effect: its regressor columns are appended to the model.
+    Effect {
+        /// The effect with its settings.
+        effect: Effect,
+    },
+    /// The torque samples lag the angle samples by `samples` (negative:
+    /// lead). Not a regressor column: the torques are shifted against the
+    /// angles and the same model is fitted again.
+    TimeDelay {
+        /// Shift in samples.
+        samples: i64,
+    },
+}
+
+impl Candidate {
+    /// The stable identifier (one of [`CANDIDATE_IDS`]).
+    pub fn id(&self) -> &'static str {
+        match self {
+            Candidate::Effect { effect } => effect.id(),
+            Candidate::TimeDelay { .. } => "time_delay",
+        }
+    }
+
+    /// A short label including the scanned setting, e.g.
+    /// `stribeck_friction(v_s = 0.1 rad/s)`.
+    pub fn label(&self) -> String {
+        match self {
+            Candidate::Effect {
+                effect: Effect::StribeckFriction { v_s },
+            } => format!("stribeck_friction(v_s = {v_s} rad/s)"),
+            Candidate::Effect {
+                effect:
+                    Effect::Cogging {
+                        cycles_per_rev,
+                        order,
+                    },
+            } => format!("cogging({cycles_per_rev} cycles/rev, order {order})"),
+            Candidate::Effect { effect } => effect.id().to_owned(),
+            Candidate::TimeDelay { samples } => format!("time_delay({samples:+} samples)"),
+        }
+    }
+
+    /// Why such an effect exists physically, and how it shows in the data.
+    pub fn explanation(&self) -> &'static str {
+        explanation(self.id())
+    }
+}
+
+/// The physical explanation of a candidate identifier (empty for an unknown
+/// identifier).
+pub fn explanation(id: &str) -> &'static str {
+    match id {
+        "torque_offset" => {
+            "a constant torque bias per motor: current-sensor or amplifier offset, or a cable \
+             or counterweight load that does not depend on the pose; the residual is shifted by \
+             the same amount everywhere"
+        }
+        "coulomb_asymmetry" => {
+            "the Coulomb friction level differs between the two directions of motion (capstan \
+             cable pre-tension, seal or bearing asymmetry); while the joint moves it acts like \
+             an offset, at rest it vanishes"
+        }
+        "stribeck_friction" => {
+            "friction rises above the Coulomb level at low speed and decays with the Stribeck \
+             velocity v_s (boundary lubrication); the residual peaks, with the sign of the \
+             velocity, just after each velocity reversal"
+        }
+        "passive_joint_viscous" => {
+            "viscous friction in the passive hinges about b, c and d (bearings of the distal \
+             links), proportional to their relative angular rates and mapped to the motors by \
+             virtual work; the residual depends on velocity and pose together"
+        }
+        "cogging" => {
+            "torque periodic in the motor angle (permanent-magnet detent torque, gear or \
+             capstan-groove ripple), with a fixed number of cycles per joint revolution; the \
+             residual oscillates with the joint angle"
+        }
+        "quadratic_damping" => {
+            "damping growing with the square of the speed (fluid or air drag, windage, \
+             velocity-dependent seal friction); the residual grows faster than linearly with \
+             |θ̇| and keeps its sign"
+        }
+        "time_delay" => {
+            "torque and angle samples are not simultaneous (current-loop or communication \
+             latency, filter group delay in the drive); the residual is proportional to the \
+             torque's rate of change"
+        }
+        _ => "",
+    }
+}
+
+/// Which candidates are scanned, and over which grids.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CandidateGrid {
+    /// Candidate identifiers to try (a subset of [`CANDIDATE_IDS`]).
+    pub ids: Vec<String>,
+    /// Stribeck velocities `v_s` (rad/s). Default 0.02–0.4 rad/s: the
+    /// Stribeck velocities of lubricated gears and bearings lie around
+    /// 0.001–0.1 m/s at the contact, i.e. a few hundredths to tenths of a
+    /// rad/s at the joint; below ≈ 0.02 rad/s the effect hides inside the
+    /// encoder's velocity resolution.
+    pub stribeck_v_s: Vec<f64>,
+    /// Cogging cycles per joint revolution. Default 1–60: a coarse grid over
+    /// the periods a 10 Hz low-pass lets through at joint speeds of
+    /// 0.2–2 rad/s (motor cogging of 6 per motor revolution through the
+    /// 10:1 capstan is 60 per joint revolution).
+    pub cogging_cycles: Vec<f64>,
+    /// Cogging harmonics (1–16, default 2).
+    pub cogging_order: usize,
+    /// Torque-against-angle shifts in samples (both signs). Default ±1, 2,
+    /// 3, 5, 8, 12, 20 samples (1–20 ms at 1 kHz: amplifier and bus
+    /// latencies).
+    pub delays: Vec<i64>,
+}
+
+impl Default for CandidateGrid {
+    fn default() -> Self {
+        let d = [1, 2, 3, 5, 8, 12, 20];
+        Self {
+            ids: CANDIDATE_IDS.iter().map(|s| s.to_string()).collect(),
+            stribeck_v_s: vec![0.05, 0.1, 0.2, 0.4],
+            cogging_cycles: vec![
+                1.0, 2.0, 3.0, 4.0, 6.0, 8.0, 10.0, 12.0, 16.0, 20.0, 24.0, 30.0, 36.0, 48.0, 60.0,
+            ],
+            cogging_order: 2,
+            delays: d.iter().flat_map(|&k| [k, -k]).collect(),
+        }
+    }
+}
+
+impl CandidateGrid {
+    /// Every candidate setting of the grid, in a fixed order.
+    pub fn expand(&self) -> Vec<Candidate> {
+        let mut out = Vec::new();
+        let eff = |effect| Candidate::Effect { effect };
+        for id in CANDIDATE_IDS {
+            if !self.ids.iter().any(|s| s == id) {
+                continue;
+            }
+            match id {
+                "torque_offset" => out.push(eff(Effect::TorqueOffset)),
+                "coulomb_asymmetry" => out.push(eff(Effect::CoulombAsymmetry)),
+                "stribeck_friction" => out.extend(
+                    self.stribeck_v_s
+                        .iter()
+                        .map(|&v_s| eff(Effect::StribeckFriction { v_s })),
+                ),
+                "passive_joint_viscous" => out.push(eff(Effect::PassiveJointViscous)),
+                "cogging" => out.extend(self.cogging_cycles.iter().map(|&c| {
+                    eff(Effect::Cogging {
+                        cycles_per_rev: c,
+                        order: self.cogging_order,
+                    })
+                })),
+                "quadratic_damping" => out.push(eff(Effect::QuadraticDamping)),
+                _ => out.extend(
+                    self.delays
+                        .iter()
+                        .map(|&samples| Candidate::TimeDelay { samples }),
+                ),
+            }
+        }
+        out
+    }
+}
