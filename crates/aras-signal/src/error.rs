@@ -403,8 +403,9 @@ pub enum ProcessError {
     /// The period is not a whole number of samples.
     #[error(
         "period {period_s} s is {samples:.4} samples at the log's step {step_s} s, not a whole \
-         number: the periods would drift by {drift:.2} samples over the record; check \
-         excitation.period_s or resample the log"
+         number (the periods would drift by {drift:.2} samples over the record), and no block of \
+         several periods that fits in the record is a whole number of samples either; check \
+         excitation.period_s, record more periods, or resample the log"
     )]
     PeriodNotWhole {
         /// Period (s).
@@ -416,9 +417,9 @@ pub enum ProcessError {
         /// Accumulated drift over all periods (samples).
         drift: f64,
     },
-    /// One period differs too much from the average.
+    /// One period (block of periods) differs too much from the average.
     #[error(
-        "period {index} (t = {t_start:.3}–{t_end:.3} s) of {channel} differs from the average \
+        "period block {index} (t = {t_start:.3}–{t_end:.3} s) of {channel} differs from the average \
          period by {relative_percent:.1}% RMS (limit {limit_percent:.1}%): the motion is not \
          periodic with period {period_s} s; check excitation.period_s and the settling time"
     , relative_percent = relative * 100.0, limit_percent = limit * 100.0)]

@@ -141,9 +141,15 @@ pub struct FilterSummary {
 pub struct PeriodSummary {
     /// Period (s).
     pub period_s: f64,
-    /// Samples per period.
-    pub samples_per_period: usize,
-    /// Whole periods averaged.
+    /// Periods per averaged block: the smallest `k` with `k·P·fs` a whole
+    /// number of samples (1 when a period is; 7 for 0.7 Hz at 1 kHz). The
+    /// output is one block, i.e. `k` periods.
+    pub periods_per_block: usize,
+    /// Samples per block (the output's length before derivative edge loss).
+    pub samples_per_block: usize,
+    /// Blocks averaged.
+    pub blocks_averaged: usize,
+    /// Whole periods averaged (`blocks_averaged · periods_per_block`).
     pub periods_averaged: usize,
     /// Samples dropped for settling.
     pub settling_samples: usize,
@@ -246,13 +252,13 @@ pub fn process(
             let avg = average_periods(&raw, dt, p, opts.settling_s)?;
             for (c, channel) in CHANNELS.iter().enumerate().take(2) {
                 if avg.spread_relative[c] > opts.max_period_spread {
-                    let k = avg.worst_period[c];
-                    let i0 = avg.start + k * avg.samples_per_period;
+                    let k = avg.worst_block[c];
+                    let i0 = avg.start + k * avg.samples_per_block;
                     return Err(ProcessError::PeriodsDisagree {
                         channel,
                         index: k,
                         t_start: log.t[i0],
-                        t_end: log.t[i0 + avg.samples_per_period - 1],
+                        t_end: log.t[i0 + avg.samples_per_block - 1],
                         relative: avg.spread_relative[c],
                         limit: opts.max_period_spread,
                         period_s: p,
@@ -267,17 +273,19 @@ pub fn process(
                     });
                 }
             }
-            let t = log.t[avg.start..avg.start + avg.samples_per_period].to_vec();
+            let t = log.t[avg.start..avg.start + avg.samples_per_block].to_vec();
             let summary = PeriodSummary {
                 period_s: p,
-                samples_per_period: avg.samples_per_period,
-                periods_averaged: avg.periods,
+                periods_per_block: avg.periods_per_block,
+                samples_per_block: avg.samples_per_block,
+                blocks_averaged: avg.blocks,
+                periods_averaged: avg.periods(),
                 settling_samples: avg.start,
                 tail_samples: avg.tail,
                 spread_relative: std::array::from_fn(|c| avg.spread_relative[c]),
                 spread_rms: std::array::from_fn(|c| avg.spread_rms[c]),
             };
-            let dropped = log.len() - avg.samples_per_period * avg.periods;
+            let dropped = log.len() - avg.samples_per_block * avg.blocks;
             (avg.channels, t, Some(summary), dropped)
         }
         None => (

@@ -84,10 +84,11 @@ fn periodic_record_without_filter_is_exact() {
     assert_eq!(
         (
             p.periods_averaged,
-            p.samples_per_period,
+            p.periods_per_block,
+            p.samples_per_block,
             out.summary.samples_dropped
         ),
-        (3, 2000, 0)
+        (3, 1, 2000, 0)
     );
     // The logged θ are exact to ~1e-16: averaging identical periods, spectral
     // derivatives and the Jacobian keep X to 1e-12, Ẋ to 1e-9 (×ω ≈ 10),

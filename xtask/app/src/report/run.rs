@@ -165,10 +165,12 @@ pub fn build(d: &RunData) -> Result<Report> {
     ];
     if let Some(per) = &p.periods {
         items.push(format!(
-            "period averaging: {} periods of {:.3} s ({} samples each), relative spread θ {:.2e}/{:.2e}, τ {:.2e}/{:.2e}",
+            "period averaging: {} periods of {:.3} s in {} blocks of {} periods ({} samples each), relative spread θ {:.2e}/{:.2e}, τ {:.2e}/{:.2e}",
             per.periods_averaged,
             per.period_s,
-            per.samples_per_period,
+            per.blocks_averaged,
+            per.periods_per_block,
+            per.samples_per_block,
             per.spread_relative[0],
             per.spread_relative[1],
             per.spread_relative[2],
