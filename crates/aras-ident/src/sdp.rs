@@ -369,6 +369,24 @@ impl ConsistentLs {
         Ok(self)
     }
 
+    /// Mass bounds `(1 ∓ fraction) ×` each added link's reference mass
+    /// (replacing the `±20 %` of [`LinkLayout::new`]), e.g. from a
+    /// configuration. `fraction` must lie in `[0, 1)`.
+    pub fn mass_tolerance(&mut self, fraction: f64) -> Result<&mut Self, IdentError> {
+        if !(fraction.is_finite() && (0.0..1.0).contains(&fraction)) {
+            return Err(IdentError::InvalidSetting {
+                name: "mass tolerance",
+                value: fraction,
+                reason: "give a fraction in [0, 1) of the reference mass (0.2 for ±20 %)",
+            });
+        }
+        for l in &mut self.links {
+            let m = l.mass_reference;
+            l.mass_bounds = ((1.0 - fraction) * m, (1.0 + fraction) * m);
+        }
+        Ok(self)
+    }
+
     /// Sign constraints (70) `β_i ≥ 0` on the named parameters (e.g. `Fv1`, `Fc1`, `Ke1`).
     pub fn nonnegative<S: AsRef<str>>(&mut self, names: &[S]) -> Result<&mut Self, IdentError> {
         for n in names {

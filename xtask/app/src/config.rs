@@ -278,8 +278,6 @@ pub struct SdpConfig {
     pub tolerance: f64,
     /// Solver iteration limit.
     pub max_iter: u32,
-    /// Sign constraints (70) on friction and elasticity.
-    pub nonnegative_friction: bool,
 }
 
 impl Default for SdpConfig {
@@ -292,7 +290,6 @@ impl Default for SdpConfig {
             regularisation: s.regularisation,
             tolerance: s.tolerance,
             max_iter: s.max_iter,
-            nonnegative_friction: true,
         }
     }
 }
@@ -305,14 +302,16 @@ pub struct IdentificationConfig {
     pub filtering: FilteringMode,
     /// Weighting.
     pub weighting: Weighting,
-    /// Relative rank tolerance of the base-parameter analysis.
-    pub rank_tolerance: f64,
-    /// Random workspace samples for the base-parameter analysis (58).
+    /// Quasi-random workspace samples for the base-parameter analysis (58).
     pub base_samples: usize,
     /// Rows where the joint moves slower than this (rad/s) are left out of
-    /// the fit: near rest, friction is static (stiction, creep), which
-    /// (49)'s `sign(θ̇)` does not describe. 0 keeps every row.
+    /// the fit, widened by the filter's reach: near a reversal friction is
+    /// static (stiction, creep), which (49)'s `sign(θ̇)` does not describe.
+    /// 0 keeps every row.
     pub min_speed: f64,
+    /// The exclusion around a slow row reaches as far as the zero-phase
+    /// filter's impulse response stays above this fraction of its peak.
+    pub reversal_reach: f64,
     /// The SDP.
     pub sdp: SdpConfig,
 }
@@ -322,9 +321,9 @@ impl Default for IdentificationConfig {
         Self {
             filtering: FilteringMode::Parallel,
             weighting: Weighting::Ols,
-            rank_tolerance: aras_ident::DEFAULT_RANK_TOLERANCE,
-            base_samples: 2000,
-            min_speed: 0.1,
+            base_samples: 400,
+            min_speed: 0.2,
+            reversal_reach: 1e-3,
             sdp: SdpConfig::default(),
         }
     }
@@ -346,6 +345,10 @@ pub struct ValidationConfig {
     pub pd_seed: u64,
     /// Heat-map resolution `[φ, γ]` (cells).
     pub heatmap: [usize; 2],
+    /// Reach of the reversal exclusion for the "kept rows" fitness of the
+    /// cross-validation (fraction of the filter's peak; only its main lobe
+    /// by default, since at 2.5 Hz the joints reverse every 0.2 s).
+    pub reversal_reach: f64,
 }
 
 impl Default for ValidationConfig {
@@ -357,6 +360,7 @@ impl Default for ValidationConfig {
             pd_random: 100_000,
             pd_seed: 0,
             heatmap: [56, 41],
+            reversal_reach: 0.5,
         }
     }
 }
@@ -525,6 +529,16 @@ impl Config {
                 bad(k, format!("must be a finite number ≥ 0, found {v}"))
             }
         };
+        let fraction = |k: &str, v: f64| -> Result<(), (String, String)> {
+            if v.is_finite() && v > 0.0 && v < 1.0 {
+                Ok(())
+            } else {
+                bad(
+                    k,
+                    format!("must be a fraction in (0, 1) of the filter's peak response, found {v}"),
+                )
+            }
+        };
         let r = &self.robot;
         if r.params.trim().is_empty() {
             return bad(
@@ -641,19 +655,14 @@ impl Config {
             );
         }
         let i = &self.identification;
-        if !(i.rank_tolerance > 0.0 && i.rank_tolerance < 1.0) {
-            return bad(
-                "identification.rank_tolerance",
-                format!("must lie in (0, 1), found {}", i.rank_tolerance),
-            );
-        }
         if i.base_samples < 100 {
             return bad(
                 "identification.base_samples",
-                "use at least 100 random samples (default 2000)".into(),
+                "use at least 100 quasi-random samples (default 400)".into(),
             );
         }
         nonneg("identification.min_speed", i.min_speed)?;
+        fraction("identification.reversal_reach", i.reversal_reach)?;
         let d = &i.sdp;
         nonneg("identification.sdp.epsilon", d.epsilon)?;
         if !(d.mass_tolerance.is_finite() && d.mass_tolerance >= 0.0 && d.mass_tolerance < 1.0) {
@@ -704,6 +713,7 @@ impl Config {
                 "the PD check needs points: pd_grid ≥ 2 or pd_random > 0".into(),
             );
         }
+        fraction("validation.reversal_reach", v.reversal_reach)?;
         if v.heatmap.iter().any(|&n| !(2..=400).contains(&n)) {
             return bad(
                 "validation.heatmap",

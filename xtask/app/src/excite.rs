@@ -3,14 +3,14 @@
 
 use anyhow::{Context, Result};
 use aras_dyn::Params;
-use aras_excite::{Criterion, Design, DesignSettings, Limits};
+use aras_excite::{Criterion, Design, DesignSettings, DynRegressor, Limits};
 use aras_ident::BaseParameters;
+use aras_ident::robot::base_projection;
 use aras_kin::Workspace;
 use nalgebra::Vector2;
 
 use crate::config::{Config, CriterionChoice};
-use crate::identify::projection;
-use crate::robot::{ModelRegressor, paper_model};
+use crate::robot::paper_model;
 
 /// The design's settings from the configuration.
 pub fn settings(cfg: &Config, nominal: &Params) -> Result<DesignSettings> {
@@ -44,11 +44,8 @@ pub fn settings(cfg: &Config, nominal: &Params) -> Result<DesignSettings> {
 
 /// Designs the excitation for the nominal robot's paper model.
 pub fn design(cfg: &Config, nominal: &Params, base: &BaseParameters) -> Result<Design> {
-    let reg = ModelRegressor {
-        model: paper_model(nominal)?,
-        geometry: nominal.geometry()?,
-    };
+    let reg = DynRegressor::new(paper_model(nominal)?, nominal.geometry()?);
     let settings = settings(cfg, nominal)?;
-    aras_excite::design(&reg, &projection(base), &settings)
+    aras_excite::design(&reg, &base_projection(base), &settings)
         .context("designing the excitation trajectory")
 }

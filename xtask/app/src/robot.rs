@@ -1,15 +1,14 @@
-//! The robot as the configuration describes it, and the two small adapters
-//! that connect the library crates: `aras-dyn`'s [`Model`] as the design's
-//! [`aras_excite::Regressor`], and a [`FourierTrajectory`] as the
-//! simulator's [`Trajectory`].
+//! The robot as the configuration describes it. The adapters between the
+//! library crates live in them: `aras_excite::DynRegressor` (the model as
+//! the design's regressor), `aras_excite::FourierTrajectory` implements
+//! `aras_dyn::Trajectory`, and `aras_ident::robot` stacks, filters and
+//! builds the physically consistent problem.
 
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use aras_dyn::{Model, Params, Trajectory};
-use aras_excite::FourierTrajectory;
-use aras_kin::{Geometry, Scalar, evaluate};
-use nalgebra::{Vector2, Vector3};
+use aras_dyn::{Model, Params};
+use nalgebra::Vector3;
 
 use crate::config::RobotConfig;
 
@@ -45,45 +44,4 @@ pub fn load_params(spec: &str, dir: &Path) -> Result<Params> {
 /// the robot's gravity: what is identified.
 pub fn paper_model(p: &Params) -> Result<Model> {
     Model::paper(p.gravity).context("building the paper's model")
-}
-
-/// `aras-dyn`'s regressor through `aras-kin`'s kinematics, for the design.
-pub struct ModelRegressor {
-    /// The model.
-    pub model: Model,
-    /// Its geometry.
-    pub geometry: Geometry,
-}
-
-impl aras_excite::Regressor for ModelRegressor {
-    type Error = aras_dyn::DynError;
-
-    fn columns(&self) -> usize {
-        self.model.columns()
-    }
-
-    fn fill<T: Scalar>(
-        &self,
-        x: &Vector2<T>,
-        x_dot: &Vector2<T>,
-        x_ddot: &Vector2<T>,
-        rows: &mut [T],
-    ) -> Result<(), Self::Error> {
-        let s = evaluate(&self.geometry, x, x_dot, x_ddot)?;
-        self.model.fill(&s, rows)
-    }
-}
-
-/// A Fourier excitation as a desired trajectory of the simulator.
-pub struct FourierPath<'a>(pub &'a FourierTrajectory);
-
-impl Trajectory for FourierPath<'_> {
-    fn eval(&self, t: f64) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>) {
-        let s = self.0.eval(t);
-        (s.x, s.x_dot, s.x_ddot)
-    }
-
-    fn period(&self) -> Option<f64> {
-        Some(self.0.period())
-    }
 }

@@ -29,6 +29,11 @@ pub struct Fitness {
     pub ols: [f64; 2],
     /// Physically consistent (SDP), `[τ1, τ2]` (%).
     pub sdp: [f64; 2],
+    /// OLS on the rows away from velocity reversals (the rows the fit
+    /// uses), `[τ1, τ2]` (%).
+    pub ols_kept: [f64; 2],
+    /// SDP on the rows away from velocity reversals (%).
+    pub sdp_kept: [f64; 2],
     /// The paper's value for this dataset, when published (%).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub paper: Option<[f64; 2]>,
@@ -130,6 +135,8 @@ pub fn fitness_list(
         frequency_hz: None,
         ols: id.fitness_ols,
         sdp: id.fitness_sdp,
+        ols_kept: id.fitness_ols_kept,
+        sdp_kept: id.fitness_sdp_kept,
         paper: excitation_paper.then_some(crate::paper::EXCITATION_FITNESS),
     }];
     for x in xv {
@@ -138,6 +145,8 @@ pub fn fitness_list(
             frequency_hz: Some(x.frequency_hz),
             ols: x.fitness[0],
             sdp: x.fitness[1],
+            ols_kept: x.fitness_kept[0],
+            sdp_kept: x.fitness_kept[1],
             paper: crate::paper::table2(x.frequency_hz),
         });
     }

@@ -8,6 +8,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use aras_dyn::{Dynamics, Model, Params, Sinusoid};
 use aras_ident::BaseParameters;
+use aras_ident::robot::{Stacked, keep_rows};
 use aras_ident::validate::{PdRegion, check_positive_definite};
 use aras_signal::{ReadOptions, read_log};
 use nalgebra::Vector2;
@@ -22,8 +23,12 @@ use crate::simulate;
 pub struct CrossValidation {
     /// Frequency of (79) (Hz).
     pub frequency_hz: f64,
-    /// Fitness (78) per joint for each candidate, in the order given.
+    /// Fitness (78) per joint for each candidate, in the order given, on
+    /// every sample.
     pub fitness: Vec<[f64; 2]>,
+    /// The same on the rows away from velocity reversals
+    /// (`identification.min_speed`, `validation.reversal_reach`).
+    pub fitness_kept: Vec<[f64; 2]>,
     /// Time, measured and predicted torques of one averaged period, for plots.
     #[serde(skip)]
     pub traces: Traces,
@@ -43,6 +48,13 @@ pub struct Traces {
 /// `W β` for a standard parameter vector.
 pub fn predict_standard(prep: &Prepared, beta: &[f64]) -> Result<Vec<f64>> {
     Ok(aras_ident::validate::predict(prep.w_ref(), beta)?)
+}
+
+/// Fitness (78) per joint of a standard parameter vector on the rows of `st`.
+fn fitness_standard(st: &Stacked, beta: &[f64]) -> Result<[f64; 2]> {
+    let p = aras_ident::validate::predict(st.w.as_ref(), beta)?;
+    let f = aras_ident::validate::fitness_per_group(&st.t, &p, &st.groups)?;
+    Ok([f[0], f[1]])
 }
 
 /// Simulates the truth robot along (79) at each configured frequency with
@@ -72,28 +84,28 @@ pub fn cross_validate(
         let path = dir.join(format!("xv_{f}hz.csv"));
         aras_dyn::sim::write_log(&path, &log, true)?;
         let read = read_log(&path, &ReadOptions::default())?;
-        // Period averaging needs a whole number of samples per period
-        // (0.7 Hz at 1 kHz has 1428.57): otherwise the whole record is
-        // filtered and differentiated as it is.
-        let per_period = cfg.simulation.rate_hz / f;
-        let mut opts = process_options(cfg, None, false);
-        if (per_period - per_period.round()).abs() > 1e-6 * per_period {
-            opts.period = aras_signal::PeriodSource::Off;
-        }
+        // Averaged over whole blocks of periods (aras-signal: 7 periods of
+        // 0.7 Hz at 1 kHz), the period coming from the sidecar.
+        let opts = process_options(cfg, None, false);
         let prep = prepare(&read, &opts, cfg.identification.filtering, model, &geometry)?;
+        let keep = prep.keep_mask(cfg.identification.min_speed, cfg.validation.reversal_reach)?;
+        let kept = keep_rows(&prep.stacked, &keep)?;
         let mut fitness = Vec::new();
+        let mut fitness_kept = Vec::new();
         let mut predicted = Vec::new();
         for beta in candidates {
             let p = predict_standard(&prep, beta)?;
-            fitness.push(fitness_per_joint(&prep.t, &p)?);
+            fitness.push(fitness_per_joint(prep.t(), &p)?);
+            fitness_kept.push(fitness_standard(&kept, beta)?);
             predicted.push(p);
         }
         out.push(CrossValidation {
             frequency_hz: f,
             fitness,
+            fitness_kept,
             traces: Traces {
                 t: prep.processed.samples.t.clone(),
-                measured: prep.t.clone(),
+                measured: prep.t().to_vec(),
                 predicted,
             },
         });

@@ -174,7 +174,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         design: input.design,
         processing: &prepared.processed.summary,
         t: &prepared.processed.samples.t,
-        measured: &prepared.t,
+        measured: prepared.t(),
         id: &id,
         fitness: &fitness,
         xv: &xv,

@@ -8,7 +8,7 @@ use crate::cmd::fit::{self, FitInput};
 use crate::config::Config;
 use crate::identify::base_parameters;
 use crate::output::OutDir;
-use crate::robot::{FourierPath, nominal, paper_model};
+use crate::robot::{nominal, paper_model};
 use crate::simulate::{run_and_write, sim_config, truth};
 use crate::stages::Stages;
 
@@ -49,7 +49,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
     let noise = sim.sensors.torque_noise_std();
     let csv = out.path("log.csv");
     stages.run("simulate robot", |_| {
-        run_and_write(&truth, &FourierPath(&design.trajectory), &sim, &csv)
+        run_and_write(&truth, &design.trajectory, &sim, &csv)
     })?;
     let log = stages
         .run("read log", |_| read_log(&csv, &ReadOptions::default()))

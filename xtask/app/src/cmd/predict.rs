@@ -8,7 +8,7 @@ use aras_signal::read_log;
 
 use crate::cli::PredictArgs;
 use crate::cmd::identify::read_options;
-use crate::identify::{fitness_per_joint, prepare, process_options, stacked};
+use crate::identify::{fitness_per_joint, prepare, process_options};
 use crate::output::write_atomic;
 use crate::validate::predict_standard;
 
@@ -33,9 +33,11 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         opts.period = aras_signal::PeriodSource::Off;
     }
     let prep = prepare(&log, &opts, cfg.identification.filtering, &model, &geometry)?;
-    let fit = fitness_per_joint(&prep.t, &predict_standard(&prep, &beta)?)?;
-    let raw = stacked(&model, &geometry, &prep.processed.samples)?;
-    let tau = aras_ident::validate::predict(crate::identify::mat_ref(&raw), &beta)?;
+    let fit = fitness_per_joint(prep.t(), &predict_standard(&prep, &beta)?)?;
+    // The model torque itself: the regressor of the processed samples,
+    // unfiltered.
+    let raw = aras_ident::robot::stack(&model, &geometry, &prep.processed.samples)?;
+    let tau = aras_ident::validate::predict(raw.w.as_ref(), &beta)?;
     let n = prep.n();
     let mut csv = String::with_capacity(n * 48);
     csv.push_str("t,tau1,tau2\n");

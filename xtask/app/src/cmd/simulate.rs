@@ -5,7 +5,7 @@ use aras_dyn::Sinusoid;
 use aras_excite::FourierTrajectory;
 
 use crate::cli::SimulateArgs;
-use crate::robot::{FourierPath, nominal};
+use crate::robot::{nominal};
 use crate::simulate::{run_and_write, sim_config, truth};
 use crate::stages::Stages;
 
@@ -27,7 +27,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
                 .with_context(|| format!("reading the trajectory {}", path.display()))?;
             let sim = sim_config(&cfg, &nominal, periods * tr.period(), cfg.simulation.seed);
             stages.run("simulate robot", |_| {
-                run_and_write(&truth, &FourierPath(&tr), &sim, &args.out)
+                run_and_write(&truth, &tr, &sim, &args.out)
             })?
         }
         (None, Some(f)) => {
