@@ -213,7 +213,10 @@ mod tests {
             })
             .collect();
         let avg = average_periods(&[&noisy], 0.001, per as f64 * 0.001, 0.0).unwrap();
-        assert_eq!((avg.blocks, avg.periods_per_block, avg.tail), (periods, 1, 0));
+        assert_eq!(
+            (avg.blocks, avg.periods_per_block, avg.tail),
+            (periods, 1, 0)
+        );
         let resid: f64 = avg.channels[0]
             .iter()
             .zip(&clean)
@@ -244,7 +247,10 @@ mod tests {
         // 100.3 samples a period: 10 periods (1003 samples) are the first
         // whole block; 900 samples hold none, 1050 hold one.
         let b = average_periods(&[&x], 0.01, 1.003, 0.0).unwrap();
-        assert_eq!((b.periods_per_block, b.samples_per_block, b.blocks), (10, 1003, 1));
+        assert_eq!(
+            (b.periods_per_block, b.samples_per_block, b.blocks),
+            (10, 1003, 1)
+        );
         assert!(matches!(
             average_periods(&[&x[..900]], 0.01, 1.003, 0.0),
             Err(ProcessError::PeriodNotWhole { .. })

@@ -535,7 +535,9 @@ impl Config {
             } else {
                 bad(
                     k,
-                    format!("must be a fraction in (0, 1) of the filter's peak response, found {v}"),
+                    format!(
+                        "must be a fraction in (0, 1) of the filter's peak response, found {v}"
+                    ),
                 )
             }
         };

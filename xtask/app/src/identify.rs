@@ -18,7 +18,9 @@ use aras_ident::robot::{
     params_from_solution, reversal_mask, stack,
 };
 use aras_ident::validate::{fitness_per_group, predict};
-use aras_ident::{BaseParameters, NoiseVariances, OlsEstimate, ReducedLs, SdpSettings, SdpSolution};
+use aras_ident::{
+    BaseParameters, NoiseVariances, OlsEstimate, ReducedLs, SdpSettings, SdpSolution,
+};
 use aras_kin::{Geometry, Workspace};
 use aras_signal::{
     Butterworth, DerivativeMethod, FilterSpec, Log, PeriodSource, ProcessOptions, Processed, Sos,

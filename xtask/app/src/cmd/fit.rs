@@ -197,7 +197,8 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
 /// The short terminal table: paper vs ours.
 pub fn terminal_table(s: &Summary) -> String {
     let mut t = String::from(
-        "dataset          paper τ1  ours τ1 (OLS/SDP)   paper τ2  ours τ2 (OLS/SDP)\n",
+        "fitness (78) %, all rows; kept: OLS on the rows away from velocity reversals\n\
+         dataset          paper τ1  ours τ1 (OLS/SDP)   paper τ2  ours τ2 (OLS/SDP)   kept τ1/τ2\n",
     );
     for f in &s.fitness {
         let p = |j: usize| {
@@ -205,14 +206,16 @@ pub fn terminal_table(s: &Summary) -> String {
                 .map_or("    –".to_string(), |p| format!("{:5.1}", p[j]))
         };
         t += &format!(
-            "{:<16} {:>8}  {:6.2} / {:6.2}     {:>8}  {:6.2} / {:6.2}\n",
+            "{:<16} {:>8}  {:6.2} / {:6.2}     {:>8}  {:6.2} / {:6.2}     {:6.2} / {:6.2}\n",
             f.dataset,
             p(0),
             f.ols[0],
             f.sdp[0],
             p(1),
             f.ols[1],
-            f.sdp[1]
+            f.sdp[1],
+            f.ols_kept[0],
+            f.ols_kept[1]
         );
     }
     t += &format!("base parameters: {}", s.base_parameters);

@@ -5,7 +5,7 @@ use aras_dyn::Sinusoid;
 use aras_excite::FourierTrajectory;
 
 use crate::cli::SimulateArgs;
-use crate::robot::{nominal};
+use crate::robot::nominal;
 use crate::simulate::{run_and_write, sim_config, truth};
 use crate::stages::Stages;
 
