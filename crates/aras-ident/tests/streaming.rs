@@ -216,7 +216,6 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
         .unwrap();
     let run = |chunk: usize| {
         let mut stage = RegressorStage::new(&r.model, &r.geo, &r.base).unwrap();
-        let mut acc = stage.accumulator();
         for c0 in (0..n).step_by(chunk) {
             let c1 = (c0 + chunk).min(n);
             let states = States {
@@ -225,10 +224,10 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
                 x_ddot: [&s[2][0][c0..c1], &s[2][1][c0..c1]],
                 tau: [&s[3][0][c0..c1], &s[3][1][c0..c1]],
             };
-            stage.push(&states, &mut acc).unwrap();
+            stage.push(&states).unwrap();
         }
         assert_eq!(stage.samples(), n);
-        acc.ols().unwrap()
+        stage.accumulator().ols().unwrap()
     };
     let a = run(7000);
     // Different row order and blocking than in memory: rounding only. The
@@ -258,7 +257,6 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
 fn regressor_stage_names_the_failing_sample() {
     let r = robot();
     let mut stage = RegressorStage::new(&r.model, &r.geo, &r.base).unwrap();
-    let mut acc = stage.accumulator();
     let s = synthetic::states(&r.model, &r.geo, &r.beta, 3000, 1000.0, 0.0).unwrap();
     let mut gamma = s[0][1].clone();
     gamma[2500] = 0.0; // γ = 0 is a singularity
@@ -268,16 +266,16 @@ fn regressor_stage_names_the_failing_sample() {
         x_ddot: [&s[2][0], &s[2][1]],
         tau: [&s[3][0], &s[3][1]],
     };
-    let e = stage.push(&states, &mut acc).unwrap_err().to_string();
+    let e = stage.push(&states).unwrap_err().to_string();
     assert!(e.contains("sample 2500"), "{e}");
-    assert_eq!(acc.rows(), 0, "nothing of a failing push is accumulated");
+    assert_eq!(stage.accumulator().rows(), 0, "nothing of a failing push is accumulated");
     let short = States {
         tau: [&s[3][0][..10], &s[3][1]],
         ..states
     };
     assert!(
         stage
-            .push(&short, &mut acc)
+            .push(&short)
             .unwrap_err()
             .to_string()
             .contains("tau1")

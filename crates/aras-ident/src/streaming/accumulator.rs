@@ -421,25 +421,56 @@ impl BlockQr {
         refill: F,
     ) -> MatRef<'_, f64> {
         let cols = self.a.ncols();
-        let k = rows.min(cols);
         self.r.fill(0.0);
+        // Columns that are exactly zero in this block (e.g. joint 2's
+        // friction in joint 1's rows) are left out of faer's QR, which
+        // would otherwise report a rank deficiency and force the slow
+        // path; they contribute nothing to `AᵀA`.
+        let mut keep = [0usize; 64];
+        let mut kc = 0;
+        if cols <= keep.len() {
+            for j in 0..cols {
+                if self.a.as_ref().col(j).subrows(0, rows).iter().any(|&v| v != 0.0) {
+                    keep[kc] = j;
+                    kc += 1;
+                }
+            }
+        } else {
+            kc = cols;
+        }
+        let compact = kc < cols;
+        if compact {
+            for p in 0..kc {
+                if keep[p] != p {
+                    let (src, dst) = (keep[p], p);
+                    for i in 0..rows {
+                        self.a[(i, dst)] = self.a[(i, src)];
+                    }
+                }
+            }
+        }
+        let k = rows.min(kc);
         if k == 0 {
             return self.r.as_ref();
         }
         let info = qr_in_place(
-            self.a.as_mut().submatrix_mut(0, 0, rows, cols),
+            self.a.as_mut().submatrix_mut(0, 0, rows, kc),
             self.h.as_mut().submatrix_mut(0, 0, self.bs, k),
             Par::Seq,
             MemStack::new(&mut self.mem),
             Default::default(),
         );
         if info.rank == k {
-            for j in 0..cols {
-                for i in 0..=j.min(k - 1) {
-                    self.r[(i, j)] = self.a[(i, j)];
+            for q in 0..kc {
+                for p in 0..=q.min(k - 1) {
+                    let (i, j) = if compact { (keep[p], keep[q]) } else { (p, q) };
+                    self.r[(i, j)] = self.a[(p, q)];
                 }
             }
-        } else {
+            return self.r.as_ref();
+        }
+        let k = rows.min(cols);
+        {
             refill(self.a.as_mut().submatrix_mut(0, 0, rows, cols));
             let mut data = Vec::with_capacity(rows * cols);
             for j in 0..cols {

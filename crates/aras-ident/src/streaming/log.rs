@@ -150,7 +150,7 @@ pub fn identify_log(
     let name = path.display().to_string();
     let mut reader = LogReader::open(path, &options.read).map_err(|e| sig("opening the log", e))?;
     let mut stage = RegressorStage::new(model, &options.geometry, base)?;
-    let mut acc = stage.accumulator();
+    let mut acc = QrAccumulator::new(&stage.names().to_vec(), 2)?;
     let period = match options.process.period {
         PeriodSource::FromSidecar => reader.sidecar().excitation.period_s,
         PeriodSource::Seconds(p) => Some(p),
@@ -210,7 +210,7 @@ pub fn identify_log(
                 x_ddot: [&xdd[0], &xdd[1]],
                 tau: [&chunk.tau[0], &chunk.tau[1]],
             };
-            stage.push(&states, &mut acc)?;
+            stage.push(&states)?;
             out.read += n;
             out.used += n;
             out.blocks += 1;
@@ -303,6 +303,9 @@ pub fn identify_log(
             buf_start += drop;
         }
         out.overlap = margin;
+    }
+    if route == StreamingRoute::LoggedDerivatives {
+        acc = stage.accumulator();
     }
     let report = reader.finish().map_err(|e| sig("checking the log", e))?;
     let reduced = acc.reduced()?;

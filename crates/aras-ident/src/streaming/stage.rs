@@ -67,8 +67,14 @@ impl States<'_> {
     }
 }
 
-/// One worker's storage: a block per joint, the per-sample regressor
-/// buffer, and the block's two factors.
+/// Independent accumulation lanes: block `i` of a push goes to lane
+/// `i % LANES`. A constant (not the thread count) so results never depend
+/// on the machine.
+const LANES: usize = 4;
+
+/// One lane's storage: a block per joint (its running factor in the top
+/// `b+1` rows, the new samples below), the per-sample regressor buffer,
+/// the lane's running factors and row count.
 struct Work {
     qr: [BlockQr; 2],
     y: Vec<f64>,
@@ -81,13 +87,17 @@ struct Work {
 /// accumulates `[W_b | T]` into a [`QrAccumulator`] (two row groups: joint 1,
 /// joint 2), the per-sample work of streaming identification.
 ///
+/// Each lane keeps its own running factor and factorises
+/// `[R_lane; new rows]` in one blocked QR, so after the first block the
+/// matrix has full rank and faer's fast QR never has to fall back.
+///
 /// Per sample: `aras_kin::evaluate` (kinematics (1)–(25)), `Model::fill`
 /// (regressor (45)–(53), into a reused buffer), the base columns `W_b = W E`
 /// (61) copied into the joint's block. Per block of
 /// [`STAGE_BLOCK_SAMPLES`]: faer's blocked QR of each joint's block. Blocks
-/// run in parallel (rayon) in waves of one block per worker; their factors
-/// are merged into the accumulator in sample order, so the result does not
-/// depend on the number of threads (bit-identical).
+/// run in parallel (rayon) in waves of one block per lane; lanes are merged
+/// in a fixed order by [`RegressorStage::accumulator`], so the result does
+/// not depend on the number of threads (bit-identical).
 ///
 /// Rows are the regressor *unfiltered*; streaming with the parallel filter
 /// is done by [`super::identify_log`], which filters blocks with overlap
@@ -117,13 +127,12 @@ impl RegressorStage {
                 hint: "find the base parameters on this model's regressor (same effects, same order)",
             });
         }
-        let workers = rayon::current_num_threads().max(1);
         let b = base.n_base();
-        let works = (0..workers)
+        let works = (0..LANES)
             .map(|_| Work {
                 qr: [
-                    BlockQr::new(STAGE_BLOCK_SAMPLES, b + 1),
-                    BlockQr::new(STAGE_BLOCK_SAMPLES, b + 1),
+                    BlockQr::new(STAGE_BLOCK_SAMPLES + b + 1, b + 1),
+                    BlockQr::new(STAGE_BLOCK_SAMPLES + b + 1, b + 1),
                 ],
                 y: vec![0.0; 2 * model.columns()],
                 r: [Mat::zeros(b + 1, b + 1), Mat::zeros(b + 1, b + 1)],
@@ -141,10 +150,18 @@ impl RegressorStage {
         })
     }
 
-    /// An empty accumulator for this stage's base parameters, one row group
-    /// per joint.
+    /// Everything pushed so far as an accumulator over this stage's base
+    /// parameters, one row group per joint (the lanes merged in order).
     pub fn accumulator(&self) -> QrAccumulator {
-        QrAccumulator::new(&self.names, 2).expect("a base analysis has at least one parameter")
+        let mut acc =
+            QrAccumulator::new(&self.names, 2).expect("a base analysis has at least one parameter");
+        for w in &self.works {
+            if w.rows > 0 {
+                acc.merge_factor(0, w.r[0].as_ref(), w.rows);
+                acc.merge_factor(1, w.r[1].as_ref(), w.rows);
+            }
+        }
+        acc
     }
 
     /// Base parameter names (the accumulator's unknowns).
@@ -158,45 +175,34 @@ impl RegressorStage {
         self.samples
     }
 
-    /// Accumulates `states` into `acc` (made by [`Self::accumulator`]).
-    /// Fails on the first sample (in order) whose kinematics fail (outside
-    /// the workspace, singular) or whose torque is not finite; nothing of a
-    /// failing call is accumulated.
-    pub fn push(&mut self, states: &States<'_>, acc: &mut QrAccumulator) -> Result<(), IdentError> {
+    /// Accumulates `states` (the next samples). Fails on the first sample
+    /// (in order) whose kinematics fail (outside the workspace, singular)
+    /// or whose torque is not finite; nothing of a failing call is
+    /// accumulated.
+    pub fn push(&mut self, states: &States<'_>) -> Result<(), IdentError> {
         states.check()?;
-        if acc.names() != self.names.as_slice() || acc.n_groups() != 2 {
-            return Err(IdentError::DimensionMismatch {
-                what: "accumulator (unknowns)",
-                expected: self.names.len(),
-                found: acc.names().len(),
-                hint: "use the accumulator made by RegressorStage::accumulator",
-            });
-        }
         let n = states.len();
         let starts: Vec<usize> = (0..n).step_by(STAGE_BLOCK_SAMPLES).collect();
-        let workers = self.works.len();
-        let mut pending: Vec<([Mat<f64>; 2], usize)> = Vec::new();
+        let saved: Vec<([Mat<f64>; 2], usize)> =
+            self.works.iter().map(|w| (w.r.clone(), w.rows)).collect();
         let (model, geometry, columns) = (&self.model, &self.geometry, &self.columns[..]);
         let offset = self.samples;
-        for wave in starts.chunks(workers) {
+        for wave in starts.chunks(LANES) {
             self.works[..wave.len()]
                 .par_iter_mut()
                 .zip(wave.par_iter())
                 .for_each(|(w, &s)| {
                     let rows = STAGE_BLOCK_SAMPLES.min(n - s);
-                    w.rows = rows;
                     w.error = run_block(w, model, geometry, columns, states, s, rows, offset).err();
                 });
-            for w in self.works.iter_mut().take(wave.len()) {
-                if let Some(e) = w.error.take() {
-                    return Err(e);
+            if let Some(e) = self.works.iter_mut().find_map(|w| w.error.take()) {
+                for (w, (r, rows)) in self.works.iter_mut().zip(saved) {
+                    w.r = r;
+                    w.rows = rows;
+                    w.error = None;
                 }
-                pending.push((w.r.clone(), w.rows));
+                return Err(e);
             }
-        }
-        for (r, rows) in &pending {
-            acc.merge_factor(0, r[0].as_ref(), *rows);
-            acc.merge_factor(1, r[1].as_ref(), *rows);
         }
         self.samples += n;
         Ok(())
@@ -215,38 +221,45 @@ fn run_block(
     offset: usize,
 ) -> Result<(), IdentError> {
     let b = columns.len();
+    let c = b + 1;
     {
         let (q0, q1) = w.qr.split_at_mut(1);
         let mut a0 = q0[0].block_mut();
         let mut a1 = q1[0].block_mut();
+        a0.as_mut().subrows_mut(0, c).copy_from(&w.r[0]);
+        a1.as_mut().subrows_mut(0, c).copy_from(&w.r[1]);
         for i in 0..rows {
             let k = start + i;
             fill_sample(model, geometry, st, k, offset, &mut w.y)?;
-            for (jb, &c) in columns.iter().enumerate() {
-                a0[(i, jb)] = w.y[2 * c];
-                a1[(i, jb)] = w.y[2 * c + 1];
+            for (jb, &col) in columns.iter().enumerate() {
+                a0[(c + i, jb)] = w.y[2 * col];
+                a1[(c + i, jb)] = w.y[2 * col + 1];
             }
-            a0[(i, b)] = st.tau[0][k];
-            a1[(i, b)] = st.tau[1][k];
+            a0[(c + i, b)] = st.tau[0][k];
+            a1[(c + i, b)] = st.tau[1][k];
         }
     }
     for j in 0..2 {
+        let lane = &w.r[j];
         let refill = |mut a: MatMut<'_, f64>| {
-            // Rare path (a rank-deficient block): recompute the rows.
+            // Rare path (the lane's first blocks, or data that do not
+            // excite every base parameter yet): recompute the rows.
+            a.as_mut().subrows_mut(0, c).copy_from(lane);
             let mut y = vec![0.0; 2 * model.columns()];
             for i in 0..rows {
                 let k = start + i;
                 if fill_sample(model, geometry, st, k, offset, &mut y).is_ok() {
-                    for (jb, &c) in columns.iter().enumerate() {
-                        a[(i, jb)] = y[2 * c + j];
+                    for (jb, &col) in columns.iter().enumerate() {
+                        a[(c + i, jb)] = y[2 * col + j];
                     }
                 }
-                a[(i, b)] = st.tau[j][k];
+                a[(c + i, b)] = st.tau[j][k];
             }
         };
-        let r = w.qr[j].factor_filled(rows, refill);
-        w.r[j].copy_from(r);
+        let r = w.qr[j].factor_filled(c + rows, refill).to_owned();
+        w.r[j].copy_from(&r);
     }
+    w.rows += rows;
     for j in 0..2 {
         let r = &w.r[j];
         for c in 0..=b {
