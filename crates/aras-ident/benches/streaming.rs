@@ -1,5 +1,6 @@
 //! Throughput of the streaming regressor + accumulation stage (issue 9:
 //! target ≥ 5 M samples/s on this machine), and its parts.
+#![allow(clippy::needless_range_loop)]
 
 use aras_dyn::Params;
 use aras_ident::BaseParameters;

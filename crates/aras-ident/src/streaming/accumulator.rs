@@ -430,7 +430,14 @@ impl BlockQr {
         let mut kc = 0;
         if cols <= keep.len() {
             for j in 0..cols {
-                if self.a.as_ref().col(j).subrows(0, rows).iter().any(|&v| v != 0.0) {
+                if self
+                    .a
+                    .as_ref()
+                    .col(j)
+                    .subrows(0, rows)
+                    .iter()
+                    .any(|&v| v != 0.0)
+                {
                     keep[kc] = j;
                     kc += 1;
                 }

@@ -150,7 +150,7 @@ pub fn identify_log(
     let name = path.display().to_string();
     let mut reader = LogReader::open(path, &options.read).map_err(|e| sig("opening the log", e))?;
     let mut stage = RegressorStage::new(model, &options.geometry, base)?;
-    let mut acc = QrAccumulator::new(&stage.names().to_vec(), 2)?;
+    let mut acc = QrAccumulator::new(stage.names(), 2)?;
     let period = match options.process.period {
         PeriodSource::FromSidecar => reader.sidecar().excitation.period_s,
         PeriodSource::Seconds(p) => Some(p),

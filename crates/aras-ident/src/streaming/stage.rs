@@ -209,7 +209,9 @@ impl RegressorStage {
     }
 }
 
-/// Fills and factorises one block of `rows` samples starting at `start`.
+/// Fills and factorises one block of `rows` samples starting at `start`
+/// (`offset`: samples pushed before, for messages).
+#[allow(clippy::too_many_arguments)]
 fn run_block(
     w: &mut Work,
     model: &Model,
