@@ -228,3 +228,20 @@ fn parallel_filtering_keeps_the_fit_torque_only_does_not() {
     assert!(fits[0].iter().all(|f| *f > 99.99), "{fits:?}");
     assert!(fits[1].iter().any(|f| *f < fits[0][0] - 0.1), "{fits:?}");
 }
+
+#[test]
+fn mass_tolerance_sets_every_links_bounds_and_rejects_bad_fractions() {
+    let p = Params::aras_diamond();
+    let model = p.model().unwrap();
+    let mut problem = consistent_problem(&model, &p).unwrap();
+    problem.mass_tolerance(0.05).unwrap();
+    for (l, link) in problem.links().iter().zip(&p.links) {
+        // Exact products of the reference mass: only rounding of (1 ± 0.05)·m.
+        assert!((l.mass_bounds.0 - 0.95 * link.mass).abs() <= 1e-15 * link.mass);
+        assert!((l.mass_bounds.1 - 1.05 * link.mass).abs() <= 1e-15 * link.mass);
+    }
+    for bad in [-0.1, 1.0, f64::NAN] {
+        let e = problem.mass_tolerance(bad).unwrap_err().to_string();
+        assert!(e.contains("mass tolerance"), "{e}");
+    }
+}
