@@ -120,7 +120,10 @@ fn show(tag: &str, d: &Diagnosis) {
         }
     }
     for s in &d.steps {
-        eprintln!("  added {} aliases {:?} {:?}", s.label, s.aliases, s.parameters);
+        eprintln!(
+            "  added {} aliases {:?} {:?}",
+            s.label, s.aliases, s.parameters
+        );
     }
     for a in d.after.iter() {
         for w in &a.whiteness {
@@ -180,7 +183,10 @@ fn hidden(id: &str) -> (Params, usize) {
 fn named_first(id: &str, gain: f64) {
     let (p, delay) = hidden(id);
     let d = run(&p, delay, id);
-    let s = d.steps.first().unwrap_or_else(|| panic!("{id}: nothing found"));
+    let s = d
+        .steps
+        .first()
+        .unwrap_or_else(|| panic!("{id}: nothing found"));
     assert!(
         s.id == id || s.aliases.iter().any(|a| a == id),
         "{id}: first step is {} (aliases {:?})",
