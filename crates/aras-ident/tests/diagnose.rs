@@ -250,3 +250,64 @@ fn two_hidden_effects_are_both_found_and_nothing_else() {
     assert_eq!(ids, ["cogging", "quadratic_damping"], "{}", d.conclusion);
     assert!(d.noise_like, "{}", d.conclusion);
 }
+
+/// Timing (issue 8): a 160 s TRAIN log (16 periods of the excitation) and
+/// two validation logs, all 7 candidates, with one hidden effect so that
+/// two rounds run. Ignored: the simulation itself takes a few seconds.
+#[test]
+#[ignore]
+fn timing_160_s() {
+    let (p, _) = hidden("quadratic_damping");
+    let period = excitation().period();
+    let train = dataset(&p, excitation(), 16.0 * period, 0, "timing-train");
+    let vals: Vec<Dataset> = [0.5, 1.0]
+        .iter()
+        .map(|&f| {
+            let t = Sinusoid::paper_79(f).unwrap();
+            dataset(&p, &t, 10.0 / f, 0, &format!("timing-val{f}"))
+        })
+        .collect();
+    let cad = Params::aras_diamond();
+    let model = Model::paper(cad.gravity).unwrap();
+    let opts = DiagnoseOptions {
+        reference: Some(cad.clone()),
+        ..DiagnoseOptions::default()
+    };
+    let t0 = std::time::Instant::now();
+    let d = diagnose(&model, &cad.geometry().unwrap(), &train, &vals, &opts).unwrap();
+    let s = t0.elapsed().as_secs_f64();
+    eprintln!(
+        "160 s log: {s:.2} s, {} rounds, {} candidate settings per round",
+        d.rounds.len(),
+        d.rounds[0].len()
+    );
+    assert_eq!(d.steps[0].id, "quadratic_damping");
+    assert!(s <= 10.0, "{s:.2} s");
+}
+
+/// Robustness (issue 8): magnitude scans for three effects, each at a
+/// fraction of the magnitude of the acceptance tests; prints whether the
+/// effect is named first. Ignored (≈ 1 min); results in docs/diagnose.md.
+#[test]
+#[ignore]
+fn robustness_magnitudes() {
+    for id in ["torque_offset", "quadratic_damping", "stribeck_friction"] {
+        for scale in [0.05, 0.1, 0.2, 0.35, 0.5] {
+            let (mut p, _) = hidden(id);
+            let x = &mut p.extra;
+            if let Some(v) = &mut x.torque_offset {
+                v.iter_mut().for_each(|a| *a *= scale);
+            }
+            if let Some(v) = &mut x.quadratic_damping {
+                v.iter_mut().for_each(|a| *a *= scale);
+            }
+            if let Some(s) = &mut x.stribeck_friction {
+                s.level.iter_mut().for_each(|a| *a *= scale);
+            }
+            let d = run(&p, 0, &format!("robust-{id}-{scale}"));
+            let first = d.steps.first().map_or("none", |s| s.id.as_str());
+            let ok = first == id;
+            eprintln!("ROBUST {id} scale {scale}: first = {first} ({ok})");
+        }
+    }
+}
