@@ -19,6 +19,8 @@
 //! 5. [`robot`]: the adapter to the ARAS-Diamond crates (stacked regressor
 //!    from `aras-dyn` and `aras-signal`, parallel filtering, the four links'
 //!    SDP layout, results back into `aras_dyn::Params`).
+//! 6. [`streaming`]: the same least squares from logs of any length in
+//!    bounded memory (incremental QR, chunked CSV reading).
 //!
 //! ## Conventions
 //! SI units and radians throughout. A stacked regressor has one row per
@@ -35,7 +37,8 @@
 //!   PSD cones call LAPACK, provided by the system OpenBLAS through
 //!   `openblas-src` (see `docs/blas.md`).
 //! * `aras-kin`, `aras-dyn`, `aras-signal`, `nalgebra`: only in [`robot`].
-//! * `rayon`: parallel tall-skinny QR and workspace scans.
+//! * `rayon`: parallel tall-skinny QR, streaming regressor blocks and
+//!   workspace scans.
 //! * `serde`: results serialise for reports; `thiserror`: the error type.
 #![warn(missing_docs)]
 // Dense linear algebra on small fixed matrices reads best with explicit indices.
@@ -53,6 +56,7 @@ mod ls;
 mod rank;
 pub mod robot;
 mod sdp;
+pub mod streaming;
 pub mod validate;
 
 pub use base::{BaseParameters, COEFFICIENT_CLEAN, DEFAULT_RANK_TOLERANCE, RankMargin};

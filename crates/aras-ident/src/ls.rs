@@ -137,6 +137,23 @@ impl ReducedLs {
         })
     }
 
+    /// A reduced problem from an already accumulated augmented factor
+    /// `R_aug` (`(b+1) × (b+1)`, upper triangular, `R_augᵀR_aug = [W|T]ᵀ[W|T]`)
+    /// over `rows` stacked rows: the result of a streaming (incremental) QR,
+    /// see [`crate::streaming`]. The caller guarantees the shape and
+    /// finiteness (checked in debug builds).
+    pub(crate) fn from_factor(names: Vec<String>, r_aug: MatRef<'_, f64>, rows: usize) -> Self {
+        let b = names.len();
+        debug_assert_eq!((r_aug.nrows(), r_aug.ncols()), (b + 1, b + 1));
+        Self {
+            r: Mat::from_fn(b, b, |i, j| if i <= j { r_aug[(i, j)] } else { 0.0 }),
+            z: (0..b).map(|i| r_aug[(i, b)]).collect(),
+            rss: r_aug[(b, b)] * r_aug[(b, b)],
+            rows,
+            names,
+        }
+    }
+
     /// Column names (the unknowns).
     pub fn names(&self) -> &[String] {
         &self.names

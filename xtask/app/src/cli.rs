@@ -32,6 +32,26 @@ pub enum Command {
     Validate(ValidateArgs),
     /// Predict torques of a log with a parameter file → PRED.csv (t,tau1,tau2).
     Predict(PredictArgs),
+    /// Find where model and measurement disagree, name the missing effect,
+    /// add it and show the gap shrink → diagnosis.{md,html,json} (issue 8).
+    Diagnose(DiagnoseArgs),
+}
+
+/// `aras diagnose`.
+#[derive(Debug, Args)]
+pub struct DiagnoseArgs {
+    /// The training log (docs/log-format.md), e.g. the designed excitation.
+    #[arg(long, value_name = "TRAIN.csv")]
+    pub data: PathBuf,
+    /// A validation log (repeat for several; at least one).
+    #[arg(long, value_name = "VAL.csv", required = true)]
+    pub validate: Vec<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "out-diagnose", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Shared options.
+    #[command(flatten)]
+    pub common: Common,
 }
 
 /// Options every command shares.

@@ -15,6 +15,7 @@ fn main() -> ExitCode {
         Command::Identify(a) => cmd::identify::run(a),
         Command::Validate(a) => cmd::validate::run(a),
         Command::Predict(a) => cmd::predict::run(a),
+        Command::Diagnose(a) => cmd::diagnose::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

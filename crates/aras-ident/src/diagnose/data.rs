@@ -8,7 +8,7 @@ use aras_signal::{Samples, Sos};
 use faer::Mat;
 
 use crate::error::IdentError;
-use crate::robot::{FilterMode, Stacked, filter, stack};
+use crate::robot::{FilterMode, Stacked, filter, filter_reach, reversal_mask, stack};
 
 /// A processed data set: the samples as `aras_signal::process` produced
 /// them, and the zero-phase filter it applied (so every regressor column is
@@ -134,28 +134,47 @@ pub(crate) fn effect_columns(
     Ok(columns(&m, geometry, data)?.w)
 }
 
-/// Per joint, the samples used in fits: `|θ̇_j| ≥ min_speed` over the whole
-/// window `±guard` samples. Near a velocity reversal the exact `sign(θ̇)`
-/// of (49) differs from the real (smooth, possibly sticking) friction, and
-/// the zero-phase filter spreads that misfit over its impulse response.
-pub(crate) fn moving_mask(data: &Dataset, min_speed: f64, guard: usize) -> [Vec<bool>; 2] {
+/// Per joint, the samples used in fits and scores: the identification's
+/// reversal exclusion ([`reversal_mask`]) — joint `j`'s rows where
+/// `|θ̇_j| < min_speed`, widened by the zero-phase filter's reach down to
+/// `reach_tol` of its peak ([`filter_reach`]; no widening without a
+/// filter). Near a velocity reversal the exact `sign` of (49) misfits real
+/// (sticking, creeping, smooth) friction far beyond the noise, and the
+/// filter spreads that misfit over its impulse response; a candidate must
+/// not be rewarded for fitting it.
+pub(crate) fn moving_mask(
+    data: &Dataset,
+    min_speed: f64,
+    reach_tol: f64,
+) -> Result<[Vec<bool>; 2], IdentError> {
     let n = data.len();
-    std::array::from_fn(|j| {
-        let v = &data.samples.theta_dot[j];
-        let slow: Vec<bool> = v.iter().map(|x| x.abs() < min_speed).collect();
-        // Prefix counts of slow samples make each window O(1).
-        let mut pre = vec![0usize; n + 1];
-        for i in 0..n {
-            pre[i + 1] = pre[i] + slow[i] as usize;
+    let guard = match &data.filter {
+        Some(sos) => filter_reach(sos, n, data.periodic, reach_tol)?,
+        None => 0,
+    };
+    let keep = reversal_mask(&data.samples.theta_dot, min_speed, guard, data.periodic)?;
+    let mask = [keep[..n].to_vec(), keep[n..].to_vec()];
+    for (j, m) in mask.iter().enumerate() {
+        let kept = m.iter().filter(|k| **k).count();
+        if kept < MIN_ROWS {
+            return Err(IdentError::InvalidSetting {
+                name: if j == 0 {
+                    "rows of joint 1 left after the reversal exclusion"
+                } else {
+                    "rows of joint 2 left after the reversal exclusion"
+                },
+                value: kept as f64,
+                reason: "the joint is rarely faster than min_speed for a whole filter reach: \
+                         record a faster or longer motion, or lower min_speed / raise the \
+                         reach tolerance",
+            });
         }
-        (0..n)
-            .map(|i| {
-                let (lo, hi) = (i.saturating_sub(guard), (i + guard + 1).min(n));
-                pre[hi] == pre[lo]
-            })
-            .collect()
-    })
+    }
+    Ok(mask)
 }
+
+/// Fewest rows per joint a diagnosis data set must keep after the exclusion.
+const MIN_ROWS: usize = 100;
 
 /// A design ready for least squares: regressor rows and torques after the
 /// torque shift and the rest exclusion, joint 1's rows first.

@@ -15,8 +15,11 @@
 //!    regressor) and scored twice: the cross-validated fitness (78) gain per
 //!    joint on the validation data, and a nested-model F-test whose
 //!    denominator degrees of freedom are the *effective* number of
-//!    independent samples (see below). The best significant candidate is
-//!    added and the search repeats; each identifier is added at most once,
+//!    independent samples (see below); it must also gain ≥ `min_gain` points
+//!    on every validation set. The significant candidate with the lowest ΔBIC
+//!    is added (aliases listed) and the search repeats; rows near velocity
+//!    reversals are excluded exactly as in identification
+//!    (`robot::reversal_mask`); each identifier is added at most once,
 //!    so the loop ends. Finally the model is re-identified physically
 //!    consistently (SDP on the links, friction-like levels `≥ 0`).
 //!

@@ -28,25 +28,34 @@ pub struct DiagnoseOptions {
     /// Family-wise significance level of one round (default 0.01), split
     /// over the candidate settings of the round.
     pub alpha: f64,
-    /// Smallest mean validation fitness gain (percentage points of (78),
-    /// averaged over joints and validation sets) a candidate must bring to
-    /// be added (default 0.1): a statistically real but practically
-    /// invisible effect is not worth parameters.
+    /// Smallest validation fitness gain (percentage points of (78),
+    /// averaged over the joints) a candidate must bring on **every**
+    /// validation set to be added (default 0.1): a statistically real but
+    /// practically invisible effect is not worth parameters, and a gain on
+    /// one motion only is more likely an accident of that motion than a
+    /// property of the robot.
     pub min_gain: f64,
     /// At most this many effects are added (default 7).
     pub max_steps: usize,
     /// Quasi-random states for the structural base parameters (default 600).
     pub base_samples: usize,
-    /// Rows where the joint is slower than this (rad/s) within ±`guard_s`
-    /// are left out of fits and scores (default 0.1 rad/s): at velocity
-    /// reversals the exact `sign` of (49) misfits the real friction (the
-    /// simulator's smooth friction, sticking, period-averaging of jittered
-    /// reversals) by far more than the noise. Stribeck friction with
-    /// `v_s ≥ 0.05 rad/s` stays visible above this speed.
+    /// Joint `j`'s rows where `|θ̇_j|` is below this (rad/s), widened by the
+    /// filter's reach, are left out of fits and scores (default 0.2, the
+    /// identification's threshold, `robot::reversal_mask`): at velocity
+    /// reversals the exact `sign` of (49) misfits the real friction
+    /// (sticking, creeping, the simulator's `tanh`) by far more than the
+    /// noise. Stribeck friction stays visible above this speed only for
+    /// `v_s ≳ min_speed / 2` (`exp(−4) ≈ 2 %` of its level at `v_s =
+    /// min_speed / 2`).
     pub min_speed: f64,
-    /// Guard window around slow samples (s, default 0.03: about the 10 Hz
-    /// zero-phase filter's impulse-response half-width).
-    pub guard_s: f64,
+    /// TRAIN's exclusion is widened by the zero-phase filter's reach down
+    /// to this fraction of its impulse-response peak (default 1e-3, as in
+    /// identification: 253 samples at 10 Hz and 1 kHz).
+    pub reach_tol: f64,
+    /// The same for the validation sets (default 0.5: the filter's main
+    /// lobe only, so that fast validation motions keep rows; the
+    /// identification's cross-validation uses the same).
+    pub validation_reach_tol: f64,
     /// Reference parameters (e.g. CAD) for the final physically consistent
     /// re-identification; `None` skips it.
     pub reference: Option<Params>,
@@ -60,8 +69,9 @@ impl Default for DiagnoseOptions {
             min_gain: 0.1,
             max_steps: 7,
             base_samples: 600,
-            min_speed: 0.1,
-            guard_s: 0.03,
+            min_speed: 0.2,
+            reach_tol: 1e-3,
+            validation_reach_tol: 0.5,
             reference: None,
         }
     }
@@ -95,14 +105,26 @@ pub struct CandidateScore {
     pub f: f64,
     /// Its p-value.
     pub p_value: f64,
+    /// Change of the Bayesian information criterion on TRAIN with the
+    /// effective sample count, `N_eff ln(RSS₁/RSS₀) + k ln N_eff` (negative:
+    /// better). Significant candidates are ranked by it, not by the raw
+    /// validation gain, so that a flexible many-parameter candidate (e.g.
+    /// slow cogging, 8 parameters) does not win over the 2-parameter effect
+    /// it imitates.
+    pub delta_bic: f64,
     /// Validation fitness gain per joint (percentage points, mean over the
     /// validation sets).
     pub gain: [f64; 2],
     /// Mean of `gain`.
     pub mean_gain: f64,
-    /// Significant (p below the round's corrected level and mean gain at
-    /// least `min_gain`).
+    /// Gain per validation set (mean over the joints, percentage points).
+    pub gain_per_set: Vec<f64>,
+    /// Significant: p below the round's corrected level and a gain of at
+    /// least `min_gain` on every validation set.
     pub significant: bool,
+    /// Why the candidate could not be scored (e.g. not excited by the
+    /// kept rows); empty if it was.
+    pub note: String,
 }
 
 /// One effect added.
@@ -116,6 +138,12 @@ pub struct Step {
     pub candidate: Candidate,
     /// Physical explanation.
     pub explanation: String,
+    /// Other candidates that explain the data equally well (their TRAIN
+    /// residual drop is within 0.1 % of this one's and they add as many
+    /// parameters): on these data they are the same hypothesis. Typical:
+    /// `coulomb_asymmetry` and `torque_offset` on data without rest
+    /// periods, where `|sign θ̇| = 1` on every row kept.
+    pub aliases: Vec<String>,
     /// Its fitted parameters (OLS on TRAIN, with the current model).
     pub parameters: Vec<NamedValue>,
     /// The evidence.
@@ -416,7 +444,7 @@ pub fn diagnose(
             Candidate::TimeDelay { .. } => true,
         })
         .collect();
-    let prep = |d: &Dataset| -> Result<Prepared, IdentError> {
+    let prep = |d: &Dataset, tol: f64| -> Result<Prepared, IdentError> {
         let base = columns(start, geometry, d)?;
         let blocks = cands
             .par_iter()
@@ -427,15 +455,17 @@ pub fn diagnose(
                 Candidate::TimeDelay { .. } => Ok(None),
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let guard = (opts.guard_s.max(0.0) * d.sample_rate_hz).round() as usize;
-        let mask = moving_mask(d, opts.min_speed, guard);
+        let mask = moving_mask(d, opts.min_speed, tol)?;
         Ok(Prepared { base, blocks, mask })
     };
     let ctx = Context {
         geometry,
         start,
-        train_p: prep(train)?,
-        vals_p: validation.iter().map(prep).collect::<Result<_, _>>()?,
+        train_p: prep(train, opts.reach_tol)?,
+        vals_p: validation
+            .iter()
+            .map(|v| prep(v, opts.validation_reach_tol))
+            .collect::<Result<_, _>>()?,
         cands,
         train,
         vals: validation,
@@ -477,7 +507,30 @@ pub fn diagnose(
                     Candidate::Effect { .. } => s.blocks.push(i),
                     Candidate::TimeDelay { samples } => s.delay = samples,
                 }
-                let (base, f, val) = ctx.run(&s)?;
+                let (base, f, val) = match ctx.run(&s) {
+                    Ok(x) => x,
+                    // A candidate the kept rows do not excite (or that makes
+                    // the fit rank deficient) is not evidence; it is scored
+                    // as insignificant with the reason.
+                    Err(e) => {
+                        let score = CandidateScore {
+                            candidate: c,
+                            label: c.label(),
+                            added_parameters: 0,
+                            rss_drop_percent: 0.0,
+                            n_eff: 0.0,
+                            f: 0.0,
+                            p_value: 1.0,
+                            delta_bic: 0.0,
+                            gain: [0.0; 2],
+                            mean_gain: 0.0,
+                            gain_per_set: vec![0.0; cur_val.len()],
+                            significant: false,
+                            note: e.to_string(),
+                        };
+                        return (i, score, s, None);
+                    }
+                };
                 let added = match c {
                     Candidate::Effect { .. } => base.n_base().saturating_sub(p0),
                     Candidate::TimeDelay { .. } => 1,
@@ -498,6 +551,12 @@ pub fn diagnose(
                 let after = mean_fit(&val);
                 let gain = [after[0] - before[0], after[1] - before[1]];
                 let mean_gain = 0.5 * (gain[0] + gain[1]);
+                let gain_per_set: Vec<f64> = val
+                    .iter()
+                    .zip(&cur_val)
+                    .map(|(a, b)| 0.5 * ((a[0] - b[0]) + (a[1] - b[1])))
+                    .collect();
+                let every = gain_per_set.iter().all(|g| *g >= opts.min_gain);
                 let score = CandidateScore {
                     candidate: c,
                     label: c.label(),
@@ -506,19 +565,43 @@ pub fn diagnose(
                     n_eff: ne,
                     f: fstat,
                     p_value: p,
+                    delta_bic: if rss1 > 0.0 && rss0 > 0.0 && ne > 1.0 {
+                        ne * (rss1 / rss0).ln() + added as f64 * ne.ln()
+                    } else {
+                        0.0
+                    },
                     gain,
                     mean_gain,
-                    significant: p < level && mean_gain >= opts.min_gain,
+                    gain_per_set,
+                    significant: p < level && every,
+                    note: String::new(),
                 };
                 let keep = score.significant.then_some((base, f, val));
-                Ok((i, score, s, keep))
+                (i, score, s, keep)
             })
-            .collect::<Result<Vec<_>, IdentError>>()?;
-        let best = scored
+            .collect();
+        let top = scored
             .iter()
             .filter(|x| x.1.significant)
-            .max_by(|a, b| a.1.mean_gain.total_cmp(&b.1.mean_gain).then(b.0.cmp(&a.0)))
-            .map(|x| x.0);
+            .min_by(|a, b| a.1.delta_bic.total_cmp(&b.1.delta_bic).then(a.0.cmp(&b.0)));
+        // Candidates of other identifiers that explain the TRAIN data as
+        // well as the best one (aliases) are listed with it; among them the
+        // first in the library's order is named, so the choice does not hang
+        // on round-off.
+        let alias_of = |x: &Scored, best: &CandidateScore| {
+            x.1.candidate.id() != best.candidate.id()
+                && x.1.added_parameters == best.added_parameters
+                && (x.1.rss_drop_percent - best.rss_drop_percent).abs()
+                    <= 1e-3 * best.rss_drop_percent.abs()
+        };
+        let best = top.map(|t| {
+            scored
+                .iter()
+                .filter(|x| x.1.significant && (x.0 == t.0 || alias_of(x, &t.1)))
+                .map(|x| x.0)
+                .min()
+                .unwrap_or(t.0)
+        });
         let mut round: Vec<CandidateScore> = scored.iter().map(|x| x.1.clone()).collect();
         round.sort_by(|a, b| b.mean_gain.total_cmp(&a.mean_gain));
         rounds.push(round);
@@ -526,21 +609,44 @@ pub fn diagnose(
             stopped_clean = true;
             break;
         };
-        let (i, score, s, keep) = scored
-            .into_iter()
+        let best_score = scored
+            .iter()
             .find(|x| x.0 == bi)
-            .expect("best is in the list");
-        let (base, f, val) = keep.expect("significant candidates keep their fit");
+            .map(|x| x.1.clone())
+            .ok_or(IdentError::InvalidSetting {
+                name: "selected candidate",
+                value: bi as f64,
+                reason: "internal: the selected candidate is missing from its round",
+            })?;
+        let mut aliases: Vec<String> = scored
+            .iter()
+            .filter(|x| x.0 != bi && alias_of(x, &best_score))
+            .map(|x| x.1.candidate.id().to_owned())
+            .collect();
+        aliases.sort();
+        aliases.dedup();
+        let Some((i, score, s, Some((base, f, val)))) = scored.into_iter().find(|x| x.0 == bi)
+        else {
+            return Err(IdentError::InvalidSetting {
+                name: "selected candidate",
+                value: bi as f64,
+                reason: "internal: a significant candidate lost its fit",
+            });
+        };
         let c = ctx.cands[i];
         let parameters = match c {
             Candidate::Effect { effect } => {
+                // Base parameter k stands for standard column independent()[k]
+                // (plus its regrouped aliases, none for an effect's own columns
+                // unless they are collinear with the model's).
                 let names = effect.names();
-                base.base_names()
+                let std_names = base.standard_names();
+                base.independent()
                     .iter()
                     .enumerate()
-                    .filter(|(_, n)| names.contains(n))
-                    .map(|(k, n)| NamedValue {
-                        name: n.clone(),
+                    .filter(|(_, c)| names.contains(&std_names[**c]))
+                    .map(|(k, _)| NamedValue {
+                        name: base.expression(k),
                         value: f.beta[k],
                         std_dev: f.std_dev[k],
                     })
@@ -553,14 +659,13 @@ pub fn diagnose(
             }],
         };
         used.push(c.id());
-        // Coulomb asymmetry and a torque offset are the same column while
-        // the joints move: once one is in, the other adds nothing.
         state = s;
         steps.push(Step {
             id: c.id().to_owned(),
             label: c.label(),
             candidate: c,
             explanation: c.explanation().to_owned(),
+            aliases,
             parameters,
             evidence: score,
         });

@@ -1,6 +1,7 @@
 //! One module per command; [`fit`] is the shared tail of `pipeline` and
 //! `identify` (processing → identification → validation → outputs).
 
+pub mod diagnose;
 pub mod excite;
 pub mod fit;
 pub mod identify;
