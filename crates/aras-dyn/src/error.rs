@@ -65,6 +65,20 @@ pub enum ParamError {
         /// The rule it broke and how to fix it.
         reason: &'static str,
     },
+    /// A link's inertial parameters are not physically consistent, spec
+    /// (67)–(69): acceptable for an OLS estimate, not where a real body is
+    /// required (the SDP's reference, a simulated robot, `validate`).
+    #[error(
+        "link {link} is not physically consistent: {reason}; the links' pseudo-inertias must be \
+         positive definite (spec (67)–(69)): check the sign and units (kg, kg·m, kg·m²) of \
+         `links.{link}`, or use the physically consistent estimate (params.json of `identify`)"
+    )]
+    NotPhysical {
+        /// Link number (1–4).
+        link: usize,
+        /// What is wrong, with the offending numbers.
+        reason: String,
+    },
     /// The file could not be read or written.
     #[error("cannot access parameter file {}: {source}", path.display())]
     Io {

@@ -249,6 +249,43 @@ impl Params {
         }
     }
 
+    /// Physical consistency of every link, spec (67)–(69): a positive mass
+    /// and a positive-definite pseudo-inertia (positive-definite inertia
+    /// about the COM satisfying the triangle inequality). [`Params::validate`]
+    /// does not ask this, because an OLS estimate may legitimately violate
+    /// it; call this where the parameters must describe real bodies.
+    ///
+    /// A pseudo-inertia eigenvalue below `−1e-9·‖𝒥‖` (far below the rounding
+    /// of a parameter file's 17 digits) fails; a point mass (a zero
+    /// eigenvalue) passes.
+    pub fn check_physical(&self) -> Result<(), ParamError> {
+        for (k, l) in self.links.iter().enumerate() {
+            let link = k + 1;
+            if l.mass.is_nan() || l.mass <= 0.0 {
+                return Err(ParamError::NotPhysical {
+                    link,
+                    reason: format!("mass = {} kg is not positive", l.mass),
+                });
+            }
+            let j = l.pseudo_inertia();
+            let scale = j.norm();
+            let eig = j.symmetric_eigenvalues();
+            let min = eig.min();
+            if !min.is_finite() || min < -1e-9 * scale {
+                return Err(ParamError::NotPhysical {
+                    link,
+                    reason: format!(
+                        "its pseudo-inertia has the negative eigenvalue {min:.4e} (largest {:.4e}): \
+                         the inertia about the centre of mass is not positive definite or breaks \
+                         the triangle inequality",
+                        eig.max()
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Checks every value: finite numbers, valid geometry, valid effect
     /// settings. Errors name the key path as in the file.
     pub fn validate(&self) -> Result<(), ParamError> {

@@ -140,7 +140,7 @@ pub enum ExciteError {
         last: String,
     },
     /// A trajectory JSON document is malformed.
-    #[error("{origin}: line {line}, column {column}: {message}")]
+    #[error("{origin}: {}{message}", position(*line, *column))]
     Json {
         /// File path, or `"<string>"`.
         origin: String,
@@ -170,5 +170,14 @@ pub(crate) fn check_finite(name: impl FnOnce() -> String, value: f64) -> Result<
             name: name(),
             value,
         })
+    }
+}
+
+/// `line L, column C: `, or nothing when the position is unknown (0).
+fn position(line: usize, column: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!("line {line}, column {column}: ")
     }
 }

@@ -127,10 +127,14 @@ impl TryFrom<FourierJson> for FourierTrajectory {
     fn try_from(j: FourierJson) -> Result<Self, ExciteError> {
         if j.format != FORMAT {
             return Err(ExciteError::Json {
-                origin: "format".into(),
+                origin: "key `format`".into(),
                 line: 0,
                 column: 0,
-                message: format!("format is {:?}; expected {FORMAT:?}", j.format),
+                message: format!(
+                    "{:?} is not a trajectory format this reader knows; expected {FORMAT:?} \
+                     (write the file with `aras excite`)",
+                    j.format
+                ),
             });
         }
         Self::new(j.omega_f, j.offset, j.a, j.b)
@@ -333,6 +337,16 @@ impl FourierTrajectory {
 }
 
 fn parse_json(text: &str, origin: &str) -> Result<FourierTrajectory, ExciteError> {
+    if text.trim().is_empty() {
+        return Err(ExciteError::Json {
+            origin: origin.into(),
+            line: 1,
+            column: 1,
+            message:
+                "the file is empty; expected a trajectory object (write one with `aras excite`)"
+                    .into(),
+        });
+    }
     serde_json::from_str(text).map_err(|e| ExciteError::Json {
         origin: origin.into(),
         line: e.line(),

@@ -112,7 +112,7 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "FILE", conflicts_with = "frequency")]
     pub trajectory: Option<PathBuf>,
     /// Instead: the paper's validation trajectory (79) at this frequency (Hz).
-    #[arg(long, value_name = "HZ")]
+    #[arg(long, value_name = "HZ", value_parser = positive, allow_hyphen_values = true)]
     pub frequency: Option<f64>,
     /// Output log (the sidecar goes next to it as .json).
     #[arg(long, default_value = "log.csv", value_name = "LOG.csv")]
@@ -132,7 +132,7 @@ pub struct IdentifyArgs {
     #[arg(long, value_name = "LOG.csv")]
     pub data: PathBuf,
     /// Excitation period (s) for period averaging (overrides the sidecar).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub period: Option<f64>,
     /// Sidecar file (default: LOG.json next to the log, if present).
     #[arg(long, value_name = "JSON")]
@@ -175,7 +175,7 @@ pub struct PredictArgs {
     #[arg(long, value_name = "PRED.csv")]
     pub out: PathBuf,
     /// Average periods of this length (s) first (default: none, the whole log is predicted).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub period: Option<f64>,
     /// Sidecar file (default: LOG.json next to the log, if present).
     #[arg(long, value_name = "JSON")]
@@ -183,4 +183,20 @@ pub struct PredictArgs {
     /// Shared options.
     #[command(flatten)]
     pub common: Common,
+}
+
+/// Parser of a strictly positive, finite number (periods, frequencies).
+/// Negative values are parsed rather than taken for options
+/// (`allow_hyphen_values`), so the message says what is wrong with them.
+fn positive(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number; give a positive number such as 10"))?;
+    if !v.is_finite() || v <= 0.0 {
+        return Err(format!(
+            "{v} is not a positive finite number; give a positive value such as 10"
+        ));
+    }
+    Ok(v)
 }

@@ -27,6 +27,10 @@ pub fn nominal(cfg: &RobotConfig, dir: &Path) -> Result<Params> {
     }
     p.validate()
         .context("the robot's parameters with the overrides of [robot]")?;
+    p.check_physical().context(
+        "the nominal robot (key `robot.params`) is the reference of the physically consistent fit \
+         and the simulated robot, so it must be physically consistent",
+    )?;
     Ok(p)
 }
 

@@ -61,6 +61,23 @@ pub struct Excitation {
 impl Sidecar {
     /// Parses sidecar JSON text; `file` names it in error messages.
     pub fn parse(text: &str, file: &str) -> Result<Self, LogError> {
+        let start = text.trim_start();
+        if !start.starts_with('{') {
+            let found = if start.is_empty() {
+                "the file is empty".to_string()
+            } else {
+                format!("it starts with {:?}", start.chars().next().unwrap_or(' '))
+            };
+            return Err(LogError::Sidecar {
+                file: file.to_string(),
+                line: 1,
+                column: 1,
+                message: format!(
+                    "{found}; the sidecar must be one JSON object `{{ … }}` (docs/log-format.md), \
+                     or remove the file"
+                ),
+            });
+        }
         let sidecar: Sidecar = serde_json::from_str(text).map_err(|e| {
             let full = e.to_string();
             let suffix = format!(" at line {} column {}", e.line(), e.column());
@@ -68,9 +85,9 @@ impl Sidecar {
             let advice = if message.starts_with("unknown field") {
                 "; remove or rename the key (only `truth` and `notes` may hold extra data)"
             } else if e.is_syntax() || e.is_eof() {
-                "; the sidecar must be one JSON object"
+                "; the sidecar must be one JSON object (JSON has no NaN or Infinity: write finite numbers)"
             } else {
-                ""
+                "; see docs/log-format.md for each key's type (numbers in SI units, pairs as [motor 1, motor 2])"
             };
             LogError::Sidecar {
                 file: file.to_string(),

@@ -41,6 +41,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
             read_log(&args.data, &read_options(args.sidecar.as_deref()))
         })
         .with_context(|| format!("reading {}", args.data.display()))?;
+    super::print_warnings(&args.data, &log.warnings);
     let sidecar = args
         .sidecar
         .clone()

@@ -28,8 +28,17 @@ pub fn load_config(common: &Common) -> Result<Loaded> {
     }
 }
 
-/// Refuses to overwrite an existing file unless `force`.
+/// Refuses to overwrite an existing file unless `force`, and a file whose
+/// directory does not exist (found before any work is done).
 pub fn check_new_file(path: &Path, force: bool) -> Result<()> {
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(dir) = parent.filter(|d| !d.is_dir()) {
+        bail!(
+            "cannot write {}: the directory {} does not exist; create it first or choose another --out",
+            path.display(),
+            dir.display()
+        );
+    }
     if path.exists() && !force {
         bail!(
             "{} already exists; pass --force to replace it or choose another --out",
@@ -37,4 +46,12 @@ pub fn check_new_file(path: &Path, force: bool) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Prints the log reader's warnings (saturation, …) on stderr, even with
+/// `--quiet`: they are about the data, not progress.
+pub fn print_warnings(path: &Path, warnings: &[aras_signal::Warning]) {
+    for w in warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
 }

@@ -27,6 +27,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let geometry = params.geometry()?;
     let log = read_log(&args.data, &read_options(args.sidecar.as_deref()))
         .with_context(|| format!("reading {}", args.data.display()))?;
+    super::print_warnings(&args.data, &log.warnings);
     let logged = log.theta_dot.is_some() && log.theta_ddot.is_some();
     let mut opts = process_options(&cfg, args.period, logged);
     if args.period.is_none() {

@@ -1,5 +1,7 @@
 //! `aras simulate`: the simulated robot tracking a trajectory file or (79).
 
+use std::path::Path;
+
 use anyhow::{Context, Result, bail};
 use aras_dyn::Sinusoid;
 use aras_excite::FourierTrajectory;
@@ -25,6 +27,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         (Some(path), _) => {
             let tr = FourierTrajectory::load(path)
                 .with_context(|| format!("reading the trajectory {}", path.display()))?;
+            check_in_box(&tr, &cfg, path)?;
             let sim = sim_config(&cfg, &nominal, periods * tr.period(), cfg.simulation.seed);
             stages.run("simulate robot", |_| {
                 run_and_write(&truth, &tr, &sim, &args.out)
@@ -47,5 +50,33 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         log.len(),
         aras_dyn::sim::sidecar_path(&args.out).display()
     );
+    Ok(())
+}
+
+/// A trajectory file must stay in the workspace box (77) of
+/// `[trajectory]` (the designed ones do, by construction): found before the
+/// simulation rather than as a robot driven into its stops or through a
+/// singularity. Checked on 2000 instants of a period (the trajectory is
+/// periodic).
+fn check_in_box(tr: &FourierTrajectory, cfg: &crate::config::Config, path: &Path) -> Result<()> {
+    let (lo, hi) = (cfg.trajectory.min_deg, cfg.trajectory.max_deg);
+    let names = ["φ", "γ"];
+    for row in tr.sample(2000, 1) {
+        for i in 0..2 {
+            let deg = row.state.x[i].to_degrees();
+            if !(lo[i]..=hi[i]).contains(&deg) {
+                bail!(
+                    "{}: the trajectory leaves the workspace box (77): {} = {deg:.2}° at t = {:.4} s, \
+                     outside [{}, {}]° (config keys trajectory.min_deg / trajectory.max_deg); \
+                     shift its offset or scale its coefficients down, or design one with `aras excite`",
+                    path.display(),
+                    names[i],
+                    row.t,
+                    lo[i],
+                    hi[i]
+                );
+            }
+        }
+    }
     Ok(())
 }

@@ -36,6 +36,13 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
     let mut stages = Stages::new(args.common.quiet);
     let params =
         Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
+    params.check_physical().with_context(|| {
+        format!(
+            "{}: `validate` checks a model for control, which needs physically consistent \
+             parameters (an OLS estimate such as params_ols.json may not be; `predict` accepts it)",
+            args.params.display()
+        )
+    })?;
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let truth = truth(&cfg, &loaded.dir, &nominal)?;
     let model = paper_model(&nominal)?;

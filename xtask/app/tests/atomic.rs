@@ -1,0 +1,191 @@
+//! Nothing is lost (issue 9): a failing run leaves the previous output
+//! directory intact and leaves no staging or temporary files behind, and
+//! inputs are never modified.
+
+use std::collections::hash_map::DefaultHasher;
+use std::hash::{Hash, Hasher};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("aras-atomic-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn fixture(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures")
+        .join(rel)
+}
+
+/// (relative path, content hash) of every file under `dir`, sorted.
+fn snapshot(dir: &Path) -> Vec<(String, u64)> {
+    let mut v = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let mut h = DefaultHasher::new();
+                std::fs::read(&p).unwrap().hash(&mut h);
+                v.push((
+                    p.strip_prefix(dir).unwrap().display().to_string(),
+                    h.finish(),
+                ));
+            }
+        }
+    }
+    v.sort();
+    v
+}
+
+fn aras(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_aras"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Names in `dir` that look like leftovers of a write (staging dirs, temp files).
+fn leftovers(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".staging-") || n.contains(".tmp") || n.ends_with(".previous"))
+        .collect()
+}
+
+#[test]
+fn a_run_that_fails_late_keeps_the_previous_outputs() {
+    let dir = scratch("late");
+    // The previous results, e.g. from a successful run.
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("params.json"), "{\"previous\": true}\n").unwrap();
+    std::fs::write(out.join("summary.json"), "{}\n").unwrap();
+    let before = snapshot(&out);
+    // `identify --force` reads the log only after the output directory is
+    // staged: a rank-deficient log makes it fail at the identification
+    // stage, well after the start.
+    let log = dir.join("one_sine.csv");
+    std::fs::copy(fixture("bad/logs/one_sine.csv"), &log).unwrap();
+    let r = aras(&[
+        "identify",
+        "--data",
+        log.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--force",
+        "-q",
+    ]);
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("do not excite"));
+    assert_eq!(snapshot(&out), before, "the previous outputs changed");
+    assert!(leftovers(&dir).is_empty(), "{:?}", leftovers(&dir));
+}
+
+#[test]
+fn a_killed_run_keeps_the_previous_outputs() {
+    let dir = scratch("kill");
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("params.json"), "{\"previous\": true}\n").unwrap();
+    let before = snapshot(&out);
+    // The default pipeline takes tens of seconds: killed after 1.5 s, in the middle.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_aras"))
+        .args(["pipeline", "--out", out.to_str().unwrap(), "--force", "-q"])
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let finished = child.try_wait().unwrap().is_some();
+    child.kill().ok();
+    child.wait().unwrap();
+    assert!(
+        !finished,
+        "the pipeline finished too quickly to be interrupted"
+    );
+    assert_eq!(snapshot(&out), before, "the previous outputs changed");
+}
+
+#[test]
+fn single_file_outputs_are_replaced_whole_or_not_at_all() {
+    let dir = scratch("file");
+    let out = dir.join("p.csv");
+    std::fs::write(&out, "previous\n").unwrap();
+    // A failing predict with --force leaves the old file.
+    let r = aras(&[
+        "predict",
+        "--params",
+        fixture("robots/aras-diamond.json").to_str().unwrap(),
+        "--data",
+        fixture("logs/bad/nan_value.csv").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--force",
+    ]);
+    assert!(!r.status.success());
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "previous\n");
+    assert!(leftovers(&dir).is_empty(), "{:?}", leftovers(&dir));
+}
+
+#[test]
+fn inputs_are_never_modified() {
+    let dir = scratch("inputs");
+    let inputs = dir.join("in");
+    std::fs::create_dir_all(&inputs).unwrap();
+    for f in [
+        "bad/logs/saturated_torque.csv",
+        "robots/aras-diamond.json",
+        "logs/good/counts_currents.csv",
+        "logs/good/counts_currents.json",
+    ] {
+        std::fs::copy(fixture(f), inputs.join(Path::new(f).file_name().unwrap())).unwrap();
+    }
+    std::fs::write(inputs.join("cfg.toml"), "[signal]\ncutoff_hz = 5\n").unwrap();
+    let before = snapshot(&inputs);
+    let i = |n: &str| inputs.join(n).display().to_string();
+    let o = |n: &str| dir.join(n).display().to_string();
+    let runs: Vec<Vec<String>> = vec![
+        vec![
+            "predict".into(),
+            "--params".into(),
+            i("aras-diamond.json"),
+            "--data".into(),
+            i("saturated_torque.csv"),
+            "--out".into(),
+            o("p.csv"),
+            "--config".into(),
+            i("cfg.toml"),
+        ],
+        vec![
+            "predict".into(),
+            "--params".into(),
+            i("aras-diamond.json"),
+            "--data".into(),
+            i("counts_currents.csv"),
+            "--out".into(),
+            o("q.csv"),
+        ],
+        vec![
+            "identify".into(),
+            "--data".into(),
+            i("saturated_torque.csv"),
+            "--out".into(),
+            o("id"),
+            "--config".into(),
+            i("cfg.toml"),
+            "-q".into(),
+        ],
+    ];
+    for args in &runs {
+        let _ = Command::new(env!("CARGO_BIN_EXE_aras"))
+            .args(args)
+            .output()
+            .unwrap();
+    }
+    assert_eq!(snapshot(&inputs), before, "an input file changed");
+}

@@ -1,0 +1,534 @@
+//! Malformed inputs through the `aras` command line: every file kind
+//! (logs, sidecars, parameter files, config files, trajectory files) and
+//! bad option values. Each case asserts the specific message: what is
+//! wrong, where (file, line, column or key) and how to fix it. The corpus
+//! is `fixtures/bad/` (written by its `make_fixtures.py`) plus the log
+//! reader's own `fixtures/logs/bad/`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn fixture(rel: &str) -> String {
+    root().join("fixtures").join(rel).display().to_string()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("aras-bad-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn aras(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_aras"))
+        .args(args)
+        .output()
+        .expect("the aras binary runs")
+}
+
+/// Runs `args`, which must fail without a panic, and returns stderr, which
+/// must contain every one of `expected`.
+fn fails_with(args: &[&str], expected: &[&str]) -> String {
+    let r = aras(args);
+    let err = String::from_utf8_lossy(&r.stderr).into_owned();
+    assert!(!r.status.success(), "{args:?} was accepted: {err}");
+    assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+    for e in expected {
+        assert!(err.contains(e), "{args:?}: missing {e:?} in:\n{err}");
+    }
+    err
+}
+
+/// `predict` with the default robot: the cheapest command that reads a log.
+fn predict_log(log: &str, dir: &Path) -> Vec<String> {
+    let out = dir.join("p.csv");
+    let _ = std::fs::remove_file(&out);
+    vec![
+        "predict".into(),
+        "--params".into(),
+        fixture("robots/aras-diamond.json"),
+        "--data".into(),
+        log.into(),
+        "--out".into(),
+        out.display().to_string(),
+        "--quiet".into(),
+    ]
+}
+
+fn strs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
+#[test]
+fn parameter_files() {
+    let dir = scratch("params");
+    let cases: &[(&str, &[&str])] = &[
+        (
+            "empty.json",
+            &[
+                "empty.json",
+                "invalid JSON at line 1, column 0",
+                "fix the syntax",
+            ],
+        ),
+        (
+            "trailing_comma.json",
+            &["trailing_comma.json", "line 71, column 1: trailing comma"],
+        ),
+        ("missing_links.json", &["missing key `links`: add it"]),
+        (
+            "misspelled_key.json",
+            &["unknown key `links.2.masss`: remove or rename it; allowed here: Ixx"],
+        ),
+        (
+            "string_value.json",
+            &["`links.3.Izz` must be a number, found \"heavy\""],
+        ),
+        (
+            "alpha_out_of_range.json",
+            &[
+                "`geometry.alpha_deg` = 200 is invalid: arc angles must lie strictly between 0 and 180",
+            ],
+        ),
+        (
+            "unknown_effect.json",
+            &[
+                "unknown key `extra.gear_backlash`",
+                "allowed here: torque_offset",
+            ],
+        ),
+    ];
+    for (file, expected) in cases {
+        let p = fixture(&format!("bad/params/{file}"));
+        let mut args = predict_log(&fixture("bad/logs/saturated_torque.csv"), &dir);
+        args[2] = p;
+        fails_with(&strs(&args), expected);
+    }
+}
+
+/// A negative mass or a non-positive-definite inertia: accepted where an
+/// OLS estimate is legitimate (`predict`), rejected with the reason where
+/// real bodies are required (`validate`, the SDP's reference).
+#[test]
+fn physically_inconsistent_parameters() {
+    let dir = scratch("physical");
+    for (file, why) in [
+        (
+            "negative_mass.json",
+            "link 2 is not physically consistent: mass = -0.11 kg is not positive",
+        ),
+        (
+            "non_pd_inertia.json",
+            "link 1 is not physically consistent: its pseudo-inertia has the negative eigenvalue",
+        ),
+    ] {
+        let p = fixture(&format!("bad/params/{file}"));
+        let mut args = predict_log(&fixture("bad/logs/saturated_torque.csv"), &dir);
+        args[2] = p.clone();
+        let r = aras(&strs(&args));
+        assert!(
+            r.status.success(),
+            "predict rejected {file}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+        let out = dir.join(format!("v-{file}"));
+        fails_with(
+            &[
+                "validate",
+                "--params",
+                &p,
+                "--out",
+                out.to_str().unwrap(),
+                "-q",
+            ],
+            &[
+                why,
+                "`validate` checks a model for control",
+                "`predict` accepts it",
+            ],
+        );
+        assert!(!out.exists(), "a rejected validate left {}", out.display());
+    }
+    for (cfg, why) in [
+        (
+            "negative_mass_reference.toml",
+            "mass = -0.11 kg is not positive",
+        ),
+        (
+            "non_pd_reference.toml",
+            "pseudo-inertia has the negative eigenvalue",
+        ),
+    ] {
+        let out = dir.join("t.json");
+        fails_with(
+            &[
+                "excite",
+                "--config",
+                &fixture(&format!("bad/config/{cfg}")),
+                "--out",
+                out.to_str().unwrap(),
+                "-q",
+            ],
+            &[
+                "key `robot.params`",
+                "reference of the physically consistent fit",
+                why,
+            ],
+        );
+    }
+}
+
+#[test]
+fn config_files() {
+    let dir = scratch("config");
+    let cases: &[(&str, &[&str])] = &[
+        (
+            "misspelled_key.toml",
+            &[
+                "misspelled_key.toml:2:1: key `signal.cutof_hz`: unknown field `cutof_hz`",
+                "remove or rename it",
+            ],
+        ),
+        (
+            "wrong_type.toml",
+            &[
+                "wrong_type.toml:2:13: key `trajectory.harmonics`: invalid type: string \"five\"",
+                "docs/config.md",
+            ],
+        ),
+        (
+            "negative_cutoff.toml",
+            &[
+                "negative_cutoff.toml:2:1: key `signal.cutoff_hz`: must be a finite number ≥ 0, found -5",
+            ],
+        ),
+        ("syntax.toml", &["syntax.toml:1:12: unclosed table"]),
+        (
+            "trailing_comma.json",
+            &["trailing_comma.json:1:30: key `simulation.periods`: trailing comma"],
+        ),
+        (
+            "unsupported.yaml",
+            &[
+                "unsupported.yaml: unknown config format",
+                "must end in .toml or .json",
+            ],
+        ),
+        (
+            "missing_params_file.toml",
+            &["key `robot.params`", "no-such-robot.json", "No such file"],
+        ),
+        // An unreachable workspace box: γ up to 200° is beyond the arcs' reach.
+        (
+            "unreachable_box.toml",
+            &[
+                "is unreachable: the arcs reach only",
+                "trajectory.min_deg/max_deg",
+            ],
+        ),
+    ];
+    for (file, expected) in cases {
+        let out = dir.join("t.json");
+        fails_with(
+            &[
+                "excite",
+                "--config",
+                &fixture(&format!("bad/config/{file}")),
+                "--out",
+                out.to_str().unwrap(),
+                "-q",
+            ],
+            expected,
+        );
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn trajectory_files() {
+    let dir = scratch("trajectory");
+    let cfg = dir.join("short.toml");
+    std::fs::write(&cfg, "[simulation]\nperiods = 1\n").unwrap();
+    let cases: &[(&str, &[&str])] = &[
+        (
+            "empty.json",
+            &[
+                "empty.json: line 1, column 1: the file is empty",
+                "aras excite",
+            ],
+        ),
+        (
+            "negative_frequency.json",
+            &["omega_f = -0.6283185307179586 is invalid: the base frequency must be positive"],
+        ),
+        (
+            "short_coefficients.json",
+            &["coefficient list a[1] has 3 entries but the trajectory has 5 harmonics"],
+        ),
+        (
+            "wrong_format.json",
+            &[
+                "key `format`: \"aras-fourier/9\" is not a trajectory format",
+                "expected \"aras-fourier/1\"",
+            ],
+        ),
+        (
+            "unreachable_pose.json",
+            &[
+                "leaves the workspace box (77): φ = 228.11° at t = 0.0000 s, outside [30, 140]°",
+                "trajectory.min_deg",
+            ],
+        ),
+    ];
+    for (file, expected) in cases {
+        let out = dir.join("l.csv");
+        let err = fails_with(
+            &[
+                "simulate",
+                "--trajectory",
+                &fixture(&format!("bad/trajectory/{file}")),
+                "--config",
+                cfg.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+                "-q",
+            ],
+            expected,
+        );
+        assert!(err.contains(file), "{file}: {err}");
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn logs_and_sidecars() {
+    let dir = scratch("logs");
+    let cases: &[(&str, &[&str])] = &[
+        (
+            "bad/logs/empty.csv",
+            &[
+                "empty.csv: no header line: the log is empty",
+                "must name the columns",
+            ],
+        ),
+        (
+            "bad/logs/header_only.csv",
+            &["header_only.csv: only 0 data rows, at least 16 are needed"],
+        ),
+        (
+            "bad/logs/gap_10s.csv",
+            &[
+                "gap_10s.csv:202: irregular sampling: the worst step, 10.001 s ending at t = 10.2 s",
+                "resample",
+            ],
+        ),
+        (
+            "logs/bad/semicolon.csv",
+            &[
+                "semicolon.csv:1: the header is separated by ';'",
+                "replace every ';' by ','",
+            ],
+        ),
+        (
+            "logs/bad/degrees.csv",
+            &["angles look like degrees", "convert to radians"],
+        ),
+        (
+            "logs/bad/nan_value.csv",
+            &["nan_value.csv:6:4: `tau1` value \"NaN\" is not finite"],
+        ),
+        (
+            "logs/bad/infinite_value.csv",
+            &["infinite_value.csv:8:5: `tau2` value \"inf\" is not finite"],
+        ),
+        (
+            "logs/bad/repeated_time.csv",
+            &["repeated_time.csv:14:1: time does not increase"],
+        ),
+        (
+            "logs/bad/time_backwards.csv",
+            &["time_backwards.csv:12:1: time does not increase"],
+        ),
+        (
+            "bad/sidecar/empty_sidecar.csv",
+            &["empty_sidecar.json:1:1: the file is empty; the sidecar must be one JSON object"],
+        ),
+        (
+            "bad/sidecar/sidecar_array.csv",
+            &["sidecar_array.json:1:1: it starts with '['"],
+        ),
+        (
+            "bad/sidecar/nan_torque_constant.csv",
+            &["nan_torque_constant.json:1:59", "JSON has no NaN"],
+        ),
+        (
+            "bad/sidecar/period_string.csv",
+            &[
+                "period_string.json:1:57: invalid type: string \"ten\"",
+                "docs/log-format.md",
+            ],
+        ),
+    ];
+    for (file, expected) in cases {
+        let args = predict_log(&fixture(file), &dir);
+        fails_with(&strs(&args), expected);
+        assert!(!dir.join("p.csv").exists());
+    }
+    // Every log of the reader's own corpus fails through the CLI too, naming its file.
+    let bad = root().join("fixtures/logs/bad");
+    let mut n = 0;
+    for e in std::fs::read_dir(&bad).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "csv") {
+            let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
+            let args = predict_log(&p.display().to_string(), &dir);
+            fails_with(&strs(&args), &[&stem]);
+            n += 1;
+        }
+    }
+    assert!(n >= 26, "only {n} logs in fixtures/logs/bad");
+}
+
+#[test]
+fn accepted_with_a_warning_or_as_is() {
+    let dir = scratch("accepted");
+    // Saturated torque: a warning with the time spans, and the run goes on.
+    let r = aras(&strs(&predict_log(
+        &fixture("bad/logs/saturated_torque.csv"),
+        &dir,
+    )));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    assert!(
+        err.contains("warning: ")
+            && err.contains(
+                "tau1 sits flat at its maximum 0.25 N·m (saturation?) at t = 0.1870–0.5590 s"
+            ),
+        "{err}"
+    );
+    // BOM, CRLF, comments and reordered columns are accepted.
+    let log = fixture("logs/good/bom_crlf_reordered.csv");
+    let r = aras(&[
+        "identify",
+        "--data",
+        &log,
+        "--out",
+        dir.join("o").to_str().unwrap(),
+        "-q",
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    // The log is valid but too short to identify: the failure is about its length, not its format.
+    assert!(
+        err.contains("fewer than twice the 42 parameters; record a longer log"),
+        "{err}"
+    );
+}
+
+/// A log whose motion is one sinusoid cannot excite every base parameter:
+/// the error names the ones it loses.
+#[test]
+fn excitation_that_cannot_excite() {
+    let dir = scratch("rank");
+    let out = dir.join("o");
+    fails_with(
+        &[
+            "identify",
+            "--data",
+            &fixture("bad/logs/one_sine.csv"),
+            "--out",
+            out.to_str().unwrap(),
+            "-q",
+        ],
+        &[
+            "the data do not excite 1 of 23 parameters (rank 22",
+            ": b16; use a richer excitation trajectory",
+        ],
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn bad_command_line_values() {
+    let dir = scratch("cli");
+    let log = fixture("bad/logs/saturated_torque.csv");
+    let o = dir.join("o");
+    let o = o.to_str().unwrap();
+    fails_with(
+        &["identify", "--data", &log, "--period", "-2", "--out", o],
+        &["invalid value '-2' for '--period <S>': -2 is not a positive finite number"],
+    );
+    fails_with(
+        &["identify", "--data", &log, "--period", "0", "--out", o],
+        &["invalid value '0' for '--period <S>'"],
+    );
+    fails_with(
+        &["identify", "--data", &log, "--period", "ten", "--out", o],
+        &["`ten` is not a number"],
+    );
+    fails_with(
+        &["simulate", "--frequency", "NaN", "--out", o],
+        &["invalid value 'NaN' for '--frequency <HZ>': NaN is not a positive finite number"],
+    );
+    fails_with(
+        &[
+            "identify",
+            "--data",
+            dir.join("missing.csv").to_str().unwrap(),
+            "--out",
+            o,
+            "-q",
+        ],
+        &["missing.csv", "No such file"],
+    );
+    fails_with(
+        &[
+            "predict",
+            "--params",
+            "no-such.json",
+            "--data",
+            &log,
+            "--out",
+            dir.join("p.csv").to_str().unwrap(),
+        ],
+        &["cannot access parameter file no-such.json"],
+    );
+    let nowhere = dir.join("no/such/dir/t.json");
+    fails_with(
+        &["excite", "--out", nowhere.to_str().unwrap(), "-q"],
+        &[
+            "the directory",
+            "does not exist; create it first or choose another --out",
+        ],
+    );
+    fails_with(
+        &[
+            "simulate",
+            "--frequency",
+            "1",
+            "--out",
+            dir.join("no/l.csv").to_str().unwrap(),
+            "-q",
+        ],
+        &["does not exist; create it first"],
+    );
+    fails_with(
+        &["identify", "--data", &log, "--frobnicate"],
+        &["unexpected argument '--frobnicate'"],
+    );
+    // An unknown effect id in a parameter file's `extra` section.
+    fails_with(
+        &[
+            "validate",
+            "--params",
+            &fixture("bad/params/unknown_effect.json"),
+            "--out",
+            o,
+            "-q",
+        ],
+        &["unknown key `extra.gear_backlash`"],
+    );
+}
