@@ -445,7 +445,7 @@ fn excitation_that_cannot_excite() {
         ],
         &[
             "the data do not excite 1 of 23 parameters (rank 22",
-            ": b16; use a richer excitation trajectory",
+            ": b23; use a richer excitation trajectory",
         ],
     );
     assert!(!out.exists());
