@@ -137,6 +137,12 @@ pub struct IdentifyArgs {
     /// Sidecar file (default: LOG.json next to the log, if present).
     #[arg(long, value_name = "JSON")]
     pub sidecar: Option<PathBuf>,
+    /// Extra effects to identify with the paper's model, comma-separated, as
+    /// `diagnose` names them: torque_offset, coulomb_asymmetry,
+    /// stribeck_friction[:V_S], passive_joint_viscous, cogging:CYCLES[:ORDER],
+    /// quadratic_damping.
+    #[arg(long, value_name = "ID[:ARG],…", value_delimiter = ',')]
+    pub effects: Vec<String>,
     /// Output directory.
     #[arg(long, default_value = "out-identify", value_name = "DIR")]
     pub out: PathBuf,

@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use aras_dyn::{Model, Params};
+use aras_dyn::{Effect, Model, Params};
 use nalgebra::Vector3;
 
 use crate::config::RobotConfig;
@@ -48,4 +48,72 @@ pub fn load_params(spec: &str, dir: &Path) -> Result<Params> {
 /// the robot's gravity: what is identified.
 pub fn paper_model(p: &Params) -> Result<Model> {
     Model::paper(p.gravity).context("building the paper's model")
+}
+
+/// Identifiers accepted by `identify --effects` (the extra effects of
+/// `aras_dyn::Effect`, as named by `diagnose`).
+pub const EFFECT_IDS: [&str; 6] = [
+    "torque_offset",
+    "coulomb_asymmetry",
+    "stribeck_friction",
+    "passive_joint_viscous",
+    "cogging",
+    "quadratic_damping",
+];
+
+/// Parses one `--effects` entry: `ID` or `ID:ARG[:ARG]`, where
+/// `stribeck_friction:V_S` takes the Stribeck velocity (rad/s, default 0.2)
+/// and `cogging:CYCLES[:ORDER]` the cycles per joint revolution and the
+/// number of harmonics (default 2). The names are those `diagnose` reports.
+pub fn parse_effect(spec: &str) -> Result<Effect> {
+    let mut parts = spec.trim().split(':');
+    let id = parts.next().unwrap_or_default();
+    let args: Vec<&str> = parts.collect();
+    let num = |i: usize, what: &str| -> Result<Option<f64>> {
+        match args.get(i) {
+            None => Ok(None),
+            Some(a) => match a.parse::<f64>() {
+                Ok(v) if v.is_finite() && v > 0.0 => Ok(Some(v)),
+                _ => anyhow::bail!("effect `{spec}`: {what} `{a}` must be a positive number"),
+            },
+        }
+    };
+    let max_args = match id {
+        "stribeck_friction" => 1,
+        "cogging" => 2,
+        _ => 0,
+    };
+    if args.len() > max_args {
+        anyhow::bail!("effect `{spec}`: `{id}` takes at most {max_args} `:` argument(s)");
+    }
+    Ok(match id {
+        "torque_offset" => Effect::TorqueOffset,
+        "coulomb_asymmetry" => Effect::CoulombAsymmetry,
+        "stribeck_friction" => Effect::StribeckFriction {
+            v_s: num(0, "the Stribeck velocity (rad/s)")?.unwrap_or(0.2),
+        },
+        "passive_joint_viscous" => Effect::PassiveJointViscous,
+        "cogging" => Effect::Cogging {
+            cycles_per_rev: num(0, "the cycles per revolution")?.ok_or_else(|| {
+                anyhow::anyhow!(
+                    "effect `{spec}`: cogging needs its cycles per joint revolution, \
+                     e.g. `cogging:12` (as `diagnose` reports it)"
+                )
+            })?,
+            order: num(1, "the number of harmonics")?.map_or(2, |v| v.round() as usize),
+        },
+        "quadratic_damping" => Effect::QuadraticDamping,
+        _ => anyhow::bail!(
+            "unknown effect `{id}` in `--effects`; known: {}",
+            EFFECT_IDS.join(", ")
+        ),
+    })
+}
+
+/// The paper's model with extra effects appended (their columns come last).
+pub fn model_with_effects(p: &Params, effects: &[Effect]) -> Result<Model> {
+    effects.iter().try_fold(paper_model(p)?, |m, e| {
+        m.with_effect(*e)
+            .with_context(|| format!("adding the effect `{}` to the model", e.id()))
+    })
 }

@@ -14,7 +14,6 @@ use crate::config::Config;
 use crate::identify::{identify, prepare, process_options};
 use crate::output::OutDir;
 use crate::report::run::{RunData, build};
-use crate::robot::paper_model;
 use crate::stages::Stages;
 use crate::summary::{PseudoInertia, SdpReport, Summary, base_file, fitness_list};
 use crate::validate::{
@@ -39,6 +38,8 @@ pub struct FitInput<'a> {
     pub design: Option<&'a Design>,
     /// Base parameters of the model.
     pub base: &'a BaseParameters,
+    /// The identified model (the paper's, possibly with extra effects).
+    pub model: &'a aras_dyn::Model,
     /// Command name for the summary.
     pub command: &'a str,
     /// Seed, for the summary.
@@ -55,21 +56,21 @@ pub struct FitInput<'a> {
 /// (with timings, whatever `reproducible` says).
 pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary> {
     let cfg = input.cfg;
-    let model = paper_model(input.nominal)?;
+    let model = input.model;
     let geometry = input.nominal.geometry()?;
     let prepared = stages.run("process log + regressor", |_| {
         prepare(
             input.log,
             &process_options(cfg, input.period, false),
             cfg.identification.filtering,
-            &model,
+            model,
             &geometry,
         )
     })?;
     let id = stages.run("identify (OLS + SDP)", |_| {
-        identify(&prepared, input.base, &model, input.nominal, cfg)
+        identify(&prepared, input.base, model, input.nominal, cfg)
     })?;
-    let ols_std = id.ols_params.standard_vector(&model)?.as_slice().to_vec();
+    let ols_std = id.ols_params.standard_vector(model)?.as_slice().to_vec();
     let sdp_std = id.sdp.standard.clone();
 
     let xv = match (input.truth, input.cross_validate) {
@@ -83,7 +84,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
                 cross_validate(
                     truth,
                     input.nominal,
-                    &model,
+                    model,
                     &[ols_std.clone(), sdp_std.clone()],
                     cfg,
                     &dir,
@@ -107,16 +108,11 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         sdp: pseudo_inertia_min(&id.sdp_params),
         truth: input.truth.map(pseudo_inertia_min),
     };
-    // The truth's paper-model part (extra effects, if any, are not in the
-    // identified model and have no base parameters to compare).
-    let truth_std: Option<Vec<f64>> = input.truth.and_then(|t| {
-        let mut paper = t.clone();
-        paper.extra = Default::default();
-        paper
-            .standard_vector(&model)
-            .ok()
-            .map(|v| v.as_slice().to_vec())
-    });
+    // The truth in the identified model's columns (effects the model lacks
+    // are simply not compared; absent extras count as zero).
+    let truth_std: Option<Vec<f64>> = input
+        .truth
+        .and_then(|t| t.standard_vector(model).ok().map(|v| v.as_slice().to_vec()));
     let truth_base = match &truth_std {
         Some(t) => Some(id.base.to_base(t)?),
         None => None,

@@ -7,7 +7,7 @@ use crate::cli::IdentifyArgs;
 use crate::cmd::fit::{self, FitInput};
 use crate::identify::base_parameters;
 use crate::output::OutDir;
-use crate::robot::{nominal, paper_model};
+use crate::robot::{model_with_effects, nominal, parse_effect};
 use crate::stages::Stages;
 
 /// The truth stored by the simulator in a sidecar (`truth.params`), if any.
@@ -34,7 +34,12 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
     let out = OutDir::create(&args.out, args.common.force)?;
     let mut stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
-    let model = paper_model(&nominal)?;
+    let effects = args
+        .effects
+        .iter()
+        .map(|e| parse_effect(e))
+        .collect::<Result<Vec<_>>>()?;
+    let model = model_with_effects(&nominal, &effects)?;
     let geometry = nominal.geometry()?;
     let log = stages
         .run("read log", |_| {
@@ -72,6 +77,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
             period: args.period,
             design: None,
             base: &base,
+            model: &model,
             command: "identify",
             seed: None,
             noise: None,

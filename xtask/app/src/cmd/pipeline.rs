@@ -91,6 +91,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
             period: None,
             design: Some(&design),
             base: &base,
+            model: &model,
             command: "pipeline",
             seed: Some(cfg.simulation.seed),
             noise: Some(noise),
