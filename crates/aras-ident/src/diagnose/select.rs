@@ -6,7 +6,6 @@ use std::time::Instant;
 use aras_dyn::{Effect, Model, Params};
 use aras_kin::{Geometry, Workspace};
 use faer::{Col, Mat};
-use nalgebra::Vector2;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -14,7 +13,7 @@ use super::candidates::{Candidate, CandidateGrid};
 use super::data::{Dataset, Design, columns, design, effect_columns, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse};
 use super::stats::{f_sf, integrated_time};
-use crate::base::{BaseParameters, DEFAULT_RANK_TOLERANCE};
+use crate::base::BaseParameters;
 use crate::error::IdentError;
 use crate::ls::ReducedLs;
 use crate::robot::{Stacked, consistent_problem};
@@ -228,55 +227,6 @@ struct Fit {
     split: usize,
 }
 
-fn halton(i: usize, base: usize) -> f64 {
-    let (mut f, mut r, mut k) = (1.0, 0.0, i);
-    while k > 0 {
-        f /= base as f64;
-        r += f * (k % base) as f64;
-        k /= base;
-    }
-    r
-}
-
-/// Structural base parameters of `model` from quasi-random states filling
-/// the paper's workspace box (77), its rate limits and ±10 rad/s²: rich
-/// data, so only structural dependencies remain.
-fn structural_base(
-    model: &Model,
-    geometry: &Geometry,
-    count: usize,
-) -> Result<BaseParameters, IdentError> {
-    let ws = Workspace::paper();
-    let (lo, hi, rate) = (ws.min(), ws.max(), ws.max_rate());
-    let primes = [2, 3, 5, 7, 11, 13];
-    let mut x = Vec::with_capacity(count);
-    let mut xd = Vec::with_capacity(count);
-    let mut xdd = Vec::with_capacity(count);
-    for i in 1..=count {
-        let u: Vec<f64> = primes.iter().map(|&p| halton(i, p)).collect();
-        x.push(Vector2::new(
-            lo[0] + u[0] * (hi[0] - lo[0]),
-            lo[1] + u[1] * (hi[1] - lo[1]),
-        ));
-        xd.push(Vector2::new(
-            rate[0] * (2.0 * u[2] - 1.0),
-            rate[1] * (2.0 * u[3] - 1.0),
-        ));
-        xdd.push(Vector2::new(
-            10.0 * (2.0 * u[4] - 1.0),
-            10.0 * (2.0 * u[5] - 1.0),
-        ));
-    }
-    let w = model
-        .stacked_from_states(geometry, &x, &xd, &xdd)
-        .map_err(|e| IdentError::Adapter {
-            context: "base parameters of the diagnosed model".into(),
-            message: e.to_string(),
-        })?;
-    let w = faer::MatRef::from_column_major_slice(w.as_slice(), w.nrows(), w.ncols());
-    BaseParameters::from_regressor(w, &model.names(), DEFAULT_RANK_TOLERANCE)
-}
-
 fn fit(d: &Design, base: &BaseParameters) -> Result<Fit, IdentError> {
     let wb = base.base_regressor(d.w.as_ref())?;
     let red = ReducedLs::new(wb.as_ref(), &d.t, &base.base_names())?;
@@ -373,7 +323,12 @@ impl Context<'_> {
     /// Fit on TRAIN and validation fitness of state `s`.
     fn run(&self, s: &State) -> Result<(BaseParameters, Fit, Vec<[f64; 2]>), IdentError> {
         let model = self.model(s)?;
-        let base = structural_base(&model, self.geometry, self.base_samples)?;
+        let base = crate::robot::base_parameters(
+            &model,
+            self.geometry,
+            &Workspace::paper(),
+            self.base_samples,
+        )?;
         let f = fit(&self.design(&self.train_p, self.train, s), &base)?;
         let fits = self
             .vals
