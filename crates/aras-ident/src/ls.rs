@@ -370,25 +370,7 @@ pub fn wls<S: AsRef<str>>(
     groups.check_rows(w_b.nrows())?;
     let ng = groups.n_groups();
     let (variances, first_pass) = match noise {
-        NoiseVariances::Known(v) => {
-            if v.len() != ng {
-                return Err(IdentError::DimensionMismatch {
-                    what: "noise variances",
-                    expected: ng,
-                    found: v.len(),
-                    hint: "give one variance per row group (joint)",
-                });
-            }
-            check_finite_vec("noise variances", &v)?;
-            if let Some(g) = v.iter().position(|&x| x <= 0.0) {
-                return Err(IdentError::InvalidSetting {
-                    name: "noise variance",
-                    value: v[g],
-                    reason: "variances must be positive",
-                });
-            }
-            (v, None)
-        }
+        NoiseVariances::Known(v) => (checked_variances(v, ng)?, None),
         NoiseVariances::FromResiduals => {
             let first = ReducedLs::new(w_b, t, names)?.ols()?;
             let res = crate::validate::predict(w_b, &first.estimate)?;
@@ -424,4 +406,26 @@ pub fn wls<S: AsRef<str>>(
         first_pass,
         reduced,
     })
+}
+
+/// Validates caller-given per-group noise variances: one per group, finite
+/// and positive (shared by the in-memory and streaming WLS).
+pub(crate) fn checked_variances(v: Vec<f64>, groups: usize) -> Result<Vec<f64>, IdentError> {
+    if v.len() != groups {
+        return Err(IdentError::DimensionMismatch {
+            what: "noise variances",
+            expected: groups,
+            found: v.len(),
+            hint: "give one variance per row group (joint)",
+        });
+    }
+    check_finite_vec("noise variances", &v)?;
+    if let Some(g) = v.iter().position(|&x| x <= 0.0) {
+        return Err(IdentError::InvalidSetting {
+            name: "noise variance",
+            value: v[g],
+            reason: "variances must be positive",
+        });
+    }
+    Ok(v)
 }

@@ -270,25 +270,7 @@ impl QrAccumulator {
     pub fn wls(&self, noise: NoiseVariances) -> Result<WlsEstimate, IdentError> {
         let ng = self.factors.len();
         let (variances, first_pass) = match noise {
-            NoiseVariances::Known(v) => {
-                if v.len() != ng {
-                    return Err(IdentError::DimensionMismatch {
-                        what: "noise variances",
-                        expected: ng,
-                        found: v.len(),
-                        hint: "give one variance per row group (joint)",
-                    });
-                }
-                check_finite_vec("noise variances", &v)?;
-                if let Some(g) = v.iter().position(|&x| x <= 0.0) {
-                    return Err(IdentError::InvalidSetting {
-                        name: "noise variance",
-                        value: v[g],
-                        reason: "variances must be positive",
-                    });
-                }
-                (v, None)
-            }
+            NoiseVariances::Known(v) => (crate::ls::checked_variances(v, ng)?, None),
             NoiseVariances::FromResiduals => {
                 let first = self.ols()?;
                 let ss = self.group_rss(&first.estimate)?;
