@@ -47,22 +47,13 @@ impl ReducedLs {
         names: &[S],
         row_weights: &[f64],
     ) -> Result<Self, IdentError> {
-        if row_weights.len() != w.nrows() {
-            return Err(IdentError::DimensionMismatch {
-                what: "row weights",
-                expected: w.nrows(),
-                found: row_weights.len(),
-                hint: "give one weight per regressor row",
-            });
+        PositiveList {
+            what: "row weights",
+            name: "row weight",
+            hint: "give one weight per regressor row",
+            reason: "weights must be positive (1/σ of the row's noise)",
         }
-        check_finite_vec("row weights", row_weights)?;
-        if let Some(i) = row_weights.iter().position(|&x| x <= 0.0) {
-            return Err(IdentError::InvalidSetting {
-                name: "row weight",
-                value: row_weights[i],
-                reason: "weights must be positive (1/σ of the row's noise)",
-            });
-        }
+        .check(row_weights, w.nrows())?;
         Self::build(w, t, names, Some(row_weights))
     }
 
@@ -408,24 +399,52 @@ pub fn wls<S: AsRef<str>>(
     })
 }
 
+/// A caller-given list that needs one finite, positive value per item
+/// (row weights, group weights, noise variances); the names go into the
+/// error messages.
+pub(crate) struct PositiveList {
+    /// The list, plural (e.g. "row weights").
+    pub what: &'static str,
+    /// One item, singular (e.g. "row weight").
+    pub name: &'static str,
+    /// How to give the right number of values.
+    pub hint: &'static str,
+    /// Why the values must be positive.
+    pub reason: &'static str,
+}
+
+impl PositiveList {
+    /// Errors on a wrong length, a non-finite or a non-positive value.
+    pub(crate) fn check(&self, values: &[f64], expected: usize) -> Result<(), IdentError> {
+        if values.len() != expected {
+            return Err(IdentError::DimensionMismatch {
+                what: self.what,
+                expected,
+                found: values.len(),
+                hint: self.hint,
+            });
+        }
+        check_finite_vec(self.what, values)?;
+        if let Some(i) = values.iter().position(|&x| x <= 0.0) {
+            return Err(IdentError::InvalidSetting {
+                name: self.name,
+                value: values[i],
+                reason: self.reason,
+            });
+        }
+        Ok(())
+    }
+}
+
 /// Validates caller-given per-group noise variances: one per group, finite
 /// and positive (shared by the in-memory and streaming WLS).
 pub(crate) fn checked_variances(v: Vec<f64>, groups: usize) -> Result<Vec<f64>, IdentError> {
-    if v.len() != groups {
-        return Err(IdentError::DimensionMismatch {
-            what: "noise variances",
-            expected: groups,
-            found: v.len(),
-            hint: "give one variance per row group (joint)",
-        });
+    PositiveList {
+        what: "noise variances",
+        name: "noise variance",
+        hint: "give one variance per row group (joint)",
+        reason: "variances must be positive",
     }
-    check_finite_vec("noise variances", &v)?;
-    if let Some(g) = v.iter().position(|&x| x <= 0.0) {
-        return Err(IdentError::InvalidSetting {
-            name: "noise variance",
-            value: v[g],
-            reason: "variances must be positive",
-        });
-    }
+    .check(&v, groups)?;
     Ok(v)
 }

@@ -180,22 +180,13 @@ impl QrAccumulator {
     /// `group_weights[g]` (e.g. `1/σ_g`): the same as `ReducedLs::weighted`
     /// in memory.
     pub fn reduced_weighted(&self, group_weights: &[f64]) -> Result<ReducedLs, IdentError> {
-        if group_weights.len() != self.factors.len() {
-            return Err(IdentError::DimensionMismatch {
-                what: "group weights",
-                expected: self.factors.len(),
-                found: group_weights.len(),
-                hint: "give one weight per row group",
-            });
+        crate::ls::PositiveList {
+            what: "group weights",
+            name: "group weight",
+            hint: "give one weight per row group",
+            reason: "weights must be positive (1/σ of the group's noise)",
         }
-        check_finite_vec("group weights", group_weights)?;
-        if let Some(i) = group_weights.iter().position(|&x| x <= 0.0) {
-            return Err(IdentError::InvalidSetting {
-                name: "group weight",
-                value: group_weights[i],
-                reason: "weights must be positive (1/σ of the group's noise)",
-            });
-        }
+        .check(group_weights, self.factors.len())?;
         self.combine(group_weights)
     }
 
