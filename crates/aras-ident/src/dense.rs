@@ -182,6 +182,7 @@ fn faer_block_r(mut a: Mat<f64>) -> Option<Mat<f64>> {
         MemStack::new(&mut mem),
         Default::default(),
     );
+    crate::simd::clear_upper_state();
     (info.rank == k).then(|| Mat::from_fn(k, n, |i, j| if i <= j { a[(i, j)] } else { 0.0 }))
 }
 

@@ -56,6 +56,7 @@ mod ls;
 mod rank;
 pub mod robot;
 mod sdp;
+mod simd;
 pub mod streaming;
 pub mod validate;
 

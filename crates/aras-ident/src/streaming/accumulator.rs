@@ -440,6 +440,7 @@ impl BlockQr {
             MemStack::new(&mut self.mem),
             Default::default(),
         );
+        crate::simd::clear_upper_state();
         if info.rank == k {
             for q in 0..kc {
                 for p in 0..=q.min(k - 1) {

@@ -30,7 +30,7 @@
 //! filter → OLS in memory). Performance and the scale study:
 //! `benches/streaming.rs`, `examples/scale_study.rs`, `docs/scale.md`.
 
-mod accumulator;
+pub(crate) mod accumulator;
 mod log;
 mod stage;
 pub mod synthetic;
