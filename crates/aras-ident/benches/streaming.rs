@@ -5,7 +5,7 @@
 use aras_dyn::Params;
 use aras_ident::BaseParameters;
 use aras_ident::robot::stack;
-use aras_ident::streaming::{RegressorStage, States, synthetic};
+use aras_ident::streaming::{Accumulation, RegressorStage, States, synthetic};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nalgebra::Vector2;
 use std::hint::black_box;
@@ -38,13 +38,43 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("streaming");
     g.throughput(Throughput::Elements(n as u64));
     g.sample_size(10);
-    g.bench_function("regressor_and_accumulation_262144_samples", |b| {
-        b.iter(|| {
-            let mut stage = RegressorStage::new(&model, &geo, &base).unwrap();
-            stage.push(&states).unwrap();
-            black_box(stage.accumulator().rows())
-        })
-    });
+    for (name, how) in [
+        (
+            "regressor_and_accumulation_gram_262144_samples",
+            Accumulation::Gram,
+        ),
+        (
+            "regressor_and_accumulation_qr_262144_samples",
+            Accumulation::Qr,
+        ),
+    ] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let mut stage =
+                    RegressorStage::with_accumulation(&model, &geo, &base, how).unwrap();
+                stage.push(&states).unwrap();
+                black_box(stage.accumulator().rows())
+            })
+        });
+    }
+    // CPU time per sample: the Gram stage on one thread (the machine is
+    // shared, so the 2-thread time depends on the load).
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    g.bench_function(
+        "regressor_and_accumulation_gram_1_thread_262144_samples",
+        |b| {
+            b.iter(|| {
+                one.install(|| {
+                    let mut stage = RegressorStage::new(&model, &geo, &base).unwrap();
+                    stage.push(&states).unwrap();
+                    black_box(stage.accumulator().rows())
+                })
+            })
+        },
+    );
     // The parts, single-threaded, per sample.
     let mut y = vec![0.0; 2 * model.columns()];
     g.bench_function("evaluate_only_262144_samples", |b| {

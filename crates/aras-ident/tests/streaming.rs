@@ -4,10 +4,10 @@
 mod common;
 
 use aras_dyn::{Model, Params};
-use aras_ident::robot::{filter, stack};
+use aras_ident::robot::{filter, filter_reach, keep_rows, noise_gain, reversal_mask, stack};
 use aras_ident::streaming::{
-    QrAccumulator, RegressorStage, States, StreamingOptions, StreamingRoute, identify_log,
-    synthetic,
+    Accumulation, QrAccumulator, RegressorStage, States, StreamingOptions, StreamingRoute,
+    identify_log, synthetic,
 };
 use aras_ident::{BaseParameters, NoiseVariances, ReducedLs, RowGroups, wls};
 use aras_kin::Geometry;
@@ -215,7 +215,8 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
         .ols()
         .unwrap();
     let run = |chunk: usize| {
-        let mut stage = RegressorStage::new(&r.model, &r.geo, &r.base).unwrap();
+        let mut stage =
+            RegressorStage::with_accumulation(&r.model, &r.geo, &r.base, Accumulation::Qr).unwrap();
         for c0 in (0..n).step_by(chunk) {
             let c1 = (c0 + chunk).min(n);
             let states = States {
@@ -245,6 +246,29 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
     );
     let c = run(n);
     assert!(rel(&c.estimate, &mem.estimate) < 1e-10);
+    // Normal equations (the default): error of order κ² ε of the
+    // column-scaled regressor at worst, still bit-identical for the same
+    // chunks.
+    let gram = |chunk: usize| {
+        let mut stage = RegressorStage::new(&r.model, &r.geo, &r.base).unwrap();
+        for c0 in (0..n).step_by(chunk) {
+            let c1 = (c0 + chunk).min(n);
+            let states = States {
+                x: [&s[0][0][c0..c1], &s[0][1][c0..c1]],
+                x_dot: [&s[1][0][c0..c1], &s[1][1][c0..c1]],
+                x_ddot: [&s[2][0][c0..c1], &s[2][1][c0..c1]],
+                tau: [&s[3][0][c0..c1], &s[3][1][c0..c1]],
+            };
+            stage.push(&states).unwrap();
+        }
+        let acc = stage.accumulator();
+        (acc.ols().unwrap(), acc.gram_check().unwrap())
+    };
+    let (g1, check) = gram(7000);
+    assert!(check.passed && check.condition > 10.0, "{check:?}");
+    let e = rel(&g1.estimate, &mem.estimate);
+    assert!(e < check.error_bound, "{e:e} vs κ²ε = {check:?}");
+    assert_eq!(g1.estimate, gram(7000).0.estimate);
     // The model fits to the noise: unit-variance noise × 0.01 N·m.
     assert!(
         (a.residual_variance / 1e-4 - 1.0).abs() < 0.05,
@@ -292,83 +316,134 @@ fn tempdir(tag: &str) -> std::path::PathBuf {
     d
 }
 
-/// The in-memory pipeline: read → process → stack → filter → OLS.
-fn in_memory(path: &std::path::Path, r: &Robot, o: &StreamingOptions) -> Vec<f64> {
+/// What the in-memory identification gives: estimate, rows fitted per
+/// joint, σ² corrected for the filter.
+struct Reference {
+    estimate: Vec<f64>,
+    rows: [usize; 2],
+    variance: f64,
+}
+
+/// The in-memory pipeline, as `aras identify` runs it: read → process →
+/// stack → filter → reversal exclusion (`reversal_mask` widened by
+/// `filter_reach`) → OLS → σ corrected by `noise_gain`.
+fn in_memory(path: &std::path::Path, r: &Robot, o: &StreamingOptions) -> Reference {
     let log = read_log(path, &o.read).unwrap();
     let pr = process(&log, &o.process, &r.geo).unwrap();
     let mut st = stack(&r.model, &r.geo, &pr.samples).unwrap();
     let periodic = pr.summary.periods.is_some();
+    let n = pr.samples.len();
+    let (mut guard, mut gain) = (0, 1.0);
     if let Some(f) = o.process.filter {
         let sos = Butterworth::lowpass(f.order, f.cutoff_hz, pr.summary.sample_rate_hz).unwrap();
         filter(&mut st, &sos, o.filter_mode, periodic).unwrap();
+        guard = filter_reach(&sos, n, periodic, o.reversal_reach).unwrap();
+        gain = noise_gain(&sos, n, periodic).unwrap();
     }
-    let wb = r.base.base_regressor(st.w.as_ref()).unwrap();
-    ReducedLs::new(wb.as_ref(), &st.t, &r.base.base_names())
+    let keep = reversal_mask(&pr.samples.theta_dot, o.min_speed, guard, periodic).unwrap();
+    let fit = keep_rows(&st, &keep).unwrap();
+    let wb = r.base.base_regressor(fit.w.as_ref()).unwrap();
+    let ols = ReducedLs::new(wb.as_ref(), &fit.t, &r.base.base_names())
         .unwrap()
         .ols()
         .unwrap()
-        .estimate
+        .with_filtered_noise(gain)
+        .unwrap();
+    Reference {
+        estimate: ols.estimate,
+        rows: [fit.groups.counts()[0], fit.groups.counts()[1]],
+        variance: ols.residual_variance,
+    }
+}
+
+/// Streaming with `o` (QR, then normal equations) against the in-memory
+/// identification: the same rows, the same estimate and σ.
+fn check_route(path: &std::path::Path, r: &Robot, o: &StreamingOptions, route: StreamingRoute) {
+    let mem = in_memory(path, r, o);
+    let mut q = o.clone();
+    q.accumulation = Accumulation::Qr;
+    let s = identify_log(path, &r.model, &r.base, &q).unwrap();
+    assert_eq!(s.route, route);
+    assert!(s.gram_check.is_none());
+    assert_eq!(s.rows_fitted, mem.rows, "{route:?}: the same rows");
+    if o.min_speed > 0.0 {
+        assert!(
+            s.rows_fitted[0] < s.samples_used && s.rows_fitted[1] < s.samples_used,
+            "{route:?}: reversals were excluded ({:?} of {})",
+            s.rows_fitted,
+            s.samples_used
+        );
+    }
+    // QR on the same rows in another order and blocking: rounding only
+    // (κ ≈ 1e3, so ≈ 1e3 ε), plus filter edge transients below 1e-12 on the
+    // overlapping-block route.
+    let e = rel(&s.ols.estimate, &mem.estimate);
+    assert!(e < 1e-9, "{route:?}: QR estimate differs by {e:e}");
+    let v = (s.ols.residual_variance / mem.variance - 1.0).abs();
+    assert!(v < 1e-9, "{route:?}: σ² differs by {v:e}");
+
+    let mut g = o.clone();
+    g.accumulation = Accumulation::Gram;
+    let s = identify_log(path, &r.model, &r.base, &g).unwrap();
+    let check = s.gram_check.expect("normal equations are checked");
+    assert!(check.passed, "{check:?}");
+    assert_eq!(s.rows_fitted, mem.rows);
+    // Normal equations: the error is of order κ² ε at worst (the Gram's
+    // rounding amplified by the squared condition number; measured 20–700×
+    // below it here), plus the route's own 1e-9.
+    let e = rel(&s.ols.estimate, &mem.estimate);
+    assert!(
+        e < check.error_bound + 1e-9,
+        "{route:?}: Gram estimate differs by {e:e}, κ²ε = {:e}",
+        check.error_bound
+    );
+    let v = (s.ols.residual_variance / mem.variance - 1.0).abs();
+    assert!(v < 1e-6, "{route:?}: Gram σ² differs by {v:e}");
 }
 
 #[test]
-fn identify_log_matches_the_in_memory_pipeline_on_every_route() {
+fn identify_log_matches_the_in_memory_identification_on_every_route() {
     let r = robot();
     let dir = tempdir("routes");
     let fs = 500.0;
     let n = 40_000; // 80 s: 8 periods
     let path = write(&dir, "run.csv", &r, n, fs);
-    let base_opts = StreamingOptions {
-        chunk_samples: 4096,
-        ..Default::default()
-    };
+    for min_speed in [0.0, 0.2] {
+        let base_opts = StreamingOptions {
+            chunk_samples: 4096,
+            min_speed,
+            ..Default::default()
+        };
 
-    // 1. Logged derivatives, no filter: the fast path.
-    let mut o = base_opts.clone();
-    o.process.use_logged_derivatives = true;
-    o.process.filter = None;
-    o.process.period = PeriodSource::Off;
-    let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
-    assert_eq!(s.route, StreamingRoute::LoggedDerivatives);
-    assert_eq!((s.samples_read, s.samples_used), (n, n));
-    let mem = in_memory(&path, &r, &o);
-    assert!(
-        rel(&s.ols.estimate, &mem) < 1e-10,
-        "{}",
-        rel(&s.ols.estimate, &mem)
-    );
+        // 1. Logged derivatives, no filter: the fast path.
+        let mut o = base_opts.clone();
+        o.process.use_logged_derivatives = true;
+        o.process.filter = None;
+        o.process.period = PeriodSource::Off;
+        check_route(&path, &r, &o, StreamingRoute::LoggedDerivatives);
+        let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
+        assert_eq!((s.samples_read, s.samples_used), (n, n));
+        assert_eq!(s.noise_gain, 1.0);
 
-    // 2. Non-periodic, filtered, θ differentiated: overlapping blocks.
-    let mut o = base_opts.clone();
-    o.process.period = PeriodSource::Off;
-    o.process.filter = Some(FilterSpec {
-        order: 4,
-        cutoff_hz: 20.0,
-    });
-    let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
-    assert_eq!(s.route, StreamingRoute::OverlappingBlocks);
-    assert!(s.blocks > 5 && s.overlap > 0, "{} blocks", s.blocks);
-    let mem = in_memory(&path, &r, &o);
-    // Edge transients decay to 1e-12 inside the overlap; what remains is
-    // rounding in the filters and the QR.
-    assert!(
-        rel(&s.ols.estimate, &mem) < 1e-8,
-        "{}",
-        rel(&s.ols.estimate, &mem)
-    );
-    assert_eq!(2 * s.samples_used, s.ols.dof + r.base.n_base());
+        // 2. Non-periodic, filtered, θ differentiated: overlapping blocks.
+        let mut o = base_opts.clone();
+        o.process.period = PeriodSource::Off;
+        o.process.filter = Some(FilterSpec {
+            order: 4,
+            cutoff_hz: 20.0,
+        });
+        check_route(&path, &r, &o, StreamingRoute::OverlappingBlocks);
+        let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
+        assert!(s.blocks > 5 && s.overlap > 0, "{} blocks", s.blocks);
+        assert!(s.noise_gain > 0.0 && s.noise_gain < 0.2, "{}", s.noise_gain);
 
-    // 3. Periodic: the period average on the fly.
-    let mut o = base_opts.clone();
-    o.process.period = PeriodSource::Seconds(synthetic::PERIOD_S);
-    let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
-    assert_eq!(s.route, StreamingRoute::PeriodAverage);
-    assert_eq!(s.periods, 8);
-    let mem = in_memory(&path, &r, &o);
-    assert!(
-        rel(&s.ols.estimate, &mem) < 1e-10,
-        "{}",
-        rel(&s.ols.estimate, &mem)
-    );
+        // 3. Periodic: the period average on the fly.
+        let mut o = base_opts.clone();
+        o.process.period = PeriodSource::Seconds(synthetic::PERIOD_S);
+        check_route(&path, &r, &o, StreamingRoute::PeriodAverage);
+        let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
+        assert_eq!(s.periods, 8);
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -404,4 +479,105 @@ fn identify_log_reports_bad_options_and_bad_logs() {
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn gram_accumulation_matches_qr_and_its_guard_trips_on_ill_conditioned_data() {
+    // Well conditioned: normal equations agree with in-memory QR to κ² ε.
+    let (rows, cols) = (5_000, 23);
+    let (w, t) = problem(rows, cols, 5);
+    let mem = ReducedLs::new(w.as_ref(), &t, &names(cols))
+        .unwrap()
+        .ols()
+        .unwrap();
+    let mut acc = QrAccumulator::new(&names(cols), 2).unwrap();
+    for g in 0..2 {
+        acc.push_rows_gram(
+            g,
+            w.as_ref().subrows(g * rows, rows),
+            &t[g * rows..(g + 1) * rows],
+        )
+        .unwrap();
+    }
+    assert_eq!(acc.gram_rows(), 2 * rows);
+    let check = acc.gram_check().unwrap();
+    assert!(check.passed && check.error().is_none(), "{check:?}");
+    // κ ≈ 1 here, so the bound is ≈ ε; 1e-12 covers the rounding of sums
+    // over thousands of rows that any method has.
+    let e = rel(&acc.ols().unwrap().estimate, &mem.estimate);
+    assert!(e < check.error_bound + 1e-12, "{e:e} vs {check:?}");
+    // WLS from residuals goes through the same factors.
+    let groups = RowGroups::contiguous(&[rows, rows]).unwrap();
+    let mem_wls = wls(
+        w.as_ref(),
+        &t,
+        &names(cols),
+        &groups,
+        NoiseVariances::FromResiduals,
+    )
+    .unwrap();
+    let acc_wls = acc.wls(NoiseVariances::FromResiduals).unwrap();
+    assert!(
+        rel(&acc_wls.estimate.estimate, &mem_wls.estimate.estimate) < check.error_bound + 1e-12
+    );
+
+    // Ill conditioned: column 1 = column 0 + 1e-6 noise, κ ≈ 1e6, κ² ε ≈
+    // 1e-4 > 1e-6: the check fails and says to use the QR accumulation,
+    // which stays accurate (κ ε ≈ 1e-10).
+    let mut r = common::rng(9);
+    let n = 4_000;
+    let w = Mat::from_fn(n, 3, |i, j| {
+        let x = ((i * 37) % 101) as f64 / 101.0 - 0.5;
+        match j {
+            0 => x,
+            1 => x + 1e-6 * common::normal(&mut r),
+            _ => ((i * 13) % 7) as f64,
+        }
+    });
+    let t: Vec<f64> = (0..n)
+        .map(|i| w[(i, 0)] - 2.0 * w[(i, 1)] + 0.5 * w[(i, 2)])
+        .collect();
+    let mut gram = QrAccumulator::new(&names(3), 1).unwrap();
+    gram.push_rows_gram(0, w.as_ref(), &t).unwrap();
+    let check = gram.gram_check().unwrap();
+    assert!(!check.passed && check.condition > 1e5, "{check:?}");
+    let msg = check.error().unwrap().to_string();
+    assert!(
+        msg.contains("Accumulation::Qr") && msg.contains("--accumulation qr"),
+        "{msg}"
+    );
+    let mut qr = QrAccumulator::new(&names(3), 1).unwrap();
+    qr.push_rows(0, w.as_ref(), &t).unwrap();
+    assert!(qr.gram_check().is_none());
+    let x = qr.ols().unwrap().estimate;
+    // Exact data: QR recovers the parameters to κ ε ≈ 1e-10 (× 10).
+    assert!(rel(&x, &[1.0, -2.0, 0.5]) < 1e-9, "{x:?}");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
+    /// Any chunking of the normal equations gives the in-memory estimate to
+    /// within their κ² ε bound (the compensated sum makes the blocking
+    /// irrelevant to first order).
+    #[test]
+    fn gram_any_chunking_stays_within_its_bound(chunk in 1usize..3000, seed in 0u64..1000) {
+        let (rows, cols) = (3_000, 8);
+        let (w, t) = problem(rows, cols, seed);
+        let mem = ReducedLs::new(w.as_ref(), &t, &names(cols)).unwrap().ols().unwrap();
+        let mut acc = QrAccumulator::new(&names(cols), 2).unwrap();
+        for g in 0..2 {
+            let mut s0 = 0;
+            while s0 < rows {
+                let k = chunk.min(rows - s0);
+                let (a, b) = (g * rows + s0, g * rows + s0 + k);
+                acc.push_rows_gram(g, w.as_ref().subrows(a, k), &t[a..b]).unwrap();
+                s0 += k;
+            }
+        }
+        let check = acc.gram_check().unwrap();
+        prop_assert!(check.passed);
+        let e = rel(&acc.ols().unwrap().estimate, &mem.estimate);
+        // + 1e-12: the rounding of sums over thousands of rows (κ ≈ 1).
+        prop_assert!(e < check.error_bound + 1e-12, "{} vs {:?}", e, check);
+    }
 }

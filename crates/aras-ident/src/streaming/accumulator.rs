@@ -35,6 +35,7 @@ pub struct QrAccumulator {
     names: Vec<String>,
     factors: Vec<Mat<f64>>,
     rows: Vec<usize>,
+    gram_rows: usize,
 }
 
 impl QrAccumulator {
@@ -59,6 +60,7 @@ impl QrAccumulator {
             names: names.iter().map(|s| s.as_ref().to_owned()).collect(),
             factors: vec![Mat::zeros(c, c); groups],
             rows: vec![0; groups],
+            gram_rows: 0,
         })
     }
 
@@ -98,16 +100,7 @@ impl QrAccumulator {
         Ok(())
     }
 
-    /// Appends the rows `w` (one column per unknown) with torques `t` to
-    /// group `group`. Any number of rows; pass blocks of many rows (a row
-    /// at a time works but wastes the blocked QR). For per-sample robot
-    /// data use [`super::RegressorStage`], which builds the blocks itself.
-    pub fn push_rows(
-        &mut self,
-        group: usize,
-        w: MatRef<'_, f64>,
-        t: &[f64],
-    ) -> Result<(), IdentError> {
+    fn check_block(&self, group: usize, w: MatRef<'_, f64>, t: &[f64]) -> Result<(), IdentError> {
         self.check_group(group)?;
         let b = self.names.len();
         if w.ncols() != b {
@@ -127,7 +120,21 @@ impl QrAccumulator {
             });
         }
         check_finite_mat("regressor block", w, &self.names)?;
-        check_finite_vec("torques of the block", t)?;
+        check_finite_vec("torques of the block", t)
+    }
+
+    /// Appends the rows `w` (one column per unknown) with torques `t` to
+    /// group `group`. Any number of rows; pass blocks of many rows (a row
+    /// at a time works but wastes the blocked QR). For per-sample robot
+    /// data use [`super::RegressorStage`], which builds the blocks itself.
+    pub fn push_rows(
+        &mut self,
+        group: usize,
+        w: MatRef<'_, f64>,
+        t: &[f64],
+    ) -> Result<(), IdentError> {
+        self.check_block(group, w, t)?;
+        let b = self.names.len();
         let m = w.nrows();
         let mut qr = BlockQr::new(PUSH_BLOCK_ROWS.min(m.max(1)), b + 1);
         for start in (0..m).step_by(PUSH_BLOCK_ROWS) {
@@ -143,6 +150,65 @@ impl QrAccumulator {
             self.merge_factor(group, r, rows);
         }
         Ok(())
+    }
+
+    /// Like [`Self::push_rows`], but through the normal equations
+    /// ([`super::Accumulation::Gram`]): the rows' Gram matrix is summed in
+    /// blocks and factorised once, then merged. Faster for many rows, less
+    /// accurate for ill-conditioned ones: see [`Self::gram_check`].
+    pub fn push_rows_gram(
+        &mut self,
+        group: usize,
+        w: MatRef<'_, f64>,
+        t: &[f64],
+    ) -> Result<(), IdentError> {
+        self.check_block(group, w, t)?;
+        let (m, b) = (w.nrows(), self.names.len());
+        let mut gram = super::gram::GramSum::new(b + 1);
+        let mut a = Mat::<f64>::zeros(PUSH_BLOCK_ROWS.min(m.max(1)), b + 1);
+        for start in (0..m).step_by(PUSH_BLOCK_ROWS) {
+            let rows = PUSH_BLOCK_ROWS.min(m - start);
+            a.as_mut()
+                .subrows_mut(0, rows)
+                .subcols_mut(0, b)
+                .copy_from(w.subrows(start, rows));
+            for i in 0..rows {
+                a[(i, b)] = t[start + i];
+            }
+            gram.add(a.as_ref().subrows(0, rows));
+        }
+        self.merge_gram(group, &gram, m);
+        Ok(())
+    }
+
+    /// Merges the factor of a Gram sum of `rows` rows into group `group`.
+    pub(crate) fn merge_gram(&mut self, group: usize, gram: &super::gram::GramSum, rows: usize) {
+        let r = gram.factor();
+        self.merge_factor(group, r.as_ref(), rows);
+        self.gram_rows += rows;
+    }
+
+    /// Rows accumulated through the normal equations (all groups).
+    pub fn gram_rows(&self) -> usize {
+        self.gram_rows
+    }
+
+    /// The accuracy check of the normal equations (condition number of the
+    /// column-scaled regressor of all groups, `κ² ε` against
+    /// [`super::GRAM_ERROR_LIMIT`]); `None` if no row went through them.
+    pub fn gram_check(&self) -> Option<super::GramCheck> {
+        if self.gram_rows == 0 {
+            return None;
+        }
+        let b = self.names.len();
+        let mut r = Mat::<f64>::zeros(b + 1, b + 1);
+        for f in &self.factors {
+            let mut s = f.clone();
+            merge_upper(r.as_mut(), s.as_mut());
+        }
+        Some(super::GramCheck::of_factor(
+            r.as_ref().submatrix(0, 0, b, b),
+        ))
     }
 
     /// Merges an upper-triangular `(b+1) × (b+1)` factor of `rows` rows into
@@ -167,6 +233,7 @@ impl QrAccumulator {
         for g in 0..self.factors.len() {
             self.merge_factor(g, other.factors[g].as_ref(), other.rows[g]);
         }
+        self.gram_rows += other.gram_rows;
         Ok(())
     }
 

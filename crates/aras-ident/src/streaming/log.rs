@@ -12,11 +12,12 @@ use nalgebra::Vector2;
 use serde::Serialize;
 
 use super::accumulator::QrAccumulator;
+use super::gram::{Accumulation, GramCheck};
 use super::stage::{RegressorStage, States};
 use crate::base::BaseParameters;
 use crate::error::IdentError;
 use crate::ls::{OlsEstimate, ReducedLs};
-use crate::robot::{FilterMode, filter, stack};
+use crate::robot::{FilterMode, filter, filter_reach, noise_gain, reversal_mask, stack};
 
 /// Options of [`identify_log`]. `Default` gives the documented defaults.
 #[derive(Debug, Clone)]
@@ -37,6 +38,16 @@ pub struct StreamingOptions {
     /// Relative size below which a filter's edge transient counts as
     /// decayed (default 1e-12): sets the overlap of filtered blocks.
     pub overlap_tolerance: f64,
+    /// Normal equations (default, fast, checked) or incremental QR.
+    pub accumulation: Accumulation,
+    /// Reversal exclusion: joint `j`'s rows with `|θ̇_j|` below this speed
+    /// (rad/s) are left out, widened by the filter's reach, exactly as
+    /// [`crate::robot::reversal_mask`] in memory (default 0: every row is
+    /// kept; the CLI uses `identification.min_speed`, 0.2 rad/s).
+    pub min_speed: f64,
+    /// Where the filter's impulse response counts as ended for the
+    /// widening ([`crate::robot::filter_reach`]; default 1e-3).
+    pub reversal_reach: f64,
 }
 
 impl Default for StreamingOptions {
@@ -48,6 +59,9 @@ impl Default for StreamingOptions {
             geometry: Geometry::aras_diamond(),
             chunk_samples: 65_536,
             overlap_tolerance: 1e-12,
+            accumulation: Accumulation::Gram,
+            min_speed: 0.0,
+            reversal_reach: 1e-3,
         }
     }
 }
@@ -73,14 +87,25 @@ pub struct StreamingResult {
     pub accumulator: QrAccumulator,
     /// The unweighted reduced problem (input of OLS and of the SDP).
     pub reduced: ReducedLs,
-    /// OLS on it (63)–(66).
+    /// OLS on it (63)–(66), σ corrected for the filter
+    /// ([`OlsEstimate::with_filtered_noise`] with [`Self::noise_gain`]).
     pub ols: OlsEstimate,
+    /// Noise power gain `Σ h²` of the zero-phase filter
+    /// ([`crate::robot::noise_gain`]; 1 unfiltered): divide variances of a
+    /// WLS from [`Self::accumulator`] by it as well.
+    pub noise_gain: f64,
+    /// The accuracy check of the normal equations (`None` with
+    /// [`Accumulation::Qr`]). If it did not pass, rerun with
+    /// [`Accumulation::Qr`].
+    pub gram_check: Option<GramCheck>,
     /// The route taken.
     pub route: StreamingRoute,
     /// Rows read from the log.
     pub samples_read: usize,
-    /// Samples that entered the least squares (per joint).
+    /// Samples that entered the least squares (before reversal exclusion).
     pub samples_used: usize,
+    /// Rows fitted per joint (after reversal exclusion).
+    pub rows_fitted: [usize; 2],
     /// Blocks processed.
     pub blocks: usize,
     /// Overlap of the blocks (samples each side; 0 unless overlapping).
@@ -149,7 +174,22 @@ pub fn identify_log(
     }
     let name = path.display().to_string();
     let mut reader = LogReader::open(path, &options.read).map_err(|e| sig("opening the log", e))?;
-    let mut stage = RegressorStage::new(model, &options.geometry, base)?;
+    if !(options.min_speed.is_finite() && options.min_speed >= 0.0) {
+        return Err(IdentError::InvalidSetting {
+            name: "min_speed",
+            value: options.min_speed,
+            reason: "give a finite speed ≥ 0 in rad/s (0 keeps every row)",
+        });
+    }
+    if !(options.reversal_reach > 0.0 && options.reversal_reach < 1.0) {
+        return Err(IdentError::InvalidSetting {
+            name: "reversal_reach",
+            value: options.reversal_reach,
+            reason: "give a fraction of the impulse response's peak in (0, 1), e.g. 1e-3",
+        });
+    }
+    let mut stage =
+        RegressorStage::with_accumulation(model, &options.geometry, base, options.accumulation)?;
     let mut acc = QrAccumulator::new(stage.names(), 2)?;
     let period = match options.process.period {
         PeriodSource::FromSidecar => reader.sidecar().excitation.period_s,
@@ -210,7 +250,9 @@ pub fn identify_log(
                 x_ddot: [&xdd[0], &xdd[1]],
                 tau: [&chunk.tau[0], &chunk.tau[1]],
             };
-            stage.push(&states)?;
+            let keep = reversal_mask(&chunk.theta_dot, options.min_speed, 0, false)?;
+            let (k1, k2) = keep.split_at(n);
+            stage.push_selected(&states, Some([k1, k2]))?;
             out.read += n;
             out.used += n;
             out.blocks += 1;
@@ -242,7 +284,16 @@ pub fn identify_log(
         let mut popts = options.process.clone();
         popts.period = PeriodSource::Seconds(p);
         popts.settling_s = 0.0;
-        out.used = accumulate_processed(&log, &popts, options, model, base, &mut acc, None)?;
+        out.used = accumulate_processed(
+            &log,
+            &popts,
+            options,
+            model,
+            base,
+            &mut acc,
+            None,
+            &mut out.gain,
+        )?;
     } else {
         route = StreamingRoute::OverlappingBlocks;
         let mut popts = options.process.clone();
@@ -268,7 +319,8 @@ pub fn identify_log(
                     return Err(sig(&name, "the log has no data rows"));
                 }
                 dt = nominal_step(&buf, dt)?;
-                margin = overlap(&popts, dt, options.overlap_tolerance)?;
+                margin = overlap(&popts, dt, options.overlap_tolerance)?
+                    + reach_of(&popts, dt, options.reversal_reach)?;
                 first = false;
                 if !eof {
                     // Read the rest of the first block with its margin.
@@ -294,6 +346,7 @@ pub fn identify_log(
                 base,
                 &mut acc,
                 Some((buf_start, done, keep_end)),
+                &mut out.gain,
             )?;
             out.blocks += 1;
             done = keep_end;
@@ -308,12 +361,30 @@ pub fn identify_log(
         acc = stage.accumulator();
     }
     let report = reader.finish().map_err(|e| sig("checking the log", e))?;
+    let [n1, n2] = [acc.group_rows()[0], acc.group_rows()[1]];
+    let b = acc.names().len();
+    if n1 < b || n2 < b {
+        return Err(IdentError::Adapter {
+            context: format!("streaming identification of {name}"),
+            message: format!(
+                "only {n1} (joint 1) and {n2} (joint 2) samples are away from velocity \
+                 reversals (min_speed = {} rad/s, widened by the filter's reach at {}); \
+                 lower them or excite the joints more",
+                options.min_speed, options.reversal_reach
+            ),
+        });
+    }
     let reduced = acc.reduced()?;
-    let ols = reduced.ols()?;
+    let ols = reduced
+        .ols()?
+        .with_filtered_noise(out.gain.unwrap_or(1.0))?;
     Ok(StreamingResult {
+        gram_check: acc.gram_check(),
         accumulator: acc,
         reduced,
         ols,
+        noise_gain: out.gain.unwrap_or(1.0),
+        rows_fitted: [n1, n2],
         route,
         samples_read: out.read,
         samples_used: out.used,
@@ -331,6 +402,7 @@ struct Progress {
     blocks: usize,
     overlap: usize,
     periods: usize,
+    gain: Option<f64>,
 }
 
 /// The reader's nominal step: `ReadOptions::nominal_step` if given (> 0),
@@ -436,10 +508,12 @@ fn block_log(name: &str, c: &Columns, dt: f64, sidecar: Sidecar) -> Log {
     }
 }
 
-/// Processes `log` as in memory (process → stack → filter → base columns)
-/// and pushes the rows of the samples with global indices in
-/// `done..keep_end` (`window = (first index of log, done, keep_end)`; all
-/// rows if `None`). Returns the samples pushed.
+/// Processes `log` as in memory (process → stack → filter → reversal
+/// exclusion → base columns) and pushes the kept rows of the samples with
+/// global indices in `done..keep_end` (`window = (first index of log, done,
+/// keep_end)`; all rows if `None`). Returns the samples in the window;
+/// sets `gain` (the filter's noise gain) on the first call.
+#[allow(clippy::too_many_arguments)]
 fn accumulate_processed(
     log: &Log,
     popts: &ProcessOptions,
@@ -448,19 +522,25 @@ fn accumulate_processed(
     base: &BaseParameters,
     acc: &mut QrAccumulator,
     window: Option<(usize, usize, usize)>,
+    gain: &mut Option<f64>,
 ) -> Result<usize, IdentError> {
     let processed = process(log, popts, &options.geometry)
         .map_err(|e| sig(&format!("processing {}", log.name), e))?;
     let edge = (log.len() - processed.samples.len()) / 2;
     let periodic = popts.period != PeriodSource::Off;
+    let n = processed.samples.len();
     let mut st = stack(model, &options.geometry, &processed.samples)?;
+    let mut guard = 0;
     if let Some(spec) = popts.filter {
         let sos: Sos =
             Butterworth::lowpass(spec.order, spec.cutoff_hz, 1.0 / log.summary.nominal_step_s)
                 .map_err(|e| sig("designing the regressor filter", e))?;
         filter(&mut st, &sos, options.filter_mode, periodic)?;
+        guard = filter_reach(&sos, n, periodic, options.reversal_reach)?;
+        if gain.is_none() {
+            *gain = Some(noise_gain(&sos, n, periodic)?);
+        }
     }
-    let n = processed.samples.len();
     let (i0, i1) = match window {
         None => (0, n),
         Some((start, done, keep_end)) => {
@@ -474,14 +554,40 @@ fn accumulate_processed(
     if i1 == i0 {
         return Ok(0);
     }
-    let wb = base.base_regressor(st.w.as_ref())?;
-    acc.push_rows(0, wb.as_ref().subrows(i0, i1 - i0), &st.t[i0..i1])?;
-    acc.push_rows(
-        1,
-        wb.as_ref().subrows(n + i0, i1 - i0),
-        &st.t[n + i0..n + i1],
+    let keep = reversal_mask(
+        &processed.samples.theta_dot,
+        options.min_speed,
+        guard,
+        periodic,
     )?;
+    let wb = base.base_regressor(st.w.as_ref())?;
+    for g in 0..2 {
+        let rows: Vec<usize> = (g * n + i0..g * n + i1).filter(|&i| keep[i]).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let w = faer::Mat::from_fn(rows.len(), wb.ncols(), |i, j| wb[(rows[i], j)]);
+        let t: Vec<f64> = rows.iter().map(|&i| st.t[i]).collect();
+        match options.accumulation {
+            Accumulation::Qr => acc.push_rows(g, w.as_ref(), &t)?,
+            Accumulation::Gram => acc.push_rows_gram(g, w.as_ref(), &t)?,
+        }
+    }
     Ok(i1 - i0)
+}
+
+/// Samples the reversal exclusion widens by ([`filter_reach`] of the
+/// filter at `dt`; 0 unfiltered): added to the overlap of blocks so that
+/// every kept sample's mask sees all the rates it depends on.
+fn reach_of(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> {
+    let Some(spec) = p.filter else {
+        return Ok(0);
+    };
+    let sos = Butterworth::lowpass(spec.order, spec.cutoff_hz, 1.0 / dt)
+        .map_err(|e| sig("designing the regressor filter", e))?;
+    // A record long enough for the impulse response to end inside it.
+    let n = 2 * overlap(p, dt, 1e-12)? + 1;
+    filter_reach(&sos, n, false, tol)
 }
 
 /// Running per-period sums of θ, τ (and logged θ̇, θ̈) for period

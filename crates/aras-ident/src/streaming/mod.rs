@@ -31,10 +31,12 @@
 //! `benches/streaming.rs`, `examples/scale_study.rs`, `docs/scale.md`.
 
 pub(crate) mod accumulator;
+mod gram;
 mod log;
 mod stage;
 pub mod synthetic;
 
 pub use accumulator::QrAccumulator;
+pub use gram::{Accumulation, GRAM_ERROR_LIMIT, GramCheck};
 pub use log::{StreamingOptions, StreamingResult, StreamingRoute, identify_log};
 pub use stage::{RegressorStage, STAGE_BLOCK_SAMPLES, States};

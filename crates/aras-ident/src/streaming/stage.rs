@@ -9,6 +9,7 @@ use nalgebra::Vector2;
 use rayon::prelude::*;
 
 use super::accumulator::{BlockQr, QrAccumulator};
+use super::gram::{Accumulation, GramSum};
 use crate::base::BaseParameters;
 use crate::error::IdentError;
 
@@ -72,14 +73,22 @@ impl States<'_> {
 /// on the machine.
 const LANES: usize = 4;
 
-/// One lane's storage: a block per joint (its running factor in the top
-/// `b+1` rows, the new samples below), the per-sample regressor buffer,
-/// the lane's running factors and row count.
+/// One lane's running sums per joint.
+enum Sums {
+    /// Running factors; the block storage holds `[R_lane; new rows]`.
+    Qr(Box<[BlockQr; 2]>, [Mat<f64>; 2]),
+    /// Running Gram matrices; the block storage holds the new rows only,
+    /// transposed (`c × samples`, a sample's row contiguous: filling it is
+    /// a run of contiguous stores, not 24 strided ones).
+    Gram([Mat<f64>; 2], Box<[GramSum; 2]>),
+}
+
+/// One lane's storage: the block per joint and its running sums, the
+/// per-sample regressor buffer, rows kept per joint.
 struct Work {
-    qr: [BlockQr; 2],
+    sums: Sums,
     y: Vec<f64>,
-    r: [Mat<f64>; 2],
-    rows: usize,
+    rows: [usize; 2],
     error: Option<IdentError>,
 }
 
@@ -87,17 +96,20 @@ struct Work {
 /// accumulates `[W_b | T]` into a [`QrAccumulator`] (two row groups: joint 1,
 /// joint 2), the per-sample work of streaming identification.
 ///
-/// Each lane keeps its own running factor and factorises
-/// `[R_lane; new rows]` in one blocked QR, so after the first block the
-/// matrix has full rank and faer's fast QR never has to fall back.
-///
 /// Per sample: `aras_kin::evaluate` (kinematics (1)–(25)), `Model::fill`
 /// (regressor (45)–(53), into a reused buffer), the base columns `W_b = W E`
 /// (61) copied into the joint's block. Per block of
-/// [`STAGE_BLOCK_SAMPLES`]: faer's blocked QR of each joint's block. Blocks
-/// run in parallel (rayon) in waves of one block per lane; lanes are merged
-/// in a fixed order by [`RegressorStage::accumulator`], so the result does
-/// not depend on the number of threads (bit-identical).
+/// [`STAGE_BLOCK_SAMPLES`], per joint, depending on [`Accumulation`]:
+/// * **Gram** (default): `G += AᵀA` (one triangular matrix product,
+///   compensated summation); factorised once at the end
+///   ([`RegressorStage::accumulator`]); accuracy checked by
+///   [`QrAccumulator::gram_check`].
+/// * **Qr**: faer's blocked QR of `[R_lane; A]`, so after the first block
+///   the matrix has full rank and faer's fast QR never has to fall back.
+///
+/// Blocks run in parallel (rayon) in waves of one block per lane; lanes are
+/// merged in a fixed order, so the result does not depend on the number of
+/// threads (bit-identical).
 ///
 /// Rows are the regressor *unfiltered*; streaming with the parallel filter
 /// is done by [`super::identify_log`], which filters blocks with overlap
@@ -109,15 +121,27 @@ pub struct RegressorStage {
     names: Vec<String>,
     works: Vec<Work>,
     samples: usize,
+    accumulation: Accumulation,
 }
 
 impl RegressorStage {
     /// A stage for `model` on `geometry`, keeping the base columns of `base`
-    /// (which must have been found on the same model's columns).
+    /// (which must have been found on the same model's columns), with the
+    /// default [`Accumulation::Gram`].
     pub fn new(
         model: &Model,
         geometry: &Geometry,
         base: &BaseParameters,
+    ) -> Result<Self, IdentError> {
+        Self::with_accumulation(model, geometry, base, Accumulation::default())
+    }
+
+    /// [`Self::new`] with a chosen accumulation.
+    pub fn with_accumulation(
+        model: &Model,
+        geometry: &Geometry,
+        base: &BaseParameters,
+        accumulation: Accumulation,
     ) -> Result<Self, IdentError> {
         if base.standard_names() != model.names().as_slice() {
             return Err(IdentError::DimensionMismatch {
@@ -127,16 +151,27 @@ impl RegressorStage {
                 hint: "find the base parameters on this model's regressor (same effects, same order)",
             });
         }
-        let b = base.n_base();
+        let c = base.n_base() + 1;
         let works = (0..LANES)
             .map(|_| Work {
-                qr: [
-                    BlockQr::new(STAGE_BLOCK_SAMPLES + b + 1, b + 1),
-                    BlockQr::new(STAGE_BLOCK_SAMPLES + b + 1, b + 1),
-                ],
+                sums: match accumulation {
+                    Accumulation::Qr => Sums::Qr(
+                        Box::new([
+                            BlockQr::new(STAGE_BLOCK_SAMPLES + c, c),
+                            BlockQr::new(STAGE_BLOCK_SAMPLES + c, c),
+                        ]),
+                        [Mat::zeros(c, c), Mat::zeros(c, c)],
+                    ),
+                    Accumulation::Gram => Sums::Gram(
+                        [
+                            Mat::zeros(c, STAGE_BLOCK_SAMPLES),
+                            Mat::zeros(c, STAGE_BLOCK_SAMPLES),
+                        ],
+                        Box::new([GramSum::new(c), GramSum::new(c)]),
+                    ),
+                },
                 y: vec![0.0; 2 * model.columns()],
-                r: [Mat::zeros(b + 1, b + 1), Mat::zeros(b + 1, b + 1)],
-                rows: 0,
+                rows: [0, 0],
                 error: None,
             })
             .collect();
@@ -147,18 +182,32 @@ impl RegressorStage {
             names: base.base_names(),
             works,
             samples: 0,
+            accumulation,
         })
+    }
+
+    /// The accumulation in use.
+    pub fn accumulation(&self) -> Accumulation {
+        self.accumulation
     }
 
     /// Everything pushed so far as an accumulator over this stage's base
     /// parameters, one row group per joint (the lanes merged in order).
+    /// With [`Accumulation::Gram`], check
+    /// [`QrAccumulator::gram_check`] before trusting an ill-conditioned
+    /// problem.
     pub fn accumulator(&self) -> QrAccumulator {
         let mut acc =
             QrAccumulator::new(&self.names, 2).expect("a base analysis has at least one parameter");
         for w in &self.works {
-            if w.rows > 0 {
-                acc.merge_factor(0, w.r[0].as_ref(), w.rows);
-                acc.merge_factor(1, w.r[1].as_ref(), w.rows);
+            for j in 0..2 {
+                if w.rows[j] == 0 {
+                    continue;
+                }
+                match &w.sums {
+                    Sums::Qr(_, r) => acc.merge_factor(j, r[j].as_ref(), w.rows[j]),
+                    Sums::Gram(_, g) => acc.merge_gram(j, &g[j], w.rows[j]),
+                }
             }
         }
         acc
@@ -175,16 +224,55 @@ impl RegressorStage {
         self.samples
     }
 
+    /// Rows accumulated per joint (samples minus the rows left out by
+    /// [`Self::push_selected`]).
+    pub fn rows(&self) -> [usize; 2] {
+        let mut r = [0, 0];
+        for w in &self.works {
+            r[0] += w.rows[0];
+            r[1] += w.rows[1];
+        }
+        r
+    }
+
     /// Accumulates `states` (the next samples). Fails on the first sample
     /// (in order) whose kinematics fail (outside the workspace, singular)
     /// or whose torque is not finite; nothing of a failing call is
     /// accumulated.
     pub fn push(&mut self, states: &States<'_>) -> Result<(), IdentError> {
+        self.push_selected(states, None)
+    }
+
+    /// [`Self::push`] keeping only joint `j`'s rows where `keep[j]` is true
+    /// (e.g. away from velocity reversals, [`crate::robot::reversal_mask`]);
+    /// `None` keeps every row. Every sample's kinematics are still
+    /// evaluated and checked, as in memory.
+    pub fn push_selected(
+        &mut self,
+        states: &States<'_>,
+        keep: Option<[&[bool]; 2]>,
+    ) -> Result<(), IdentError> {
         states.check()?;
         let n = states.len();
+        if let Some(k) = keep {
+            for (j, m) in k.iter().enumerate() {
+                if m.len() != n {
+                    return Err(IdentError::DimensionMismatch {
+                        what: if j == 0 {
+                            "row mask of joint 1"
+                        } else {
+                            "row mask of joint 2"
+                        },
+                        expected: n,
+                        found: m.len(),
+                        hint: "give one keep flag per sample and joint",
+                    });
+                }
+            }
+        }
         let starts: Vec<usize> = (0..n).step_by(STAGE_BLOCK_SAMPLES).collect();
-        let saved: Vec<([Mat<f64>; 2], usize)> =
-            self.works.iter().map(|w| (w.r.clone(), w.rows)).collect();
+        let saved: Vec<(Saved, [usize; 2])> =
+            self.works.iter().map(|w| (w.sums.save(), w.rows)).collect();
         let (model, geometry, columns) = (&self.model, &self.geometry, &self.columns[..]);
         let offset = self.samples;
         for wave in starts.chunks(LANES) {
@@ -193,11 +281,18 @@ impl RegressorStage {
                 .zip(wave.par_iter())
                 .for_each(|(w, &s)| {
                     let rows = STAGE_BLOCK_SAMPLES.min(n - s);
-                    w.error = run_block(w, model, geometry, columns, states, s, rows, offset).err();
+                    let block = Block {
+                        st: states,
+                        keep,
+                        start: s,
+                        rows,
+                        offset,
+                    };
+                    w.error = run_block(w, model, geometry, columns, &block).err();
                 });
             if let Some(e) = self.works.iter_mut().find_map(|w| w.error.take()) {
-                for (w, (r, rows)) in self.works.iter_mut().zip(saved) {
-                    w.r = r;
+                for (w, (sums, rows)) in self.works.iter_mut().zip(saved) {
+                    w.sums.restore(sums);
                     w.rows = rows;
                     w.error = None;
                 }
@@ -209,79 +304,192 @@ impl RegressorStage {
     }
 }
 
-/// Fills and factorises one block of `rows` samples starting at `start`
-/// (`offset`: samples pushed before, for messages).
-#[allow(clippy::too_many_arguments)]
+/// The running sums of a lane (to undo a failing push).
+enum Saved {
+    Qr([Mat<f64>; 2]),
+    Gram(Box<[GramSum; 2]>),
+}
+
+impl Sums {
+    fn save(&self) -> Saved {
+        match self {
+            Sums::Qr(_, r) => Saved::Qr(r.clone()),
+            Sums::Gram(_, g) => Saved::Gram(g.clone()),
+        }
+    }
+
+    fn restore(&mut self, saved: Saved) {
+        match (self, saved) {
+            (Sums::Qr(_, r), Saved::Qr(s)) => *r = s,
+            (Sums::Gram(_, g), Saved::Gram(s)) => *g = s,
+            _ => unreachable!("a lane keeps its accumulation"),
+        }
+    }
+
+    fn is_finite(&self) -> bool {
+        let finite =
+            |m: &Mat<f64>| (0..m.ncols()).all(|j| (0..m.nrows()).all(|i| m[(i, j)].is_finite()));
+        match self {
+            Sums::Qr(_, r) => r.iter().all(finite),
+            Sums::Gram(_, g) => g.iter().all(|g| g.is_finite()),
+        }
+    }
+}
+
+/// A block of samples of one push: `rows` samples from `start` (`offset`:
+/// samples pushed before, for messages), with the optional row masks.
+struct Block<'s, 'a> {
+    st: &'s States<'a>,
+    keep: Option<[&'s [bool]; 2]>,
+    start: usize,
+    rows: usize,
+    offset: usize,
+}
+
+impl Block<'_, '_> {
+    fn kept(&self, j: usize, k: usize) -> bool {
+        self.keep.is_none_or(|m| m[j][k])
+    }
+}
+
+/// Writes the block's rows into `a[j]` from row `top` (masked rows as
+/// zeros, which add nothing to `AᵀA`); returns the rows kept per joint.
+fn fill_block(
+    a: [MatMut<'_, f64>; 2],
+    top: usize,
+    y: &mut [f64],
+    model: &Model,
+    geometry: &Geometry,
+    columns: &[usize],
+    bl: &Block<'_, '_>,
+) -> Result<[usize; 2], IdentError> {
+    let b = columns.len();
+    let mut kept = [0, 0];
+    let [mut a0, mut a1] = a;
+    for i in 0..bl.rows {
+        let k = bl.start + i;
+        fill_sample(model, geometry, bl.st, k, bl.offset, y)?;
+        for (j, a) in [&mut a0, &mut a1].into_iter().enumerate() {
+            if bl.kept(j, k) {
+                for (jb, &col) in columns.iter().enumerate() {
+                    a[(top + i, jb)] = y[2 * col + j];
+                }
+                a[(top + i, b)] = bl.st.tau[j][k];
+                kept[j] += 1;
+            } else {
+                for jb in 0..=b {
+                    a[(top + i, jb)] = 0.0;
+                }
+            }
+        }
+    }
+    Ok(kept)
+}
+
+/// [`fill_block`] into transposed blocks (`c × samples`, column `i` = row
+/// of sample `i`), through plain slices: the per-sample copy of the hot
+/// path.
+fn fill_block_transposed(
+    a: &mut [Mat<f64>; 2],
+    y: &mut [f64],
+    model: &Model,
+    geometry: &Geometry,
+    columns: &[usize],
+    bl: &Block<'_, '_>,
+) -> Result<[usize; 2], IdentError> {
+    let b = columns.len();
+    let mut kept = [0, 0];
+    for i in 0..bl.rows {
+        let k = bl.start + i;
+        fill_sample(model, geometry, bl.st, k, bl.offset, y)?;
+        for (j, a) in a.iter_mut().enumerate() {
+            let col = a
+                .as_mut()
+                .col_mut(i)
+                .try_as_col_major_mut()
+                .expect("a Mat's columns are contiguous")
+                .as_slice_mut();
+            let (row, tau) = col.split_at_mut(b);
+            if bl.kept(j, k) {
+                for (dst, &c) in row.iter_mut().zip(columns) {
+                    *dst = y[2 * c + j];
+                }
+                tau[0] = bl.st.tau[j][k];
+                kept[j] += 1;
+            } else {
+                row.fill(0.0);
+                tau[0] = 0.0;
+            }
+        }
+    }
+    Ok(kept)
+}
+
+/// Fills and accumulates one block.
 fn run_block(
     w: &mut Work,
     model: &Model,
     geometry: &Geometry,
     columns: &[usize],
-    st: &States<'_>,
-    start: usize,
-    rows: usize,
-    offset: usize,
+    bl: &Block<'_, '_>,
 ) -> Result<(), IdentError> {
     let b = columns.len();
     let c = b + 1;
-    {
-        let (q0, q1) = w.qr.split_at_mut(1);
-        let mut a0 = q0[0].block_mut();
-        let mut a1 = q1[0].block_mut();
-        a0.as_mut().subrows_mut(0, c).copy_from(&w.r[0]);
-        a1.as_mut().subrows_mut(0, c).copy_from(&w.r[1]);
-        for i in 0..rows {
-            let k = start + i;
-            fill_sample(model, geometry, st, k, offset, &mut w.y)?;
-            for (jb, &col) in columns.iter().enumerate() {
-                a0[(c + i, jb)] = w.y[2 * col];
-                a1[(c + i, jb)] = w.y[2 * col + 1];
+    let rows = bl.rows;
+    let kept = match &mut w.sums {
+        Sums::Gram(blocks, grams) => {
+            let kept = fill_block_transposed(blocks, &mut w.y, model, geometry, columns, bl)?;
+            for j in 0..2 {
+                grams[j].add_transposed(blocks[j].as_ref().subcols(0, rows));
             }
-            a0[(c + i, b)] = st.tau[0][k];
-            a1[(c + i, b)] = st.tau[1][k];
+            kept
         }
-    }
-    for j in 0..2 {
-        let lane = &w.r[j];
-        let refill = |mut a: MatMut<'_, f64>| {
-            // Rare path (the lane's first blocks, or data that do not
-            // excite every base parameter yet): recompute the rows.
-            a.as_mut().subrows_mut(0, c).copy_from(lane);
-            let mut y = vec![0.0; 2 * model.columns()];
-            for i in 0..rows {
-                let k = start + i;
-                if fill_sample(model, geometry, st, k, offset, &mut y).is_ok() {
-                    for (jb, &col) in columns.iter().enumerate() {
-                        a[(c + i, jb)] = y[2 * col + j];
+        Sums::Qr(qr, r) => {
+            let kept = {
+                let [q0, q1] = &mut **qr;
+                let mut a0 = q0.block_mut();
+                let mut a1 = q1.block_mut();
+                a0.as_mut().subrows_mut(0, c).copy_from(&r[0]);
+                a1.as_mut().subrows_mut(0, c).copy_from(&r[1]);
+                fill_block([a0, a1], c, &mut w.y, model, geometry, columns, bl)?
+            };
+            for j in 0..2 {
+                let lane = &r[j];
+                let refill = |mut a: MatMut<'_, f64>| {
+                    // Rare path (the lane's first blocks, or data that do
+                    // not excite every base parameter yet): recompute the
+                    // rows.
+                    a.as_mut().subrows_mut(0, c).copy_from(lane);
+                    let mut y = vec![0.0; 2 * model.columns()];
+                    for i in 0..rows {
+                        let k = bl.start + i;
+                        let ok = bl.kept(j, k)
+                            && fill_sample(model, geometry, bl.st, k, bl.offset, &mut y).is_ok();
+                        for (jb, &col) in columns.iter().enumerate() {
+                            a[(c + i, jb)] = if ok { y[2 * col + j] } else { 0.0 };
+                        }
+                        a[(c + i, b)] = if ok { bl.st.tau[j][k] } else { 0.0 };
                     }
-                }
-                a[(c + i, b)] = st.tau[j][k];
+                };
+                let f = qr[j].factor_filled(c + rows, refill).to_owned();
+                r[j].copy_from(&f);
             }
-        };
-        let r = w.qr[j].factor_filled(c + rows, refill).to_owned();
-        w.r[j].copy_from(&r);
-    }
-    w.rows += rows;
-    for j in 0..2 {
-        let r = &w.r[j];
-        for c in 0..=b {
-            for i in 0..=c {
-                if !r[(i, c)].is_finite() {
-                    return Err(IdentError::Adapter {
-                        context: format!(
-                            "streaming regressor, block of samples {}..{}",
-                            offset + start,
-                            offset + start + rows
-                        ),
-                        message: format!(
-                            "the regressor or torque of joint {} overflowed to a non-finite value; \
-                             check the states for extreme rates or accelerations",
-                            j + 1
-                        ),
-                    });
-                }
-            }
+            kept
         }
+    };
+    w.rows[0] += kept[0];
+    w.rows[1] += kept[1];
+    if !w.sums.is_finite() {
+        return Err(IdentError::Adapter {
+            context: format!(
+                "streaming regressor, block of samples {}..{}",
+                bl.offset + bl.start,
+                bl.offset + bl.start + rows
+            ),
+            message: "the regressor or a torque overflowed to a non-finite value; \
+                      check the states for extreme rates or accelerations"
+                .into(),
+        });
     }
     Ok(())
 }
