@@ -322,6 +322,7 @@ struct Reference {
     estimate: Vec<f64>,
     rows: [usize; 2],
     variance: f64,
+    fitness: [f64; 2],
 }
 
 /// The in-memory pipeline, as `aras identify` runs it: read → process →
@@ -349,7 +350,10 @@ fn in_memory(path: &std::path::Path, r: &Robot, o: &StreamingOptions) -> Referen
         .unwrap()
         .with_filtered_noise(gain)
         .unwrap();
+    let pred = aras_ident::validate::predict(wb.as_ref(), &ols.estimate).unwrap();
+    let f = aras_ident::validate::fitness_per_group(&fit.t, &pred, &fit.groups).unwrap();
     Reference {
+        fitness: [f[0], f[1]],
         estimate: ols.estimate,
         rows: [fit.groups.counts()[0], fit.groups.counts()[1]],
         variance: ols.residual_variance,
@@ -381,6 +385,15 @@ fn check_route(path: &std::path::Path, r: &Robot, o: &StreamingOptions, route: S
     assert!(e < 1e-9, "{route:?}: QR estimate differs by {e:e}");
     let v = (s.ols.residual_variance / mem.variance - 1.0).abs();
     assert!(v < 1e-9, "{route:?}: σ² differs by {v:e}");
+    // Fitness (78) from the factors and torque sums, vs from the rows.
+    let f = s.fitness(&s.ols.estimate).unwrap();
+    for j in 0..2 {
+        assert!(
+            (f[j] - mem.fitness[j]).abs() < 1e-6,
+            "{route:?}: {f:?} vs {:?}",
+            mem.fitness
+        );
+    }
 
     let mut g = o.clone();
     g.accumulation = Accumulation::Gram;

@@ -66,6 +66,29 @@ impl Default for StreamingOptions {
     }
 }
 
+impl StreamingResult {
+    /// Fitness (78) per joint of the base parameters `beta_b` on the fitted
+    /// rows, `100 (1 − ‖τ − W_b β_b‖ / ‖τ − mean τ‖)`, from the accumulated
+    /// factors and [`Self::torque_sums`] (no second pass over the log).
+    pub fn fitness(&self, beta_b: &[f64]) -> Result<[f64; 2], IdentError> {
+        let rss = self.accumulator.group_rss(beta_b)?;
+        let mut f = [0.0; 2];
+        for j in 0..2 {
+            let n = self.rows_fitted[j] as f64;
+            let [s1, s2] = self.torque_sums[j];
+            let den = (s2 - s1 * s1 / n).max(0.0).sqrt();
+            if !(n > 0.0 && den > 0.0) {
+                return Err(IdentError::ConstantSignal {
+                    group: j,
+                    len: self.rows_fitted[j],
+                });
+            }
+            f[j] = 100.0 * (1.0 - rss[j].max(0.0).sqrt() / den);
+        }
+        Ok(f)
+    }
+}
+
 /// Which bounded-memory route [`identify_log`] took.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub enum StreamingRoute {
@@ -106,6 +129,11 @@ pub struct StreamingResult {
     pub samples_used: usize,
     /// Rows fitted per joint (after reversal exclusion).
     pub rows_fitted: [usize; 2],
+    /// `[Σ τ, Σ τ²]` per joint over the fitted rows (as they entered the
+    /// least squares, i.e. filtered): with [`QrAccumulator::group_rss`]
+    /// this gives the fitness (78) on the fitted rows
+    /// ([`StreamingResult::fitness`]).
+    pub torque_sums: [[f64; 2]; 2],
     /// Blocks processed.
     pub blocks: usize,
     /// Overlap of the blocks (samples each side; 0 unless overlapping).
@@ -252,6 +280,12 @@ pub fn identify_log(
             };
             let keep = reversal_mask(&chunk.theta_dot, options.min_speed, 0, false)?;
             let (k1, k2) = keep.split_at(n);
+            for (j, k) in [k1, k2].into_iter().enumerate() {
+                for (&t, _) in chunk.tau[j].iter().zip(k).filter(|(_, k)| **k) {
+                    out.tau[j][0] += t;
+                    out.tau[j][1] += t * t;
+                }
+            }
             stage.push_selected(&states, Some([k1, k2]))?;
             out.read += n;
             out.used += n;
@@ -284,16 +318,9 @@ pub fn identify_log(
         let mut popts = options.process.clone();
         popts.period = PeriodSource::Seconds(p);
         popts.settling_s = 0.0;
-        out.used = accumulate_processed(
-            &log,
-            &popts,
-            options,
-            model,
-            base,
-            &mut acc,
-            None,
-            &mut out.gain,
-        )?;
+        let used =
+            accumulate_processed(&log, &popts, options, model, base, &mut acc, None, &mut out)?;
+        out.used = used;
     } else {
         route = StreamingRoute::OverlappingBlocks;
         let mut popts = options.process.clone();
@@ -338,7 +365,7 @@ pub fn identify_log(
                 continue;
             }
             let log = block_log(&name, &buf, dt, reader.sidecar().clone());
-            out.used += accumulate_processed(
+            let used = accumulate_processed(
                 &log,
                 &popts,
                 options,
@@ -346,8 +373,9 @@ pub fn identify_log(
                 base,
                 &mut acc,
                 Some((buf_start, done, keep_end)),
-                &mut out.gain,
+                &mut out,
             )?;
+            out.used += used;
             out.blocks += 1;
             done = keep_end;
             // Keep `margin` samples before `done` for the next block.
@@ -385,6 +413,7 @@ pub fn identify_log(
         ols,
         noise_gain: out.gain.unwrap_or(1.0),
         rows_fitted: [n1, n2],
+        torque_sums: out.tau,
         route,
         samples_read: out.read,
         samples_used: out.used,
@@ -403,6 +432,7 @@ struct Progress {
     overlap: usize,
     periods: usize,
     gain: Option<f64>,
+    tau: [[f64; 2]; 2],
 }
 
 /// The reader's nominal step: `ReadOptions::nominal_step` if given (> 0),
@@ -522,7 +552,7 @@ fn accumulate_processed(
     base: &BaseParameters,
     acc: &mut QrAccumulator,
     window: Option<(usize, usize, usize)>,
-    gain: &mut Option<f64>,
+    out: &mut Progress,
 ) -> Result<usize, IdentError> {
     let processed = process(log, popts, &options.geometry)
         .map_err(|e| sig(&format!("processing {}", log.name), e))?;
@@ -537,8 +567,8 @@ fn accumulate_processed(
                 .map_err(|e| sig("designing the regressor filter", e))?;
         filter(&mut st, &sos, options.filter_mode, periodic)?;
         guard = filter_reach(&sos, n, periodic, options.reversal_reach)?;
-        if gain.is_none() {
-            *gain = Some(noise_gain(&sos, n, periodic)?);
+        if out.gain.is_none() {
+            out.gain = Some(noise_gain(&sos, n, periodic)?);
         }
     }
     let (i0, i1) = match window {
@@ -568,6 +598,10 @@ fn accumulate_processed(
         }
         let w = faer::Mat::from_fn(rows.len(), wb.ncols(), |i, j| wb[(rows[i], j)]);
         let t: Vec<f64> = rows.iter().map(|&i| st.t[i]).collect();
+        for v in &t {
+            out.tau[g][0] += v;
+            out.tau[g][1] += v * v;
+        }
         match options.accumulation {
             Accumulation::Qr => acc.push_rows(g, w.as_ref(), &t)?,
             Accumulation::Gram => acc.push_rows_gram(g, w.as_ref(), &t)?,
