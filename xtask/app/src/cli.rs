@@ -149,9 +149,38 @@ pub struct IdentifyArgs {
     /// Leave wall-clock timings out of summary.json.
     #[arg(long)]
     pub reproducible: bool,
+    /// Streaming identification in bounded memory (docs/scale.md): `auto`
+    /// streams logs larger than 256 MB, `on` always, `off` never.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub streaming: StreamingMode,
+    /// How streaming accumulates the least squares: `gram` (normal
+    /// equations, fast, accuracy-checked; falls back to `qr` when the check
+    /// fails) or `qr` (incremental QR).
+    #[arg(long, value_enum, default_value = "gram")]
+    pub accumulation: AccumulationArg,
     /// Shared options.
     #[command(flatten)]
     pub common: Common,
+}
+
+/// `identify --streaming`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum StreamingMode {
+    /// Stream logs larger than [`crate::cmd::identify::STREAMING_BYTES`].
+    Auto,
+    /// Always stream.
+    On,
+    /// Never stream (the whole log in memory).
+    Off,
+}
+
+/// `identify --accumulation`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum AccumulationArg {
+    /// Normal equations.
+    Gram,
+    /// Incremental QR.
+    Qr,
 }
 
 /// `aras validate`.

@@ -228,6 +228,41 @@ pub fn with_standard(p: &Params, model: &Model, beta: &[f64]) -> Result<Params> 
     Ok(q)
 }
 
+/// The physically consistent fit (SDP (67)–(73)) of a reduced problem with
+/// `nominal` as reference and the `[identification.sdp]` settings: shared by
+/// the in-memory and the streaming identification.
+pub fn consistent_fit(
+    reduced: &ReducedLs,
+    base: &BaseParameters,
+    model: &Model,
+    nominal: &Params,
+    cfg: &Config,
+) -> Result<SdpSolution> {
+    let ic = &cfg.identification;
+    let sc = &ic.sdp;
+    let mut problem = consistent_problem(model, nominal)
+        .context("the physically consistent problem around the nominal robot")?;
+    problem.mass_tolerance(sc.mass_tolerance)?;
+    if let Some([lo, hi]) = sc.box_bounds {
+        let all: Vec<usize> = problem
+            .links()
+            .iter()
+            .flat_map(|l| l.inertia.iter().chain(&l.first_moment).copied())
+            .collect();
+        problem.box_around_reference(&all, lo, hi)?;
+    }
+    problem.settings(SdpSettings {
+        regularisation: sc.regularisation,
+        psd_margin: sc.epsilon,
+        tolerance: sc.tolerance,
+        max_iter: sc.max_iter,
+        ..SdpSettings::default()
+    });
+    problem
+        .solve(base, reduced)
+        .context("physically consistent fit (SDP)")
+}
+
 /// OLS and SDP on prepared data, with `nominal` as the SDP's reference:
 /// rows near velocity reversals are left out (`identification.min_speed`,
 /// widened by the filter's reach), σ is corrected for the filter.
@@ -271,28 +306,7 @@ pub fn identify(
         }
     };
     let ols = ols.with_filtered_noise(prepared.noise_gain()?)?;
-    let sc = &ic.sdp;
-    let mut problem = consistent_problem(model, nominal)
-        .context("the physically consistent problem around the nominal robot")?;
-    problem.mass_tolerance(sc.mass_tolerance)?;
-    if let Some([lo, hi]) = sc.box_bounds {
-        let all: Vec<usize> = problem
-            .links()
-            .iter()
-            .flat_map(|l| l.inertia.iter().chain(&l.first_moment).copied())
-            .collect();
-        problem.box_around_reference(&all, lo, hi)?;
-    }
-    problem.settings(SdpSettings {
-        regularisation: sc.regularisation,
-        psd_margin: sc.epsilon,
-        tolerance: sc.tolerance,
-        max_iter: sc.max_iter,
-        ..SdpSettings::default()
-    });
-    let sdp = problem
-        .solve(base, &reduced)
-        .context("physically consistent fit (SDP)")?;
+    let sdp = consistent_fit(&reduced, base, model, nominal, cfg)?;
     let reference: Vec<f64> = nominal
         .standard_vector(model)
         .context("the nominal robot's standard parameters")?

@@ -5,6 +5,7 @@ pub mod diagnose;
 pub mod excite;
 pub mod fit;
 pub mod identify;
+pub mod identify_streaming;
 pub mod pipeline;
 pub mod predict;
 pub mod simulate;
