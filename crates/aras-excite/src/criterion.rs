@@ -346,8 +346,8 @@ mod tests {
     use crate::constraints::{GridConstraints, Limits};
     use crate::param::Layout;
     use crate::test_support::{StandIn, base_projection};
+    use rand::SeedableRng;
     use rand::rngs::Xoshiro256PlusPlus;
-    use rand::{RngExt, SeedableRng};
 
     fn setup(l: usize) -> (Layout, Grid, GridConstraints) {
         let layout = Layout {
@@ -361,16 +361,7 @@ mod tests {
     fn interior_point(cons: &GridConstraints, seed: u64) -> Vec<f64> {
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
         let w = cons.grid.layout.per_coord();
-        let mut p: Vec<f64> = (0..2 * w)
-            .map(|k| {
-                if k % w == 0 {
-                    0.0
-                } else {
-                    rng.random_range(-1.0..1.0)
-                }
-            })
-            .collect();
-        cons.scale_to_fit(&mut p, true, true);
+        let mut p = crate::design::random_point(cons, &mut rng);
         // Shrink to 80 % so finite-difference steps never reach the clamp.
         for (k, v) in p.iter_mut().enumerate() {
             if k % w != 0 {
