@@ -465,3 +465,226 @@ fn timing_160_s() {
     assert_eq!(d.steps[0].id, "quadratic_damping");
     assert!(s <= 10.0, "{s:.2} s");
 }
+
+/// Noise seeds of the robustness study (seed 1 is the acceptance tests').
+const ROBUST_SEEDS: [u64; 5] = [1, 2, 3, 4, 5];
+
+/// Magnitude grid per effect: fractions of the acceptance magnitude
+/// ([`hidden`]), for `time_delay` the delay in samples. Chosen to bracket
+/// each detection limit (a first scan of one seed: offset and Stribeck
+/// between 50 % and 100 %, quadratic damping between 35 % and 50 %;
+/// passive viscous and cogging gained ≈ 24 points at 100 %; with three
+/// seeds Stribeck needed 2×, hence 2.8).
+fn robust_grid(id: &str) -> &'static [f64] {
+    match id {
+        "torque_offset" | "coulomb_asymmetry" => &[0.25, 0.5, 0.7, 1.0, 1.4, 2.0],
+        "stribeck_friction" => &[0.25, 0.5, 0.7, 1.0, 1.4, 2.0, 2.8],
+        "quadratic_damping" => &[0.2, 0.35, 0.5, 0.7, 1.0],
+        "passive_joint_viscous" | "cogging" => &[0.01, 0.02, 0.05, 0.1, 0.2, 0.5],
+        "time_delay" => &[1.0, 2.0, 3.0, 5.0],
+        _ => panic!("unknown effect {id}"),
+    }
+}
+
+/// The truth with effect `id` at `scale` × its acceptance magnitude (for
+/// `time_delay`: `scale` samples).
+fn hidden_scaled(id: &str, scale: f64) -> (Params, usize) {
+    if id == "time_delay" {
+        return (Params::aras_diamond(), scale as usize);
+    }
+    let (mut p, delay) = hidden(id);
+    let x = &mut p.extra;
+    let mul = |v: &mut [f64]| v.iter_mut().for_each(|a| *a *= scale);
+    if let Some(v) = &mut x.torque_offset {
+        mul(v);
+    }
+    if let Some(v) = &mut x.coulomb_asymmetry {
+        mul(v);
+    }
+    if let Some(s) = &mut x.stribeck_friction {
+        mul(&mut s.level);
+    }
+    if let Some(v) = &mut x.passive_joint_viscous {
+        mul(v);
+    }
+    if let Some(c) = &mut x.cogging {
+        c.sin
+            .iter_mut()
+            .chain(c.cos.iter_mut())
+            .for_each(|v| mul(v));
+    }
+    if let Some(v) = &mut x.quadratic_damping {
+        mul(v);
+    }
+    (p, delay)
+}
+
+/// Robustness (issue 8): every effect at a grid of magnitudes around its
+/// detection limit, 5 noise seeds each, plus the control per seed; the
+/// paper's model as start, the acceptance setup otherwise (no SDP re-fit:
+/// it does not change what is named). Prints one `ROBUST {json}` line per
+/// case and a `ROBUST_SUMMARY {json}` with, per effect, the smallest
+/// magnitude of the grid from which on the effect is named first for every
+/// seed, and the false discoveries (a step naming another effect).
+/// `coulomb_asymmetry` counts as named when it is the name or an alias of
+/// the first step (it is `torque_offset` on rows where the joint moves).
+/// Ignored (≈ 8 min on 2 cores, 210 cases); results in docs/diagnose.md.
+#[test]
+#[ignore]
+fn robustness_magnitudes() {
+    let mut cases: Vec<(&str, f64, u64)> = Vec::new();
+    for seed in ROBUST_SEEDS {
+        cases.push(("control", 0.0, seed));
+        for id in aras_ident::diagnose::CANDIDATE_IDS {
+            for &scale in robust_grid(id) {
+                cases.push((id, scale, seed));
+            }
+        }
+    }
+    let t0 = std::time::Instant::now();
+    let records: Vec<serde_json::Value> = cases
+        .par_iter()
+        .map(|&(id, scale, seed)| {
+            let (p, delay) = if id == "control" {
+                (Params::aras_diamond(), 0)
+            } else {
+                hidden_scaled(id, scale)
+            };
+            let tag = format!("robust-{id}-{scale}-{seed}");
+            let d = diagnose_on(&scenario(&p, delay, seed, &tag), false);
+            let first = d.steps.first();
+            let detected = id != "control" && first.is_some_and(|s| names(s, id));
+            let wrong: Vec<String> = d
+                .steps
+                .iter()
+                .filter(|s| !names(s, id))
+                .map(|s| s.label.clone())
+                .collect();
+            // Round 0's evidence for the hidden effect: its best setting
+            // (lowest p; the true delay for `time_delay`).
+            let round0 = &d.rounds[0];
+            let level = 0.01 / round0.len() as f64;
+            let own = round0
+                .iter()
+                .filter(|c| {
+                    c.candidate.id() == id
+                        && (id != "time_delay"
+                            || c.label == format!("time_delay({:+} samples)", scale as i64))
+                })
+                .min_by(|a, b| a.p_value.total_cmp(&b.p_value));
+            let z_max = first
+                .filter(|_| detected)
+                .map(|s| {
+                    s.parameters
+                        .iter()
+                        .filter(|p| p.std_dev > 0.0)
+                        .map(|p| (p.value / p.std_dev).abs())
+                        .fold(0.0, f64::max)
+                })
+                .unwrap_or(0.0);
+            let rec = serde_json::json!({
+                "effect": id,
+                "scale": scale,
+                "seed": seed,
+                "first": first.map_or("none".to_owned(), |s| s.label.clone()),
+                "detected": detected,
+                "false_discoveries": wrong,
+                "p": own.map(|c| c.p_value),
+                "p_ok": own.map(|c| c.p_value < level),
+                "f": own.map(|c| c.f),
+                "gain_per_set": own.map(|c| c.gain_per_set.clone()),
+                "rss_drop_percent": own.map(|c| c.rss_drop_percent),
+                "max_abs_z_added": z_max,
+                "fitness_gain": if d.steps.is_empty() { 0.0 } else { first_gain(&d) },
+            });
+            eprintln!("ROBUST {rec}");
+            rec
+        })
+        .collect();
+    let mut summary = Vec::new();
+    for id in aras_ident::diagnose::CANDIDATE_IDS
+        .iter()
+        .copied()
+        .chain(["control"])
+    {
+        let of: Vec<&serde_json::Value> = records.iter().filter(|r| r["effect"] == id).collect();
+        let grid: Vec<f64> = if id == "control" {
+            vec![0.0]
+        } else {
+            robust_grid(id).to_vec()
+        };
+        let all_seeds = |s: f64| {
+            of.iter()
+                .filter(|r| r["scale"].as_f64() == Some(s))
+                .all(|r| r["detected"] == true)
+        };
+        // Smallest grid magnitude from which on every larger one is named
+        // first for every seed.
+        let mut reliable = None;
+        for &s in grid.iter().rev() {
+            if all_seeds(s) {
+                reliable = Some(s);
+            } else {
+                break;
+            }
+        }
+        let detected_per_scale: Vec<serde_json::Value> = grid
+            .iter()
+            .map(|&s| {
+                let n = of
+                    .iter()
+                    .filter(|r| r["scale"].as_f64() == Some(s) && r["detected"] == true)
+                    .count();
+                serde_json::json!([s, n])
+            })
+            .collect();
+        let false_disc: Vec<serde_json::Value> = of
+            .iter()
+            .filter(|r| {
+                r["false_discoveries"]
+                    .as_array()
+                    .is_some_and(|a| !a.is_empty())
+            })
+            .map(|r| {
+                serde_json::json!({"scale": r["scale"], "seed": r["seed"],
+                    "named": r["false_discoveries"]})
+            })
+            .collect();
+        summary.push(serde_json::json!({
+            "effect": id,
+            "seeds": ROBUST_SEEDS.len(),
+            "smallest_reliable_scale": reliable,
+            "detected_seeds_per_scale": detected_per_scale,
+            "false_discoveries": false_disc,
+        }));
+    }
+    eprintln!(
+        "ROBUST_SUMMARY {}",
+        serde_json::Value::Array(summary.clone())
+    );
+    eprintln!(
+        "{} cases in {:.0} s",
+        records.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    // The grid brackets every detection limit (the largest magnitude is
+    // named for every seed, the smallest missed by at least one), and no
+    // case names a wrong effect.
+    for e in &summary {
+        let per: Vec<(f64, u64)> = e["detected_seeds_per_scale"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| (x[0].as_f64().unwrap(), x[1].as_u64().unwrap()))
+            .collect();
+        let n = ROBUST_SEEDS.len() as u64;
+        if e["effect"] != "control" {
+            assert_eq!(per.last().unwrap().1, n, "{e}: top of the grid missed");
+            assert!(per[0].1 < n, "{e}: the grid does not reach below the limit");
+        }
+        assert!(
+            e["false_discoveries"].as_array().unwrap().is_empty(),
+            "{e}: false discovery"
+        );
+    }
+}
