@@ -152,6 +152,9 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         &mut self,
         state: impl Fn(usize) -> [Vector2<f64>; 3],
     ) -> Result<(), ExciteError> {
+        // Start the scalar loop clean whatever ran on this thread before
+        // (see `aras_kin::simd`).
+        aras_kin::simd::clear_upper_state();
         let n = self.reg.columns();
         let ns = self.samples;
         for s in 0..ns {
@@ -175,6 +178,9 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         &mut self,
         state: impl Fn(usize) -> [Vector2<f64>; 3],
     ) -> Result<(), ExciteError> {
+        // Start the scalar loop clean whatever ran on this thread before
+        // (see `aras_kin::simd`).
+        aras_kin::simd::clear_upper_state();
         let n = self.reg.columns();
         let ns = self.samples;
         for s in 0..ns {
@@ -238,6 +244,10 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         let svd_b = wb
             .thin_svd()
             .map_err(|e| degenerate(format!("SVD failed: {e:?}")))?;
+        // faer's SVDs can leave the AVX upper state dirty, which makes the
+        // scalar code after them (the contraction below, the next
+        // iteration's dual-number kinematics) several times slower.
+        aras_kin::simd::clear_upper_state();
         let ss: Vec<f64> = svd_s.S().column_vector().iter().copied().collect();
         let sb: Vec<f64> = svd_b.S().column_vector().iter().copied().collect();
         let (smax, smin) = (ss[0], ss[b - 1]);
@@ -284,6 +294,7 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
                 }
             };
             let a = &g * self.e.transpose();
+            aras_kin::simd::clear_upper_state();
             let n = a.ncols();
             for s in 0..ns {
                 let mut acc = [0.0; DIRS];
@@ -346,8 +357,8 @@ mod tests {
     use crate::constraints::{GridConstraints, Limits};
     use crate::param::Layout;
     use crate::test_support::{StandIn, base_projection};
+    use rand::SeedableRng;
     use rand::rngs::Xoshiro256PlusPlus;
-    use rand::{RngExt, SeedableRng};
 
     fn setup(l: usize) -> (Layout, Grid, GridConstraints) {
         let layout = Layout {
@@ -361,16 +372,7 @@ mod tests {
     fn interior_point(cons: &GridConstraints, seed: u64) -> Vec<f64> {
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
         let w = cons.grid.layout.per_coord();
-        let mut p: Vec<f64> = (0..2 * w)
-            .map(|k| {
-                if k % w == 0 {
-                    0.0
-                } else {
-                    rng.random_range(-1.0..1.0)
-                }
-            })
-            .collect();
-        cons.scale_to_fit(&mut p, true, true);
+        let mut p = crate::design::random_point(cons, &mut rng);
         // Shrink to 80 % so finite-difference steps never reach the clamp.
         for (k, v) in p.iter_mut().enumerate() {
             if k % w != 0 {

@@ -323,7 +323,8 @@ pub fn random_feasible(
         .collect()
 }
 
-fn random_point(cons: &GridConstraints, rng: &mut Xoshiro256PlusPlus) -> Vec<f64> {
+/// One random feasible coefficient vector (see [`random_feasible`]).
+pub(crate) fn random_point(cons: &GridConstraints, rng: &mut Xoshiro256PlusPlus) -> Vec<f64> {
     let layout = cons.grid.layout;
     let w = layout.per_coord();
     let mut p: Vec<f64> = (0..layout.dim())

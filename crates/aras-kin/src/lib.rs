@@ -61,6 +61,7 @@ pub mod links;
 mod pose;
 mod sample;
 mod scalar;
+pub mod simd;
 mod workspace;
 
 pub use error::KinError;

@@ -86,6 +86,21 @@ impl Dataset {
         (n * 2.0 * b / fs).clamp(1.0, n)
     }
 
+    /// Noise power gain of the zero-phase filter, `g = Σ h_k²` of its
+    /// impulse response on this record ([`crate::robot::noise_gain`]; 1
+    /// without a filter). White noise of variance `σ²` leaves the filter
+    /// with variance `g σ²`, correlated over about `1/g` samples; the OLS σ
+    /// of a parameter whose regressor lies in the pass band is divided by
+    /// `√g` to be honest ([`crate::OlsEstimate::with_filtered_noise`]).
+    /// It is the same quantity as [`Self::filter_dof`]` / len` (Parseval:
+    /// `Σ h² = ∫ |H|⁴ df / f_s`), computed in the time domain.
+    pub fn noise_gain(&self) -> Result<f64, IdentError> {
+        match &self.filter {
+            Some(sos) => crate::robot::noise_gain(sos, self.len(), self.periodic),
+            None => Ok(1.0),
+        }
+    }
+
     pub(crate) fn check(&self) -> Result<(), IdentError> {
         if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
             return Err(IdentError::InvalidSetting {

@@ -6,7 +6,7 @@
 //!    against velocity (rest band `|θ̇| < 0.05 rad/s`, split by sign),
 //!    position, acceleration and time, its whiteness is tested (Ljung–Box)
 //!    and bins beyond noise become [`Finding`]s in words with numbers.
-//! 2. **Candidates** ([`candidates`]): `torque_offset`, `coulomb_asymmetry`,
+//! 2. **Candidates** ([`CANDIDATE_IDS`], [`Candidate`]): `torque_offset`, `coulomb_asymmetry`,
 //!    `stribeck_friction` (v_s scanned), `passive_joint_viscous`, `cogging`
 //!    (cycles per revolution scanned, order configurable),
 //!    `quadratic_damping`, `time_delay` (torque shifted against the angles).
@@ -34,6 +34,16 @@
 //! residual (which also counts slow, systematic misfit as correlated). The
 //! significance level is divided by the number of candidate settings tried
 //! in a round (Bonferroni for the grid scans).
+//!
+//! ## σ of the fitted parameters
+//! The σ reported with every fitted parameter ([`NamedValue::std_dev`]) is
+//! the OLS σ of (64)–(66) divided by `√g`, `g = Σ h²` the filter's noise
+//! gain ([`Dataset::noise_gain`]), as in identification
+//! (`OlsEstimate::with_filtered_noise`). `g` and `2 B T / N` are the same
+//! number (Parseval), so σ and the F-test account for the filter once each
+//! and consistently: σ through `g`, the F-test through `N_eff` with the
+//! uncorrected residual sum of squares (for one added column `F ≈ z²`,
+//! `z = β̂/σ`). Residual bins use `σ_rms / √(g n)` for the same reason.
 //!
 //! Performance: the regressor blocks of every candidate setting are stacked
 //! and filtered once per data set; each fit is one tall-skinny QR.

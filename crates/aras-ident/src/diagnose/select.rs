@@ -83,7 +83,10 @@ pub struct NamedValue {
     pub name: String,
     /// Value (SI).
     pub value: f64,
-    /// Standard deviation (OLS, assuming white noise; NaN-free, 0 if unknown).
+    /// Standard deviation: the OLS σ of (64)–(66) corrected for the
+    /// zero-phase filter's noise gain (divided by `√g`, [`Dataset::noise_gain`]),
+    /// since the filtered residual is correlated over `≈ 1/g` samples;
+    /// 0 if unknown (never NaN).
     pub std_dev: f64,
 }
 
@@ -227,10 +230,17 @@ struct Fit {
     split: usize,
 }
 
-fn fit(d: &Design, base: &BaseParameters) -> Result<Fit, IdentError> {
+/// OLS of design `d` on `base`, with σ corrected for TRAIN's filter noise
+/// gain `noise_gain` (`OlsEstimate::with_filtered_noise`). Only σ is
+/// corrected here; the F-test does not use σ but RSS ratios with the
+/// effective sample count `N_eff ≤ g N` (see [`n_eff`]), which is the same
+/// correction expressed as degrees of freedom: for one added column,
+/// `F ≈ (β/σ_corrected)²` when `N_eff = g N`. Applying both to one
+/// statistic would count the filter twice.
+fn fit(d: &Design, base: &BaseParameters, noise_gain: f64) -> Result<Fit, IdentError> {
     let wb = base.base_regressor(d.w.as_ref())?;
     let red = ReducedLs::new(wb.as_ref(), &d.t, &base.base_names())?;
-    let ols = red.ols()?;
+    let ols = red.ols()?.with_filtered_noise(noise_gain)?;
     let b = Col::from_fn(ols.estimate.len(), |i| ols.estimate[i]);
     let pred = &wb * &b;
     let residual: Vec<f64> = (0..d.t.len()).map(|i| d.t[i] - pred[i]).collect();
@@ -266,7 +276,12 @@ fn evaluate(
 
 /// Effective independent samples of a two-joint residual: per joint
 /// `min(2BT, N/τ_int)`.
-/// `dof_ratio` is the filter's independent fraction of samples.
+/// `dof_ratio` is the filter's independent fraction of samples, `2BT/N`
+/// ([`Dataset::filter_dof`]), equal to the noise gain `g` that corrects σ
+/// in [`fit`]: the F-test accounts for the filter here, through its
+/// degrees of freedom, and uses the *uncorrected* RSS; σ accounts for it
+/// through `g`. `τ_int` additionally counts slow systematic misfit as
+/// correlated, which the σ correction (pure noise) does not.
 fn n_eff(residual: &[f64], split: usize, dof_ratio: f64) -> f64 {
     let (a, b) = residual.split_at(split);
     [a, b]
@@ -295,6 +310,8 @@ struct Context<'a> {
     vals: &'a [Dataset],
     vals_p: Vec<Prepared>,
     base_samples: usize,
+    /// TRAIN's filter noise gain `g` ([`Dataset::noise_gain`]) for σ.
+    noise_gain: f64,
 }
 
 impl Context<'_> {
@@ -329,7 +346,11 @@ impl Context<'_> {
             &Workspace::paper(),
             self.base_samples,
         )?;
-        let f = fit(&self.design(&self.train_p, self.train, s), &base)?;
+        let f = fit(
+            &self.design(&self.train_p, self.train, s),
+            &base,
+            self.noise_gain,
+        )?;
         let fits = self
             .vals
             .iter()
@@ -425,7 +446,10 @@ pub fn diagnose(
         train,
         vals: validation,
         base_samples: opts.base_samples.max(50),
+        noise_gain: train.noise_gain()?,
     };
+    // The filter's independent fraction of samples (= the σ correction's
+    // noise gain, see `n_eff`), for the F-test's degrees of freedom.
     let dof_ratio = train.filter_dof() / train.len() as f64;
 
     let mut state = State {
