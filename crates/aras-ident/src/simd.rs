@@ -30,5 +30,14 @@ mod tests {
             "after BlockQr::factor_filled"
         );
         assert!(r[(23, 23)].abs() > 0.0);
+        // The normal equations: faer's matrix product, eigensolver and SVD.
+        let mut g = crate::streaming::gram::GramSum::new(24);
+        g.add(a.as_ref());
+        assert_eq!(upper_state_dirty(), Some(false), "after GramSum::add");
+        let f = g.factor();
+        assert_eq!(upper_state_dirty(), Some(false), "after GramSum::factor");
+        let c = crate::streaming::GramCheck::of_factor(f.as_ref());
+        assert_eq!(upper_state_dirty(), Some(false), "after GramCheck");
+        assert!(c.condition.is_finite());
     }
 }
