@@ -166,7 +166,7 @@ pub struct IdentifyArgs {
 /// `identify --streaming`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum StreamingMode {
-    /// Stream logs larger than [`crate::cmd::identify::STREAMING_BYTES`].
+    /// Stream logs larger than 256 MB (`cmd::identify::STREAMING_BYTES`).
     Auto,
     /// Always stream.
     On,
