@@ -238,8 +238,18 @@ pub fn reversal_mask(
             hint: "give both joints' rates for the same samples",
         });
     }
+    // Each slow sample excludes the window [i − guard, i + guard]; windows
+    // are marked in a difference array and resolved by one prefix sum, so
+    // the cost is O(n) whatever the guard (the filter's reach grows with the
+    // sampling rate: thousands of samples at 10 kHz).
     let mut keep = vec![true; 2 * n];
+    let mut cover = vec![0i64; n + 1];
     for j in 0..2 {
+        cover.iter_mut().for_each(|c| *c = 0);
+        let mut mark = |lo: usize, hi: usize| {
+            cover[lo] += 1;
+            cover[hi + 1] -= 1;
+        };
         for (i, v) in theta_dot[j].iter().enumerate() {
             if !v.is_finite() {
                 return Err(IdentError::InvalidSetting {
@@ -251,17 +261,25 @@ pub fn reversal_mask(
             if v.abs() >= v_min {
                 continue;
             }
-            let (lo, hi) = (i as i64 - guard as i64, i as i64 + guard as i64);
-            for k in lo..=hi {
-                let idx = if periodic {
-                    Some(k.rem_euclid(n as i64) as usize)
-                } else {
-                    usize::try_from(k).ok().filter(|&k| k < n)
-                };
-                if let Some(k) = idx {
-                    keep[j * n + k] = false;
-                }
+            let lo = i as i64 - guard as i64;
+            let hi = i as i64 + guard as i64;
+            let last = n as i64 - 1;
+            if periodic && hi - lo >= last {
+                mark(0, n - 1);
+            } else if periodic && lo < 0 {
+                mark((lo + n as i64) as usize, n - 1);
+                mark(0, hi as usize);
+            } else if periodic && hi > last {
+                mark(lo as usize, n - 1);
+                mark(0, (hi - n as i64) as usize);
+            } else {
+                mark(lo.max(0) as usize, hi.min(last) as usize);
             }
+        }
+        let mut run = 0;
+        for (k, c) in cover[..n].iter().enumerate() {
+            run += c;
+            keep[j * n + k] = run == 0;
         }
     }
     Ok(keep)

@@ -245,3 +245,44 @@ fn mass_tolerance_sets_every_links_bounds_and_rejects_bad_fractions() {
         assert!(e.contains("mass tolerance"), "{e}");
     }
 }
+
+/// The reversal mask's O(n) sweep equals the definition (drop joint j's row
+/// i if |θ̇_j| < v_min anywhere within `guard` samples, circularly when
+/// periodic), for any rates, guards from 0 to beyond the record, both modes.
+mod reversal_mask_sweep {
+    use aras_ident::robot::reversal_mask;
+    use proptest::prelude::*;
+
+    fn by_definition(td: &[Vec<f64>; 2], v_min: f64, guard: usize, periodic: bool) -> Vec<bool> {
+        let n = td[0].len();
+        let mut keep = vec![true; 2 * n];
+        for j in 0..2 {
+            for i in 0..n {
+                for (k, v) in td[j].iter().enumerate() {
+                    let d = i.abs_diff(k);
+                    let d = if periodic { d.min(n - d) } else { d };
+                    if d <= guard && v.abs() < v_min {
+                        keep[j * n + i] = false;
+                    }
+                }
+            }
+        }
+        keep
+    }
+
+    proptest! {
+        #[test]
+        fn equals_definition(
+            a in proptest::collection::vec(-1.0f64..1.0, 0..60),
+            b_seed in proptest::collection::vec(-1.0f64..1.0, 60),
+            guard in 0usize..70,
+            periodic: bool,
+            v_min in 0.0f64..0.6,
+        ) {
+            let b: Vec<f64> = b_seed[..a.len()].to_vec();
+            let td = [a, b];
+            let got = reversal_mask(&td, v_min, guard, periodic).unwrap();
+            prop_assert_eq!(got, by_definition(&td, v_min, guard, periodic));
+        }
+    }
+}
