@@ -186,6 +186,19 @@ pub fn identify_log(
     base: &BaseParameters,
     options: &StreamingOptions,
 ) -> Result<StreamingResult, IdentError> {
+    identify_log_with_progress(path, model, base, options, &mut |_| {})
+}
+
+/// [`identify_log`], calling `progress(rows)` with the number of log rows
+/// read so far after each chunk (for a progress bar: an hour at 10 kHz
+/// takes minutes).
+pub fn identify_log_with_progress(
+    path: &Path,
+    model: &Model,
+    base: &BaseParameters,
+    options: &StreamingOptions,
+    progress: &mut dyn FnMut(u64),
+) -> Result<StreamingResult, IdentError> {
     if options.chunk_samples < 1024 {
         return Err(IdentError::InvalidSetting {
             name: "chunk_samples",
@@ -230,10 +243,14 @@ pub fn identify_log(
     let mut chunk = Columns::default();
     let mut first = true;
     let mut dt = options.read.nominal_step.unwrap_or(0.0);
-    let read = |reader: &mut LogReader<std::fs::File>, chunk: &mut Columns, n: usize| {
-        reader
+    let mut rows_read = 0u64;
+    let mut read = |reader: &mut LogReader<std::fs::File>, chunk: &mut Columns, n: usize| {
+        let k = reader
             .read_rows(chunk, n)
-            .map_err(|e| sig("reading the log", e))
+            .map_err(|e| sig("reading the log", e))?;
+        rows_read += k as u64;
+        progress(rows_read);
+        Ok::<usize, IdentError>(k)
     };
     let mut out = Progress::default();
     let route;

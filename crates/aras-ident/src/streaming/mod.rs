@@ -46,5 +46,7 @@ pub mod synthetic;
 
 pub use accumulator::QrAccumulator;
 pub use gram::{Accumulation, GRAM_ERROR_LIMIT, GramCheck};
-pub use log::{StreamingOptions, StreamingResult, StreamingRoute, identify_log};
+pub use log::{
+    StreamingOptions, StreamingResult, StreamingRoute, identify_log, identify_log_with_progress,
+};
 pub use stage::{RegressorStage, STAGE_BLOCK_SAMPLES, States};

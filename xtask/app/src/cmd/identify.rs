@@ -139,8 +139,8 @@ fn run_streaming(args: &IdentifyArgs) -> Result<()> {
         base_parameters(&model, &geometry, &cfg)
     })?;
     let opts = options(args, &cfg, &nominal)?;
-    let r = stages.run("stream log → least squares", |_| {
-        stream(&args.data, &model, &base, &opts)
+    let r = stages.run("stream log → least squares", |bar| {
+        stream(&args.data, &model, &base, &opts, bar)
     })?;
     super::print_warnings(&args.data, &r.log.warnings);
     let intro = format!(

@@ -13,8 +13,11 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use aras_dyn::{Model, Params};
 use aras_ident::robot::{FilterMode, params_from_solution};
-use aras_ident::streaming::{Accumulation, StreamingOptions, StreamingResult, identify_log};
+use aras_ident::streaming::{
+    Accumulation, StreamingOptions, StreamingResult, identify_log_with_progress,
+};
 use aras_ident::{BaseParameters, NoiseVariances};
+use indicatif::ProgressBar;
 
 use crate::cli::{AccumulationArg, IdentifyArgs};
 use crate::config::{Config, FilteringMode, Weighting};
@@ -49,29 +52,58 @@ pub fn options(args: &IdentifyArgs, cfg: &Config, nominal: &Params) -> Result<St
 }
 
 /// Streams the log; reruns with the QR accumulation if the normal
-/// equations' accuracy check fails (a second pass, said on stderr).
+/// equations' accuracy check fails (a second pass, said on stderr). The
+/// stage's spinner shows the rows read and, from the file size, roughly
+/// how far along it is (an hour at 10 kHz takes minutes).
 pub fn stream(
     data: &Path,
     model: &Model,
     base: &BaseParameters,
     opts: &StreamingOptions,
+    bar: &ProgressBar,
 ) -> Result<StreamingResult> {
-    let r = identify_log(data, model, base, opts)
+    let total = estimated_rows(data);
+    let show = |pass: &str| {
+        let bar = bar.clone();
+        let pass = pass.to_string();
+        move |rows: u64| {
+            let pct = total
+                .map(|t| format!(" (≈ {:.0} %)", (100.0 * rows as f64 / t as f64).min(100.0)))
+                .unwrap_or_default();
+            bar.set_message(format!(
+                "stream log → least squares{pass}: {rows} rows{pct}"
+            ));
+        }
+    };
+    let r = identify_log_with_progress(data, model, base, opts, &mut show(""))
         .with_context(|| format!("streaming identification of {}", data.display()))?;
     match r.gram_check {
         Some(c) if !c.passed => {
-            eprintln!(
-                "note: κ = {:.3e} makes the normal equations too inaccurate (κ²ε = {:.1e} > {:.0e}); \
-                 accumulating again with incremental QR",
-                c.condition, c.error_bound, c.limit
-            );
+            bar.suspend(|| {
+                eprintln!(
+                    "note: κ = {:.3e} makes the normal equations too inaccurate (κ²ε = {:.1e} > {:.0e}); \
+                     accumulating again with incremental QR",
+                    c.condition, c.error_bound, c.limit
+                )
+            });
             let mut q = opts.clone();
             q.accumulation = Accumulation::Qr;
-            identify_log(data, model, base, &q)
+            identify_log_with_progress(data, model, base, &q, &mut show(", QR pass"))
                 .with_context(|| format!("streaming identification of {}", data.display()))
         }
         _ => Ok(r),
     }
+}
+
+/// Rows of a CSV log estimated from its size and the mean length of the
+/// lines in its first 64 KiB; `None` if that cannot be read.
+fn estimated_rows(path: &Path) -> Option<u64> {
+    use std::io::Read;
+    let size = std::fs::metadata(path).ok()?.len();
+    let mut head = vec![0u8; 64 * 1024];
+    let n = std::fs::File::open(path).ok()?.read(&mut head).ok()?;
+    let lines = head[..n].iter().filter(|&&b| b == b'\n').count() as u64;
+    (lines > 1).then(|| size * lines / n as u64)
 }
 
 /// Everything after streaming: OLS/WLS, SDP, checks, and the output files
