@@ -1,10 +1,13 @@
 //! `aras identify`: identification from any log in the documented format.
 
 use anyhow::{Context, Result};
+use aras_dyn::{Model, Params};
+use aras_kin::Geometry;
 use aras_signal::{ReadOptions, SidecarSource, read_log};
 
 use crate::cli::{IdentifyArgs, StreamingMode};
 use crate::cmd::fit::{self, FitInput};
+use crate::config::Config;
 use crate::identify::base_parameters;
 use crate::output::OutDir;
 use crate::robot::{model_with_effects, nominal, parse_effect};
@@ -46,15 +49,23 @@ pub fn streams(args: &IdentifyArgs) -> Result<bool> {
     })
 }
 
-/// Runs `identify`.
-pub fn run(args: &IdentifyArgs) -> Result<()> {
-    if streams(args)? {
-        return run_streaming(args);
-    }
+/// What both `identify` paths start from.
+struct Setup {
+    cfg: Config,
+    out: OutDir,
+    stages: Stages,
+    nominal: Params,
+    model: Model,
+    geometry: Geometry,
+}
+
+/// Config, output directory, nominal robot and the model with the
+/// requested extra effects.
+fn setup(args: &IdentifyArgs) -> Result<Setup> {
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config;
     let out = OutDir::create(&args.out, args.common.force)?;
-    let mut stages = Stages::new(args.common.quiet);
+    let stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let effects = args
         .effects
@@ -63,6 +74,29 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     let model = model_with_effects(&nominal, &effects)?;
     let geometry = nominal.geometry()?;
+    Ok(Setup {
+        cfg,
+        out,
+        stages,
+        nominal,
+        model,
+        geometry,
+    })
+}
+
+/// Runs `identify`.
+pub fn run(args: &IdentifyArgs) -> Result<()> {
+    if streams(args)? {
+        return run_streaming(args);
+    }
+    let Setup {
+        cfg,
+        out,
+        mut stages,
+        nominal,
+        model,
+        geometry,
+    } = setup(args)?;
     let log = stages
         .run("read log", |_| {
             read_log(&args.data, &read_options(args.sidecar.as_deref()))
@@ -118,18 +152,14 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
 /// `identify` in bounded memory (`--streaming on`, or `auto` on a large log).
 fn run_streaming(args: &IdentifyArgs) -> Result<()> {
     use super::identify_streaming::{fit_and_write, options, stream};
-    let loaded = super::load_config(&args.common)?;
-    let cfg = loaded.config;
-    let out = OutDir::create(&args.out, args.common.force)?;
-    let mut stages = Stages::new(args.common.quiet);
-    let nominal = nominal(&cfg.robot, &loaded.dir)?;
-    let effects = args
-        .effects
-        .iter()
-        .map(|e| parse_effect(e))
-        .collect::<Result<Vec<_>>>()?;
-    let model = model_with_effects(&nominal, &effects)?;
-    let geometry = nominal.geometry()?;
+    let Setup {
+        cfg,
+        out,
+        mut stages,
+        nominal,
+        model,
+        geometry,
+    } = setup(args)?;
     let sidecar = args
         .sidecar
         .clone()
