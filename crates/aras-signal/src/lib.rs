@@ -85,7 +85,7 @@ pub use log::{
     ReadOptions, Sensors, Sidecar, SidecarSource, Span, StepDeviation, Warning, read_log,
     read_log_from,
 };
-pub use periods::{PeriodAverage, average_periods};
+pub use periods::{MAX_BLOCK_MISMATCH, MAX_DRIFT, PeriodAverage, average_periods};
 pub use process::{
     FilterSpec, FilterSummary, PeriodSource, PeriodSummary, ProcessOptions, ProcessSummary,
     Processed, Samples, process,

@@ -139,7 +139,7 @@ pub struct IdentifyArgs {
     pub sidecar: Option<PathBuf>,
     /// Extra effects to identify with the paper's model, comma-separated, as
     /// `diagnose` names them: torque_offset, coulomb_asymmetry,
-    /// stribeck_friction[:V_S], passive_joint_viscous, cogging:CYCLES[:ORDER],
+    /// `stribeck_friction[:V_S]`, passive_joint_viscous, `cogging:CYCLES[:ORDER]`,
     /// quadratic_damping.
     #[arg(long, value_name = "ID[:ARG],…", value_delimiter = ',')]
     pub effects: Vec<String>,
