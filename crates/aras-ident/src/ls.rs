@@ -369,18 +369,7 @@ pub fn wls<S: AsRef<str>>(
             for (i, (&ti, &pi)) in t.iter().zip(&res).enumerate() {
                 ss[groups.labels()[i]] += (ti - pi) * (ti - pi);
             }
-            let (n, b) = (w_b.nrows() as f64, w_b.ncols() as f64);
-            let mut v: Vec<f64> = ss
-                .iter()
-                .zip(groups.counts())
-                .map(|(s, &c)| s / (c as f64 * (1.0 - b / n)))
-                .collect();
-            let vmax = v.iter().copied().fold(0.0, f64::max);
-            if vmax == 0.0 {
-                v.iter_mut().for_each(|x| *x = 1.0);
-            } else {
-                v.iter_mut().for_each(|x| *x = x.max(1e-12 * vmax));
-            }
+            let v = variances_from_rss(&ss, groups.counts(), w_b.nrows(), w_b.ncols());
             (v, Some(first))
         }
     };
@@ -434,6 +423,27 @@ impl PositiveList {
         }
         Ok(())
     }
+}
+
+/// Per-group noise variances from the first pass's residual sums of squares
+/// `ss` (group `g` has `counts[g]` of the `n` rows, `b` unknowns): each
+/// divided by its share of the degrees of freedom, floored at 1e-12 of the
+/// largest so a noise-free group keeps a finite weight (all 1 if every sum
+/// is zero). Shared by the in-memory and the streaming WLS.
+pub(crate) fn variances_from_rss(ss: &[f64], counts: &[usize], n: usize, b: usize) -> Vec<f64> {
+    let (n, b) = (n as f64, b as f64);
+    let mut v: Vec<f64> = ss
+        .iter()
+        .zip(counts)
+        .map(|(s, &c)| s / (c as f64 * (1.0 - b / n)))
+        .collect();
+    let vmax = v.iter().copied().fold(0.0, f64::max);
+    if vmax == 0.0 {
+        v.iter_mut().for_each(|x| *x = 1.0);
+    } else {
+        v.iter_mut().for_each(|x| *x = x.max(1e-12 * vmax));
+    }
+    v
 }
 
 /// Validates caller-given per-group noise variances: one per group, finite

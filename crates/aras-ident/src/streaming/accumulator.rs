@@ -332,18 +332,8 @@ impl QrAccumulator {
             NoiseVariances::FromResiduals => {
                 let first = self.ols()?;
                 let ss = self.group_rss(&first.estimate)?;
-                let (n, b) = (self.rows() as f64, self.names.len() as f64);
-                let mut v: Vec<f64> = ss
-                    .iter()
-                    .zip(&self.rows)
-                    .map(|(s, &c)| s / (c as f64 * (1.0 - b / n)))
-                    .collect();
-                let vmax = v.iter().copied().fold(0.0, f64::max);
-                if vmax == 0.0 {
-                    v.iter_mut().for_each(|x| *x = 1.0);
-                } else {
-                    v.iter_mut().for_each(|x| *x = x.max(1e-12 * vmax));
-                }
+                let v =
+                    crate::ls::variances_from_rss(&ss, &self.rows, self.rows(), self.names.len());
                 (v, Some(first))
             }
         };
