@@ -8,6 +8,10 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use faer::Mat;
 use std::hint::black_box;
 
+// The rigid-body rows (Newton–Euler in regressor form) the tests use too.
+#[path = "../tests/common/mod.rs"]
+mod common;
+
 /// SplitMix64-based standard normals (Box–Muller), deterministic.
 struct Gen(u64);
 impl Gen {
@@ -54,7 +58,7 @@ fn bench_sdp(c: &mut Criterion) {
         for k in 0..4 {
             let om = [g.n(), g.n(), g.n()];
             let od = [g.n(), g.n(), g.n()];
-            let rows = rows(om, od, gv);
+            let rows = common::body_rows(om, od, gv);
             for a in 0..3 {
                 for col in 0..9 {
                     w[(a * n + s, 9 * k + col)] = rows[a][col];
@@ -125,40 +129,6 @@ fn bench_sdp(c: &mut Criterion) {
     c.bench_function("sdp_4_links_42_params", |bch| {
         bch.iter(|| p.solve(black_box(&base), black_box(&red)).unwrap())
     });
-}
-
-fn rows(om: [f64; 3], od: [f64; 3], g: [f64; 3]) -> [[f64; 9]; 3] {
-    let cross = |a: [f64; 3], b: [f64; 3]| {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    };
-    let l = |w: [f64; 3]| {
-        [
-            [w[0], w[1], w[2], 0.0, 0.0, 0.0],
-            [0.0, w[0], 0.0, w[1], w[2], 0.0],
-            [0.0, 0.0, w[0], 0.0, w[1], w[2]],
-        ]
-    };
-    let (ld, lo) = (l(od), l(om));
-    let mut out = [[0.0; 9]; 3];
-    for c in 0..6 {
-        let x = cross(om, [lo[0][c], lo[1][c], lo[2][c]]);
-        for r in 0..3 {
-            out[r][c] = ld[r][c] + x[r];
-        }
-    }
-    for c in 0..3 {
-        let mut e = [0.0; 3];
-        e[c] = 1.0;
-        let x = cross(g, e);
-        for r in 0..3 {
-            out[r][6 + c] = x[r];
-        }
-    }
-    out
 }
 
 /// A closed-form 2×2 mass matrix of a 2-DOF arm-like mechanism (stand-in
