@@ -9,18 +9,20 @@
 //! Simulations are shared between tests through `OnceLock`s.
 #![allow(clippy::needless_range_loop)]
 
+mod common;
+
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
 use aras_dyn::sim::{SimConfig, SimLog, simulate, write_log};
-use aras_dyn::{Dynamics, Model, Params, Sinusoid, Trajectory};
+use aras_dyn::{Model, Params, Sinusoid, Trajectory};
 use aras_excite::{DesignSettings, DynRegressor, FourierTrajectory, assess, random_feasible};
 use aras_ident::robot::base_projection;
 use aras_ident::robot::{
     FilterMode, Stacked, base_parameters, consistent_problem, filter, filter_reach, keep_rows,
     noise_gain, params_from_solution, reversal_mask, stack,
 };
-use aras_ident::validate::{PdRegion, check_positive_definite, fitness_per_group, predict};
+use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 use aras_kin::{Geometry, Workspace};
 use aras_signal::{
@@ -312,22 +314,7 @@ fn sdp_is_physical_positive_definite_and_fits_like_ols() {
     for j in 0..2 {
         assert!((fit[j] - n.fit[j]).abs() <= 0.5, "{fit:?} vs {:?}", n.fit);
     }
-    let dy = Dynamics::new(&identified).unwrap();
-    let ws = Workspace::paper();
-    let mut region = PdRegion::new([ws.min()[0], ws.min()[1]], [ws.max()[0], ws.max()[1]]);
-    region.grid_per_axis = 201;
-    region.random = 60_000;
-    let z = Vector2::zeros();
-    let rep = check_positive_definite(
-        |x: &[f64; 2]| -> Result<[[f64; 2]; 2], String> {
-            let s = dy
-                .sample(&Vector2::new(x[0], x[1]), &z, &z)
-                .map_err(|e| e.to_string())?;
-            let m = dy.mass_matrix(&s);
-            Ok([[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]])
-        },
-        &region,
-    );
+    let rep = common::task_mass_pd(&identified, 201, 60_000);
     eprintln!(
         "mass matrix over {} points: λ ∈ [{:.3e}, {:.3e}], min at {:?}",
         rep.points, rep.min_eigenvalue, rep.max_eigenvalue, rep.argmin

@@ -4,9 +4,9 @@
 
 mod common;
 
-use aras_dyn::{Dynamics, Effect, Model, Params};
+use aras_dyn::{Effect, Model, Params};
 use aras_ident::robot::{FilterMode, consistent_problem, filter, params_from_solution, stack};
-use aras_ident::validate::{PdRegion, check_positive_definite, fitness_per_group, predict};
+use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{BaseParameters, ReducedLs, RowGroups};
 use aras_kin::Workspace;
 use aras_signal::{Butterworth, Samples};
@@ -135,22 +135,7 @@ fn default_robot_ols_and_sdp_round_trip() {
         );
     }
     // The identified robot's mass matrix (80) is positive definite over the workspace.
-    let dy = Dynamics::new(&identified).unwrap();
-    let ws = Workspace::paper();
-    let mut region = PdRegion::new([ws.min()[0], ws.min()[1]], [ws.max()[0], ws.max()[1]]);
-    region.grid_per_axis = 21;
-    region.random = 2000;
-    let z = Vector2::zeros();
-    let rep = check_positive_definite(
-        |x: &[f64; 2]| -> Result<[[f64; 2]; 2], String> {
-            let s = dy
-                .sample(&Vector2::new(x[0], x[1]), &z, &z)
-                .map_err(|e| e.to_string())?;
-            let m = dy.mass_matrix(&s);
-            Ok([[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]])
-        },
-        &region,
-    );
+    let rep = common::task_mass_pd(&identified, 21, 2000);
     assert!(rep.positive_definite(), "{rep:?}");
 }
 
