@@ -38,16 +38,19 @@ fn diagnose_names_the_hidden_effect() {
     log(&truth, &exc, 2.0 * exc.period(), &train);
     log(&truth, &Sinusoid::paper_79(0.5).unwrap(), 10.0, &val);
     let out = dir.join("out");
-    let r = Command::new(env!("CARGO_BIN_EXE_aras"))
-        .args(["diagnose", "--data"])
-        .arg(&train)
-        .arg("--validate")
-        .arg(&val)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .output()
-        .unwrap();
+    let diagnose = || {
+        Command::new(env!("CARGO_BIN_EXE_aras"))
+            .args(["diagnose", "--data"])
+            .arg(&train)
+            .arg("--validate")
+            .arg(&val)
+            .arg("--out")
+            .arg(&out)
+            .arg("--quiet")
+            .output()
+            .unwrap()
+    };
+    let r = diagnose();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let j: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("diagnosis.json")).unwrap())
@@ -67,16 +70,7 @@ fn diagnose_names_the_hidden_effect() {
     let html = std::fs::read_to_string(out.join("diagnosis.html")).unwrap();
     assert!(html.contains("<svg"), "the HTML inlines its figures");
     // Without --force the same output directory is refused.
-    let again = Command::new(env!("CARGO_BIN_EXE_aras"))
-        .args(["diagnose", "--data"])
-        .arg(&train)
-        .arg("--validate")
-        .arg(&val)
-        .arg("--out")
-        .arg(&out)
-        .arg("--quiet")
-        .output()
-        .unwrap();
+    let again = diagnose();
     assert!(!again.status.success());
     let _ = std::fs::remove_dir_all(&dir);
 }
