@@ -10,7 +10,7 @@
 //! * `cargo xtask deps`: only the system-library check and install.
 //! * `cargo xtask <command> [ARGS…]`: every other command (`pipeline`, `excite`,
 //!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `--help`) is
-//!   passed to the `aras` binary of the `aras-app` package.
+//!   passed to the `aras` binary of the `aras-cli` package.
 
 use std::path::Path;
 use std::process::{Command, ExitCode};
@@ -140,7 +140,7 @@ fn main() -> ExitCode {
                 "--quiet",
                 "--release",
                 "--package",
-                "aras-app",
+                "aras-cli",
                 "--bin",
                 "aras",
                 "--",

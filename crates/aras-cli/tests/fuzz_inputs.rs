@@ -3,14 +3,14 @@
 //! file (a byte flipped, inserted or deleted, the file cut short), which
 //! reach much deeper than random bytes. Case counts are small so CI stays
 //! fast; a longer run: `PROPTEST_CASES=100000 cargo test --release -p
-//! aras-app --test fuzz_inputs` (docs/robustness.md).
+//! aras-cli --test fuzz_inputs` (docs/robustness.md).
 //!
 //! A parser "passes" when it returns `Ok` or `Err` without panicking; an
 //! `Ok` result must also be usable (re-serialised, or its values finite).
 
 use std::path::Path;
 
-use aras_app::config::{Config, Format};
+use aras_cli::config::{Config, Format};
 use aras_dyn::Params;
 use aras_excite::FourierTrajectory;
 use aras_signal::{ReadOptions, Sidecar, read_log_from};

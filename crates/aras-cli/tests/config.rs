@@ -1,6 +1,6 @@
 //! Configuration errors name the file, the key and the line.
 
-use aras_app::config::{Config, Format};
+use aras_cli::config::{Config, Format};
 
 fn err(text: &str, format: Format) -> String {
     Config::parse(text, format, "cfg")

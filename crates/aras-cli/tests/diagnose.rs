@@ -10,7 +10,7 @@ use aras_dyn::{Params, Sinusoid, Trajectory};
 use aras_excite::FourierTrajectory;
 
 fn scratch() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-app-test-diagnose-{}", std::process::id()));
+    let d = std::env::temp_dir().join(format!("aras-cli-test-diagnose-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
@@ -80,7 +80,7 @@ fn diagnose_names_the_hidden_effect() {
 /// `params.json` (parameter-file key `extra.torque_offset`).
 #[test]
 fn identify_with_extra_effects() {
-    let dir = std::env::temp_dir().join(format!("aras-app-test-effects-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("aras-cli-test-effects-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let mut truth = Params::aras_diamond();

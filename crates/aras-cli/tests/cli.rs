@@ -11,7 +11,7 @@ fn aras(args: &[&str]) -> Output {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-app-test-{name}-{}", std::process::id()));
+    let d = std::env::temp_dir().join(format!("aras-cli-test-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
@@ -205,11 +205,11 @@ fn existing_output_directory_is_refused_without_force() {
     let out = dir.join("out");
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("keep.txt"), "mine").unwrap();
-    let err = aras_app::output::OutDir::create(&out, false)
+    let err = aras_cli::output::OutDir::create(&out, false)
         .err()
         .expect("refused");
     assert!(err.to_string().contains("--force"), "{err}");
-    let o = aras_app::output::OutDir::create(&out, true).unwrap();
+    let o = aras_cli::output::OutDir::create(&out, true).unwrap();
     o.write("new.txt", "x").unwrap();
     assert!(
         out.join("keep.txt").exists(),
@@ -229,6 +229,6 @@ fn print_config_prints_parseable_defaults() {
     assert!(r.status.success());
     let text = String::from_utf8(r.stdout).unwrap();
     let c =
-        aras_app::config::Config::parse(&text, aras_app::config::Format::Toml, "printed").unwrap();
-    assert_eq!(c, aras_app::config::Config::default());
+        aras_cli::config::Config::parse(&text, aras_cli::config::Format::Toml, "printed").unwrap();
+    assert_eq!(c, aras_cli::config::Config::default());
 }

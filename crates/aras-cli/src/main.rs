@@ -2,8 +2,8 @@
 
 use std::process::ExitCode;
 
-use aras_app::cli::{Cli, Command};
-use aras_app::cmd;
+use aras_cli::cli::{Cli, Command};
+use aras_cli::cmd;
 use clap::Parser;
 
 fn main() -> ExitCode {
