@@ -5,8 +5,8 @@ use anyhow::{Context, Result};
 use aras_dyn::Params;
 use aras_excite::{Criterion, Design, DesignSettings, DynRegressor, Limits};
 use aras_ident::BaseParameters;
-use aras_ident::robot::base_projection;
 use aras_kin::Workspace;
+use aras_pipeline::robot::base_projection;
 use nalgebra::Vector2;
 
 use crate::config::{Config, CriterionChoice};

@@ -153,8 +153,8 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         state: impl Fn(usize) -> [Vector2<f64>; 3],
     ) -> Result<(), ExciteError> {
         // Start the scalar loop clean whatever ran on this thread before
-        // (see `aras_kin::simd`).
-        aras_kin::simd::clear_upper_state();
+        // (see `aras_ident::simd`).
+        aras_ident::simd::clear_upper_state();
         let n = self.reg.columns();
         let ns = self.samples;
         for s in 0..ns {
@@ -179,8 +179,8 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         state: impl Fn(usize) -> [Vector2<f64>; 3],
     ) -> Result<(), ExciteError> {
         // Start the scalar loop clean whatever ran on this thread before
-        // (see `aras_kin::simd`).
-        aras_kin::simd::clear_upper_state();
+        // (see `aras_ident::simd`).
+        aras_ident::simd::clear_upper_state();
         let n = self.reg.columns();
         let ns = self.samples;
         for s in 0..ns {
@@ -247,7 +247,7 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         // faer's SVDs can leave the AVX upper state dirty, which makes the
         // scalar code after them (the contraction below, the next
         // iteration's dual-number kinematics) several times slower.
-        aras_kin::simd::clear_upper_state();
+        aras_ident::simd::clear_upper_state();
         let ss: Vec<f64> = svd_s.S().column_vector().iter().copied().collect();
         let sb: Vec<f64> = svd_b.S().column_vector().iter().copied().collect();
         let (smax, smin) = (ss[0], ss[b - 1]);
@@ -294,7 +294,7 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
                 }
             };
             let a = &g * self.e.transpose();
-            aras_kin::simd::clear_upper_state();
+            aras_ident::simd::clear_upper_state();
             let n = a.ncols();
             for s in 0..ns {
                 let mut acc = [0.0; DIRS];

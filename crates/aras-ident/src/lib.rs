@@ -16,11 +16,12 @@
 //!    convex SDP over the links' pseudo-inertias.
 //! 4. [`validate`]: fitness (78), workspace positive definiteness of the mass
 //!    matrix (80), parameter errors against a known truth.
-//! 5. [`robot`]: the adapter to the ARAS-Diamond crates (stacked regressor
-//!    from `aras-dyn` and `aras-signal`, parallel filtering, the four links'
-//!    SDP layout, results back into `aras_dyn::Params`).
-//! 6. [`streaming`]: the same least squares from logs of any length in
-//!    bounded memory (incremental QR, chunked CSV reading).
+//! 5. [`streaming`]: the same least squares from data of any length in
+//!    bounded memory (incremental QR or Gram accumulation), for any
+//!    [`LinearModel`].
+//!
+//! The robot-specific orchestration (the ARAS-Diamond's regressor, reading
+//! and processing logs, the diagnosis) lives in `aras-pipeline`.
 //!
 //! ## Conventions
 //! SI units and radians throughout. A stacked regressor has one row per
@@ -36,7 +37,6 @@
 //! * `clarabel`: interior-point conic solver with PSD cones for the SDP; its
 //!   PSD cones call LAPACK, provided by the system OpenBLAS through
 //!   `openblas-src` (see `docs/blas.md`).
-//! * `aras-kin`, `aras-dyn`, `aras-signal`, `nalgebra`: only in [`robot`].
 //! * `rayon`: parallel tall-skinny QR, streaming regressor blocks and
 //!   workspace scans.
 //! * `serde`: results serialise for reports; `thiserror`: the error type.
@@ -49,14 +49,13 @@ use openblas_src as _;
 
 mod base;
 mod dense;
-pub mod diagnose;
 mod error;
 mod groups;
 mod ls;
+mod model;
 mod rank;
-pub mod robot;
 mod sdp;
-mod simd;
+pub mod simd;
 pub mod streaming;
 pub mod validate;
 
@@ -65,6 +64,7 @@ pub use dense::symmetric_eigenvalues;
 pub use error::IdentError;
 pub use groups::RowGroups;
 pub use ls::{NoiseVariances, OlsEstimate, ReducedLs, WlsEstimate, ols, wls};
+pub use model::LinearModel;
 pub use sdp::{
     ActiveConstraint, ConsistentLs, ConstraintKind, LinkLayout, LinkReport, SdpSettings,
     SdpSolution, pseudo_inertia_min_eigenvalue,

@@ -1,5 +1,5 @@
 //! `aras identify --streaming`: identification from a log of any length in
-//! bounded memory (`aras_ident::streaming::identify_log`, docs/scale.md),
+//! bounded memory (`aras_pipeline::streaming::identify_log`, docs/scale.md),
 //! with the same settings as the in-memory path (processing, parallel
 //! filter, reversal exclusion, filter-corrected σ, OLS/WLS, SDP) and the
 //! same output files. What a single bounded pass cannot give: the fitness
@@ -12,11 +12,10 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use aras_dyn::{Model, Params};
-use aras_ident::robot::{FilterMode, params_from_solution};
-use aras_ident::streaming::{
-    Accumulation, StreamingOptions, StreamingResult, identify_log_with_progress,
-};
+use aras_ident::streaming::Accumulation;
 use aras_ident::{BaseParameters, NoiseVariances};
+use aras_pipeline::robot::{FilterMode, params_from_solution};
+use aras_pipeline::streaming::{StreamingOptions, StreamingResult, identify_log_with_progress};
 use indicatif::ProgressBar;
 
 use crate::cli::{AccumulationArg, IdentifyArgs};

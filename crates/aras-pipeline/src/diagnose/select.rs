@@ -13,11 +13,10 @@ use super::candidates::{Candidate, CandidateGrid};
 use super::data::{Dataset, Design, columns, design, effect_columns, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse};
 use super::stats::{f_sf, integrated_time};
-use crate::base::BaseParameters;
-use crate::error::IdentError;
-use crate::ls::ReducedLs;
+use aras_ident::validate::fitness;
+use aras_ident::{BaseParameters, IdentError, ReducedLs};
+
 use crate::robot::{Stacked, consistent_problem};
-use crate::validate::fitness;
 
 /// Settings of [`diagnose`]; `Default` gives the documented values.
 #[derive(Debug, Clone, PartialEq, Serialize)]
