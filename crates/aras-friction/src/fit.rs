@@ -135,7 +135,7 @@ pub fn metrics(measured: &[f64], estimated: &[f64]) -> Metrics {
 pub struct Fitted<M> {
     /// The model.
     pub model: M,
-    /// Every parameter with its σ, in [`FrictionModel::parameters`] order.
+    /// Every parameter with its σ, in [`crate::FrictionModel::parameters`] order.
     pub estimates: Vec<Estimate>,
     /// Metrics on the training log.
     pub train: Metrics,
