@@ -432,6 +432,9 @@ pub enum FileKind {
     /// `aras simulate`: a log whose sidecar (LOG.json) holds the simulator's
     /// ground truth (`truth`), which only the simulator writes.
     SimulatedLog,
+    /// `aras export-mjcf`: a MuJoCo model whose header comment names the
+    /// ARAS-Diamond robot (`<!--` then `ARAS-Diamond` before `<mujoco`).
+    Mjcf,
 }
 
 impl FileKind {
@@ -448,6 +451,10 @@ impl FileKind {
                 v.get("format").and_then(|f| f.as_str()) == Some("aras-log/1")
                     && v.get("truth").is_some()
             }),
+            Self::Mjcf => fs::read_to_string(path).is_ok_and(|x| {
+                x.find("<mujoco")
+                    .is_some_and(|m| x[..m].contains("<!--") && x[..m].contains("ARAS-Diamond"))
+            }),
         }
     }
 
@@ -458,6 +465,7 @@ impl FileKind {
             Self::SimulatedLog => {
                 "a log written by `aras simulate` (its sidecar LOG.json holds the simulator's truth)"
             }
+            Self::Mjcf => "a MuJoCo model written by `aras export-mjcf`",
         }
     }
 }
