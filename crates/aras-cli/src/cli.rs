@@ -35,6 +35,23 @@ pub enum Command {
     /// Find where model and measurement disagree, name the missing effect,
     /// add it and show the gap shrink → diagnosis.{md,html,json} (issue 8).
     Diagnose(DiagnoseArgs),
+    /// Write the robot of a parameter file as a MuJoCo model (MJCF):
+    /// bodies, joints, the loop constraint, friction and actuators (docs/mjcf.md).
+    ExportMjcf(ExportMjcfArgs),
+}
+
+/// `aras export-mjcf`.
+#[derive(Debug, Args)]
+pub struct ExportMjcfArgs {
+    /// Parameter file (e.g. params.json from identify: physically consistent).
+    #[arg(long, value_name = "P.json")]
+    pub params: PathBuf,
+    /// Output MJCF file.
+    #[arg(long, default_value = "robot.xml", value_name = "robot.xml")]
+    pub out: PathBuf,
+    /// Shared options.
+    #[command(flatten)]
+    pub common: Common,
 }
 
 /// `aras diagnose`.
@@ -61,7 +78,9 @@ pub struct Common {
     /// to every key not given.
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
-    /// Replace an existing output.
+    /// Replace an existing output, only if aras wrote it: a directory whose
+    /// files are all listed in its `.aras-manifest.json`, or a file of the
+    /// same kind. A directory holding an input or anything else is refused.
     #[arg(long)]
     pub force: bool,
     /// No progress display and no stage lines on stderr.

@@ -203,20 +203,22 @@ fn pipeline_identify_predict_end_to_end() {
 fn existing_output_directory_is_refused_without_force() {
     let dir = scratch("force");
     let out = dir.join("out");
-    std::fs::create_dir_all(&out).unwrap();
-    std::fs::write(out.join("keep.txt"), "mine").unwrap();
-    let err = aras_cli::output::OutDir::create(&out, false)
+    // A previous run of the tool (with its manifest).
+    let first = aras_cli::output::OutDir::create(&out, false, &[]).unwrap();
+    first.write("old.txt", "x").unwrap();
+    first.commit().unwrap();
+    let err = aras_cli::output::OutDir::create(&out, false, &[])
         .err()
         .expect("refused");
     assert!(err.to_string().contains("--force"), "{err}");
-    let o = aras_cli::output::OutDir::create(&out, true).unwrap();
+    let o = aras_cli::output::OutDir::create(&out, true, &[]).unwrap();
     o.write("new.txt", "x").unwrap();
     assert!(
-        out.join("keep.txt").exists(),
+        out.join("old.txt").exists(),
         "nothing is removed before commit"
     );
     o.commit().unwrap();
-    assert!(out.join("new.txt").exists() && !out.join("keep.txt").exists());
+    assert!(out.join("new.txt").exists() && !out.join("old.txt").exists());
     let r = aras(&["pipeline", "--out", out.to_str().unwrap(), "-q"]);
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("already exists"));

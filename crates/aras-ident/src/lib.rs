@@ -19,6 +19,10 @@
 //! 5. [`streaming`]: the same least squares from data of any length in
 //!    bounded memory (incremental QR or Gram accumulation), for any
 //!    [`LinearModel`].
+//! 6. [`selection`]: which of many candidate column blocks a model is
+//!    missing, from one pass over the data in bounded memory (forward
+//!    selection on accumulated Gram blocks, validated on every held-out
+//!    set); [`stats`]: the F, χ² and autocorrelation tools it uses.
 //!
 //! The robot-specific orchestration (the ARAS-Diamond's regressor, reading
 //! and processing logs, the diagnosis) lives in `aras-pipeline`.
@@ -55,7 +59,9 @@ mod ls;
 mod model;
 mod rank;
 mod sdp;
+pub mod selection;
 pub mod simd;
+pub mod stats;
 pub mod streaming;
 pub mod validate;
 

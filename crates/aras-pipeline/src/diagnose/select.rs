@@ -12,7 +12,7 @@ use serde::Serialize;
 use super::candidates::{Candidate, CandidateGrid};
 use super::data::{Dataset, Design, columns, design, effect_columns, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse};
-use super::stats::{f_sf, integrated_time};
+use aras_ident::stats::{f_sf, integrated_time};
 use aras_ident::validate::fitness;
 use aras_ident::{BaseParameters, IdentError, ReducedLs};
 

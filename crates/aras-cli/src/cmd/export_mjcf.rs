@@ -1,0 +1,37 @@
+//! `aras export-mjcf`: the robot of a parameter file as a MuJoCo model
+//! (`docs/mjcf.md`).
+
+use anyhow::{Context, Result};
+use aras_dyn::Params;
+use aras_dyn::mjcf::{MjcfOptions, to_mjcf, unrepresented};
+
+use crate::cli::ExportMjcfArgs;
+use crate::output::{FileKind, check_new_file, write_atomic};
+
+/// Runs `export-mjcf`: refuses an existing `--out` unless `--force`, writes
+/// the MJCF atomically and names the effects MuJoCo cannot express.
+pub fn run(args: &ExportMjcfArgs) -> Result<()> {
+    check_new_file(
+        &args.out,
+        args.common.force,
+        FileKind::Mjcf,
+        std::slice::from_ref(&args.params),
+    )?;
+    let params =
+        Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
+    let xml = to_mjcf(&params, &MjcfOptions::default())
+        .with_context(|| format!("exporting {} to MJCF", args.params.display()))?;
+    write_atomic(&args.out, xml.as_bytes())?;
+    println!(
+        "{}: MuJoCo model (MJCF) of {}",
+        args.out.display(),
+        args.params.display()
+    );
+    for u in unrepresented(&params) {
+        eprintln!(
+            "note: effect `{}` is not represented in MJCF ({}); listed in the XML comment",
+            u.effect, u.why
+        );
+    }
+    Ok(())
+}
