@@ -24,7 +24,7 @@ use crate::identify::{consistent_fit, process_options, with_standard};
 use crate::output::OutDir;
 use crate::stages::Stages;
 use crate::summary::{
-    BASE_FORMAT, BaseEntry, BaseFile, Fitness, PseudoInertia, SdpReport, Summary,
+    BASE_FORMAT, BaseEntry, BaseFile, DataKind, Fitness, PseudoInertia, SdpReport, Summary,
 };
 use crate::validate::{parameter_errors, pd_check, pseudo_inertia_min};
 
@@ -145,7 +145,15 @@ pub fn fit_and_write(
         sdp: f_sdp,
         ols_kept: f_ols,
         sdp_kept: f_sdp,
-        paper: None,
+        data: if truth.is_some() {
+            DataKind::Simulated
+        } else {
+            DataKind::Measured
+        },
+        // Streaming keeps no samples to evaluate the truth on.
+        noise_ceiling: None,
+        noise_ceiling_kept: None,
+        paper_real_robot: None,
     }];
     let mut pd = BTreeMap::new();
     pd.insert("ols".to_string(), pd_check(&ols_params, cfg)?);

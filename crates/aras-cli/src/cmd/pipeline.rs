@@ -90,6 +90,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
             cfg: &cfg,
             nominal: &nominal,
             truth: Some(&truth),
+            friction_smoothing: cfg.simulation.friction_smoothing,
             cross_validate: true,
             log: &log,
             period: None,
