@@ -30,3 +30,17 @@ pub fn run(args: &ExportMjcfArgs) -> Result<()> {
     }
     Ok(())
 }
+
+/// Writes `robot.xml` (the MJCF of `params`, the physically consistent
+/// estimate) into a run's directory beside `params.json`. A parameter set
+/// MuJoCo would reject is reported on stderr and no file is written: the
+/// identification's other outputs stay valid.
+pub fn write_beside(out: &crate::output::OutDir, params: &Params) -> Result<()> {
+    match to_mjcf(params, &MjcfOptions::default()) {
+        Ok(xml) => {
+            out.write("robot.xml", xml)?;
+        }
+        Err(e) => eprintln!("warning: robot.xml not written: {e}"),
+    }
+    Ok(())
+}
