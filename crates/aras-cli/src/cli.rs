@@ -78,7 +78,9 @@ pub struct Common {
     /// to every key not given.
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
-    /// Replace an existing output.
+    /// Replace an existing output, only if aras wrote it: a directory whose
+    /// files are all listed in its `.aras-manifest.json`, or a file of the
+    /// same kind. A directory holding an input or anything else is refused.
     #[arg(long)]
     pub force: bool,
     /// No progress display and no stage lines on stderr.

@@ -9,7 +9,8 @@
 //! Conventions: SI units and radians everywhere except config keys ending
 //! in `_deg` and report labels; torques are motor (joint) torques; stacked
 //! data put joint 1's rows first. Outputs are written atomically into a
-//! staged directory that replaces the target only at the end (`--force`).
+//! staged directory that replaces the target only at the end; `--force`
+//! replaces only files a previous run listed in its manifest ([`output`]).
 //! See `docs/architecture.md` (data flow, module map) and `docs/config.md`.
 //!
 //! Dependencies beyond the workspace crates: `clap` (command line),

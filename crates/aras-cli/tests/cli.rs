@@ -50,6 +50,7 @@ fn pipeline_identify_predict_end_to_end() {
         "log.csv",
         "log.json",
         "params.json",
+        "robot.xml",
         "params_ols.json",
         "base.json",
         "summary.json",
@@ -116,6 +117,12 @@ fn pipeline_identify_predict_end_to_end() {
     let params =
         aras_dyn::Params::load(out.join("params.json")).expect("params.json is a parameter file");
     assert!(params.links.iter().all(|l| l.mass > 0.0));
+    // robot.xml is the MJCF of exactly this (physically consistent) set.
+    let xml = std::fs::read_to_string(out.join("robot.xml")).unwrap();
+    assert_eq!(
+        xml,
+        aras_dyn::mjcf::to_mjcf(&params, &Default::default()).unwrap()
+    );
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(
         html.contains("<svg") && !html.contains("src=\""),
@@ -203,20 +210,22 @@ fn pipeline_identify_predict_end_to_end() {
 fn existing_output_directory_is_refused_without_force() {
     let dir = scratch("force");
     let out = dir.join("out");
-    std::fs::create_dir_all(&out).unwrap();
-    std::fs::write(out.join("keep.txt"), "mine").unwrap();
-    let err = aras_cli::output::OutDir::create(&out, false)
+    // A previous run of the tool (with its manifest).
+    let first = aras_cli::output::OutDir::create(&out, false, &[]).unwrap();
+    first.write("old.txt", "x").unwrap();
+    first.commit().unwrap();
+    let err = aras_cli::output::OutDir::create(&out, false, &[])
         .err()
         .expect("refused");
     assert!(err.to_string().contains("--force"), "{err}");
-    let o = aras_cli::output::OutDir::create(&out, true).unwrap();
+    let o = aras_cli::output::OutDir::create(&out, true, &[]).unwrap();
     o.write("new.txt", "x").unwrap();
     assert!(
-        out.join("keep.txt").exists(),
+        out.join("old.txt").exists(),
         "nothing is removed before commit"
     );
     o.commit().unwrap();
-    assert!(out.join("new.txt").exists() && !out.join("keep.txt").exists());
+    assert!(out.join("new.txt").exists() && !out.join("old.txt").exists());
     let r = aras(&["pipeline", "--out", out.to_str().unwrap(), "-q"]);
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("already exists"));

@@ -21,8 +21,23 @@ use crate::stages::Stages;
 /// Runs `diagnose`.
 pub fn run(args: &DiagnoseArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
-    let cfg = loaded.config;
-    let out = OutDir::create(&args.out, args.common.force)?;
+    let cfg = loaded.config.clone();
+    // The logs and their sidecars.
+    let logs: Vec<&std::path::Path> = std::iter::once(&args.data)
+        .chain(&args.validate)
+        .map(|p| p.as_path())
+        .collect();
+    let sidecars: Vec<std::path::PathBuf> = logs
+        .iter()
+        .map(|p| aras_dyn::sim::sidecar_path(p))
+        .collect();
+    let mut read = logs.clone();
+    read.extend(sidecars.iter().map(|p| p.as_path()));
+    let out = OutDir::create(
+        &args.out,
+        args.common.force,
+        &super::input_files(&args.common, &loaded, &read),
+    )?;
     let mut stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let model = paper_model(&nominal)?;

@@ -4,18 +4,23 @@ use anyhow::Result;
 
 use crate::cli::ExciteArgs;
 use crate::identify::base_parameters;
-use crate::output::write_atomic;
+use crate::output::{FileKind, check_new_file, write_atomic};
 use crate::robot::{nominal, paper_model};
 use crate::stages::Stages;
 
 /// Runs `excite`.
 pub fn run(args: &ExciteArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
-    let mut cfg = loaded.config;
+    let mut cfg = loaded.config.clone();
     if let Some(s) = args.seed {
         cfg.trajectory.seed = s;
     }
-    super::check_new_file(&args.out, args.common.force)?;
+    check_new_file(
+        &args.out,
+        args.common.force,
+        FileKind::Trajectory,
+        &super::input_files(&args.common, &loaded, &[]),
+    )?;
     let mut stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let model = paper_model(&nominal)?;

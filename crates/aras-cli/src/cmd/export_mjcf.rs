@@ -6,12 +6,19 @@ use aras_dyn::Params;
 use aras_dyn::mjcf::{MjcfOptions, to_mjcf, unrepresented};
 
 use crate::cli::ExportMjcfArgs;
-use crate::output::write_atomic;
+use crate::output::{FileKind, check_new_file, write_atomic};
 
-/// Runs `export-mjcf`: refuses an existing `--out` unless `--force`, writes
+/// Runs `export-mjcf`: refuses an existing `--out` unless `--force` and it
+/// is an MJCF this command wrote (never the parameter file itself), writes
 /// the MJCF atomically and names the effects MuJoCo cannot express.
 pub fn run(args: &ExportMjcfArgs) -> Result<()> {
-    super::check_new_file(&args.out, args.common.force)?;
+    let loaded = super::load_config(&args.common)?;
+    check_new_file(
+        &args.out,
+        args.common.force,
+        FileKind::Mjcf,
+        &super::input_files(&args.common, &loaded, &[&args.params]),
+    )?;
     let params =
         Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
     let xml = to_mjcf(&params, &MjcfOptions::default())

@@ -63,8 +63,16 @@ struct Setup {
 /// requested extra effects.
 fn setup(args: &IdentifyArgs) -> Result<Setup> {
     let loaded = super::load_config(&args.common)?;
-    let cfg = loaded.config;
-    let out = OutDir::create(&args.out, args.common.force)?;
+    let cfg = loaded.config.clone();
+    let sidecar = args
+        .sidecar
+        .clone()
+        .unwrap_or_else(|| aras_dyn::sim::sidecar_path(&args.data));
+    let out = OutDir::create(
+        &args.out,
+        args.common.force,
+        &super::input_files(&args.common, &loaded, &[&args.data, &sidecar]),
+    )?;
     let stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let effects = args

@@ -19,12 +19,16 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
         return Ok(());
     }
     let loaded = super::load_config(&args.common)?;
-    let mut cfg = loaded.config;
+    let mut cfg = loaded.config.clone();
     if let Some(s) = args.seed {
         cfg.trajectory.seed = s;
         cfg.simulation.seed = s;
     }
-    let out = OutDir::create(&args.out, args.common.force)?;
+    let out = OutDir::create(
+        &args.out,
+        args.common.force,
+        &super::input_files(&args.common, &loaded, &[]),
+    )?;
     let mut stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let truth = truth(&cfg, &loaded.dir, &nominal)?;

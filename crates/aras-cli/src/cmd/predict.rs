@@ -9,7 +9,7 @@ use aras_signal::read_log;
 use crate::cli::PredictArgs;
 use crate::cmd::identify::read_options;
 use crate::identify::{fitness_per_joint, prepare, process_options};
-use crate::output::write_atomic;
+use crate::output::{FileKind, check_new_file, write_atomic};
 use crate::validate::predict_standard;
 
 /// Runs `predict`: writes `t,tau1,tau2` (the model torque `Y(X, Ẋ, Ẍ) β`
@@ -17,8 +17,17 @@ use crate::validate::predict_standard;
 /// the log's processed torques, filtered like `identify` does.
 pub fn run(args: &PredictArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
-    let cfg = loaded.config;
-    super::check_new_file(&args.out, args.common.force)?;
+    let cfg = loaded.config.clone();
+    let sidecar = args
+        .sidecar
+        .clone()
+        .unwrap_or_else(|| aras_dyn::sim::sidecar_path(&args.data));
+    check_new_file(
+        &args.out,
+        args.common.force,
+        FileKind::Prediction,
+        &super::input_files(&args.common, &loaded, &[&args.params, &args.data, &sidecar]),
+    )?;
     let params =
         Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
     // The parameter file's own model: extra effects in it are predicted too.

@@ -31,8 +31,12 @@ struct ValidateSummary {
 /// Runs `validate`.
 pub fn run(args: &ValidateArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
-    let cfg = loaded.config;
-    let out = OutDir::create(&args.out, args.common.force)?;
+    let cfg = loaded.config.clone();
+    let out = OutDir::create(
+        &args.out,
+        args.common.force,
+        &super::input_files(&args.common, &loaded, &[&args.params]),
+    )?;
     let mut stages = Stages::new(args.common.quiet);
     let params =
         Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
