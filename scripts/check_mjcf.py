@@ -571,10 +571,10 @@ def main():
         with open(cfg, "w") as f:
             f.write(
                 "[trajectory]\nstarts = 2\n[simulation]\nperiods = 4\n"
-                "[validation]\nfrequencies_hz = [0.7]\nperiods = 4\npd_grid = 21\npd_random = 1000\n"
+                "[validation]\nfrequencies_hz = [0.5]\nperiods = 4\npd_grid = 21\npd_random = 1000\n"
             )
         t0 = time.perf_counter()
-        run([aras, "pipeline", "--quiet", "--force", "--reproducible", "--config", cfg, "--out", out])
+        run([args.aras, "pipeline", "--quiet", "--force", "--reproducible", "--config", cfg, "--out", out])
         print(f"short pipeline → {out}/params.json [{time.perf_counter() - t0:.1f} s]")
         if not os.path.exists(os.path.join(out, "robot.xml")):
             sys.exit("the pipeline did not write robot.xml beside params.json")

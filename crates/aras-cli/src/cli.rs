@@ -26,7 +26,7 @@ pub enum Command {
     Excite(ExciteArgs),
     /// Simulate the robot tracking a trajectory → LOG.csv + LOG.json.
     Simulate(SimulateArgs),
-    /// Identify the dynamic parameters from a log → params.json, base.json, report.
+    /// Identify the dynamic parameters from a log → params.json, robot.xml (MJCF), base.json, report.
     Identify(IdentifyArgs),
     /// Validate a parameter file: cross-validation on (79), workspace PD check.
     Validate(ValidateArgs),

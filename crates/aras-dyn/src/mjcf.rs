@@ -62,6 +62,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::{LinkParams, ParamError, Params};
 
+/// Words in the opening comment of every exported file: how a tool tells
+/// a file it wrote (and may replace) from someone else's MJCF.
+pub const GENERATOR_MARK: &str = "exported by `aras export-mjcf`";
+
 /// Settings of the exported model; the defaults live in [`Default`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -444,7 +448,7 @@ pub fn to_mjcf(params: &Params, opts: &MjcfOptions) -> Result<String, MjcfError>
     let _ = writeln!(
         w,
         "<!--\n  ARAS-Diamond spherical parallel robot (coaxial spherical five-bar), \
-         exported by `aras export-mjcf`.\n  Frames, joints and the parameter mapping: \
+         {GENERATOR_MARK}.\n  Frames, joints and the parameter mapping: \
          docs/mjcf.md. Units SI, angles in radians.\n  qpos = [theta1, hinge_c, theta2, \
          hinge_b]; motor1 drives theta1 (link 2), motor2 drives theta2 (link 1).\n  \
          Geometry: alpha = {} rad, beta = {} rad. The loop is closed by the connect \

@@ -106,7 +106,7 @@ fn estimated_rows(path: &Path) -> Option<u64> {
 }
 
 /// Everything after streaming: OLS/WLS, SDP, checks, and the output files
-/// (params.json, params_ols.json, base.json, summary.json, report.md).
+/// (params.json, robot.xml, params_ols.json, base.json, summary.json, report.md).
 #[allow(clippy::too_many_arguments)]
 pub fn fit_and_write(
     r: &StreamingResult,
@@ -180,6 +180,7 @@ pub fn fit_and_write(
         None => None,
     };
     out.write("params.json", sdp_params.to_json_string() + "\n")?;
+    crate::cmd::export_mjcf::write_beside(out, &sdp_params)?;
     out.write("params_ols.json", ols_params.to_json_string() + "\n")?;
     out.write_json(
         "base.json",
