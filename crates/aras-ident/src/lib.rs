@@ -14,8 +14,8 @@
 //!    excite some base parameters give [`IdentError::NotExcited`] naming them.
 //!    [`covariance`]: the uncertainty for correlated residuals (HAC sandwich
 //!    with a data-driven bandwidth), which σ, σ% and the tests should use.
-//! 3. [`ConsistentLs`] (67)–(73): the physically consistent estimate as one
-//!    convex SDP over the links' pseudo-inertias.
+//! 3. `ConsistentLs` (67)–(73): the physically consistent estimate as one
+//!    convex SDP over the links' pseudo-inertias (default feature `sdp`).
 //! 4. [`validate`]: fitness (78), workspace positive definiteness of the mass
 //!    matrix (80), parameter errors against a known truth.
 //! 5. [`streaming`]: the same least squares from data of any length in
@@ -40,9 +40,11 @@
 //! ## Dependencies, and why
 //! * `faer`: fast blocked QR and SVD of tall regressors (hundreds of
 //!   thousands of rows).
-//! * `clarabel`: interior-point conic solver with PSD cones for the SDP; its
-//!   PSD cones call LAPACK, provided by the system OpenBLAS through
-//!   `openblas-src` (see `docs/blas.md`).
+//! * `clarabel` (feature `sdp`, default): interior-point conic solver with
+//!   PSD cones for the SDP; its PSD cones call LAPACK through `openblas-src`,
+//!   whose flavour (`system` or `static`) the final binary chooses, as with
+//!   clarabel itself (see `docs/blas.md`). Without `sdp` the crate needs no
+//!   system library.
 //! * `rayon`: parallel tall-skinny QR, streaming regressor blocks and
 //!   workspace scans.
 //! * `serde`: results serialise for reports; `thiserror`: the error type.
@@ -50,17 +52,16 @@
 // Dense linear algebra on small fixed matrices reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-// Links the system OpenBLAS that clarabel's PSD cones call (LAPACK).
-use openblas_src as _;
-
 mod base;
 pub mod covariance;
 mod dense;
 mod error;
 mod groups;
+pub mod linalg;
 mod ls;
 mod model;
 mod rank;
+#[cfg(feature = "sdp")]
 mod sdp;
 pub mod selection;
 pub mod simd;
@@ -75,6 +76,7 @@ pub use error::IdentError;
 pub use groups::RowGroups;
 pub use ls::{NoiseVariances, OlsEstimate, ReducedLs, WlsEstimate, ols, wls};
 pub use model::LinearModel;
+#[cfg(feature = "sdp")]
 pub use sdp::{
     ActiveConstraint, ConsistentLs, ConstraintKind, LinkLayout, LinkReport, SdpSettings,
     SdpSolution, pseudo_inertia_min_eigenvalue,

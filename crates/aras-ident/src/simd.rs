@@ -140,5 +140,20 @@ mod factorisation_tests {
         let c = crate::streaming::GramCheck::of_factor(f.as_ref());
         assert_eq!(upper_state_dirty(), Some(false), "after GramCheck");
         assert!(c.condition.is_finite());
+        // Least squares: QR of the stacked data, then the SVD of R for the
+        // condition number in `ols`.
+        let t: Vec<f64> = (0..4000).map(|i| (i as f64 * 0.01).cos()).collect();
+        let names: Vec<String> = (0..24).map(|j| format!("p{j}")).collect();
+        let ls = crate::ReducedLs::new(a.as_ref(), &t, &names).unwrap();
+        assert_eq!(upper_state_dirty(), Some(false), "after ReducedLs::new");
+        let est = ls.ols().unwrap();
+        assert_eq!(upper_state_dirty(), Some(false), "after ReducedLs::ols");
+        assert!(est.condition_number.is_finite());
+        // The facade's remaining kernels.
+        let p = crate::linalg::product(a.as_ref(), f.as_ref());
+        assert_eq!(upper_state_dirty(), Some(false), "after linalg::product");
+        let svd = crate::linalg::thin_svd(a.as_ref()).unwrap();
+        assert_eq!(upper_state_dirty(), Some(false), "after linalg::thin_svd");
+        assert_eq!((p.nrows(), svd.s.len()), (4000, 24));
     }
 }

@@ -434,7 +434,6 @@ fn fixture_is_what_the_design_produces() {
         &base_projection(&s.base),
         &DesignSettings {
             seed: 1,
-            progress: false,
             ..DesignSettings::default()
         },
     )
