@@ -50,6 +50,7 @@ fn pipeline_identify_predict_end_to_end() {
         "log.csv",
         "log.json",
         "params.json",
+        "robot.xml",
         "params_ols.json",
         "base.json",
         "summary.json",
@@ -147,6 +148,12 @@ fn pipeline_identify_predict_end_to_end() {
     let params =
         aras_dyn::Params::load(out.join("params.json")).expect("params.json is a parameter file");
     assert!(params.links.iter().all(|l| l.mass > 0.0));
+    // robot.xml is the MJCF of exactly this (physically consistent) set.
+    let xml = std::fs::read_to_string(out.join("robot.xml")).unwrap();
+    assert_eq!(
+        xml,
+        aras_dyn::mjcf::to_mjcf(&params, &Default::default()).unwrap()
+    );
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(
         html.contains("<svg") && !html.contains("src=\""),

@@ -15,9 +15,7 @@ mod test_support;
 
 use std::sync::OnceLock;
 
-use aras_excite::{
-    Design, DesignSettings, DynRegressor, Margins, assess, design, random_feasible,
-};
+use aras_excite::{Design, DesignSettings, DynRegressor, Margins, assess, design, random_feasible};
 use nalgebra::DMatrix;
 
 struct Case {
@@ -33,10 +31,7 @@ fn case() -> &'static Case {
     C.get_or_init(|| {
         let reg = DynRegressor::aras_diamond().unwrap();
         let e = test_support::base_projection(&reg, 400, 7);
-        let settings = DesignSettings {
-            progress: false,
-            ..DesignSettings::default()
-        };
+        let settings = DesignSettings::default();
         let default = design(&reg, &e, &settings).unwrap();
         Case {
             reg,

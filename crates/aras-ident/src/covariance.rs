@@ -198,8 +198,8 @@ pub fn hac_covariance(
         }
     }
     let dof = m as f64 / (m - b) as f64;
-    let ws = &winv * &s;
-    let mut covariance = &ws * &winv;
+    let ws = crate::linalg::product(winv.as_ref(), s.as_ref());
+    let mut covariance = crate::linalg::product(ws.as_ref(), winv.as_ref());
     for j in 0..b {
         for i in 0..b {
             covariance[(i, j)] *= dof;

@@ -151,6 +151,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
     let fitness = fitness_list(&id, &xv, input.design.is_some(), ceiling);
 
     out.write("params.json", id.sdp_params.to_json_string() + "\n")?;
+    crate::cmd::export_mjcf::write_beside(out, &id.sdp_params)?;
     out.write("params_ols.json", id.ols_params.to_json_string() + "\n")?;
     out.write_json("base.json", &base_file(&id, truth_base.as_deref()))?;
 

@@ -4,7 +4,7 @@
 //! identification, and the result is compared with the truth.
 //!
 //! The excitation is the fixture `fixtures/trajectories/default-excitation.json`,
-//! made by `cargo run --release -p aras-ident --example default_excitation`
+//! made by `cargo run --release -p aras-pipeline --example default_excitation`
 //! (seed 1; `fixture_is_what_the_design_produces` checks it, ignored: ~10 s).
 //! Simulations are shared between tests through `OnceLock`s.
 #![allow(clippy::needless_range_loop)]
@@ -17,14 +17,14 @@ use std::sync::OnceLock;
 use aras_dyn::sim::{SimConfig, SimLog, simulate, write_log};
 use aras_dyn::{Model, Params, Sinusoid, Trajectory};
 use aras_excite::{DesignSettings, DynRegressor, FourierTrajectory, assess, random_feasible};
-use aras_ident::robot::base_projection;
-use aras_ident::robot::{
-    FilterMode, Stacked, base_parameters, consistent_problem, filter, filter_reach, keep_rows,
-    noise_gain, params_from_solution, reversal_mask, stack,
-};
 use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 use aras_kin::{Geometry, Workspace};
+use aras_pipeline::robot::base_projection;
+use aras_pipeline::robot::{
+    FilterMode, Stacked, base_parameters, consistent_problem, filter, filter_reach, keep_rows,
+    noise_gain, params_from_solution, reversal_mask, stack,
+};
 use aras_signal::{
     Butterworth, FilterSpec, PeriodSource, ProcessOptions, Processed, ReadOptions, process,
     read_log,
@@ -389,9 +389,17 @@ fn design_sigma_percent_below_5_for_parameters_above_1_percent_of_torque() {
         );
         if share > 1.0 {
             checked += 1;
-            assert!(r < 5.0, "{}: σ% {r} with a {share:.1} % share", n.ols.names[i]);
+            assert!(
+                r < 5.0,
+                "{}: σ% {r} with a {share:.1} % share",
+                n.ols.names[i]
+            );
         }
-        assert!(contribution_sigma < 5.0, "{}: {contribution_sigma}", n.ols.names[i]);
+        assert!(
+            contribution_sigma < 5.0,
+            "{}: {contribution_sigma}",
+            n.ols.names[i]
+        );
     }
     assert!(checked >= 5, "only {checked} parameters above 1 %");
 }
@@ -437,7 +445,6 @@ fn fixture_is_what_the_design_produces() {
         &base_projection(&s.base),
         &DesignSettings {
             seed: 1,
-            progress: false,
             ..DesignSettings::default()
         },
     )

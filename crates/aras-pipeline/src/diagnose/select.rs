@@ -12,12 +12,11 @@ use serde::Serialize;
 use super::candidates::{Candidate, CandidateGrid};
 use super::data::{Dataset, Design, columns, design, effect_columns, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse};
-use super::stats::{f_sf, integrated_time};
-use crate::base::BaseParameters;
-use crate::error::IdentError;
-use crate::ls::ReducedLs;
+use aras_ident::stats::{f_sf, integrated_time};
+use aras_ident::validate::fitness;
+use aras_ident::{BaseParameters, IdentError, ReducedLs};
+
 use crate::robot::{Stacked, consistent_problem};
-use crate::validate::fitness;
 
 /// Settings of [`diagnose`]; `Default` gives the documented values.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -237,7 +236,7 @@ struct Fit {
 fn fit(d: &Design, base: &BaseParameters, periodic: bool) -> Result<Fit, IdentError> {
     let wb = base.base_regressor(d.w.as_ref())?;
     let red = ReducedLs::new(wb.as_ref(), &d.t, &base.base_names())?;
-    let groups = crate::RowGroups::contiguous(&[d.split(), d.t.len() - d.split()])?;
+    let groups = aras_ident::RowGroups::contiguous(&[d.split(), d.t.len() - d.split()])?;
     let (ols, _) = red.ols()?.with_hac(wb.as_ref(), &d.t, &groups, periodic)?;
     let b = Col::from_fn(ols.estimate.len(), |i| ols.estimate[i]);
     let pred = &wb * &b;
