@@ -404,8 +404,13 @@ fn design_sigma_percent_below_5_for_parameters_above_1_percent_of_torque() {
     assert!(checked >= 5, "only {checked} parameters above 1 %");
 }
 
+/// The committed design (the fixture) against 100 random feasible
+/// trajectories of its form scaled until they touch a limit (the strongest
+/// random baseline), with the product's base projection: it beats every
+/// one, and its κ is at least 2.5× below their median (measured 946.1 vs
+/// 2667.9, 2.82×).
 #[test]
-fn designed_excitation_beats_random_trajectories() {
+fn designed_excitation_2_5x_below_median_of_100_random_at_the_limits() {
     let s = setup();
     let reg = DynRegressor::new(s.model.clone(), s.geometry);
     let e = base_projection(&s.base);
@@ -433,6 +438,7 @@ fn designed_excitation_beats_random_trajectories() {
         designed < k[0],
         "the design must beat every random trajectory"
     );
+    assert!(2.5 * designed <= median, "ratio {:.3}", median / designed);
 }
 
 #[test]

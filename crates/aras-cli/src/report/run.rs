@@ -416,8 +416,9 @@ fn base_table(r: &mut Report, d: &RunData) {
     r.paragraph(format!(
         "Residual standard deviation σ_ρ = {:.3e} N·m (66); condition number of the base regressor {:.1}; largest σ% {:.2}. \
          Fitted on {} (joint 1) and {} (joint 2) of {} rows each, away from velocity reversals; \
-         σ, σ% and σ_ρ are corrected for the zero-phase filter (its correlated residuals; \
-         `OlsEstimate::with_filtered_noise`).",
+         σ and σ% come from the HAC sandwich covariance (`aras_ident::covariance`), which \
+         counts the filtered residual's correlation with a bandwidth from its own \
+         autocorrelation time.",
         id.ols.residual_variance.sqrt(),
         id.ols.condition_number,
         id.ols.rel_std_percent.iter().cloned().fold(0.0, f64::max),
