@@ -25,14 +25,19 @@ pub struct Fitness {
     /// Frequency of (79) (Hz), for cross-validation datasets.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub frequency_hz: Option<f64>,
-    /// OLS, `[τ1, τ2]` (%).
-    pub ols: [f64; 2],
-    /// Physically consistent (SDP), `[τ1, τ2]` (%).
-    pub sdp: [f64; 2],
-    /// OLS on the rows away from velocity reversals (the rows the fit
-    /// uses), `[τ1, τ2]` (%).
+    /// OLS, `[τ1, τ2]` (%): the paper's fitness, against the log's raw
+    /// torques on every row (absent when it was not computed: a streaming
+    /// pass keeps only the fitted rows).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ols: Option<[f64; 2]>,
+    /// Physically consistent (SDP), `[τ1, τ2]` (%), as `ols`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sdp: Option<[f64; 2]>,
+    /// OLS on the fitted rows only: away from velocity reversals, and for
+    /// the excitation as the fit saw them (period-averaged, and filtered
+    /// like the regressor when a Butterworth was used), `[τ1, τ2]` (%).
     pub ols_kept: [f64; 2],
-    /// SDP on the rows away from velocity reversals (%).
+    /// SDP on the same rows as `ols_kept` (%).
     pub sdp_kept: [f64; 2],
     /// The paper's value for this dataset, when published (%).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -133,8 +138,8 @@ pub fn fitness_list(
     let mut v = vec![Fitness {
         dataset: "excitation".into(),
         frequency_hz: None,
-        ols: id.fitness_ols,
-        sdp: id.fitness_sdp,
+        ols: Some(id.fitness_ols),
+        sdp: Some(id.fitness_sdp),
         ols_kept: id.fitness_ols_kept,
         sdp_kept: id.fitness_sdp_kept,
         paper: excitation_paper.then_some(crate::paper::EXCITATION_FITNESS),
@@ -143,8 +148,8 @@ pub fn fitness_list(
         v.push(Fitness {
             dataset: format!("xv_{}hz", x.frequency_hz),
             frequency_hz: Some(x.frequency_hz),
-            ols: x.fitness[0],
-            sdp: x.fitness[1],
+            ols: Some(x.fitness[0]),
+            sdp: Some(x.fitness[1]),
             ols_kept: x.fitness_kept[0],
             sdp_kept: x.fitness_kept[1],
             paper: crate::paper::table2(x.frequency_hz),

@@ -193,23 +193,27 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
 /// The short terminal table: paper vs ours.
 pub fn terminal_table(s: &Summary) -> String {
     let mut t = String::from(
-        "fitness (78) %, all rows; kept: OLS on the rows away from velocity reversals\n\
-         dataset          paper τ1  ours τ1 (OLS/SDP)   paper τ2  ours τ2 (OLS/SDP)   kept τ1/τ2\n",
+        "fitness (78) %, against the log's raw torques on all rows; fitted rows: OLS on the rows \
+         the fit used (away from velocity reversals; averaged/filtered as fitted)\n\
+         dataset          paper τ1  ours τ1 (OLS/SDP)   paper τ2  ours τ2 (OLS/SDP)   fitted rows τ1/τ2\n",
     );
     for f in &s.fitness {
         let p = |j: usize| {
             f.paper
                 .map_or("    –".to_string(), |p| format!("{:5.1}", p[j]))
         };
+        let v = |x: Option<[f64; 2]>, j: usize| {
+            x.map_or("     –".into(), |x| format!("{:6.2}", x[j]))
+        };
         t += &format!(
-            "{:<16} {:>8}  {:6.2} / {:6.2}     {:>8}  {:6.2} / {:6.2}     {:6.2} / {:6.2}\n",
+            "{:<16} {:>8}  {} / {}     {:>8}  {} / {}     {:6.2} / {:6.2}\n",
             f.dataset,
             p(0),
-            f.ols[0],
-            f.sdp[0],
+            v(f.ols, 0),
+            v(f.sdp, 0),
             p(1),
-            f.ols[1],
-            f.sdp[1],
+            v(f.ols, 1),
+            v(f.sdp, 1),
             f.ols_kept[0],
             f.ols_kept[1]
         );

@@ -142,8 +142,8 @@ pub fn fit_and_write(
     let fitness = vec![Fitness {
         dataset: "excitation".into(),
         frequency_hz: None,
-        ols: f_ols,
-        sdp: f_sdp,
+        ols: None,
+        sdp: None,
         ols_kept: f_ols,
         sdp_kept: f_sdp,
         paper: None,

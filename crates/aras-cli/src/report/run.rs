@@ -76,11 +76,11 @@ pub fn build(d: &RunData) -> Result<Report> {
         rows.push(vec![
             x.dataset.clone(),
             p[0].clone(),
-            f(x.ols[0], 2),
-            f(x.sdp[0], 2),
+            x.ols.map_or("–".into(), |v| f(v[0], 2)),
+            x.sdp.map_or("–".into(), |v| f(v[0], 2)),
             p[1].clone(),
-            f(x.ols[1], 2),
-            f(x.sdp[1], 2),
+            x.ols.map_or("–".into(), |v| f(v[1], 2)),
+            x.sdp.map_or("–".into(), |v| f(v[1], 2)),
             f(x.ols_kept[0], 2),
             f(x.ols_kept[1], 2),
         ]);
@@ -94,18 +94,20 @@ pub fn build(d: &RunData) -> Result<Report> {
             "paper τ2",
             "OLS τ2",
             "SDP τ2",
-            "kept OLS τ1",
-            "kept OLS τ2",
+            "fitted rows OLS τ1",
+            "fitted rows OLS τ2",
         ],
         rows,
     );
     r.paragraph(
-        "Fitness (78) in %, `100 (1 − ‖τ − τ̂‖/‖τ − mean τ‖)`, on the processed (period-averaged, \
-         zero-phase filtered) torques: OLS and SDP columns on **every** sample; the \"kept\" \
-         columns only on the rows away from velocity reversals (the rows the fit uses; \
-         `identification.min_speed`, widened by the filter's reach), where (49)'s Coulomb \
-         model holds. Paper values: §7 (excitation, about 75 % OLS / 78 % constrained) and \
-         Table 2 (cross-validation on (79)).",
+        "Fitness (78) in %, `100 (1 − ‖τ − τ̂‖/‖τ − mean τ‖)`, as the paper defines it: OLS and \
+         SDP columns against the log's **raw** torques on **every** row (a periodic log's \
+         prediction repeats on every period; – when not computed, as in a streaming pass). \
+         The \"fitted rows\" columns are a different figure: only the rows the fit uses (away \
+         from velocity reversals, `identification.min_speed`, widened by a filter's reach), \
+         as the fit saw them (period-averaged; filtered like the regressor when a Butterworth \
+         was used), where (49)'s Coulomb model holds. Paper values: §7 (excitation, about \
+         75 % OLS / 78 % constrained) and Table 2 (cross-validation on (79)).",
     );
 
     if let Some(des) = d.design {
@@ -184,9 +186,13 @@ pub fn build(d: &RunData) -> Result<Report> {
             per.spread_relative[3]
         ));
     }
+    items.push(format!("bandwidth: {}", p.bandwidth.reason));
+    if let Some(r) = &p.bandwidth.resampling {
+        items.push(format!("time steps: {r}"));
+    }
     if let Some(fl) = &p.filter {
         items.push(format!(
-            "low-pass: Butterworth order {} at {} Hz, {}",
+            "low-pass: Butterworth order {} at {:.3} Hz, {}",
             fl.order, fl.cutoff_hz, fl.kind
         ));
     }
