@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 /// ARAS-Diamond dynamics toolkit: excitation design, simulation,
-/// identification, validation and prediction (spec/ARAS-DIAMOND.md).
+/// identification, validation and prediction (docs/model.md).
 #[derive(Debug, Parser)]
 #[command(name = "aras", version, about, long_about = None)]
 pub struct Cli {

@@ -7,8 +7,8 @@ use aras_kin::Geometry;
 use aras_signal::{Samples, Sos};
 use faer::Mat;
 
-use crate::error::IdentError;
 use crate::robot::{FilterMode, Stacked, filter, filter_reach, reversal_mask, stack};
+use aras_ident::IdentError;
 
 /// A processed data set: the samples as `aras_signal::process` produced
 /// them, and the zero-phase filter it applied (so every regressor column is
