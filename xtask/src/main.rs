@@ -8,7 +8,7 @@
 //! * `cargo xtask test [ARGS…]`: the whole test suite (`cargo test --workspace --release`).
 //! * `cargo xtask deps`: only the system-library check and install.
 //! * `cargo xtask <command> [ARGS…]`: every other command (`pipeline`, `excite`,
-//!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `--help`) is
+//!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `friction`, `--help`) is
 //!   passed to the `aras` binary of the `aras-cli` package.
 //!
 //! When a library is missing it says which, why, and the exact command that
@@ -223,7 +223,7 @@ fn main() -> ExitCode {
     }
     let Some(first) = args.first().map(String::as_str) else {
         eprintln!(
-            "usage: cargo xtask [--no-install] <pipeline|excite|simulate|identify|validate|predict|diagnose|test|deps> [ARGS…]\n\
+            "usage: cargo xtask [--no-install] <pipeline|excite|simulate|identify|validate|predict|diagnose|friction|test|deps> [ARGS…]\n\
              `cargo xtask --help` lists the commands of the toolkit; --no-install (or\n\
              ARAS_NO_INSTALL=1) never installs missing system libraries, it prints the command."
         );

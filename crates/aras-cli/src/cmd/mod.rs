@@ -4,6 +4,7 @@
 pub mod diagnose;
 pub mod excite;
 pub mod fit;
+pub mod friction;
 pub mod identify;
 pub mod identify_streaming;
 pub mod pipeline;
