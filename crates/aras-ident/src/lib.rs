@@ -21,6 +21,10 @@
 //!    SDP layout, results back into `aras_dyn::Params`).
 //! 6. [`streaming`]: the same least squares from logs of any length in
 //!    bounded memory (incremental QR, chunked CSV reading).
+//! 7. [`selection`]: which of many candidate column blocks a model is
+//!    missing, from one pass over the data in bounded memory (forward
+//!    selection on accumulated Gram blocks, validated on every held-out
+//!    set); [`stats`]: the F, χ² and autocorrelation tools it uses.
 //!
 //! ## Conventions
 //! SI units and radians throughout. A stacked regressor has one row per
@@ -56,7 +60,9 @@ mod ls;
 mod rank;
 pub mod robot;
 mod sdp;
+pub mod selection;
 mod simd;
+pub mod stats;
 pub mod streaming;
 pub mod validate;
 

@@ -53,8 +53,8 @@ mod candidates;
 mod data;
 pub mod residual;
 mod select;
-mod stats;
 
+pub use crate::stats::{chi2_sf, f_sf, integrated_time, ljung_box};
 pub use candidates::{CANDIDATE_IDS, Candidate, CandidateGrid, explanation};
 pub use data::Dataset;
 pub use residual::{Finding, ResidualAnalysis, Whiteness};
@@ -62,4 +62,3 @@ pub use select::{
     CandidateScore, ConsistentFit, DiagnoseOptions, Diagnosis, FitnessRow, NamedValue, Step,
     diagnose,
 };
-pub use stats::{chi2_sf, f_sf, integrated_time, ljung_box};

@@ -5,7 +5,7 @@
 
 use serde::Serialize;
 
-use super::stats::{integrated_time, ljung_box};
+use crate::stats::{integrated_time, ljung_box};
 
 /// What a residual is binned against.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

@@ -12,11 +12,11 @@ use serde::Serialize;
 use super::candidates::{Candidate, CandidateGrid};
 use super::data::{Dataset, Design, columns, design, effect_columns, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse};
-use super::stats::{f_sf, integrated_time};
 use crate::base::BaseParameters;
 use crate::error::IdentError;
 use crate::ls::ReducedLs;
 use crate::robot::{Stacked, consistent_problem};
+use crate::stats::{f_sf, integrated_time};
 use crate::validate::fitness;
 
 /// Settings of [`diagnose`]; `Default` gives the documented values.

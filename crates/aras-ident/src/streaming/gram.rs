@@ -154,6 +154,36 @@ impl GramSum {
         self.add(at.transpose());
     }
 
+    /// Adds another running Gram of the same size (compensated), e.g. the
+    /// sums of another thread's share of the rows.
+    pub(crate) fn absorb(&mut self, other: &GramSum) {
+        let c = self.sum.ncols();
+        for j in 0..c {
+            for i in j..c {
+                for x in [other.sum[(i, j)], other.comp[(i, j)]] {
+                    let s = self.sum[(i, j)];
+                    let t = s + x;
+                    self.comp[(i, j)] += if s.abs() >= x.abs() {
+                        (s - t) + x
+                    } else {
+                        (x - t) + s
+                    };
+                    self.sum[(i, j)] = t;
+                }
+            }
+        }
+    }
+
+    /// The accumulated Gram as a full symmetric matrix (sum plus its
+    /// compensation).
+    pub(crate) fn value(&self) -> Mat<f64> {
+        let c = self.sum.ncols();
+        Mat::from_fn(c, c, |i, j| {
+            let (i, j) = if i >= j { (i, j) } else { (j, i) };
+            self.sum[(i, j)] + self.comp[(i, j)]
+        })
+    }
+
     /// True if every accumulated entry is finite.
     pub(crate) fn is_finite(&self) -> bool {
         let c = self.sum.ncols();

@@ -1,4 +1,4 @@
-//! Small statistics toolbox for the diagnosis: F and χ² tail probabilities,
+//! Small statistics toolbox for selection and diagnosis: F and χ² tail probabilities,
 //! autocorrelation, the integrated autocorrelation time and the Ljung–Box
 //! whiteness test. Written here (≈ 150 lines) rather than pulling in a
 //! statistics crate for four functions.
