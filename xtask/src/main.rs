@@ -14,7 +14,7 @@
 //!   keep an existing one) and runs `scripts/check_mjcf.py` (ARGS go to the script,
 //!   e.g. `--params P.json`).
 //! * `cargo xtask <command> [ARGS…]`: every other command (`pipeline`, `excite`,
-//!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `--help`) is
+//!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `friction`, `--help`) is
 //!   passed to the `aras` binary of the `aras-cli` package (`export-mjcf` too).
 //!
 //! When a library is missing it says which, why, and the exact command that
@@ -229,7 +229,7 @@ fn main() -> ExitCode {
     }
     let Some(first) = args.first().map(String::as_str) else {
         eprintln!(
-            "usage: cargo xtask [--no-install] <pipeline|excite|simulate|identify|validate|predict|diagnose|export-mjcf|check-mjcf|test|deps> [ARGS…]\n\
+            "usage: cargo xtask [--no-install] <pipeline|excite|simulate|identify|validate|predict|diagnose|friction|export-mjcf|check-mjcf|test|deps> [ARGS…]\n\
              `cargo xtask --help` lists the commands of the toolkit; --no-install (or\n\
              ARAS_NO_INSTALL=1) never installs missing system libraries, it prints the command."
         );
