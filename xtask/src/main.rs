@@ -2,18 +2,31 @@
 //!
 //! It has no dependencies and no mathematics. It makes sure the system
 //! libraries the SDP solver links against are present (clarabel's PSD cones
-//! call LAPACK; we link Debian's OpenBLAS, see `docs/blas.md`), installing
-//! them with `apt-get` when it runs as root, or printing the exact command
-//! when it cannot, and then builds and runs the real tools in release mode:
+//! call LAPACK; we link Debian's OpenBLAS, see `docs/blas.md`), and then
+//! builds and runs the real tools in release mode:
 //!
 //! * `cargo xtask test [ARGS…]`: the whole test suite (`cargo test --workspace --release`).
 //! * `cargo xtask deps`: only the system-library check and install.
+//! * `cargo xtask check-mjcf [--reuse-venv] [--no-build] [ARGS…]`: verifies the MJCF
+//!   export in MuJoCo itself (`docs/mjcf.md`): builds `aras` (`--no-build`: use the
+//!   `target/release/aras` a test run left), creates a throwaway Python environment
+//!   with `mujoco` and `numpy` from PyPI in `target/check-mjcf/venv` (`--reuse-venv`:
+//!   keep an existing one) and runs `scripts/check_mjcf.py` (ARGS go to the script,
+//!   e.g. `--params P.json`).
 //! * `cargo xtask <command> [ARGS…]`: every other command (`pipeline`, `excite`,
-//!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `--help`) is
-//!   passed to the `aras` binary of the `aras-cli` package.
+//!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `friction`, `--help`) is
+//!   passed to the `aras` binary of the `aras-cli` package (`export-mjcf` too).
+//!
+//! When a library is missing it says which, why, and the exact command that
+//! installs it. It runs that command itself only with `apt-get` (the one
+//! package manager it recognises), as root, and unless declined with
+//! `--no-install` (before the command: `cargo xtask --no-install test`) or
+//! `ARAS_NO_INSTALL=1`; at a terminal it asks first. The package manager's
+//! own output is shown (on stderr, so a command's stdout stays clean).
 
+use std::io::{IsTerminal, Write};
 use std::path::Path;
-use std::process::{Command, ExitCode};
+use std::process::{Command, ExitCode, Stdio};
 
 /// Shared objects the numeric crates link against, with the Debian package
 /// that provides each (the gfortran one depends on the GCC major version).
@@ -53,47 +66,137 @@ fn is_root() -> bool {
         .unwrap_or(false)
 }
 
-fn ensure_system_libraries() -> Result<(), String> {
-    let missing: Vec<String> = required_libraries()
+/// Whether `apt-get` is there to run (Debian and its derivatives).
+fn has_apt_get() -> bool {
+    Command::new("apt-get")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// How the user chose to handle a missing library.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Install {
+    /// Install with apt-get when possible (the default).
+    Allowed,
+    /// `--no-install` or `ARAS_NO_INSTALL=1`: never run a package manager.
+    Declined,
+}
+
+/// `ARAS_NO_INSTALL` set to anything but empty, `0` or `false` declines.
+fn declined_by_env() -> bool {
+    std::env::var("ARAS_NO_INSTALL")
+        .map(|v| !matches!(v.trim(), "" | "0" | "false"))
+        .unwrap_or(false)
+}
+
+/// At a terminal, asks before installing; elsewhere (CI) proceeds.
+fn confirmed() -> bool {
+    if !std::io::stdin().is_terminal() {
+        return true;
+    }
+    eprint!("xtask: install them now? [Y/n] ");
+    let _ = std::io::stderr().flush();
+    let mut answer = String::new();
+    if std::io::stdin().read_line(&mut answer).is_err() {
+        return false;
+    }
+    matches!(answer.trim().to_lowercase().as_str(), "" | "y" | "yes")
+}
+
+/// Runs apt-get with `args`, its output on our stderr.
+fn apt_get(args: &[&str]) -> bool {
+    eprintln!("xtask: running: apt-get {}", args.join(" "));
+    Command::new("apt-get")
+        .args(args)
+        .env("DEBIAN_FRONTEND", "noninteractive")
+        .stdout(Stdio::from(std::io::stderr()))
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// What to do about missing libraries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Plan {
+    /// Run apt-get (as root, not declined).
+    AptGet,
+    /// Print the command for the user, with the reason.
+    ByHand(&'static str),
+}
+
+/// Installs only when allowed, with apt-get, as root; otherwise the user
+/// gets the command.
+fn plan(install: Install, apt_get: bool, root: bool) -> Plan {
+    if install == Install::Declined {
+        Plan::ByHand("not installing (--no-install or ARAS_NO_INSTALL is set)")
+    } else if !apt_get {
+        Plan::ByHand("apt-get is not available here, and no other package manager is run")
+    } else if !root {
+        Plan::ByHand("installing needs root")
+    } else {
+        Plan::AptGet
+    }
+}
+
+fn ensure_system_libraries(install: Install) -> Result<(), String> {
+    let missing: Vec<(&str, String)> = required_libraries()
         .into_iter()
         .filter(|(lib, _)| !linker_finds(lib))
-        .map(|(_, pkg)| pkg)
         .collect();
     if missing.is_empty() {
         return Ok(());
     }
-    let install = format!(
+    let packages: Vec<&str> = missing.iter().map(|(_, p)| p.as_str()).collect();
+    let libs: Vec<String> = missing
+        .iter()
+        .map(|(lib, pkg)| format!("{lib} (Debian package {pkg})"))
+        .collect();
+    let command = format!(
         "apt-get update && apt-get install -y --no-install-recommends {}",
-        missing.join(" ")
+        packages.join(" ")
     );
-    if !is_root() || Command::new("apt-get").arg("--version").output().is_err() {
-        return Err(format!(
-            "the SDP solver needs system packages that are missing: {}.\n\
-             Install them, then run this command again:\n    sudo sh -c '{install}'",
-            missing.join(", ")
-        ));
+    eprintln!(
+        "xtask: the linker cannot find {}.\n\
+         xtask: why: the physically consistent identification is a semidefinite program; its \
+         solver (clarabel) calls LAPACK for the PSD cones, and this workspace links the \
+         system's OpenBLAS and the gfortran runtime it needs (docs/blas.md).",
+        libs.join(" and ")
+    );
+    let by_hand = |why: &str| {
+        format!(
+            "{why}. Install the packages, then run this command again:\n    \
+             sudo sh -c '{command}'\n\
+             (other systems: install OpenBLAS with LAPACK and the gfortran runtime with your \
+             package manager; docs/blas.md)"
+        )
+    };
+    match plan(install, has_apt_get(), is_root()) {
+        Plan::ByHand(why) => return Err(by_hand(why)),
+        Plan::AptGet => {}
     }
     eprintln!(
-        "xtask: installing {} (needed by the SDP solver)…",
-        missing.join(", ")
+        "xtask: will run `{command}` (decline with `cargo xtask --no-install …` or ARAS_NO_INSTALL=1)"
     );
-    let ok = Command::new("sh")
-        .arg("-c")
-        .arg(format!(
-            "DEBIAN_FRONTEND=noninteractive {install} >/dev/null"
-        ))
-        .status()
-        .map(|s| s.success())
-        .unwrap_or(false);
+    if !confirmed() {
+        return Err(by_hand("not installing (declined)"));
+    }
+    let ok = apt_get(&["update"]) && {
+        let mut args = vec!["install", "-y", "--no-install-recommends"];
+        args.extend(&packages);
+        apt_get(&args)
+    };
     if !ok
         || required_libraries()
             .iter()
             .any(|(lib, _)| !linker_finds(lib))
     {
         return Err(format!(
-            "installing the system packages failed; run by hand:\n    {install}"
+            "installing the system packages failed (apt-get's output is above); run by hand:\n    {command}"
         ));
     }
+    eprintln!("xtask: installed {}", packages.join(", "));
     Ok(())
 }
 
@@ -113,20 +216,32 @@ fn run(mut cmd: Command) -> ExitCode {
 }
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    // The launcher's own option comes before the command.
+    let mut install = if declined_by_env() {
+        Install::Declined
+    } else {
+        Install::Allowed
+    };
+    while args.first().map(String::as_str) == Some("--no-install") {
+        install = Install::Declined;
+        args.remove(0);
+    }
     let Some(first) = args.first().map(String::as_str) else {
         eprintln!(
-            "usage: cargo xtask <pipeline|excite|simulate|identify|validate|predict|diagnose|test|deps> [ARGS…]\n\
-             `cargo xtask --help` lists the commands of the toolkit."
+            "usage: cargo xtask [--no-install] <pipeline|excite|simulate|identify|validate|predict|diagnose|friction|export-mjcf|check-mjcf|test|deps> [ARGS…]\n\
+             `cargo xtask --help` lists the commands of the toolkit; --no-install (or\n\
+             ARAS_NO_INSTALL=1) never installs missing system libraries, it prints the command."
         );
         return ExitCode::FAILURE;
     };
-    if let Err(msg) = ensure_system_libraries() {
+    if let Err(msg) = ensure_system_libraries(install) {
         eprintln!("xtask: {msg}");
         return ExitCode::FAILURE;
     }
     match first {
         "deps" => ExitCode::SUCCESS,
+        "check-mjcf" => check_mjcf(&args[1..]),
         "test" => {
             let mut cmd = cargo();
             cmd.args(["test", "--workspace", "--release"])
@@ -147,6 +262,158 @@ fn main() -> ExitCode {
             ])
             .args(&args);
             run(cmd)
+        }
+    }
+}
+
+/// Python packages of the MuJoCo check, pinned so that every machine checks
+/// against the same MuJoCo (update both together).
+const CHECK_MJCF_PACKAGES: [&str; 2] = ["mujoco==4.0.0", "numpy==2.4.6"];
+
+/// Marker file: the venv (or scratch) directory was made by this command,
+/// so it may remove it again.
+const VENV_MARKER: &str = ".made-by-cargo-xtask-check-mjcf";
+
+/// `cargo xtask check-mjcf`: build `aras`, make the throwaway venv, run the script.
+fn check_mjcf(args: &[String]) -> ExitCode {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives inside the workspace")
+        .to_path_buf();
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root.join("target"));
+    let base = target.join("check-mjcf");
+    let venv = base.join("venv");
+    let reuse = args.iter().any(|a| a == "--reuse-venv");
+    let no_build = args.iter().any(|a| a == "--no-build");
+    let script_args: Vec<&String> = args
+        .iter()
+        .filter(|a| *a != "--reuse-venv" && *a != "--no-build")
+        .collect();
+    let aras = target.join("release").join("aras");
+
+    if no_build {
+        if !aras.is_file() {
+            eprintln!(
+                "xtask: --no-build, but {} does not exist; build it (cargo build --release -p aras-cli) or drop --no-build",
+                aras.display()
+            );
+            return ExitCode::FAILURE;
+        }
+    } else if run({
+        let mut build = cargo();
+        build.args([
+            "build",
+            "--quiet",
+            "--release",
+            "--package",
+            "aras-cli",
+            "--bin",
+            "aras",
+        ]);
+        build
+    }) != ExitCode::SUCCESS
+    {
+        return ExitCode::FAILURE;
+    }
+    let python = venv.join("bin").join("python");
+    if !(reuse && python.exists()) {
+        if venv.exists() {
+            if !venv.join(VENV_MARKER).exists() {
+                eprintln!(
+                    "xtask: {} exists but was not made by check-mjcf; remove it or move it away",
+                    venv.display()
+                );
+                return ExitCode::FAILURE;
+            }
+            if let Err(e) = std::fs::remove_dir_all(&venv) {
+                eprintln!("xtask: cannot remove the old {}: {e}", venv.display());
+                return ExitCode::FAILURE;
+            }
+        }
+        eprintln!(
+            "xtask: creating {} with {}…",
+            venv.display(),
+            CHECK_MJCF_PACKAGES.join(", ")
+        );
+        let mut mk = Command::new("python3");
+        mk.args(["-m", "venv"]).arg(&venv);
+        if run(mk) != ExitCode::SUCCESS {
+            eprintln!("xtask: `python3 -m venv` failed; install python3 and python3-venv");
+            return ExitCode::FAILURE;
+        }
+        if let Err(e) = std::fs::write(venv.join(VENV_MARKER), b"") {
+            eprintln!("xtask: cannot write into {}: {e}", venv.display());
+            return ExitCode::FAILURE;
+        }
+        let mut pip = Command::new(&python);
+        pip.args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+        ])
+        .args(CHECK_MJCF_PACKAGES);
+        if run(pip) != ExitCode::SUCCESS {
+            eprintln!(
+                "xtask: installing {} from PyPI failed",
+                CHECK_MJCF_PACKAGES.join(" ")
+            );
+            return ExitCode::FAILURE;
+        }
+    }
+    // A fresh scratch directory each run (only one this command made is removed).
+    let work = base.join("work");
+    if work.exists() {
+        if !work.join(VENV_MARKER).exists() {
+            eprintln!(
+                "xtask: {} exists but was not made by check-mjcf; remove it or move it away",
+                work.display()
+            );
+            return ExitCode::FAILURE;
+        }
+        if let Err(e) = std::fs::remove_dir_all(&work) {
+            eprintln!("xtask: cannot remove the old {}: {e}", work.display());
+            return ExitCode::FAILURE;
+        }
+    }
+    if let Err(e) =
+        std::fs::create_dir_all(&work).and_then(|()| std::fs::write(work.join(VENV_MARKER), b""))
+    {
+        eprintln!("xtask: cannot create {}: {e}", work.display());
+        return ExitCode::FAILURE;
+    }
+    let mut check = Command::new(&python);
+    check
+        .arg(root.join("scripts").join("check_mjcf.py"))
+        .arg("--aras")
+        .arg(&aras)
+        .arg("--work")
+        .arg(&work)
+        .arg("--identified")
+        .args(script_args);
+    run(check)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn installs_only_with_apt_get_as_root_when_not_declined() {
+        assert_eq!(plan(Install::Allowed, true, true), Plan::AptGet);
+        for (install, apt, root) in [
+            (Install::Declined, true, true),
+            (Install::Allowed, false, true),
+            (Install::Allowed, true, false),
+            (Install::Declined, false, false),
+        ] {
+            assert!(
+                matches!(plan(install, apt, root), Plan::ByHand(_)),
+                "{install:?} apt-get={apt} root={root}"
+            );
         }
     }
 }

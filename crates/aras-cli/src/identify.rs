@@ -4,24 +4,25 @@
 //! The mathematics lives in `aras-signal` (processing), `aras-dyn`
 //! (regressor) and `aras-ident` (base parameters, least squares, SDP); this
 //! module wires them with the configured settings, the way
-//! `crates/aras-ident/tests/acceptance.rs` does (`docs/validation.md`):
+//! `crates/aras-pipeline/tests/acceptance.rs` does (`docs/validation.md`):
 //! **parallel filtering** (spec §6 NOTE: the same zero-phase low-pass on the
 //! torques and every regressor column, so a Coulomb jump is smeared
 //! identically on both sides of `T = W β`), **reversal exclusion** (rows of
 //! a joint near its velocity reversals, where (49)'s `sign(θ̇)` is wrong,
-//! widened by the filter's reach) and the **filter-corrected σ**.
+//! widened by the filter's reach) and **σ from the HAC covariance**
+//! (`aras_ident::covariance`: correlated residuals, data-driven bandwidth).
 
 use anyhow::{Context, Result, bail};
 use aras_dyn::{Model, Params};
-use aras_ident::robot::{
-    self, FilterMode, Stacked, consistent_problem, filter, filter_reach, keep_rows, noise_gain,
-    params_from_solution, reversal_mask, stack,
-};
 use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{
     BaseParameters, NoiseVariances, OlsEstimate, ReducedLs, SdpSettings, SdpSolution,
 };
 use aras_kin::{Geometry, Workspace};
+use aras_pipeline::robot::{
+    self, FilterMode, Stacked, consistent_problem, filter, filter_reach, keep_rows, noise_gain,
+    params_from_solution, reversal_mask, stack,
+};
 use aras_signal::{
     Bandwidth, Butterworth, DerivativeMethod, FilterSpec, Log, OutputRows, PeriodSource,
     ProcessOptions, Processed, Sos,
@@ -66,7 +67,7 @@ pub fn process_options(
 
 /// Data ready for least squares: the processed samples and the stacked
 /// regressor (`2N × n`, joint 1's rows first) with its torques, filtered as
-/// the filtering mode says (`aras_ident::robot::filter`).
+/// the filtering mode says (`aras_pipeline::robot::filter`).
 pub struct Prepared {
     /// What `aras-signal` produced.
     pub processed: Processed,
@@ -127,7 +128,7 @@ impl Prepared {
 }
 
 /// Processes a log and stacks the model's regressor on it
-/// (`aras_ident::robot::{stack, filter}`).
+/// (`aras_pipeline::robot::{stack, filter}`).
 pub fn prepare(
     log: &Log,
     opts: &ProcessOptions,
@@ -173,7 +174,7 @@ pub fn prepare(
     })
 }
 
-/// Base parameters (58)–(61) of `model` (`aras_ident::robot::base_parameters`)
+/// Base parameters (58)–(61) of `model` (`aras_pipeline::robot::base_parameters`)
 /// on `identification.base_samples` quasi-random states filling the
 /// workspace box and rate limits of `[trajectory]`.
 pub fn base_parameters(model: &Model, geometry: &Geometry, cfg: &Config) -> Result<BaseParameters> {
@@ -193,8 +194,8 @@ pub struct Identification {
     pub names: Vec<String>,
     /// Base parameters.
     pub base: BaseParameters,
-    /// OLS (or WLS) estimate of the base parameters, σ corrected for the
-    /// filter (`OlsEstimate::with_filtered_noise`).
+    /// OLS (or WLS) estimate of the base parameters, σ from the HAC
+    /// sandwich covariance (`OlsEstimate::with_hac`).
     pub ols: OlsEstimate,
     /// The SDP solution.
     pub sdp: SdpSolution,
@@ -305,7 +306,8 @@ pub fn consistent_fit(
 
 /// OLS and SDP on prepared data, with `nominal` as the SDP's reference:
 /// rows near velocity reversals are left out (`identification.min_speed`,
-/// widened by the filter's reach), σ is corrected for the filter.
+/// widened by the filter's reach), σ is the HAC sandwich's
+/// (`aras_ident::covariance`).
 pub fn identify(
     prepared: &Prepared,
     base: &BaseParameters,
@@ -329,10 +331,16 @@ pub fn identify(
         );
     }
     let w_fit = base.base_regressor(fit.w.as_ref())?;
+    // σ, σ% and the covariance: the HAC sandwich (`aras_ident::covariance`)
+    // on the rows as fitted (scaled by 1/σ_joint for WLS).
+    let periodic = prepared.periodic();
     let (ols, reduced) = match ic.weighting {
         Weighting::Ols => {
             let r = ReducedLs::new(w_fit.as_ref(), &fit.t, &bnames)?;
-            (r.ols()?, r)
+            let (e, _) = r
+                .ols()?
+                .with_hac(w_fit.as_ref(), &fit.t, &fit.groups, periodic)?;
+            (e, r)
         }
         Weighting::Wls => {
             let e = aras_ident::wls(
@@ -342,10 +350,22 @@ pub fn identify(
                 &fit.groups,
                 NoiseVariances::FromResiduals,
             )?;
-            (e.estimate, e.reduced)
+            let scale: Vec<f64> = fit
+                .groups
+                .labels()
+                .iter()
+                .map(|&g| 1.0 / e.variances[g].sqrt())
+                .collect();
+            let ww = faer::Mat::from_fn(w_fit.nrows(), w_fit.ncols(), |i, j| {
+                w_fit[(i, j)] * scale[i]
+            });
+            let tw: Vec<f64> = fit.t.iter().zip(&scale).map(|(t, s)| t * s).collect();
+            let (est, _) = e
+                .estimate
+                .with_hac(ww.as_ref(), &tw, &fit.groups, periodic)?;
+            (est, e.reduced)
         }
     };
-    let ols = ols.with_filtered_noise(prepared.noise_gain()?)?;
     let sdp = consistent_fit(&reduced, base, model, nominal, cfg)?;
     let reference: Vec<f64> = nominal
         .standard_vector(model)

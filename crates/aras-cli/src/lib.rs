@@ -1,6 +1,6 @@
 //! The ARAS-Diamond toolkit's command-line tools and reports.
 //!
-//! This crate is the orchestrator of `spec/ARAS-DIAMOND.md`: it parses the
+//! This crate is the orchestrator of the model of `docs/model.md`: it parses the
 //! command line and the config file, calls the library crates in the order of
 //! the data flow (excitation → simulation → signal processing →
 //! identification → validation → diagnosis) and writes reports. It holds no
@@ -9,7 +9,8 @@
 //! Conventions: SI units and radians everywhere except config keys ending
 //! in `_deg` and report labels; torques are motor (joint) torques; stacked
 //! data put joint 1's rows first. Outputs are written atomically into a
-//! staged directory that replaces the target only at the end (`--force`).
+//! staged directory that replaces the target only at the end; `--force`
+//! replaces only files a previous run listed in its manifest ([`output`]).
 //! See `docs/architecture.md` (data flow, module map) and `docs/config.md`.
 //!
 //! Dependencies beyond the workspace crates: `clap` (command line),
@@ -20,10 +21,12 @@
 
 #![warn(missing_docs)]
 
+pub mod ceiling;
 pub mod cli;
 pub mod cmd;
 pub mod config;
 pub mod excite;
+pub mod friction;
 pub mod identify;
 pub mod output;
 pub mod paper;

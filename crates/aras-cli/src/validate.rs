@@ -8,8 +8,8 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use aras_dyn::{Dynamics, Model, Params, Sinusoid};
 use aras_ident::BaseParameters;
-use aras_ident::robot::{Stacked, keep_rows, reversal_mask, stack};
 use aras_ident::validate::{PdRegion, check_positive_definite};
+use aras_pipeline::robot::{Stacked, keep_rows, reversal_mask, stack};
 use aras_signal::{OutputRows, ReadOptions, read_log};
 use nalgebra::Vector2;
 use serde::Serialize;
@@ -27,8 +27,11 @@ pub struct CrossValidation {
     /// against the log's raw torques on every row.
     pub fitness: Vec<[f64; 2]>,
     /// The same on the rows away from velocity reversals
-    /// (`identification.min_speed`), a different figure.
+    /// (`identification.min_speed`, `validation.reversal_reach`).
     pub fitness_kept: Vec<[f64; 2]>,
+    /// Noise ceiling (78) per joint: the true robot's noise-free torques
+    /// against the same log (`crate::ceiling`).
+    pub ceiling: crate::ceiling::Ceiling,
     /// Time, raw measured and predicted torques of the first two periods,
     /// for plots.
     #[serde(skip)]
@@ -92,41 +95,57 @@ pub fn cross_validate(
         opts.rows = OutputRows::EveryRow;
         let processed = aras_signal::process(&read, &opts, &geometry)
             .with_context(|| format!("processing {}", path.display()))?;
-        let st = stack(model, &geometry, &processed.samples)?;
+        let stacked = stack(model, &geometry, &processed.samples)?;
+        let prep = Prepared {
+            processed,
+            stacked,
+            filter: None,
+            unfiltered: None,
+        };
         let keep = reversal_mask(
-            &processed.samples.theta_dot,
+            &prep.processed.samples.theta_dot,
             cfg.identification.min_speed,
             0,
             false,
         )?;
-        let kept = keep_rows(&st, &keep)?;
+        let kept = keep_rows(&prep.stacked, &keep)?;
         let mut fitness = Vec::new();
         let mut fitness_kept = Vec::new();
         let mut predicted = Vec::new();
         // Traces: the first two periods.
-        let t0 = processed.samples.t.first().copied().unwrap_or(0.0);
-        let rows = processed
+        let t0 = prep.processed.samples.t.first().copied().unwrap_or(0.0);
+        let rows = prep
+            .processed
             .samples
             .t
             .iter()
             .take_while(|t| **t - t0 <= 2.0 / f)
             .count();
-        let n = processed.samples.len();
-        let pick =
-            |v: &[f64]| -> Vec<f64> { v[..rows].iter().chain(&v[n..n + rows]).copied().collect() };
+        let n = prep.n();
+        let pick = |v: &[f64]| -> Vec<f64> {
+            v[..rows].iter().chain(&v[n..n + rows]).copied().collect()
+        };
         for beta in candidates {
-            let p = aras_ident::validate::predict(st.w.as_ref(), beta)?;
-            fitness.push(fitness_per_joint(&st.t, &p)?);
+            let p = predict_standard(&prep, beta)?;
+            fitness.push(fitness_per_joint(prep.t(), &p)?);
             fitness_kept.push(fitness_standard(&kept, beta)?);
             predicted.push(pick(&p));
         }
+        let ceiling = crate::ceiling::noise_ceiling(
+            &prep,
+            truth,
+            cfg.simulation.friction_smoothing,
+            cfg.identification.filtering,
+            &keep,
+        )?;
         out.push(CrossValidation {
             frequency_hz: f,
             fitness,
             fitness_kept,
+            ceiling,
             traces: Traces {
-                t: processed.samples.t[..rows].to_vec(),
-                measured: pick(&st.t),
+                t: prep.processed.samples.t[..rows].to_vec(),
+                measured: pick(prep.t()),
                 predicted,
             },
         });

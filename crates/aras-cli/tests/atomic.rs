@@ -1,6 +1,6 @@
-//! Nothing is lost (issue 9): a failing run leaves the previous output
-//! directory intact and leaves no staging or temporary files behind, and
-//! inputs are never modified.
+//! Nothing is lost: a failing run leaves the previous output directory
+//! intact and leaves no staging or temporary files behind, and inputs are
+//! never modified. (What `--force` may replace: `tests/force.rs`.)
 
 use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
@@ -59,14 +59,27 @@ fn leftovers(dir: &Path) -> Vec<String> {
         .collect()
 }
 
+/// A directory as a previous run of the tool leaves it (with its manifest).
+fn previous_run(out: &Path, files: &[(&str, &str)]) {
+    let o = aras_cli::output::OutDir::create(out, false, &[]).unwrap();
+    for (name, text) in files {
+        o.write(name, text).unwrap();
+    }
+    o.commit().unwrap();
+}
+
 #[test]
 fn a_run_that_fails_late_keeps_the_previous_outputs() {
     let dir = scratch("late");
     // The previous results, e.g. from a successful run.
     let out = dir.join("out");
-    std::fs::create_dir_all(&out).unwrap();
-    std::fs::write(out.join("params.json"), "{\"previous\": true}\n").unwrap();
-    std::fs::write(out.join("summary.json"), "{}\n").unwrap();
+    previous_run(
+        &out,
+        &[
+            ("params.json", "{\"previous\": true}\n"),
+            ("summary.json", "{}\n"),
+        ],
+    );
     let before = snapshot(&out);
     // `identify --force` reads the log only after the output directory is
     // staged: a rank-deficient log makes it fail at the identification
@@ -92,8 +105,7 @@ fn a_run_that_fails_late_keeps_the_previous_outputs() {
 fn a_killed_run_keeps_the_previous_outputs() {
     let dir = scratch("kill");
     let out = dir.join("out");
-    std::fs::create_dir_all(&out).unwrap();
-    std::fs::write(out.join("params.json"), "{\"previous\": true}\n").unwrap();
+    previous_run(&out, &[("params.json", "{\"previous\": true}\n")]);
     let before = snapshot(&out);
     // The default pipeline takes tens of seconds: killed after 1.5 s, in the middle.
     let mut child = Command::new(env!("CARGO_BIN_EXE_aras"))
@@ -115,7 +127,9 @@ fn a_killed_run_keeps_the_previous_outputs() {
 fn single_file_outputs_are_replaced_whole_or_not_at_all() {
     let dir = scratch("file");
     let out = dir.join("p.csv");
-    std::fs::write(&out, "previous\n").unwrap();
+    // A previous prediction (the only kind of file `predict --force` replaces).
+    let previous = "t,tau1,tau2\n0,0.1,0.2\n";
+    std::fs::write(&out, previous).unwrap();
     // A failing predict with --force leaves the old file.
     let r = aras(&[
         "predict",
@@ -128,7 +142,7 @@ fn single_file_outputs_are_replaced_whole_or_not_at_all() {
         "--force",
     ]);
     assert!(!r.status.success());
-    assert_eq!(std::fs::read_to_string(&out).unwrap(), "previous\n");
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), previous);
     assert!(leftovers(&dir).is_empty(), "{:?}", leftovers(&dir));
 }
 

@@ -108,6 +108,13 @@ pub enum IdentError {
         /// What is wrong and how to fix it.
         reason: String,
     },
+    /// A malformed selection problem (candidate layout, output group, sums
+    /// of different layouts).
+    #[error("selection: {reason}")]
+    InvalidSelection {
+        /// What is wrong and how to fix it.
+        reason: String,
+    },
     /// Bounds with lower > upper or non-finite values.
     #[error("bounds of `{name}`: lower {lower} > upper {upper} or not finite; give lower ≤ upper")]
     InvalidBounds {

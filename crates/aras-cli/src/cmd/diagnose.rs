@@ -1,12 +1,12 @@
 //! `aras diagnose` (issue 8): where the model and the measurement disagree,
 //! which missing effect explains it, and how much the gap shrinks once it
-//! is added. The statistics live in `aras_ident::diagnose`; this command
+//! is added. The statistics live in `aras_pipeline::diagnose`; this command
 //! reads and processes the logs, runs it, and writes
 //! `diagnosis.json`, `diagnosis.md`, `diagnosis.html` and the plots.
 
 use anyhow::{Context, Result};
-use aras_ident::diagnose::residual::Profile;
-use aras_ident::diagnose::{Dataset, DiagnoseOptions, Diagnosis, diagnose};
+use aras_pipeline::diagnose::residual::Profile;
+use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, diagnose};
 use aras_signal::read_log;
 
 use crate::cli::DiagnoseArgs;
@@ -21,8 +21,23 @@ use crate::stages::Stages;
 /// Runs `diagnose`.
 pub fn run(args: &DiagnoseArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
-    let cfg = loaded.config;
-    let out = OutDir::create(&args.out, args.common.force)?;
+    let cfg = loaded.config.clone();
+    // The logs and their sidecars.
+    let logs: Vec<&std::path::Path> = std::iter::once(&args.data)
+        .chain(&args.validate)
+        .map(|p| p.as_path())
+        .collect();
+    let sidecars: Vec<std::path::PathBuf> = logs
+        .iter()
+        .map(|p| aras_dyn::sim::sidecar_path(p))
+        .collect();
+    let mut read = logs.clone();
+    read.extend(sidecars.iter().map(|p| p.as_path()));
+    let out = OutDir::create(
+        &args.out,
+        args.common.force,
+        &super::input_files(&args.common, &loaded, &read),
+    )?;
     let mut stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let model = paper_model(&nominal)?;

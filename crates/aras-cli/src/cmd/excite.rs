@@ -4,26 +4,31 @@ use anyhow::Result;
 
 use crate::cli::ExciteArgs;
 use crate::identify::base_parameters;
-use crate::output::write_atomic;
+use crate::output::{FileKind, check_new_file, write_atomic};
 use crate::robot::{nominal, paper_model};
 use crate::stages::Stages;
 
 /// Runs `excite`.
 pub fn run(args: &ExciteArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
-    let mut cfg = loaded.config;
+    let mut cfg = loaded.config.clone();
     if let Some(s) = args.seed {
         cfg.trajectory.seed = s;
     }
-    super::check_new_file(&args.out, args.common.force)?;
+    check_new_file(
+        &args.out,
+        args.common.force,
+        FileKind::Trajectory,
+        &super::input_files(&args.common, &loaded, &[]),
+    )?;
     let mut stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let model = paper_model(&nominal)?;
     let base = stages.run("base parameters (58)", |_| {
         base_parameters(&model, &nominal.geometry()?, &cfg)
     })?;
-    let d = stages.run("excitation design (74)–(77)", |_| {
-        crate::excite::design(&cfg, &nominal, &base)
+    let d = stages.run("excitation design (74)–(77)", |bar| {
+        crate::excite::design(&cfg, &nominal, &base, bar)
     })?;
     write_atomic(&args.out, (d.trajectory.to_json() + "\n").as_bytes())?;
     println!(

@@ -3,7 +3,9 @@
 
 pub mod diagnose;
 pub mod excite;
+pub mod export_mjcf;
 pub mod fit;
+pub mod friction;
 pub mod identify;
 pub mod identify_streaming;
 pub mod pipeline;
@@ -11,9 +13,9 @@ pub mod predict;
 pub mod simulate;
 pub mod validate;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 
 use crate::cli::Common;
 use crate::config::{Config, Loaded};
@@ -29,24 +31,21 @@ pub fn load_config(common: &Common) -> Result<Loaded> {
     }
 }
 
-/// Refuses to overwrite an existing file unless `force`, and a file whose
-/// directory does not exist (found before any work is done).
-pub fn check_new_file(path: &Path, force: bool) -> Result<()> {
-    let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
-    if let Some(dir) = parent.filter(|d| !d.is_dir()) {
-        bail!(
-            "cannot write {}: the directory {} does not exist; create it first or choose another --out",
-            path.display(),
-            dir.display()
-        );
+/// The files a run reads that could sit in its output: the config file,
+/// the parameter files it names (`robot.params`, `simulation.truth`) and
+/// `extra` (logs, sidecars, parameter files of the command line). Outputs
+/// that hold one of them are refused ([`crate::output`]).
+pub fn input_files(common: &Common, loaded: &Loaded, extra: &[&Path]) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = extra.iter().map(|p| p.to_path_buf()).collect();
+    v.extend(common.config.clone());
+    let cfg = &loaded.config;
+    if cfg.robot.params != "default" {
+        v.push(loaded.dir.join(&cfg.robot.params));
     }
-    if path.exists() && !force {
-        bail!(
-            "{} already exists; pass --force to replace it or choose another --out",
-            path.display()
-        );
+    if let Some(t) = &cfg.simulation.truth {
+        v.push(loaded.dir.join(t));
     }
-    Ok(())
+    v
 }
 
 /// Prints the log reader's warnings (saturation, …) on stderr, even with

@@ -19,12 +19,16 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
         return Ok(());
     }
     let loaded = super::load_config(&args.common)?;
-    let mut cfg = loaded.config;
+    let mut cfg = loaded.config.clone();
     if let Some(s) = args.seed {
         cfg.trajectory.seed = s;
         cfg.simulation.seed = s;
     }
-    let out = OutDir::create(&args.out, args.common.force)?;
+    let out = OutDir::create(
+        &args.out,
+        args.common.force,
+        &super::input_files(&args.common, &loaded, &[]),
+    )?;
     let mut stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let truth = truth(&cfg, &loaded.dir, &nominal)?;
@@ -34,8 +38,8 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
     let base = stages.run("base parameters (58)", |_| {
         base_parameters(&model, &geometry, &cfg)
     })?;
-    let design = stages.run("excitation design (74)–(77)", |_| {
-        crate::excite::design(&cfg, &nominal, &base)
+    let design = stages.run("excitation design (74)–(77)", |bar| {
+        crate::excite::design(&cfg, &nominal, &base, bar)
     })?;
     out.write("trajectory.json", design.trajectory.to_json() + "\n")?;
 
@@ -86,6 +90,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
             cfg: &cfg,
             nominal: &nominal,
             truth: Some(&truth),
+            friction_smoothing: cfg.simulation.friction_smoothing,
             cross_validate: true,
             log: &log,
             period: None,
@@ -104,7 +109,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
     let dir = out.commit()?;
     println!("{}", fit::terminal_table(&summary));
     println!(
-        "outputs in {} (report.html, report.md, summary.json, params.json, base.json)",
+        "outputs in {} (report.html, report.md, summary.json, params.json, robot.xml, base.json)",
         dir.display()
     );
     Ok(())

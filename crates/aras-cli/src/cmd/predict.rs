@@ -9,7 +9,7 @@ use aras_signal::{OutputRows, read_log};
 use crate::cli::PredictArgs;
 use crate::cmd::identify::read_options;
 use crate::identify::{fitness_per_joint, process_options};
-use crate::output::write_atomic;
+use crate::output::{FileKind, check_new_file, write_atomic};
 
 /// Runs `predict`: writes `t,tau1,tau2`, the model torque `Y(θ, θ̇, θ̈) β`
 /// on every row of the log (θ̇, θ̈ from the log's derivative columns as
@@ -18,8 +18,17 @@ use crate::output::write_atomic;
 /// torques on the same rows.
 pub fn run(args: &PredictArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
-    let cfg = loaded.config;
-    super::check_new_file(&args.out, args.common.force)?;
+    let cfg = loaded.config.clone();
+    let sidecar = args
+        .sidecar
+        .clone()
+        .unwrap_or_else(|| aras_dyn::sim::sidecar_path(&args.data));
+    check_new_file(
+        &args.out,
+        args.common.force,
+        FileKind::Prediction,
+        &super::input_files(&args.common, &loaded, &[&args.params, &args.data, &sidecar]),
+    )?;
     let params =
         Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
     // The parameter file's own model: extra effects in it are predicted too.
@@ -35,7 +44,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let processed = aras_signal::process(&log, &opts, &geometry)
         .with_context(|| format!("processing {}", args.data.display()))?;
     let samples = &processed.samples;
-    let w = aras_ident::robot::stack(&model, &geometry, samples)?;
+    let w = aras_pipeline::robot::stack(&model, &geometry, samples)?;
     let tau = aras_ident::validate::predict(w.w.as_ref(), &beta)?;
     let n = samples.len();
     let mut measured = samples.tau[0].clone();

@@ -7,6 +7,7 @@ use aras_dyn::Sinusoid;
 use aras_excite::FourierTrajectory;
 
 use crate::cli::SimulateArgs;
+use crate::output::{FileKind, check_new_file};
 use crate::robot::nominal;
 use crate::simulate::{run_and_write, sim_config, truth};
 use crate::stages::Stages;
@@ -14,11 +15,17 @@ use crate::stages::Stages;
 /// Runs `simulate`.
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
-    let mut cfg = loaded.config;
+    let mut cfg = loaded.config.clone();
     if let Some(s) = args.seed {
         cfg.simulation.seed = s;
     }
-    super::check_new_file(&args.out, args.common.force)?;
+    let trajectory: Vec<&Path> = args.trajectory.iter().map(|p| p.as_path()).collect();
+    check_new_file(
+        &args.out,
+        args.common.force,
+        FileKind::SimulatedLog,
+        &super::input_files(&args.common, &loaded, &trajectory),
+    )?;
     let mut stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let truth = truth(&cfg, &loaded.dir, &nominal)?;

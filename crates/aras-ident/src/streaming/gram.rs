@@ -10,8 +10,7 @@
 //! check [`GramCheck`] measures `κ` on the final factor and says when the QR
 //! accumulation ([`Accumulation::Qr`]) should be used instead.
 
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par, Side};
+use faer::{Mat, MatRef};
 use serde::Serialize;
 
 use crate::error::IdentError;
@@ -70,14 +69,13 @@ impl GramCheck {
             let (ci, cj) = (cols[i], cols[j]);
             r[(ci, cj)] / norms[cj]
         });
-        let condition = match scaled.singular_values() {
+        let condition = match crate::linalg::singular_values(scaled.as_ref()) {
             Ok(s) if !s.is_empty() => {
                 let (hi, lo) = (s[0], s[s.len() - 1]);
                 if lo > 0.0 { hi / lo } else { f64::INFINITY }
             }
             _ => f64::INFINITY,
         };
-        crate::simd::clear_upper_state();
         let error_bound = condition * condition * f64::EPSILON;
         Self {
             condition,
@@ -124,15 +122,7 @@ impl GramSum {
         // The full product, though only the lower triangle is used: faer's
         // triangular-destination product was 2.4× slower at this shape
         // (2048 × 24: 129 µs vs 53 µs, 44 GFlop/s).
-        matmul(
-            self.block.as_mut(),
-            Accum::Replace,
-            a.transpose(),
-            a,
-            1.0,
-            Par::Seq,
-        );
-        crate::simd::clear_upper_state();
+        crate::linalg::gram_into(self.block.as_mut(), a);
         let c = self.sum.ncols();
         for j in 0..c {
             for i in j..c {
@@ -152,6 +142,36 @@ impl GramSum {
     /// `G += AᵀA` for a block given transposed (`at`: `c × rows`).
     pub(crate) fn add_transposed(&mut self, at: MatRef<'_, f64>) {
         self.add(at.transpose());
+    }
+
+    /// Adds another running Gram of the same size (compensated), e.g. the
+    /// sums of another thread's share of the rows.
+    pub(crate) fn absorb(&mut self, other: &GramSum) {
+        let c = self.sum.ncols();
+        for j in 0..c {
+            for i in j..c {
+                for x in [other.sum[(i, j)], other.comp[(i, j)]] {
+                    let s = self.sum[(i, j)];
+                    let t = s + x;
+                    self.comp[(i, j)] += if s.abs() >= x.abs() {
+                        (s - t) + x
+                    } else {
+                        (x - t) + s
+                    };
+                    self.sum[(i, j)] = t;
+                }
+            }
+        }
+    }
+
+    /// The accumulated Gram as a full symmetric matrix (sum plus its
+    /// compensation).
+    pub(crate) fn value(&self) -> Mat<f64> {
+        let c = self.sum.ncols();
+        Mat::from_fn(c, c, |i, j| {
+            let (i, j) = if i >= j { (i, j) } else { (j, i) };
+            self.sum[(i, j)] + self.comp[(i, j)]
+        })
     }
 
     /// True if every accumulated entry is finite.
@@ -185,9 +205,8 @@ impl GramSum {
             .collect();
         let scaled = Mat::from_fn(c, c, |i, j| g(i, j) / (d[i] * d[j]));
         let mut data = vec![0.0; c * c];
-        match scaled.self_adjoint_eigen(Side::Lower) {
-            Ok(evd) => {
-                let (u, s) = (evd.U(), evd.S());
+        match crate::linalg::symmetric_eigen(scaled.as_ref()) {
+            Ok((u, s)) => {
                 // Row k of F = sqrt(λ_k) v_kᵀ D, column-major.
                 for j in 0..c {
                     for k in 0..c {
@@ -201,7 +220,6 @@ impl GramSum {
             // instead of returning a wrong estimate.
             Err(_) => data.iter_mut().for_each(|v| *v = f64::NAN),
         }
-        crate::simd::clear_upper_state();
         crate::dense::HouseholderQr::new(data, c, c).r()
     }
 }

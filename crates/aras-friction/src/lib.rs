@@ -1,0 +1,54 @@
+//! # aras-friction: friction of one joint from its log
+//!
+//! Robot-agnostic friction modelling for any joint — a serial arm, a cable
+//! drive, a harmonic-drive joint — from a log of time, position, velocity and
+//! friction torque (the measured joint torque minus the rigid-body model).
+//!
+//! * [`Motion`]: time, position and velocity on the log's own, possibly
+//!   irregular, time grid.
+//! * [`models`]: [`CoulombViscous`], [`Stribeck`], [`Dahl`] and [`LuGre`],
+//!   each with its equations, parameter vector with physical bounds
+//!   ([`ParamInfo`]), prediction along a motion ([`FrictionModel`]) and its
+//!   separable structure `τ = Φ(θ) β` ([`Separable`]) for fitting.
+//! * [`log`]: the joint log format (CSV with `t, q, dq, tau`, optional `ddq`),
+//!   column mapping ([`ColumnMap`]), derivatives on irregular grids.
+//! * [`fit`]: variable-projection fits with physical bounds, several starts
+//!   and σ of every parameter; RMS and fitness (78).
+//! * [`effects`]: candidate effects beyond a model (ripple, asymmetry,
+//!   drift, hysteresis, delay, inertia) as column blocks for a forward
+//!   selection, and residual profiles.
+//! * [`sim`]: a single-joint simulator with known friction (LuGre with
+//!   internal state, ripple, drift, asymmetry, noise, irregular sampling).
+//!
+//! ## Conventions
+//! SI units and radians: s, rad, rad/s, N·m. `sgn(0) = 0`. Dynamic models
+//! integrate their state over every interval between two samples with an
+//! unconditionally stable exact update, so sampling jitter, gaps and stiff
+//! bristles are handled alike.
+//!
+//! ## Dependencies, and why
+//! * `nalgebra`: QR least squares on small tall regressors.
+//! * `rayon`: the finite-difference Jacobian columns of the nonlinear
+//!   search are independent model evaluations, run in parallel.
+//! * `serde`: models and results serialise for reports; `thiserror`: the
+//!   error type.
+#![warn(missing_docs)]
+// Small dense linear algebra reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
+pub mod effects;
+mod error;
+pub mod fit;
+mod linalg;
+pub mod log;
+pub mod models;
+mod motion;
+pub mod sim;
+
+pub use error::FrictionError;
+pub use log::{ColumnMap, JointLog, LogError, read_joint_log, read_joint_log_from};
+pub use models::{
+    CoulombViscous, Dahl, FrictionModel, LuGre, ParamInfo, Separable, Stribeck, predict_parts, sgn,
+    stribeck_decay,
+};
+pub use motion::Motion;

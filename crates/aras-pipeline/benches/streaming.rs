@@ -1,0 +1,122 @@
+//! Throughput of the streaming regressor + accumulation stage (issue 9:
+//! target ≥ 5 M samples/s on this machine), and its parts.
+#![allow(clippy::needless_range_loop)]
+
+use aras_dyn::Params;
+use aras_ident::BaseParameters;
+use aras_ident::streaming::{Accumulation, RegressorStage, States};
+use aras_pipeline::TaskRegressor;
+use aras_pipeline::robot::stack;
+use aras_pipeline::streaming::synthetic;
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use nalgebra::Vector2;
+use std::hint::black_box;
+
+fn bench(c: &mut Criterion) {
+    let p = Params::aras_diamond();
+    let model = p.model().unwrap();
+    let geo = p.geometry().unwrap();
+    let beta = p.standard_vector(&model).unwrap().as_slice().to_vec();
+    let rich = synthetic::states(&model, &geo, &beta, 2000, 200.0, 0.0).unwrap();
+    let samples = aras_signal::Samples {
+        t: (0..2000).map(|i| i as f64 / 200.0).collect(),
+        x: rich[0].clone(),
+        x_dot: rich[1].clone(),
+        x_ddot: rich[2].clone(),
+        tau: rich[3].clone(),
+        ..Default::default()
+    };
+    let st = stack(&model, &geo, &samples).unwrap();
+    let base = BaseParameters::from_regressor(st.w.as_ref(), &st.names, 1e-8).unwrap();
+
+    let n = 262_144;
+    let s = synthetic::states(&model, &geo, &beta, n, 1000.0, 0.01).unwrap();
+    let states = States {
+        x: [&s[0][0], &s[0][1]],
+        x_dot: [&s[1][0], &s[1][1]],
+        x_ddot: [&s[2][0], &s[2][1]],
+        tau: [&s[3][0], &s[3][1]],
+    };
+    let mut g = c.benchmark_group("streaming");
+    g.throughput(Throughput::Elements(n as u64));
+    g.sample_size(10);
+    for (name, how) in [
+        (
+            "regressor_and_accumulation_gram_262144_samples",
+            Accumulation::Gram,
+        ),
+        (
+            "regressor_and_accumulation_qr_262144_samples",
+            Accumulation::Qr,
+        ),
+    ] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                let mut stage = RegressorStage::with_accumulation(
+                    TaskRegressor::new(model.clone(), geo),
+                    &base,
+                    how,
+                )
+                .unwrap();
+                stage.push(&states).unwrap();
+                black_box(stage.accumulator().rows())
+            })
+        });
+    }
+    // CPU time per sample: the Gram stage on one thread (the machine is
+    // shared, so the 2-thread time depends on the load).
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    g.bench_function(
+        "regressor_and_accumulation_gram_1_thread_262144_samples",
+        |b| {
+            b.iter(|| {
+                one.install(|| {
+                    let mut stage =
+                        RegressorStage::new(TaskRegressor::new(model.clone(), geo), &base).unwrap();
+                    stage.push(&states).unwrap();
+                    black_box(stage.accumulator().rows())
+                })
+            })
+        },
+    );
+    // The parts, single-threaded, per sample.
+    let mut y = vec![0.0; 2 * model.columns()];
+    g.bench_function("evaluate_only_262144_samples", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for i in 0..n {
+                let k = aras_kin::evaluate(
+                    &geo,
+                    &Vector2::new(s[0][0][i], s[0][1][i]),
+                    &Vector2::new(s[1][0][i], s[1][1][i]),
+                    &Vector2::new(s[2][0][i], s[2][1][i]),
+                )
+                .unwrap();
+                acc += k.theta[0];
+            }
+            black_box(acc)
+        })
+    });
+    g.bench_function("evaluate_and_fill_262144_samples", |b| {
+        b.iter(|| {
+            for i in 0..n {
+                let k = aras_kin::evaluate(
+                    &geo,
+                    &Vector2::new(s[0][0][i], s[0][1][i]),
+                    &Vector2::new(s[1][0][i], s[1][1][i]),
+                    &Vector2::new(s[2][0][i], s[2][1][i]),
+                )
+                .unwrap();
+                model.fill(&k, &mut y).unwrap();
+            }
+            black_box(y[0])
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,264 @@
+//! Data sets and the stacked, parallel-filtered regressor blocks the
+//! diagnosis fits: the current model's columns, each candidate's columns,
+//! and the torque shift of the `time_delay` candidate.
+
+use aras_dyn::{Effect, Model};
+use aras_kin::Geometry;
+use aras_signal::{Samples, Sos};
+use faer::Mat;
+
+use crate::robot::{FilterMode, Stacked, filter, filter_reach, reversal_mask, stack};
+use aras_ident::IdentError;
+
+/// A processed data set: the samples as `aras_signal::process` produced
+/// them, and the zero-phase filter it applied (so every regressor column is
+/// filtered the same way, spec §6 NOTE).
+#[derive(Debug, Clone)]
+pub struct Dataset {
+    /// Name used in findings and reports (e.g. the file name).
+    pub name: String,
+    /// Processed samples.
+    pub samples: Samples,
+    /// The low-pass that was applied to θ (`None`: unfiltered); the blocks
+    /// apply it to the torques and every regressor column alike.
+    pub filter: Option<Sos>,
+    /// True if the samples are one period-averaged period (the periodic
+    /// filter and circular shifts then apply).
+    pub periodic: bool,
+    /// Sample rate (Hz).
+    pub sample_rate_hz: f64,
+}
+
+impl Dataset {
+    /// A data set from `aras_signal::process`'s output: the filter is
+    /// re-designed from the processing summary (same order, cut-off and
+    /// rate), periodic if the record was period-averaged.
+    pub fn from_processed(
+        name: impl Into<String>,
+        processed: &aras_signal::Processed,
+    ) -> Result<Self, IdentError> {
+        let s = &processed.summary;
+        let filter = match &s.filter {
+            Some(f) => Some(
+                aras_signal::Butterworth::lowpass(f.order, f.cutoff_hz, s.sample_rate_hz).map_err(
+                    |e| IdentError::Adapter {
+                        context: "re-designing the processing low-pass".into(),
+                        message: e.to_string(),
+                    },
+                )?,
+            ),
+            None => None,
+        };
+        Ok(Self {
+            name: name.into(),
+            samples: processed.samples.clone(),
+            filter,
+            periodic: s.periods.is_some(),
+            sample_rate_hz: s.sample_rate_hz,
+        })
+    }
+
+    /// Samples per joint.
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// True if there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+
+    /// Upper bound on independent noise samples per joint, `2 B T`: the
+    /// zero-phase filter's equivalent noise bandwidth `B = ∫ |H(f)|⁴ df`
+    /// (forward–backward squares the power response) times the record
+    /// length. Without a filter every sample counts.
+    pub fn filter_dof(&self) -> f64 {
+        let n = self.len() as f64;
+        let Some(sos) = &self.filter else { return n };
+        let fs = self.sample_rate_hz;
+        let steps = 4000;
+        let df = 0.5 * fs / steps as f64;
+        let b: f64 = (0..steps)
+            .map(|i| {
+                let g = sos.gain((i as f64 + 0.5) * df, fs);
+                g * g * g * g * df
+            })
+            .sum();
+        (n * 2.0 * b / fs).clamp(1.0, n)
+    }
+
+    /// Noise power gain of the zero-phase filter, `g = Σ h_k²` of its
+    /// impulse response on this record ([`crate::robot::noise_gain`]; 1
+    /// without a filter). White noise of variance `σ²` leaves the filter
+    /// with variance `g σ²`, correlated over about `1/g` samples; the OLS σ
+    /// of a parameter whose regressor lies in the pass band is divided by
+    /// `√g` to be honest ([`crate::OlsEstimate::with_filtered_noise`]).
+    /// It is the same quantity as [`Self::filter_dof`]` / len` (Parseval:
+    /// `Σ h² = ∫ |H|⁴ df / f_s`), computed in the time domain.
+    pub fn noise_gain(&self) -> Result<f64, IdentError> {
+        match &self.filter {
+            Some(sos) => crate::robot::noise_gain(sos, self.len(), self.periodic),
+            None => Ok(1.0),
+        }
+    }
+
+    pub(crate) fn check(&self) -> Result<(), IdentError> {
+        if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
+            return Err(IdentError::InvalidSetting {
+                name: "sample rate of a diagnosis data set",
+                value: self.sample_rate_hz,
+                reason: "give the log's sample rate in Hz (ProcessSummary::sample_rate_hz)",
+            });
+        }
+        if self.len() < 200 {
+            return Err(IdentError::TooFewRows {
+                what: "diagnosis data set",
+                rows: self.len(),
+                columns: 0,
+                needed: 200,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Filtered regressor columns of `model` on `data` (`2N × n`, joint-major)
+/// with the torques.
+pub(crate) fn columns(
+    model: &Model,
+    geometry: &Geometry,
+    data: &Dataset,
+) -> Result<Stacked, IdentError> {
+    let mut s = stack(model, geometry, &data.samples)?;
+    if let Some(sos) = &data.filter {
+        filter(&mut s, sos, FilterMode::Parallel, data.periodic)?;
+    }
+    Ok(s)
+}
+
+/// Filtered columns of a single extra effect.
+pub(crate) fn effect_columns(
+    effect: Effect,
+    gravity: nalgebra::Vector3<f64>,
+    geometry: &Geometry,
+    data: &Dataset,
+) -> Result<Mat<f64>, IdentError> {
+    let m = Model::new(vec![effect], gravity).map_err(|e| IdentError::Adapter {
+        context: format!("candidate {}", effect.id()),
+        message: e.to_string(),
+    })?;
+    Ok(columns(&m, geometry, data)?.w)
+}
+
+/// Per joint, the samples used in fits and scores: the identification's
+/// reversal exclusion ([`reversal_mask`]) — joint `j`'s rows where
+/// `|θ̇_j| < min_speed`, widened by the zero-phase filter's reach down to
+/// `reach_tol` of its peak ([`filter_reach`]; no widening without a
+/// filter). Near a velocity reversal the exact `sign` of (49) misfits real
+/// (sticking, creeping, smooth) friction far beyond the noise, and the
+/// filter spreads that misfit over its impulse response; a candidate must
+/// not be rewarded for fitting it.
+pub(crate) fn moving_mask(
+    data: &Dataset,
+    min_speed: f64,
+    reach_tol: f64,
+) -> Result<[Vec<bool>; 2], IdentError> {
+    let n = data.len();
+    let guard = match &data.filter {
+        Some(sos) => filter_reach(sos, n, data.periodic, reach_tol)?,
+        None => 0,
+    };
+    let keep = reversal_mask(&data.samples.theta_dot, min_speed, guard, data.periodic)?;
+    let mask = [keep[..n].to_vec(), keep[n..].to_vec()];
+    for (j, m) in mask.iter().enumerate() {
+        let kept = m.iter().filter(|k| **k).count();
+        if kept < MIN_ROWS {
+            return Err(IdentError::InvalidSetting {
+                name: if j == 0 {
+                    "rows of joint 1 left after the reversal exclusion"
+                } else {
+                    "rows of joint 2 left after the reversal exclusion"
+                },
+                value: kept as f64,
+                reason: "the joint is rarely faster than min_speed for a whole filter reach: \
+                         record a faster or longer motion, or lower min_speed / raise the \
+                         reach tolerance",
+            });
+        }
+    }
+    Ok(mask)
+}
+
+/// Fewest rows per joint a diagnosis data set must keep after the exclusion.
+const MIN_ROWS: usize = 100;
+
+/// A design ready for least squares: regressor rows and torques after the
+/// torque shift and the rest exclusion, joint 1's rows first.
+pub(crate) struct Design {
+    pub w: Mat<f64>,
+    pub t: Vec<f64>,
+    /// Sample index (of the angles) of each joint's rows.
+    pub idx: [Vec<usize>; 2],
+}
+
+impl Design {
+    /// Rows of joint 1 (joint 2's start there).
+    pub fn split(&self) -> usize {
+        self.idx[0].len()
+    }
+}
+
+/// Assembles `[base | blocks…]` with the torques shifted by `delay`
+/// samples (`τ[k + delay]` pairs with the angles of sample `k`): circular
+/// for a periodic record, otherwise the rows without a partner are dropped;
+/// rows outside `mask` are dropped too.
+pub(crate) fn design(
+    base: &Stacked,
+    blocks: &[&Mat<f64>],
+    delay: i64,
+    periodic: bool,
+    mask: &[Vec<bool>; 2],
+) -> Design {
+    let n_all = base.groups.counts()[0];
+    let d = delay.unsigned_abs() as usize;
+    let (lo, hi) = if periodic || d == 0 {
+        (0, n_all)
+    } else if delay < 0 {
+        (d, n_all)
+    } else {
+        (0, n_all.saturating_sub(d))
+    };
+    let idx: [Vec<usize>; 2] = std::array::from_fn(|g| (lo..hi).filter(|&i| mask[g][i]).collect());
+    let rows = idx[0].len() + idx[1].len();
+    let cols = base.w.ncols() + blocks.iter().map(|b| b.ncols()).sum::<usize>();
+    let mut w = Mat::zeros(rows, cols);
+    let mut t = vec![0.0; rows];
+    let mut r = 0;
+    for g in 0..2 {
+        for &i in &idx[g] {
+            let k = (i as i64 + delay).rem_euclid(n_all as i64) as usize;
+            t[r] = base.t[g * n_all + k];
+            r += 1;
+        }
+    }
+    let mut c = 0;
+    let mut copy = |m: &Mat<f64>, j: usize, w: &mut Mat<f64>| {
+        let mut r = 0;
+        for g in 0..2 {
+            for &i in &idx[g] {
+                w[(r, c)] = m[(g * n_all + i, j)];
+                r += 1;
+            }
+        }
+        c += 1;
+    };
+    for j in 0..base.w.ncols() {
+        copy(&base.w, j, &mut w);
+    }
+    for b in blocks {
+        for j in 0..b.ncols() {
+            copy(b, j, &mut w);
+        }
+    }
+    Design { w, t, idx }
+}

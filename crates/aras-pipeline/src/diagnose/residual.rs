@@ -1,0 +1,328 @@
+//! Where model and measurement disagree: the validation residual per joint,
+//! binned against velocity (with bins at rest and split by sign), position,
+//! acceleration and time, its whiteness, and the bins whose mean is beyond
+//! what noise explains.
+
+use serde::Serialize;
+
+use aras_ident::stats::{integrated_time, ljung_box};
+
+/// What a residual is binned against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Axis {
+    /// Joint rate θ̇ (rad/s).
+    Velocity,
+    /// Joint angle θ (rad).
+    Position,
+    /// Joint acceleration θ̈ (rad/s²).
+    Acceleration,
+    /// Time (s).
+    Time,
+}
+
+impl Axis {
+    fn unit(self) -> &'static str {
+        match self {
+            Axis::Velocity => "rad/s",
+            Axis::Position => "rad",
+            Axis::Acceleration => "rad/s²",
+            Axis::Time => "s",
+        }
+    }
+    fn symbol(self) -> &'static str {
+        match self {
+            Axis::Velocity => "θ̇",
+            Axis::Position => "θ",
+            Axis::Acceleration => "θ̈",
+            Axis::Time => "t",
+        }
+    }
+}
+
+/// One bin of a residual profile.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Bin {
+    /// Lower edge.
+    pub lo: f64,
+    /// Upper edge.
+    pub hi: f64,
+    /// Samples in the bin.
+    pub count: usize,
+    /// Mean residual (N·m).
+    pub mean: f64,
+    /// Standard error of the mean from the noise level and the effective
+    /// number of independent samples in the bin (N·m).
+    pub std_error: f64,
+}
+
+impl Bin {
+    /// `mean / std_error`.
+    pub fn z(&self) -> f64 {
+        if self.std_error > 0.0 {
+            self.mean / self.std_error
+        } else {
+            0.0
+        }
+    }
+}
+
+/// The residual of one joint binned against one axis.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Profile {
+    /// Joint (1 or 2).
+    pub joint: usize,
+    /// The axis.
+    pub axis: Axis,
+    /// Bins in increasing order of the axis.
+    pub bins: Vec<Bin>,
+}
+
+/// Whiteness of a joint's residual (Ljung–Box on the residual decimated to
+/// the filter's independent-sample spacing).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Whiteness {
+    /// Joint (1 or 2).
+    pub joint: usize,
+    /// Decimation step (samples).
+    pub step: usize,
+    /// Lags tested.
+    pub lags: usize,
+    /// Ljung–Box Q.
+    pub q: f64,
+    /// p-value under "white noise".
+    pub p_value: f64,
+    /// Integrated autocorrelation time of the undecimated residual (samples).
+    pub autocorrelation_time: f64,
+    /// Residual RMS (N·m).
+    pub rms: f64,
+}
+
+impl Whiteness {
+    /// True if whiteness is not rejected at the 1 % level.
+    pub fn is_white(&self) -> bool {
+        self.p_value >= 0.01
+    }
+}
+
+/// One statement about a residual, in words with numbers.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Finding {
+    /// Joint (1 or 2).
+    pub joint: usize,
+    /// The sentence.
+    pub text: String,
+    /// True if beyond noise (|z| above the threshold).
+    pub systematic: bool,
+    /// The z-score behind the statement.
+    pub z: f64,
+}
+
+/// The residual analysis of one data set.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ResidualAnalysis {
+    /// Data set name.
+    pub dataset: String,
+    /// Profiles per joint and axis.
+    pub profiles: Vec<Profile>,
+    /// Whiteness per joint.
+    pub whiteness: Vec<Whiteness>,
+    /// Findings, systematic ones first.
+    pub findings: Vec<Finding>,
+}
+
+impl ResidualAnalysis {
+    /// True if no bin is systematic and both joints' residuals are white.
+    pub fn noise_like(&self) -> bool {
+        self.whiteness.iter().all(|w| w.is_white()) && !self.findings.iter().any(|f| f.systematic)
+    }
+
+    /// The velocity profile of `joint` (1 or 2).
+    pub fn velocity_profile(&self, joint: usize) -> Option<&Profile> {
+        self.profiles
+            .iter()
+            .find(|p| p.joint == joint && p.axis == Axis::Velocity)
+    }
+}
+
+/// Velocity below which a joint counts as at rest (rad/s): a few encoder
+/// quanta per 10 ms.
+pub const REST_VELOCITY: f64 = 0.05;
+/// |z| above which a bin mean is called systematic. With about 30 bins per
+/// joint, 4 keeps the chance of a false call under 0.2 % per analysis.
+pub const Z_SYSTEMATIC: f64 = 4.0;
+
+/// Per-joint inputs of the analysis.
+pub(crate) struct JointData<'a> {
+    pub residual: &'a [f64],
+    pub theta: &'a [f64],
+    pub theta_dot: &'a [f64],
+    pub theta_ddot: &'a [f64],
+    pub t: &'a [f64],
+}
+
+fn quantile_edges(x: &[f64], bins: usize) -> Vec<f64> {
+    let mut v: Vec<f64> = x.to_vec();
+    v.sort_by(|a, b| a.total_cmp(b));
+    if v.is_empty() {
+        return vec![];
+    }
+    let mut e: Vec<f64> = (0..=bins).map(|i| v[((v.len() - 1) * i) / bins]).collect();
+    e.dedup();
+    e
+}
+
+fn bin_by(x: &[f64], r: &[f64], edges: &[f64], sigma: f64, dof_ratio: f64) -> Vec<Bin> {
+    let nb = edges.len().saturating_sub(1);
+    let mut sum = vec![0.0; nb];
+    let mut cnt = vec![0usize; nb];
+    for (xi, ri) in x.iter().zip(r) {
+        // Upper edge of the last bin is inclusive.
+        let k = edges[1..]
+            .partition_point(|e| e < xi)
+            .min(nb.saturating_sub(1));
+        if nb > 0 && *xi >= edges[0] {
+            sum[k] += ri;
+            cnt[k] += 1;
+        }
+    }
+    (0..nb)
+        .filter(|&k| cnt[k] > 0)
+        .map(|k| {
+            let neff = (cnt[k] as f64 * dof_ratio).max(1.0);
+            Bin {
+                lo: edges[k],
+                hi: edges[k + 1],
+                count: cnt[k],
+                mean: sum[k] / cnt[k] as f64,
+                std_error: sigma / neff.sqrt(),
+            }
+        })
+        .collect()
+}
+
+/// Velocity edges: the rest band `±REST_VELOCITY` split at zero, and four
+/// quantile bins of |θ̇| on each side.
+fn velocity_edges(v: &[f64]) -> Vec<f64> {
+    let pos: Vec<f64> = v.iter().copied().filter(|x| *x >= REST_VELOCITY).collect();
+    let neg: Vec<f64> = v.iter().copied().filter(|x| *x <= -REST_VELOCITY).collect();
+    let mut e: Vec<f64> = quantile_edges(&neg, 4);
+    e.extend([-REST_VELOCITY, 0.0, REST_VELOCITY]);
+    e.extend(quantile_edges(&pos, 4));
+    let mut e: Vec<f64> = e.into_iter().collect();
+    e.sort_by(|a, b| a.total_cmp(b));
+    e.dedup();
+    e
+}
+
+/// Analyses the residuals of both joints. `sigma` is each joint's noise
+/// level per sample (N·m), `dof_ratio` the fraction of samples that are
+/// independent (see [`super::Dataset::filter_dof`]).
+pub(crate) fn analyse(
+    dataset: &str,
+    joints: &[JointData<'_>; 2],
+    sigma: [f64; 2],
+    dof_ratio: f64,
+) -> ResidualAnalysis {
+    let mut profiles = Vec::new();
+    let mut whiteness = Vec::new();
+    let mut findings = Vec::new();
+    for (j, d) in joints.iter().enumerate() {
+        let joint = j + 1;
+        for (axis, x) in [
+            (Axis::Velocity, d.theta_dot),
+            (Axis::Position, d.theta),
+            (Axis::Acceleration, d.theta_ddot),
+            (Axis::Time, d.t),
+        ] {
+            if x.is_empty() {
+                continue;
+            }
+            let edges = match axis {
+                Axis::Velocity => velocity_edges(x),
+                Axis::Time => {
+                    let (a, b) = (x[0], x[x.len() - 1]);
+                    (0..=8).map(|i| a + (b - a) * i as f64 / 8.0).collect()
+                }
+                _ => quantile_edges(x, 8),
+            };
+            let bins = bin_by(x, d.residual, &edges, sigma[j], dof_ratio);
+            for b in &bins {
+                let z = b.z();
+                if z.abs() > Z_SYSTEMATIC {
+                    findings.push(Finding {
+                        joint,
+                        text: format!(
+                            "joint {joint}: residual mean {:+.4} N·m for {} in [{:.3}, {:.3}] {} \
+                             ({} samples, z = {:.1})",
+                            b.mean,
+                            axis.symbol(),
+                            b.lo,
+                            b.hi,
+                            axis.unit(),
+                            b.count,
+                            z
+                        ),
+                        systematic: true,
+                        z,
+                    });
+                }
+            }
+            if axis == Axis::Velocity {
+                // The jump across the velocity reversal: the slowest bins on
+                // either side of zero.
+                let below = bins.iter().rfind(|b| b.hi <= 0.0);
+                let above = bins.iter().find(|b| b.lo >= 0.0);
+                if let (Some(a), Some(b)) = (below, above) {
+                    let jump = b.mean - a.mean;
+                    let se = (a.std_error * a.std_error + b.std_error * b.std_error).sqrt();
+                    let z = if se > 0.0 { jump / se } else { 0.0 };
+                    findings.push(Finding {
+                        joint,
+                        text: format!(
+                            "joint {joint}: residual jumps by {jump:+.4} N·m at velocity \
+                             reversal (z = {z:.1}){}",
+                            if z.abs() > Z_SYSTEMATIC {
+                                ""
+                            } else {
+                                ", within noise"
+                            }
+                        ),
+                        systematic: z.abs() > Z_SYSTEMATIC,
+                        z,
+                    });
+                }
+            }
+            profiles.push(Profile { joint, axis, bins });
+        }
+        whiteness.push(white(joint, d.residual, dof_ratio));
+    }
+    findings.sort_by(|a, b| {
+        b.systematic
+            .cmp(&a.systematic)
+            .then(b.z.abs().total_cmp(&a.z.abs()))
+    });
+    ResidualAnalysis {
+        dataset: dataset.to_owned(),
+        profiles,
+        whiteness,
+        findings,
+    }
+}
+
+fn white(joint: usize, r: &[f64], dof_ratio: f64) -> Whiteness {
+    let step = ((1.0 / dof_ratio).round() as usize).max(1);
+    let dec: Vec<f64> = r.iter().step_by(step).copied().collect();
+    let lags = (dec.len() / 5).clamp(1, 20);
+    let (q, p_value) = ljung_box(&dec, lags);
+    let rms = (r.iter().map(|x| x * x).sum::<f64>() / r.len().max(1) as f64).sqrt();
+    Whiteness {
+        joint,
+        step,
+        lags,
+        q,
+        p_value,
+        autocorrelation_time: integrated_time(r, 2000.min(r.len() / 4)),
+        rms,
+    }
+}

@@ -1,0 +1,419 @@
+//! Adapter to the ARAS-Diamond crates: stacked regressors from `aras-dyn`'s
+//! model and `aras-signal`'s samples, parallel filtering (spec §6 NOTE), the
+//! SDP layout of the four links, and the way back into `aras-dyn`'s
+//! parameter type.
+
+use aras_dyn::{Effect, Model, Params};
+use aras_kin::{Geometry, Workspace};
+use aras_signal::{Samples, Sos};
+use faer::Mat;
+use nalgebra::Vector2;
+use rayon::prelude::*;
+
+use aras_ident::{
+    BaseParameters, ConsistentLs, DEFAULT_RANK_TOLERANCE, IdentError, RowGroups, SdpSolution,
+};
+
+/// A stacked, joint-major regressor with its torques: rows `0..N` are
+/// joint 1, `N..2N` joint 2.
+#[derive(Debug, Clone)]
+pub struct Stacked {
+    /// `2N × n` regressor.
+    pub w: Mat<f64>,
+    /// `2N` torques.
+    pub t: Vec<f64>,
+    /// Column names (standard parameters of the model).
+    pub names: Vec<String>,
+    /// Row groups (joint 1, joint 2).
+    pub groups: RowGroups,
+}
+
+fn dyn_err(context: &str, e: impl std::fmt::Display) -> IdentError {
+    IdentError::Adapter {
+        context: context.to_owned(),
+        message: e.to_string(),
+    }
+}
+
+/// Stacks `model`'s regressor over processed `samples` (their `X, Ẋ, Ẍ`
+/// through the kinematics; `θ, θ̇` are recomputed from `X`, which is how the
+/// samples were derived) and their torques.
+pub fn stack(model: &Model, geometry: &Geometry, samples: &Samples) -> Result<Stacked, IdentError> {
+    let n = samples.len();
+    let v = |a: &[Vec<f64>; 2]| -> Vec<Vector2<f64>> {
+        (0..n).map(|i| Vector2::new(a[0][i], a[1][i])).collect()
+    };
+    for (what, a) in [
+        ("x", &samples.x),
+        ("x_dot", &samples.x_dot),
+        ("x_ddot", &samples.x_ddot),
+        ("tau", &samples.tau),
+    ] {
+        if a[0].len() != n || a[1].len() != n {
+            return Err(dyn_err(
+                "samples",
+                format!(
+                    "`{what}` has {}/{} entries for {n} samples",
+                    a[0].len(),
+                    a[1].len()
+                ),
+            ));
+        }
+    }
+    let w = model
+        .stacked_from_states(
+            geometry,
+            &v(&samples.x),
+            &v(&samples.x_dot),
+            &v(&samples.x_ddot),
+        )
+        .map_err(|e| dyn_err("stacking the regressor", e))?;
+    let w = faer::MatRef::from_column_major_slice(w.as_slice(), 2 * n, model.columns()).to_owned();
+    let t = samples.tau[0]
+        .iter()
+        .chain(&samples.tau[1])
+        .copied()
+        .collect();
+    Ok(Stacked {
+        w,
+        t,
+        names: model.names(),
+        groups: RowGroups::contiguous(&[n, n])?,
+    })
+}
+
+/// The `i`-th point (from 1) of the van der Corput sequence in base `b`.
+fn radical_inverse(mut i: u64, b: u64) -> f64 {
+    let (mut f, mut r) = (1.0, 0.0);
+    while i > 0 {
+        f /= b as f64;
+        r += f * (i % b) as f64;
+        i /= b;
+    }
+    r
+}
+
+/// Base parameters (58)–(61) of `model` from `samples` rich states: poses
+/// filling the `workspace` box, rates within its limits and accelerations
+/// within ±20 rad/s², on a six-dimensional Halton sequence (deterministic,
+/// no seed, and more even than random points, so no accidental dependency
+/// is taken as structural). Default rank tolerance.
+///
+/// A few hundred samples suffice (the dependencies are structural); the
+/// base set is the same for every trajectory of this model and geometry,
+/// so an excitation design and an identification can share it.
+pub fn base_parameters(
+    model: &Model,
+    geometry: &Geometry,
+    workspace: &Workspace,
+    samples: usize,
+) -> Result<BaseParameters, IdentError> {
+    const PRIMES: [u64; 6] = [2, 3, 5, 7, 11, 13];
+    const ACCEL: f64 = 20.0;
+    let (lo, hi, rate) = (workspace.min(), workspace.max(), workspace.max_rate());
+    let mut x = Vec::with_capacity(samples);
+    let mut xd = Vec::with_capacity(samples);
+    let mut xdd = Vec::with_capacity(samples);
+    for i in 0..samples as u64 {
+        let u: [f64; 6] = std::array::from_fn(|d| radical_inverse(i + 1, PRIMES[d]));
+        x.push(Vector2::new(
+            lo[0] + u[0] * (hi[0] - lo[0]),
+            lo[1] + u[1] * (hi[1] - lo[1]),
+        ));
+        xd.push(Vector2::new(
+            rate[0] * (2.0 * u[2] - 1.0),
+            rate[1] * (2.0 * u[3] - 1.0),
+        ));
+        xdd.push(Vector2::new(
+            ACCEL * (2.0 * u[4] - 1.0),
+            ACCEL * (2.0 * u[5] - 1.0),
+        ));
+    }
+    let w = model
+        .stacked_from_states(geometry, &x, &xd, &xdd)
+        .map_err(|e| dyn_err("stacking the regressor for the base analysis", e))?;
+    let w = faer::MatRef::from_column_major_slice(w.as_slice(), 2 * samples, model.columns());
+    BaseParameters::from_regressor(w, &model.names(), DEFAULT_RANK_TOLERANCE)
+}
+
+/// The base projection `E` (`n × b`, `W_b = W E`: column `j` selects the
+/// standard column of base parameter `j`) as a dense matrix, the form
+/// `aras-excite`'s design takes.
+pub fn base_projection(base: &BaseParameters) -> nalgebra::DMatrix<f64> {
+    let mut e = nalgebra::DMatrix::zeros(base.n_standard(), base.n_base());
+    for (j, &c) in base.independent().iter().enumerate() {
+        e[(c, j)] = 1.0;
+    }
+    e
+}
+
+/// What the zero-phase filter is applied to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FilterMode {
+    /// The torques and every regressor column (spec §6 NOTE): the fit
+    /// compares like with like, so Coulomb jumps do not bias it.
+    Parallel,
+    /// Only the torques, as the paper did (kept for comparison).
+    TorqueOnly,
+}
+
+/// Applies `sos` forward and backward to each joint's block of the torques
+/// and (with [`FilterMode::Parallel`]) of every regressor column, in
+/// parallel. `periodic` selects the exact periodic filter for period-averaged
+/// data (one period, no edge effects).
+pub fn filter(
+    stacked: &mut Stacked,
+    sos: &Sos,
+    mode: FilterMode,
+    periodic: bool,
+) -> Result<(), IdentError> {
+    let n = stacked.groups.counts()[0];
+    let run = |x: &[f64]| -> Result<Vec<f64>, IdentError> {
+        if periodic {
+            sos.filtfilt_periodic(x)
+        } else {
+            sos.filtfilt(x)
+        }
+        .map_err(|e| dyn_err("filtering", e))
+    };
+    let cols = if mode == FilterMode::Parallel {
+        stacked.w.ncols()
+    } else {
+        0
+    };
+    let w = &stacked.w;
+    let filtered: Vec<Result<Vec<f64>, IdentError>> = (0..2 * cols)
+        .into_par_iter()
+        .map(|k| {
+            let (j, g) = (k / 2, k % 2);
+            let x: Vec<f64> = (g * n..(g + 1) * n).map(|i| w[(i, j)]).collect();
+            run(&x)
+        })
+        .collect();
+    for (k, f) in filtered.into_iter().enumerate() {
+        let (j, g) = (k / 2, k % 2);
+        for (i, v) in f?.into_iter().enumerate() {
+            stacked.w[(g * n + i, j)] = v;
+        }
+    }
+    for g in 0..2 {
+        let f = run(&stacked.t[g * n..(g + 1) * n])?;
+        stacked.t[g * n..(g + 1) * n].copy_from_slice(&f);
+    }
+    Ok(())
+}
+
+/// Rows to keep away from velocity reversals: joint `j`'s row of sample `i`
+/// is dropped if `|θ̇_j| < v_min` at any sample within `guard` samples of
+/// `i` (circularly when `periodic`). Joint-major mask for a [`Stacked`].
+///
+/// Why: the paper's Coulomb term `Fc sign(θ̇)` (49) is the one part of the
+/// model that is wrong on any real drive near a reversal (stiction,
+/// pre-sliding, Stribeck; the simulator's `tanh(θ̇/w)`), and the measured
+/// `θ̇` is least reliable exactly there, so `sign(θ̇)` may even have the
+/// wrong sign. Friction acts per joint, so only that joint's equation is
+/// affected. `guard` should cover the zero-phase filter's impulse response
+/// ([`filter_reach`]) when the data were filtered, because filtering spreads
+/// the mismatch in time.
+pub fn reversal_mask(
+    theta_dot: &[Vec<f64>; 2],
+    v_min: f64,
+    guard: usize,
+    periodic: bool,
+) -> Result<Vec<bool>, IdentError> {
+    if !(v_min.is_finite() && v_min >= 0.0) {
+        return Err(IdentError::InvalidSetting {
+            name: "reversal velocity threshold",
+            value: v_min,
+            reason: "give a finite speed ≥ 0 in rad/s (0 keeps every row)",
+        });
+    }
+    let n = theta_dot[0].len();
+    if theta_dot[1].len() != n {
+        return Err(IdentError::DimensionMismatch {
+            what: "θ̇2 samples",
+            expected: n,
+            found: theta_dot[1].len(),
+            hint: "give both joints' rates for the same samples",
+        });
+    }
+    // Each slow sample excludes the window [i − guard, i + guard]; windows
+    // are marked in a difference array and resolved by one prefix sum, so
+    // the cost is O(n) whatever the guard (the filter's reach grows with the
+    // sampling rate: thousands of samples at 10 kHz).
+    let mut keep = vec![true; 2 * n];
+    let mut cover = vec![0i64; n + 1];
+    for j in 0..2 {
+        cover.iter_mut().for_each(|c| *c = 0);
+        let mut mark = |lo: usize, hi: usize| {
+            cover[lo] += 1;
+            cover[hi + 1] -= 1;
+        };
+        for (i, v) in theta_dot[j].iter().enumerate() {
+            if !v.is_finite() {
+                return Err(IdentError::InvalidSetting {
+                    name: "joint rate θ̇",
+                    value: *v,
+                    reason: "every joint rate must be finite",
+                });
+            }
+            if v.abs() >= v_min {
+                continue;
+            }
+            let lo = i as i64 - guard as i64;
+            let hi = i as i64 + guard as i64;
+            let last = n as i64 - 1;
+            if periodic && hi - lo >= last {
+                mark(0, n - 1);
+            } else if periodic && lo < 0 {
+                mark((lo + n as i64) as usize, n - 1);
+                mark(0, hi as usize);
+            } else if periodic && hi > last {
+                mark(lo as usize, n - 1);
+                mark(0, (hi - n as i64) as usize);
+            } else {
+                mark(lo.max(0) as usize, hi.min(last) as usize);
+            }
+        }
+        let mut run = 0;
+        for (k, c) in cover[..n].iter().enumerate() {
+            run += c;
+            keep[j * n + k] = run == 0;
+        }
+    }
+    Ok(keep)
+}
+
+/// Half-length (samples) of the zero-phase filter's impulse response down to
+/// `tol` of its peak, on a record of `n` samples (circular when
+/// `periodic`): how far filtering spreads a local model error.
+pub fn filter_reach(sos: &Sos, n: usize, periodic: bool, tol: f64) -> Result<usize, IdentError> {
+    let (impulse, centre) = impulse_response(sos, n, periodic)?;
+    let peak = impulse.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    let reach = impulse
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.abs() > tol * peak)
+        .map(|(i, _)| {
+            let d = i.abs_diff(centre);
+            if periodic { d.min(n - d) } else { d }
+        })
+        .max()
+        .unwrap_or(0);
+    Ok(reach)
+}
+
+/// Noise power gain `Σ h_k²` of the zero-phase filter (`h` its impulse
+/// response): white noise of variance `σ²` leaves the filter with variance
+/// `g σ²`, strongly correlated over about `1/g` samples.
+pub fn noise_gain(sos: &Sos, n: usize, periodic: bool) -> Result<f64, IdentError> {
+    Ok(impulse_response(sos, n, periodic)?
+        .0
+        .iter()
+        .map(|v| v * v)
+        .sum())
+}
+
+fn impulse_response(sos: &Sos, n: usize, periodic: bool) -> Result<(Vec<f64>, usize), IdentError> {
+    let centre = n / 2;
+    let mut x = vec![0.0; n];
+    if n == 0 {
+        return Ok((x, 0));
+    }
+    x[centre] = 1.0;
+    let h = if periodic {
+        sos.filtfilt_periodic(&x)
+    } else {
+        sos.filtfilt(&x)
+    }
+    .map_err(|e| dyn_err("impulse response of the filter", e))?;
+    Ok((h, centre))
+}
+
+/// The rows of `stacked` where `keep` is true (joint-major mask of length
+/// `2N`, e.g. from [`reversal_mask`]); the row groups shrink accordingly.
+/// Apply after [`filter`], which needs the complete, evenly sampled record.
+pub fn keep_rows(stacked: &Stacked, keep: &[bool]) -> Result<Stacked, IdentError> {
+    let m = stacked.w.nrows();
+    if keep.len() != m {
+        return Err(IdentError::DimensionMismatch {
+            what: "row mask",
+            expected: m,
+            found: keep.len(),
+            hint: "give one flag per stacked row (joint-major, 2N)",
+        });
+    }
+    let rows: Vec<usize> = (0..m).filter(|&i| keep[i]).collect();
+    let n = stacked.groups.counts()[0];
+    let n1 = rows.iter().filter(|&&i| i < n).count();
+    Ok(Stacked {
+        w: Mat::from_fn(rows.len(), stacked.w.ncols(), |i, j| {
+            stacked.w[(rows[i], j)]
+        }),
+        t: rows.iter().map(|&i| stacked.t[i]).collect(),
+        names: stacked.names.clone(),
+        groups: RowGroups::contiguous(&[n1, rows.len() - n1])?,
+    })
+}
+
+/// The physically consistent problem for `model` (which must contain the
+/// rigid links) with `reference` (e.g. the CAD parameters) as regulariser
+/// target and mass reference (bounds ±20 %), and `Fv, Fc ≥ 0`, `Ke ≥ 0` (70)
+/// for the effects the model has.
+pub fn consistent_problem(model: &Model, reference: &Params) -> Result<ConsistentLs, IdentError> {
+    let names = model.names();
+    let beta = reference
+        .standard_vector(model)
+        .map_err(|e| dyn_err("reference parameters", e))?;
+    let mut p = ConsistentLs::new(&names, beta.as_slice().to_vec())?;
+    if !model.effects().contains(&Effect::RigidLinks) {
+        return Err(dyn_err(
+            "consistent problem",
+            "the model has no rigid links, so there is nothing to keep physical",
+        ));
+    }
+    for (k, link) in reference.links.iter().enumerate() {
+        let l = format!("L{}", k + 1);
+        let f = |s: &str| format!("{l}.{s}");
+        let (ix, iy, iz, iyy, iyz, izz) =
+            (f("Ixx"), f("Ixy"), f("Ixz"), f("Iyy"), f("Iyz"), f("Izz"));
+        let (hx, hy, hz) = (f("hx"), f("hy"), f("hz"));
+        p.link_by_names(
+            &l,
+            [&ix, &iy, &iz, &iyy, &iyz, &izz],
+            [&hx, &hy, &hz],
+            link.mass,
+        )?;
+    }
+    let signed: Vec<&String> = names
+        .iter()
+        .filter(|n| ["Fv1", "Fc1", "Fv2", "Fc2", "Ke1", "Ke2"].contains(&n.as_str()))
+        .collect();
+    p.nonnegative(&signed)?;
+    Ok(p)
+}
+
+/// `reference` with the SDP's standard parameters and masses written in
+/// (the round trip into `aras-dyn`'s parameter type).
+pub fn params_from_solution(
+    reference: &Params,
+    model: &Model,
+    sol: &SdpSolution,
+) -> Result<Params, IdentError> {
+    let mut p = reference.clone();
+    p.set_standard_vector(model, &sol.standard)
+        .map_err(|e| dyn_err("writing the SDP result", e))?;
+    if sol.masses.len() != p.links.len() {
+        return Err(IdentError::DimensionMismatch {
+            what: "link masses of the SDP solution",
+            expected: p.links.len(),
+            found: sol.masses.len(),
+            hint: "solve the problem built by `consistent_problem`",
+        });
+    }
+    for (l, m) in p.links.iter_mut().zip(&sol.masses) {
+        l.mass = *m;
+    }
+    p.validate().map_err(|e| dyn_err("the SDP result", e))?;
+    Ok(p)
+}

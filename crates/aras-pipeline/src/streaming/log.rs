@@ -1,0 +1,815 @@
+//! End-to-end streaming identification from a CSV log in bounded memory.
+
+use std::path::Path;
+
+use aras_dyn::Model;
+use aras_kin::{AssemblyMode, Geometry};
+use aras_signal::{
+    Bandwidth, Butterworth, Columns, FilterSpec, Log, LogReader, LogReport, LogSummary,
+    PeriodSource, ProcessOptions, ReadOptions, Sidecar, Sos, process,
+};
+use nalgebra::Vector2;
+use serde::Serialize;
+
+use aras_ident::streaming::{Accumulation, GramCheck, QrAccumulator, RegressorStage, States};
+use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
+
+use crate::TaskRegressor;
+use crate::robot::{FilterMode, filter, filter_reach, noise_gain, reversal_mask, stack};
+
+/// Options of [`identify_log`]. `Default` gives the documented defaults.
+#[derive(Debug, Clone)]
+pub struct StreamingOptions {
+    /// How the log is read (sidecar, sensor constants, checks).
+    pub read: ReadOptions,
+    /// Signal processing, as for the in-memory `aras_signal::process`
+    /// (filter, period, settling, derivative method, logged derivatives).
+    pub process: ProcessOptions,
+    /// What the zero-phase filter is applied to after stacking (as
+    /// [`crate::robot::filter`]), with the Butterworth the processing
+    /// applied to θ; nothing is filtered when it applied none (a harmonic
+    /// series, logged derivatives, [`Bandwidth::Off`]).
+    pub filter_mode: FilterMode,
+    /// Kinematic geometry (default: ARAS-Diamond).
+    pub geometry: Geometry,
+    /// Samples per block read and processed at a time (default 65 536).
+    /// Memory grows with it, not with the log.
+    pub chunk_samples: usize,
+    /// Relative size below which a filter's edge transient counts as
+    /// decayed (default 1e-12): sets the overlap of filtered blocks.
+    pub overlap_tolerance: f64,
+    /// Normal equations (default, fast, checked) or incremental QR.
+    pub accumulation: Accumulation,
+    /// Reversal exclusion: joint `j`'s rows with `|θ̇_j|` below this speed
+    /// (rad/s) are left out, widened by the filter's reach, exactly as
+    /// [`crate::robot::reversal_mask`] in memory (default 0: every row is
+    /// kept; the CLI uses `identification.min_speed`, 0.2 rad/s).
+    pub min_speed: f64,
+    /// Where the filter's impulse response counts as ended for the
+    /// widening ([`crate::robot::filter_reach`]; default 1e-3).
+    pub reversal_reach: f64,
+}
+
+impl Default for StreamingOptions {
+    fn default() -> Self {
+        Self {
+            read: ReadOptions::default(),
+            process: ProcessOptions::default(),
+            filter_mode: FilterMode::Parallel,
+            geometry: Geometry::aras_diamond(),
+            chunk_samples: 65_536,
+            overlap_tolerance: 1e-12,
+            accumulation: Accumulation::Gram,
+            min_speed: 0.0,
+            reversal_reach: 1e-3,
+        }
+    }
+}
+
+impl StreamingResult {
+    /// Fitness (78) per joint of the base parameters `beta_b` on the fitted
+    /// rows, `100 (1 − ‖τ − W_b β_b‖ / ‖τ − mean τ‖)`, from the accumulated
+    /// factors and [`Self::torque_sums`] (no second pass over the log).
+    pub fn fitness(&self, beta_b: &[f64]) -> Result<[f64; 2], IdentError> {
+        let rss = self.accumulator.group_rss(beta_b)?;
+        let mut f = [0.0; 2];
+        for j in 0..2 {
+            let n = self.rows_fitted[j] as f64;
+            let [s1, s2] = self.torque_sums[j];
+            let den = (s2 - s1 * s1 / n).max(0.0).sqrt();
+            if !(n > 0.0 && den > 0.0) {
+                return Err(IdentError::ConstantSignal {
+                    group: j,
+                    len: self.rows_fitted[j],
+                });
+            }
+            f[j] = 100.0 * (1.0 - rss[j].max(0.0).sqrt() / den);
+        }
+        Ok(f)
+    }
+}
+
+/// Which bounded-memory route [`identify_log`] took.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum StreamingRoute {
+    /// Logged `dtheta`, `ddtheta` used and no filter: chunks go straight to
+    /// the [`RegressorStage`] (the fast path).
+    LoggedDerivatives,
+    /// A period was given: the period average is accumulated on the fly
+    /// (memory: one period), then processed as in memory.
+    PeriodAverage,
+    /// Non-periodic, filtered or differentiated: overlapping blocks, each
+    /// processed as in memory, interior samples kept.
+    OverlappingBlocks,
+}
+
+/// The result of [`identify_log`].
+#[derive(Debug, Clone)]
+pub struct StreamingResult {
+    /// The accumulated per-joint factors (for WLS: `accumulator.wls(...)`).
+    pub accumulator: QrAccumulator,
+    /// The unweighted reduced problem (input of OLS and of the SDP).
+    pub reduced: ReducedLs,
+    /// OLS on it (63)–(66), σ corrected for the filter
+    /// ([`OlsEstimate::with_filtered_noise`] with [`Self::noise_gain`]).
+    pub ols: OlsEstimate,
+    /// Noise power gain `Σ h²` of the zero-phase filter
+    /// ([`crate::robot::noise_gain`]; 1 unfiltered): divide variances of a
+    /// WLS from [`Self::accumulator`] by it as well.
+    pub noise_gain: f64,
+    /// The accuracy check of the normal equations (`None` with
+    /// [`Accumulation::Qr`]). If it did not pass, rerun with
+    /// [`Accumulation::Qr`].
+    pub gram_check: Option<GramCheck>,
+    /// The route taken.
+    pub route: StreamingRoute,
+    /// Rows read from the log.
+    pub samples_read: usize,
+    /// Samples that entered the least squares (before reversal exclusion).
+    pub samples_used: usize,
+    /// Rows fitted per joint (after reversal exclusion).
+    pub rows_fitted: [usize; 2],
+    /// `[Σ τ, Σ τ²]` per joint over the fitted rows (as they entered the
+    /// least squares, i.e. filtered): with [`QrAccumulator::group_rss`]
+    /// this gives the fitness (78) on the fitted rows
+    /// ([`StreamingResult::fitness`]).
+    pub torque_sums: [[f64; 2]; 2],
+    /// Blocks processed.
+    pub blocks: usize,
+    /// Overlap of the blocks (samples each side; 0 unless overlapping).
+    pub overlap: usize,
+    /// Whole periods averaged (period route).
+    pub periods: usize,
+    /// The reader's report (sampling, sources, saturation warnings).
+    pub log: LogReport,
+}
+
+fn sig(context: &str, e: impl std::fmt::Display) -> IdentError {
+    IdentError::Adapter {
+        context: context.to_owned(),
+        message: e.to_string(),
+    }
+}
+
+/// Identifies `model`'s base parameters (`base`) from the log at `path`
+/// without holding the log in memory: it is read in chunks of
+/// `options.chunk_samples` rows, and the least-squares problem is
+/// accumulated as an incremental QR ([`QrAccumulator`]).
+///
+/// The route depends on the log and the options ([`StreamingRoute`]):
+/// * **logged derivatives, no filter** (`process.use_logged_derivatives`,
+///   the log has `dtheta*` and `ddtheta*`, used as given): per
+///   sample `X, Ẋ, Ẍ` by `aras_kin::forward_motion`, then the
+///   [`RegressorStage`]; memory: one chunk.
+/// * **period averaging** (a period from the options or the sidecar): the
+///   sum of each channel over the period is accumulated while reading
+///   (memory: one period), then the averaged period is processed exactly as
+///   `aras_signal::process` would, stacked, filtered ([`filter`], periodic)
+///   and accumulated. The period-to-period spread check of the in-memory
+///   path is not made (it needs the average before the periods).
+/// * **overlapping blocks** (everything else): blocks of `chunk_samples`
+///   plus an overlap each side long enough for the filters' edge
+///   transients to decay below `overlap_tolerance` (the slowest pole's time
+///   constant `τ = fs/(2π f_c sin(π/2N))` samples (an automatic
+///   bandwidth takes its cut-off from the first block's angle spectrum,
+///   `aras_signal::spectrum_cutoff`, so every block uses the same filter), `τ ln(1/tol)` per
+///   filter, for the signal filter and the regressor filter in series) plus
+///   the derivative stencil; each block is processed, stacked and filtered
+///   as in memory and only its interior samples are accumulated. Block by
+///   block the result then matches the in-memory pipeline to about
+///   `overlap_tolerance` (tested).
+///
+/// Memory is `O(chunk_samples + overlap)` (or one period), independent of
+/// the log length. The reader's end-of-log checks run at the end: a log
+/// that fails them is an error even though it was consumed.
+pub fn identify_log(
+    path: &Path,
+    model: &Model,
+    base: &BaseParameters,
+    options: &StreamingOptions,
+) -> Result<StreamingResult, IdentError> {
+    identify_log_with_progress(path, model, base, options, &mut |_| {})
+}
+
+/// [`identify_log`], calling `progress(rows)` with the number of log rows
+/// read so far after each chunk (for a progress bar: an hour at 10 kHz
+/// takes minutes).
+pub fn identify_log_with_progress(
+    path: &Path,
+    model: &Model,
+    base: &BaseParameters,
+    options: &StreamingOptions,
+    progress: &mut dyn FnMut(u64),
+) -> Result<StreamingResult, IdentError> {
+    if options.chunk_samples < 1024 {
+        return Err(IdentError::InvalidSetting {
+            name: "chunk_samples",
+            value: options.chunk_samples as f64,
+            reason: "read at least 1024 samples per chunk (65 536 is a good size)",
+        });
+    }
+    if !(options.overlap_tolerance > 0.0 && options.overlap_tolerance < 1.0) {
+        return Err(IdentError::InvalidSetting {
+            name: "overlap_tolerance",
+            value: options.overlap_tolerance,
+            reason: "give a relative tolerance in (0, 1), e.g. 1e-12",
+        });
+    }
+    let name = path.display().to_string();
+    let mut reader = LogReader::open(path, &options.read).map_err(|e| sig("opening the log", e))?;
+    if !(options.min_speed.is_finite() && options.min_speed >= 0.0) {
+        return Err(IdentError::InvalidSetting {
+            name: "min_speed",
+            value: options.min_speed,
+            reason: "give a finite speed ≥ 0 in rad/s (0 keeps every row)",
+        });
+    }
+    if !(options.reversal_reach > 0.0 && options.reversal_reach < 1.0) {
+        return Err(IdentError::InvalidSetting {
+            name: "reversal_reach",
+            value: options.reversal_reach,
+            reason: "give a fraction of the impulse response's peak in (0, 1), e.g. 1e-3",
+        });
+    }
+    let mut stage = RegressorStage::with_accumulation(
+        TaskRegressor::new(model.clone(), options.geometry),
+        base,
+        options.accumulation,
+    )?;
+    let mut acc = QrAccumulator::new(stage.names(), 2)?;
+    let period = match options.process.period {
+        PeriodSource::FromSidecar => reader.sidecar().excitation.period_s,
+        PeriodSource::Seconds(p) => Some(p),
+        PeriodSource::Off => None,
+    };
+    let logged = options.process.use_logged_derivatives
+        && reader.has_velocity()
+        && reader.has_acceleration();
+    let mut chunk = Columns::default();
+    let mut first = true;
+    let mut dt = options.read.nominal_step.unwrap_or(0.0);
+    let mut rows_read = 0u64;
+    let mut read = |reader: &mut LogReader<std::fs::File>, chunk: &mut Columns, n: usize| {
+        let k = reader
+            .read_rows(chunk, n)
+            .map_err(|e| sig("reading the log", e))?;
+        rows_read += k as u64;
+        progress(rows_read);
+        Ok::<usize, IdentError>(k)
+    };
+    let mut out = Progress::default();
+    let route;
+    if period.is_none() && logged {
+        route = StreamingRoute::LoggedDerivatives;
+        let mut x = [vec![], vec![]];
+        let mut xd = [vec![], vec![]];
+        let mut xdd = [vec![], vec![]];
+        loop {
+            chunk.clear();
+            let n = read(&mut reader, &mut chunk, options.chunk_samples)?;
+            if n == 0 {
+                break;
+            }
+            for v in x.iter_mut().chain(&mut xd).chain(&mut xdd) {
+                v.resize(n, 0.0);
+            }
+            for i in 0..n {
+                let th = |a: &[Vec<f64>; 2]| Vector2::new(a[0][i], a[1][i]);
+                let [p, v, a] = aras_kin::forward_motion(
+                    &options.geometry,
+                    &th(&chunk.theta),
+                    &th(&chunk.theta_dot),
+                    &th(&chunk.theta_ddot),
+                    AssemblyMode::Plus,
+                )
+                .map_err(|e| {
+                    sig(
+                        &format!("{name}: forward kinematics of sample {}", out.read + i),
+                        e,
+                    )
+                })?;
+                for c in 0..2 {
+                    x[c][i] = p[c];
+                    xd[c][i] = v[c];
+                    xdd[c][i] = a[c];
+                }
+            }
+            let states = States {
+                x: [&x[0], &x[1]],
+                x_dot: [&xd[0], &xd[1]],
+                x_ddot: [&xdd[0], &xdd[1]],
+                tau: [&chunk.tau[0], &chunk.tau[1]],
+            };
+            let keep = reversal_mask(&chunk.theta_dot, options.min_speed, 0, false)?;
+            let (k1, k2) = keep.split_at(n);
+            for (j, k) in [k1, k2].into_iter().enumerate() {
+                for (&t, _) in chunk.tau[j].iter().zip(k).filter(|(_, k)| **k) {
+                    out.tau[j][0] += t;
+                    out.tau[j][1] += t * t;
+                }
+            }
+            stage.push_selected(&states, Some([k1, k2]))?;
+            out.read += n;
+            out.used += n;
+            out.blocks += 1;
+        }
+    } else if let Some(p) = period {
+        route = StreamingRoute::PeriodAverage;
+        let mut avg: Option<PeriodSums> = None;
+        loop {
+            chunk.clear();
+            let n = read(&mut reader, &mut chunk, options.chunk_samples)?;
+            if n == 0 {
+                break;
+            }
+            if first {
+                dt = nominal_step(&chunk, dt)?;
+                first = false;
+            }
+            let sums = match &mut avg {
+                Some(s) => s,
+                None => avg.insert(PeriodSums::new(p, dt, &options.process, logged)?),
+            };
+            sums.add(&chunk);
+            out.read += n;
+            out.blocks += 1;
+        }
+        let sums = avg.ok_or_else(|| sig(&name, "the log has no data rows"))?;
+        let (log, periods) = sums.finish(&name, out.read, reader.sidecar().clone())?;
+        out.periods = periods;
+        let mut popts = options.process.clone();
+        popts.period = PeriodSource::Seconds(p);
+        popts.settling_s = 0.0;
+        let used =
+            accumulate_processed(&log, &popts, options, model, base, &mut acc, None, &mut out)?;
+        out.used = used;
+    } else {
+        route = StreamingRoute::OverlappingBlocks;
+        let mut popts = options.process.clone();
+        popts.period = PeriodSource::Off;
+        let mut buf = Columns::default();
+        let mut buf_start = 0usize; // global index of buf's first sample
+        let mut done = 0usize; // samples before this are accumulated
+        let mut margin = 0usize;
+        let mut eof = false;
+        while !eof {
+            chunk.clear();
+            let want = if first {
+                options.chunk_samples
+            } else {
+                options.chunk_samples + 2 * margin
+            };
+            let n = read(&mut reader, &mut chunk, want.saturating_sub(buf.len()))?;
+            eof = n == 0 || buf.len() + n < want;
+            append(&mut buf, &chunk);
+            out.read += n;
+            if first {
+                if buf.is_empty() {
+                    return Err(sig(&name, "the log has no data rows"));
+                }
+                dt = nominal_step(&buf, dt)?;
+                if popts.filter == Bandwidth::Auto && !logged {
+                    // One cut-off for every block: the first block's spectrum.
+                    let c = aras_signal::spectrum_cutoff([&buf.theta[0], &buf.theta[1]], dt);
+                    popts.filter = Bandwidth::Fixed(FilterSpec {
+                        cutoff_hz: c.cutoff_hz,
+                        ..FilterSpec::default()
+                    });
+                }
+                margin = overlap(&popts, dt, options.overlap_tolerance)?
+                    + reach_of(&popts, dt, options.reversal_reach)?;
+                first = false;
+                if !eof {
+                    // Read the rest of the first block with its margin.
+                    chunk.clear();
+                    let want = options.chunk_samples + 2 * margin;
+                    let n = read(&mut reader, &mut chunk, want - buf.len())?;
+                    eof = buf.len() + n < want;
+                    append(&mut buf, &chunk);
+                    out.read += n;
+                }
+            }
+            let end = buf_start + buf.len();
+            let keep_end = if eof { end } else { end - margin };
+            if keep_end <= done && !eof {
+                continue;
+            }
+            let log = block_log(&name, &buf, dt, reader.sidecar().clone());
+            let used = accumulate_processed(
+                &log,
+                &popts,
+                options,
+                model,
+                base,
+                &mut acc,
+                Some((buf_start, done, keep_end)),
+                &mut out,
+            )?;
+            out.used += used;
+            out.blocks += 1;
+            done = keep_end;
+            // Keep `margin` samples before `done` for the next block.
+            let drop = (done.saturating_sub(margin)).saturating_sub(buf_start);
+            drain_front(&mut buf, drop);
+            buf_start += drop;
+        }
+        out.overlap = margin;
+    }
+    if route == StreamingRoute::LoggedDerivatives {
+        acc = stage.accumulator();
+    }
+    let report = reader.finish().map_err(|e| sig("checking the log", e))?;
+    let [n1, n2] = [acc.group_rows()[0], acc.group_rows()[1]];
+    let b = acc.names().len();
+    if n1 < b || n2 < b {
+        return Err(IdentError::Adapter {
+            context: format!("streaming identification of {name}"),
+            message: format!(
+                "only {n1} (joint 1) and {n2} (joint 2) samples are away from velocity \
+                 reversals (min_speed = {} rad/s, widened by the filter's reach at {}); \
+                 lower them or excite the joints more",
+                options.min_speed, options.reversal_reach
+            ),
+        });
+    }
+    let reduced = acc.reduced()?;
+    let ols = reduced
+        .ols()?
+        .with_filtered_noise(out.gain.unwrap_or(1.0))?;
+    Ok(StreamingResult {
+        gram_check: acc.gram_check(),
+        accumulator: acc,
+        reduced,
+        ols,
+        noise_gain: out.gain.unwrap_or(1.0),
+        rows_fitted: [n1, n2],
+        torque_sums: out.tau,
+        route,
+        samples_read: out.read,
+        samples_used: out.used,
+        blocks: out.blocks,
+        overlap: out.overlap,
+        periods: out.periods,
+        log: report,
+    })
+}
+
+#[derive(Default)]
+struct Progress {
+    read: usize,
+    used: usize,
+    blocks: usize,
+    overlap: usize,
+    periods: usize,
+    gain: Option<f64>,
+    tau: [[f64; 2]; 2],
+}
+
+/// The reader's nominal step: `ReadOptions::nominal_step` if given (> 0),
+/// else the median of the first 4096 steps, as the reader defines it.
+fn nominal_step(c: &Columns, given: f64) -> Result<f64, IdentError> {
+    if given > 0.0 {
+        return Ok(given);
+    }
+    let k = (c.len().saturating_sub(1)).min(aras_signal::NOMINAL_WINDOW);
+    if k == 0 {
+        return Err(sig(
+            "estimating the sample step",
+            "the log has fewer than 2 rows; record at least 16 samples",
+        ));
+    }
+    let mut steps: Vec<f64> = (0..k).map(|i| c.t[i + 1] - c.t[i]).collect();
+    steps.sort_by(f64::total_cmp);
+    Ok(if k % 2 == 1 {
+        steps[k / 2]
+    } else {
+        0.5 * (steps[k / 2 - 1] + steps[k / 2])
+    })
+}
+
+/// Samples of overlap each side of a block: the filters' transients (two
+/// zero-phase filters in series: the signal's and the regressor's) decay to
+/// `tol` and the derivative stencil (at most 64 samples) fits.
+fn overlap(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> {
+    const STENCIL: usize = 64;
+    let Bandwidth::Fixed(spec) = p.filter else {
+        return Ok(STENCIL);
+    };
+    let fs = 1.0 / dt;
+    let slowest = (std::f64::consts::PI / (2.0 * spec.order as f64)).sin();
+    let tau = fs / (std::f64::consts::TAU * spec.cutoff_hz * slowest);
+    if !(tau.is_finite() && tau > 0.0) {
+        return Err(IdentError::InvalidSetting {
+            name: "filter cut-off",
+            value: spec.cutoff_hz,
+            reason: "the cut-off must be positive and below the Nyquist frequency",
+        });
+    }
+    Ok(2 * (tau * (1.0 / tol).ln()).ceil() as usize + STENCIL)
+}
+
+fn append(buf: &mut Columns, c: &Columns) {
+    buf.t.extend_from_slice(&c.t);
+    for k in 0..2 {
+        buf.theta[k].extend_from_slice(&c.theta[k]);
+        buf.tau[k].extend_from_slice(&c.tau[k]);
+        buf.theta_dot[k].extend_from_slice(&c.theta_dot[k]);
+        buf.theta_ddot[k].extend_from_slice(&c.theta_ddot[k]);
+    }
+}
+
+fn drain_front(buf: &mut Columns, n: usize) {
+    let d = |v: &mut Vec<f64>| {
+        let n = n.min(v.len());
+        v.drain(..n);
+    };
+    d(&mut buf.t);
+    for k in 0..2 {
+        d(&mut buf.theta[k]);
+        d(&mut buf.tau[k]);
+        d(&mut buf.theta_dot[k]);
+        d(&mut buf.theta_ddot[k]);
+    }
+}
+
+fn range(v: &[f64]) -> [f64; 2] {
+    v.iter()
+        .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], &x| {
+            [lo.min(x), hi.max(x)]
+        })
+}
+
+/// A `Log` over a block of rows, so `aras_signal::process` can run on it.
+fn block_log(name: &str, c: &Columns, dt: f64, sidecar: Sidecar) -> Log {
+    let pair = |a: &[Vec<f64>; 2]| (!a[0].is_empty()).then(|| a.clone());
+    Log {
+        name: name.to_owned(),
+        t: c.t.clone(),
+        theta: c.theta.clone(),
+        tau: c.tau.clone(),
+        theta_dot: pair(&c.theta_dot),
+        theta_ddot: pair(&c.theta_ddot),
+        sidecar,
+        summary: LogSummary {
+            file: name.to_owned(),
+            rows: c.len(),
+            nominal_step_s: dt,
+            sample_rate_hz: 1.0 / dt,
+            duration_s: c.t.last().copied().unwrap_or(0.0) - c.t.first().copied().unwrap_or(0.0),
+            worst_step: None,
+            angle_source: String::new(),
+            torque_source: String::new(),
+            theta_range: [range(&c.theta[0]), range(&c.theta[1])],
+            tau_range: [range(&c.tau[0]), range(&c.tau[1])],
+            sidecar: None,
+        },
+        notes: Vec::new(),
+        warnings: Vec::new(),
+    }
+}
+
+/// Processes `log` as in memory (process → stack → filter → reversal
+/// exclusion → base columns) and pushes the kept rows of the samples with
+/// global indices in `done..keep_end` (`window = (first index of log, done,
+/// keep_end)`; all rows if `None`). Returns the samples in the window;
+/// sets `gain` (the filter's noise gain) on the first call.
+#[allow(clippy::too_many_arguments)]
+fn accumulate_processed(
+    log: &Log,
+    popts: &ProcessOptions,
+    options: &StreamingOptions,
+    model: &Model,
+    base: &BaseParameters,
+    acc: &mut QrAccumulator,
+    window: Option<(usize, usize, usize)>,
+    out: &mut Progress,
+) -> Result<usize, IdentError> {
+    let processed = process(log, popts, &options.geometry)
+        .map_err(|e| sig(&format!("processing {}", log.name), e))?;
+    let edge = (log.len() - processed.samples.len()) / 2;
+    let periodic = popts.period != PeriodSource::Off;
+    let n = processed.samples.len();
+    let mut st = stack(model, &options.geometry, &processed.samples)?;
+    let mut guard = 0;
+    if let Some(spec) = &processed.summary.filter {
+        let sos: Sos =
+            Butterworth::lowpass(spec.order, spec.cutoff_hz, 1.0 / log.summary.nominal_step_s)
+                .map_err(|e| sig("designing the regressor filter", e))?;
+        filter(&mut st, &sos, options.filter_mode, periodic)?;
+        guard = filter_reach(&sos, n, periodic, options.reversal_reach)?;
+        if out.gain.is_none() {
+            out.gain = Some(noise_gain(&sos, n, periodic)?);
+        }
+    }
+    let (i0, i1) = match window {
+        None => (0, n),
+        Some((start, done, keep_end)) => {
+            // Output sample i is global index start + edge + i.
+            let first = start + edge;
+            let i0 = done.saturating_sub(first).min(n);
+            let i1 = keep_end.saturating_sub(first).min(n);
+            (i0, i1.max(i0))
+        }
+    };
+    if i1 == i0 {
+        return Ok(0);
+    }
+    let keep = reversal_mask(
+        &processed.samples.theta_dot,
+        options.min_speed,
+        guard,
+        periodic,
+    )?;
+    let wb = base.base_regressor(st.w.as_ref())?;
+    for g in 0..2 {
+        let rows: Vec<usize> = (g * n + i0..g * n + i1).filter(|&i| keep[i]).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let w = faer::Mat::from_fn(rows.len(), wb.ncols(), |i, j| wb[(rows[i], j)]);
+        let t: Vec<f64> = rows.iter().map(|&i| st.t[i]).collect();
+        for v in &t {
+            out.tau[g][0] += v;
+            out.tau[g][1] += v * v;
+        }
+        match options.accumulation {
+            Accumulation::Qr => acc.push_rows(g, w.as_ref(), &t)?,
+            Accumulation::Gram => acc.push_rows_gram(g, w.as_ref(), &t)?,
+        }
+    }
+    Ok(i1 - i0)
+}
+
+/// Samples the reversal exclusion widens by ([`filter_reach`] of the
+/// filter at `dt`; 0 unfiltered): added to the overlap of blocks so that
+/// every kept sample's mask sees all the rates it depends on.
+fn reach_of(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> {
+    let Bandwidth::Fixed(spec) = p.filter else {
+        return Ok(0);
+    };
+    let sos = Butterworth::lowpass(spec.order, spec.cutoff_hz, 1.0 / dt)
+        .map_err(|e| sig("designing the regressor filter", e))?;
+    // A record long enough for the impulse response to end inside it.
+    let n = 2 * overlap(p, dt, 1e-12)? + 1;
+    filter_reach(&sos, n, false, tol)
+}
+
+/// Running per-period sums of θ, τ (and logged θ̇, θ̈) for period
+/// averaging in one pass (memory: one period).
+struct PeriodSums {
+    per: usize,
+    settling: usize,
+    exact: f64,
+    logged: bool,
+    seen: usize,
+    sums: Vec<Vec<f64>>,
+    cur: Vec<Vec<f64>>,
+    periods: usize,
+    t0: Vec<f64>,
+    dt: f64,
+    period_s: f64,
+}
+
+impl PeriodSums {
+    fn new(period_s: f64, dt: f64, p: &ProcessOptions, logged: bool) -> Result<Self, IdentError> {
+        let bad = |name, value: f64, reason| IdentError::InvalidSetting {
+            name,
+            value,
+            reason,
+        };
+        if !(period_s.is_finite() && period_s > 0.0) {
+            return Err(bad(
+                "period",
+                period_s,
+                "the period must be a positive number of seconds",
+            ));
+        }
+        if !(p.settling_s.is_finite() && p.settling_s >= 0.0) {
+            return Err(bad(
+                "settling_s",
+                p.settling_s,
+                "the settling time must be ≥ 0 s",
+            ));
+        }
+        let exact = period_s / dt;
+        let per = exact.round() as usize;
+        if per < 3 {
+            return Err(bad(
+                "period",
+                period_s,
+                "a period must span at least 3 samples",
+            ));
+        }
+        let channels = if logged { 8 } else { 4 };
+        Ok(Self {
+            per,
+            settling: (p.settling_s / dt).round() as usize,
+            exact,
+            logged,
+            seen: 0,
+            sums: vec![vec![0.0; per]; channels],
+            cur: vec![vec![0.0; per]; channels],
+            periods: 0,
+            t0: Vec::with_capacity(per),
+            dt,
+            period_s,
+        })
+    }
+
+    fn add(&mut self, c: &Columns) {
+        for i in 0..c.len() {
+            let g = self.seen + i;
+            if g < self.settling {
+                continue;
+            }
+            let k = (g - self.settling) % self.per;
+            if self.t0.len() < self.per {
+                self.t0.push(c.t[i]);
+            }
+            let mut vals = [
+                c.theta[0][i],
+                c.theta[1][i],
+                c.tau[0][i],
+                c.tau[1][i],
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+            ];
+            if self.logged {
+                vals[4] = c.theta_dot[0][i];
+                vals[5] = c.theta_dot[1][i];
+                vals[6] = c.theta_ddot[0][i];
+                vals[7] = c.theta_ddot[1][i];
+            }
+            for (s, v) in self.cur.iter_mut().zip(vals) {
+                s[k] = v;
+            }
+            if k + 1 == self.per {
+                // A whole period: add it (an incomplete last one never is).
+                for (s, c) in self.sums.iter_mut().zip(&self.cur) {
+                    for (a, b) in s.iter_mut().zip(c) {
+                        *a += b;
+                    }
+                }
+                self.periods += 1;
+            }
+        }
+        self.seen += c.len();
+    }
+
+    /// The averaged period as a one-period log (an incomplete last period
+    /// is dropped, as in memory).
+    fn finish(self, name: &str, rows: usize, sidecar: Sidecar) -> Result<(Log, usize), IdentError> {
+        let periods = self.periods;
+        if periods == 0 {
+            return Err(IdentError::Adapter {
+                context: format!("period averaging of {name}"),
+                message: format!(
+                    "{rows} rows hold no whole period of {} s ({} samples) after {} settling samples; \
+                     record at least one whole period",
+                    self.period_s, self.per, self.settling
+                ),
+            });
+        }
+        let drift = (self.exact - self.per as f64).abs() * periods as f64;
+        if drift > 0.5 {
+            return Err(IdentError::Adapter {
+                context: format!("period averaging of {name}"),
+                message: format!(
+                    "the period {} s is {:.4} samples at step {} s, not a whole number: it drifts \
+                     {drift:.2} samples over {periods} periods; give the exact period or resample",
+                    self.period_s, self.exact, self.dt
+                ),
+            });
+        }
+        let inv = 1.0 / periods as f64;
+        let mut ch: Vec<Vec<f64>> = self
+            .sums
+            .into_iter()
+            .map(|v| v.into_iter().map(|x| x * inv).collect())
+            .collect();
+        let pair = |a: Vec<f64>, b: Vec<f64>| [a, b];
+        let dd = if self.logged {
+            let a = ch.pop().unwrap_or_default();
+            let b = ch.pop().unwrap_or_default();
+            let c = ch.pop().unwrap_or_default();
+            let d = ch.pop().unwrap_or_default();
+            Some((pair(d, c), pair(b, a)))
+        } else {
+            None
+        };
+        let tau1 = ch.pop().unwrap_or_default();
+        let tau0 = ch.pop().unwrap_or_default();
+        let th1 = ch.pop().unwrap_or_default();
+        let th0 = ch.pop().unwrap_or_default();
+        let cols = Columns {
+            t: self.t0,
+            theta: [th0, th1],
+            tau: [tau0, tau1],
+            theta_dot: dd.as_ref().map_or([vec![], vec![]], |d| d.0.clone()),
+            theta_ddot: dd.map_or([vec![], vec![]], |d| d.1),
+        };
+        Ok((block_log(name, &cols, self.dt, sidecar), periods))
+    }
+}

@@ -1,0 +1,273 @@
+//! The adapter on the ARAS-Diamond model: base-parameter counts, OLS and SDP
+//! on the default robot, parallel filtering.
+#![allow(clippy::needless_range_loop)]
+
+mod common;
+
+use aras_dyn::{Effect, Model, Params};
+use aras_ident::validate::{fitness_per_group, predict};
+use aras_ident::{BaseParameters, ReducedLs, RowGroups};
+use aras_kin::Workspace;
+use aras_pipeline::robot::{FilterMode, consistent_problem, filter, params_from_solution, stack};
+use aras_signal::{Butterworth, Samples};
+use faer::Mat;
+use nalgebra::{Vector2, Vector3};
+use rand::RngExt;
+
+/// Stacked regressor of `n` random workspace states (uniform pose in the
+/// box (77), uniform rates within the limits, Gaussian accelerations).
+fn random_regressor(model: &Model, n: usize, seed: u64) -> Mat<f64> {
+    let p = Params::aras_diamond();
+    let g = p.geometry().unwrap();
+    let ws = Workspace::paper();
+    let mut r = common::rng(seed);
+    let (lo, hi, rate) = (ws.min(), ws.max(), ws.max_rate());
+    let mut x = Vec::new();
+    let mut xd = Vec::new();
+    let mut xdd = Vec::new();
+    for _ in 0..n {
+        x.push(Vector2::new(
+            r.random_range(lo[0]..hi[0]),
+            r.random_range(lo[1]..hi[1]),
+        ));
+        xd.push(Vector2::new(
+            r.random_range(-rate[0]..rate[0]),
+            r.random_range(-rate[1]..rate[1]),
+        ));
+        xdd.push(Vector2::new(
+            5.0 * common::normal(&mut r),
+            5.0 * common::normal(&mut r),
+        ));
+    }
+    let w = model.stacked_from_states(&g, &x, &xd, &xdd).unwrap();
+    faer::MatRef::from_column_major_slice(w.as_slice(), 2 * n, model.columns()).to_owned()
+}
+
+fn count(effects: Vec<Effect>, gravity: [f64; 3]) -> (usize, BaseParameters) {
+    let model = Model::new(effects, Vector3::from(gravity)).unwrap();
+    let w = random_regressor(&model, 500, 3);
+    let base = BaseParameters::from_regressor(w.as_ref(), &model.names(), 1e-8).unwrap();
+    (base.n_base(), base)
+}
+
+#[test]
+fn base_counts_match_the_independent_count() {
+    let full = vec![Effect::RigidLinks, Effect::Friction, Effect::Elasticity];
+    let links = vec![Effect::RigidLinks];
+    // Spec §4 NOTE: g ⊥ a: 17 link / 23 full; g along a: 13 / 19.
+    let (b, base) = count(full.clone(), [0.0, -9.81, 0.0]);
+    assert_eq!(b, 23, "{base}");
+    let m = base.rank_margin();
+    assert!(m.smallest_kept > 1e-6 && m.largest_dropped < 1e-10, "{m:?}");
+    assert_eq!(count(links.clone(), [0.0, -9.81, 0.0]).0, 17);
+    assert_eq!(count(full, [0.0, 0.0, -9.81]).0, 19);
+    assert_eq!(count(links, [0.0, 0.0, -9.81]).0, 13);
+}
+
+#[test]
+fn default_robot_ols_and_sdp_round_trip() {
+    let cad = Params::aras_diamond();
+    let model = cad.model().unwrap();
+    let names = model.names();
+    let w = random_regressor(&model, 2000, 5);
+    let base = BaseParameters::from_regressor(w.as_ref(), &names, 1e-8).unwrap();
+    let truth = cad.standard_vector(&model).unwrap();
+    let truth_b = base.to_base(truth.as_slice()).unwrap();
+    let t = predict(w.as_ref(), truth.as_slice()).unwrap();
+    let wb = base.base_regressor(w.as_ref()).unwrap();
+    let red = ReducedLs::new(wb.as_ref(), &t, &base.base_names()).unwrap();
+    let ols = red.ols().unwrap();
+    // Noise-free: OLS recovers the true base parameters (condition number of
+    // the random regressor ~1e3–1e4, rounding 1e-16: far inside 1e-6).
+    let scale = truth_b.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    for i in 0..base.n_base() {
+        assert!(
+            (ols.estimate[i] - truth_b[i]).abs() <= 1e-6 * scale,
+            "{}",
+            base.expression(i)
+        );
+    }
+    let groups = RowGroups::contiguous(&[2000, 2000]).unwrap();
+    let fit =
+        fitness_per_group(&t, &predict(wb.as_ref(), &ols.estimate).unwrap(), &groups).unwrap();
+    assert!(fit.iter().all(|f| *f > 99.9999), "{fit:?}");
+    // SDP towards a 10 % heavier CAD (physical, but wrong): the data pull
+    // the identifiable combinations back to the truth.
+    let mut heavy = cad.clone();
+    for l in heavy.links.iter_mut() {
+        l.ixx *= 1.1;
+        l.ixy *= 1.1;
+        l.ixz *= 1.1;
+        l.iyy *= 1.1;
+        l.iyz *= 1.1;
+        l.izz *= 1.1;
+        l.h *= 1.1;
+        l.mass *= 1.1;
+    }
+    let problem = consistent_problem(&model, &heavy).unwrap();
+    let sol = problem.solve(&base, &red).unwrap();
+    eprintln!("{base}\n{sol}");
+    assert!(
+        sol.status == "Solved" || sol.status == "AlmostSolved",
+        "{sol}"
+    );
+    for i in 0..base.n_base() {
+        // The truth is feasible, so the optimum is the truth up to the
+        // regulariser's pull (λ = 1e-6) and solver accuracy.
+        assert!(
+            (sol.base[i] - truth_b[i]).abs() <= 1e-4 * scale,
+            "{}: {} vs {}",
+            base.expression(i),
+            sol.base[i],
+            truth_b[i]
+        );
+    }
+    assert!(sol.links.iter().all(|l| l.min_eigenvalue >= 0.0), "{sol}");
+    let identified = params_from_solution(&heavy, &model, &sol).unwrap();
+    for k in 0..4 {
+        assert!(
+            identified
+                .pseudo_inertia(k + 1)
+                .unwrap()
+                .symmetric_eigenvalues()
+                .min()
+                >= 0.0
+        );
+    }
+    // The identified robot's mass matrix (80) is positive definite over the workspace.
+    let rep = common::task_mass_pd(&identified, 21, 2000);
+    assert!(rep.positive_definite(), "{rep:?}");
+}
+
+/// A smooth multi-sine trajectory inside the workspace, sampled at 200 Hz,
+/// with its exact derivatives and the model's noise-free torques.
+fn trajectory(model: &Model, beta: &[f64]) -> Samples {
+    let p = Params::aras_diamond();
+    let geo = p.geometry().unwrap();
+    let fs = 200.0;
+    let n = 4000;
+    let d = f64::to_radians;
+    // (amplitude rad, angular frequency rad/s, phase) per axis.
+    let comps = [
+        [(d(30.0), 0.9, 0.0), (d(10.0), 2.3, 1.0), (d(5.0), 4.1, 2.0)],
+        [(d(12.0), 1.3, 0.5), (d(5.0), 3.1, 0.2), (d(3.0), 5.3, 1.7)],
+    ];
+    let centre = [d(85.0), d(60.0)];
+    let mut s = Samples::default();
+    for i in 0..n {
+        let t = i as f64 / fs;
+        s.t.push(t);
+        for a in 0..2 {
+            let (mut x, mut xd, mut xdd) = (centre[a], 0.0, 0.0);
+            for &(amp, w, ph) in &comps[a] {
+                x += amp * (w * t + ph).sin();
+                xd += amp * w * (w * t + ph).cos();
+                xdd -= amp * w * w * (w * t + ph).sin();
+            }
+            s.x[a].push(x);
+            s.x_dot[a].push(xd);
+            s.x_ddot[a].push(xdd);
+            s.tau[a].push(0.0);
+        }
+    }
+    let _ = geo;
+    let st = stack(model, &p.geometry().unwrap(), &s).unwrap();
+    let tau = predict(st.w.as_ref(), beta).unwrap();
+    for a in 0..2 {
+        s.tau[a] = tau[a * n..(a + 1) * n].to_vec();
+    }
+    s
+}
+
+#[test]
+fn parallel_filtering_keeps_the_fit_torque_only_does_not() {
+    let cad = Params::aras_diamond();
+    let model = cad.model().unwrap();
+    let geo = cad.geometry().unwrap();
+    let beta = cad.standard_vector(&model).unwrap();
+    let w_rich = random_regressor(&model, 500, 9);
+    let base = BaseParameters::from_regressor(w_rich.as_ref(), &model.names(), 1e-8).unwrap();
+    let samples = trajectory(&model, beta.as_slice());
+    let sos = Butterworth::lowpass(4, 5.0, 200.0).unwrap();
+    let mut fits = Vec::new();
+    for mode in [FilterMode::Parallel, FilterMode::TorqueOnly] {
+        let mut st = stack(&model, &geo, &samples).unwrap();
+        filter(&mut st, &sos, mode, false).unwrap();
+        let wb = base.base_regressor(st.w.as_ref()).unwrap();
+        let ols = ReducedLs::new(wb.as_ref(), &st.t, &base.base_names())
+            .unwrap()
+            .ols()
+            .unwrap();
+        let f = fitness_per_group(
+            &st.t,
+            &predict(wb.as_ref(), &ols.estimate).unwrap(),
+            &st.groups,
+        )
+        .unwrap();
+        fits.push(f);
+    }
+    // Filtering is linear: with parallel filtering T_f = W_f β holds exactly,
+    // so the fit stays perfect; filtering only T smears the Coulomb jumps
+    // while sign(θ̇) stays sharp.
+    eprintln!("fitness parallel {:?}, torque-only {:?}", fits[0], fits[1]);
+    assert!(fits[0].iter().all(|f| *f > 99.99), "{fits:?}");
+    assert!(fits[1].iter().any(|f| *f < fits[0][0] - 0.1), "{fits:?}");
+}
+
+#[test]
+fn mass_tolerance_sets_every_links_bounds_and_rejects_bad_fractions() {
+    let p = Params::aras_diamond();
+    let model = p.model().unwrap();
+    let mut problem = consistent_problem(&model, &p).unwrap();
+    problem.mass_tolerance(0.05).unwrap();
+    for (l, link) in problem.links().iter().zip(&p.links) {
+        // Exact products of the reference mass: only rounding of (1 ± 0.05)·m.
+        assert!((l.mass_bounds.0 - 0.95 * link.mass).abs() <= 1e-15 * link.mass);
+        assert!((l.mass_bounds.1 - 1.05 * link.mass).abs() <= 1e-15 * link.mass);
+    }
+    for bad in [-0.1, 1.0, f64::NAN] {
+        let e = problem.mass_tolerance(bad).unwrap_err().to_string();
+        assert!(e.contains("mass tolerance"), "{e}");
+    }
+}
+
+/// The reversal mask's O(n) sweep equals the definition (drop joint j's row
+/// i if |θ̇_j| < v_min anywhere within `guard` samples, circularly when
+/// periodic), for any rates, guards from 0 to beyond the record, both modes.
+mod reversal_mask_sweep {
+    use aras_pipeline::robot::reversal_mask;
+    use proptest::prelude::*;
+
+    fn by_definition(td: &[Vec<f64>; 2], v_min: f64, guard: usize, periodic: bool) -> Vec<bool> {
+        let n = td[0].len();
+        let mut keep = vec![true; 2 * n];
+        for j in 0..2 {
+            for i in 0..n {
+                for (k, v) in td[j].iter().enumerate() {
+                    let d = i.abs_diff(k);
+                    let d = if periodic { d.min(n - d) } else { d };
+                    if d <= guard && v.abs() < v_min {
+                        keep[j * n + i] = false;
+                    }
+                }
+            }
+        }
+        keep
+    }
+
+    proptest! {
+        #[test]
+        fn equals_definition(
+            a in proptest::collection::vec(-1.0f64..1.0, 0..60),
+            b_seed in proptest::collection::vec(-1.0f64..1.0, 60),
+            guard in 0usize..70,
+            periodic: bool,
+            v_min in 0.0f64..0.6,
+        ) {
+            let b: Vec<f64> = b_seed[..a.len()].to_vec();
+            let td = [a, b];
+            let got = reversal_mask(&td, v_min, guard, periodic).unwrap();
+            prop_assert_eq!(got, by_definition(&td, v_min, guard, periodic));
+        }
+    }
+}
