@@ -273,7 +273,8 @@ pub(crate) fn harmonic_fit(
     let top = harmonics * kp;
     let w0 = std::f64::consts::TAU / (n as f64 * dt);
     let keep = |k: i64| -> bool {
-        k == 0 || (k.unsigned_abs() as usize % kp == 0 && k.unsigned_abs() as usize <= top)
+        k == 0
+            || ((k.unsigned_abs() as usize).is_multiple_of(kp) && k.unsigned_abs() as usize <= top)
     };
     f.synthesise(&spec, x, |k| {
         if keep(k) {
@@ -533,6 +534,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::needless_range_loop)]
     fn harmonic_fit_keeps_the_motion_and_drops_the_noise() {
         // 5 harmonics of 0.5 Hz in 2 s (one period, 2000 samples) plus
         // white noise: the fit keeps exactly 5 harmonics and its

@@ -330,6 +330,9 @@ impl Processed {
     }
 }
 
+/// One series per joint.
+type Pair = [Vec<f64>; 2];
+
 const CHANNELS: [&str; 4] = ["theta1", "theta2", "tau1", "tau2"];
 
 /// Largest relative deviation of a time step from the nominal one that is
@@ -576,7 +579,7 @@ pub fn process(
     let mut harmonics = None;
     let mut spectrum = None;
     let mut spec_used = None;
-    let mut derivs: Option<([Vec<f64>; 2], [Vec<f64>; 2], usize)> = None;
+    let mut derivs: Option<(Pair, Pair, usize)> = None;
     if logged {
         // Nothing is filtered; θ̈ from the logged θ̇ when it is not logged.
         let vel = [data[4].clone(), data[5].clone()];

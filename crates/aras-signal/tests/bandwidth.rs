@@ -9,6 +9,8 @@
 //! the exact sign + elasticity), an implementation independent of the
 //! processing under test.
 
+#![allow(clippy::needless_range_loop)]
+
 use aras_dyn::sim::{SimConfig, SimLog, simulate};
 use aras_dyn::{Dynamics, Params, Sign, Sinusoid};
 use aras_signal::{
