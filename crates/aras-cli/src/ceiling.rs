@@ -35,6 +35,7 @@ pub struct Ceiling {
 /// `prep` (see the module docs), on every row and on the stacked rows
 /// `keep` selects. `friction_smoothing` is the simulator's `tanh` width
 /// (rad/s).
+#[allow(clippy::needless_range_loop)]
 pub fn noise_ceiling(
     prep: &Prepared,
     truth: &Params,
