@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 /// ARAS-Diamond dynamics toolkit: excitation design, simulation,
-/// identification, validation and prediction (spec/ARAS-DIAMOND.md).
+/// identification, validation and prediction (docs/model.md).
 #[derive(Debug, Parser)]
 #[command(name = "aras", version, about, long_about = None)]
 pub struct Cli {
@@ -26,7 +26,7 @@ pub enum Command {
     Excite(ExciteArgs),
     /// Simulate the robot tracking a trajectory → LOG.csv + LOG.json.
     Simulate(SimulateArgs),
-    /// Identify the dynamic parameters from a log → params.json, base.json, report.
+    /// Identify the dynamic parameters from a log → params.json, robot.xml (MJCF), base.json, report.
     Identify(IdentifyArgs),
     /// Validate a parameter file: cross-validation on (79), workspace PD check.
     Validate(ValidateArgs),
@@ -38,6 +38,10 @@ pub enum Command {
     /// Write the robot of a parameter file as a MuJoCo model (MJCF):
     /// bodies, joints, the loop constraint, friction and actuators (docs/mjcf.md).
     ExportMjcf(ExportMjcfArgs),
+    /// Friction of one joint of any robot from its log: classical and
+    /// dynamic models, then the diagnosis of what they miss →
+    /// friction.json, report.html, pred_<log>.csv (docs/friction.md).
+    Friction(FrictionArgs),
 }
 
 /// `aras export-mjcf`.
@@ -52,6 +56,36 @@ pub struct ExportMjcfArgs {
     /// Shared options.
     #[command(flatten)]
     pub common: Common,
+}
+
+/// `aras friction`.
+#[derive(Debug, Args)]
+pub struct FrictionArgs {
+    /// The training log: CSV with a header and columns t (s), q (rad),
+    /// dq (rad/s, computed from q when absent), tau (N·m, the friction
+    /// torque), optional ddq (rad/s²); other columns are ignored.
+    #[arg(long, value_name = "TRAIN.csv")]
+    pub data: PathBuf,
+    /// A validation log, same format (repeat for several).
+    #[arg(long, value_name = "VAL.csv")]
+    pub validate: Vec<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "out-friction", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Your column names, e.g. `t=time,q=q2,dq=dq2,tau=tau_f` (roles: t, q,
+    /// dq, tau, ddq; roles not given keep their default names).
+    #[arg(long, value_name = "ROLE=NAME,…")]
+    pub columns: Option<String>,
+    /// Hold the Stribeck shape exponent δ of the Stribeck and LuGre models
+    /// at this value (2 is the classical LuGre shape) instead of fitting it.
+    #[arg(long, value_name = "DELTA", value_parser = positive, allow_hyphen_values = true)]
+    pub shape: Option<f64>,
+    /// Replace an existing output directory, only if aras wrote it.
+    #[arg(long)]
+    pub force: bool,
+    /// No progress display and no stage lines on stderr.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 /// `aras diagnose`.

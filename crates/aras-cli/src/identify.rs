@@ -9,7 +9,8 @@
 //! torques and every regressor column, so a Coulomb jump is smeared
 //! identically on both sides of `T = W β`), **reversal exclusion** (rows of
 //! a joint near its velocity reversals, where (49)'s `sign(θ̇)` is wrong,
-//! widened by the filter's reach) and the **filter-corrected σ**.
+//! widened by the filter's reach) and **σ from the HAC covariance**
+//! (`aras_ident::covariance`: correlated residuals, data-driven bandwidth).
 
 use anyhow::{Context, Result, bail};
 use aras_dyn::{Model, Params};
@@ -180,8 +181,8 @@ pub struct Identification {
     pub names: Vec<String>,
     /// Base parameters.
     pub base: BaseParameters,
-    /// OLS (or WLS) estimate of the base parameters, σ corrected for the
-    /// filter (`OlsEstimate::with_filtered_noise`).
+    /// OLS (or WLS) estimate of the base parameters, σ from the HAC
+    /// sandwich covariance (`OlsEstimate::with_hac`).
     pub ols: OlsEstimate,
     /// The SDP solution.
     pub sdp: SdpSolution,
@@ -265,7 +266,8 @@ pub fn consistent_fit(
 
 /// OLS and SDP on prepared data, with `nominal` as the SDP's reference:
 /// rows near velocity reversals are left out (`identification.min_speed`,
-/// widened by the filter's reach), σ is corrected for the filter.
+/// widened by the filter's reach), σ is the HAC sandwich's
+/// (`aras_ident::covariance`).
 pub fn identify(
     prepared: &Prepared,
     base: &BaseParameters,
@@ -289,10 +291,16 @@ pub fn identify(
         );
     }
     let w_fit = base.base_regressor(fit.w.as_ref())?;
+    // σ, σ% and the covariance: the HAC sandwich (`aras_ident::covariance`)
+    // on the rows as fitted (scaled by 1/σ_joint for WLS).
+    let periodic = prepared.periodic();
     let (ols, reduced) = match ic.weighting {
         Weighting::Ols => {
             let r = ReducedLs::new(w_fit.as_ref(), &fit.t, &bnames)?;
-            (r.ols()?, r)
+            let (e, _) = r
+                .ols()?
+                .with_hac(w_fit.as_ref(), &fit.t, &fit.groups, periodic)?;
+            (e, r)
         }
         Weighting::Wls => {
             let e = aras_ident::wls(
@@ -302,10 +310,22 @@ pub fn identify(
                 &fit.groups,
                 NoiseVariances::FromResiduals,
             )?;
-            (e.estimate, e.reduced)
+            let scale: Vec<f64> = fit
+                .groups
+                .labels()
+                .iter()
+                .map(|&g| 1.0 / e.variances[g].sqrt())
+                .collect();
+            let ww = faer::Mat::from_fn(w_fit.nrows(), w_fit.ncols(), |i, j| {
+                w_fit[(i, j)] * scale[i]
+            });
+            let tw: Vec<f64> = fit.t.iter().zip(&scale).map(|(t, s)| t * s).collect();
+            let (est, _) = e
+                .estimate
+                .with_hac(ww.as_ref(), &tw, &fit.groups, periodic)?;
+            (est, e.reduced)
         }
     };
-    let ols = ols.with_filtered_noise(prepared.noise_gain()?)?;
     let sdp = consistent_fit(&reduced, base, model, nominal, cfg)?;
     let reference: Vec<f64> = nominal
         .standard_vector(model)

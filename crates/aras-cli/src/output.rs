@@ -432,8 +432,8 @@ pub enum FileKind {
     /// `aras simulate`: a log whose sidecar (LOG.json) holds the simulator's
     /// ground truth (`truth`), which only the simulator writes.
     SimulatedLog,
-    /// `aras export-mjcf`: a MuJoCo model whose header comment names the
-    /// ARAS-Diamond robot (`<!--` then `ARAS-Diamond` before `<mujoco`).
+    /// `aras export-mjcf`: an MJCF file carrying the exporter's mark
+    /// ([`aras_dyn::mjcf::GENERATOR_MARK`]) in its opening comment.
     Mjcf,
 }
 
@@ -451,10 +451,12 @@ impl FileKind {
                 v.get("format").and_then(|f| f.as_str()) == Some("aras-log/1")
                     && v.get("truth").is_some()
             }),
-            Self::Mjcf => fs::read_to_string(path).is_ok_and(|x| {
-                x.find("<mujoco")
-                    .is_some_and(|m| x[..m].contains("<!--") && x[..m].contains("ARAS-Diamond"))
-            }),
+            Self::Mjcf => fs::read(path)
+                .map(|b| {
+                    let head = String::from_utf8_lossy(&b[..b.len().min(512)]).into_owned();
+                    head.contains(aras_dyn::mjcf::GENERATOR_MARK)
+                })
+                .unwrap_or(false),
         }
     }
 
@@ -465,7 +467,7 @@ impl FileKind {
             Self::SimulatedLog => {
                 "a log written by `aras simulate` (its sidecar LOG.json holds the simulator's truth)"
             }
-            Self::Mjcf => "a MuJoCo model written by `aras export-mjcf`",
+            Self::Mjcf => "an MJCF file written by `aras export-mjcf`",
         }
     }
 }

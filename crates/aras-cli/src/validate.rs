@@ -29,6 +29,9 @@ pub struct CrossValidation {
     /// The same on the rows away from velocity reversals
     /// (`identification.min_speed`, `validation.reversal_reach`).
     pub fitness_kept: Vec<[f64; 2]>,
+    /// Noise ceiling (78) per joint: the true robot's noise-free torques
+    /// against the same log (`crate::ceiling`).
+    pub ceiling: crate::ceiling::Ceiling,
     /// Time, measured and predicted torques of one averaged period, for plots.
     #[serde(skip)]
     pub traces: Traces,
@@ -99,10 +102,18 @@ pub fn cross_validate(
             fitness_kept.push(fitness_standard(&kept, beta)?);
             predicted.push(p);
         }
+        let ceiling = crate::ceiling::noise_ceiling(
+            &prep,
+            truth,
+            cfg.simulation.friction_smoothing,
+            cfg.identification.filtering,
+            &keep,
+        )?;
         out.push(CrossValidation {
             frequency_hz: f,
             fitness,
             fitness_kept,
+            ceiling,
             traces: Traces {
                 t: prep.processed.samples.t.clone(),
                 measured: prep.t().to_vec(),

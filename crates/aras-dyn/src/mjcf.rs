@@ -62,6 +62,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::{LinkParams, ParamError, Params};
 
+/// Words in the opening comment of every exported file: how a tool tells
+/// a file it wrote (and may replace) from someone else's MJCF.
+pub const GENERATOR_MARK: &str = "exported by `aras export-mjcf`";
+
 /// Settings of the exported model; the defaults live in [`Default`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -172,7 +176,7 @@ impl Inertial {
     /// (28)); `link` (1–4) names it in errors.
     pub fn from_link(link: usize, l: &LinkParams) -> Result<Self, MjcfError> {
         let bad = |reason: String| MjcfError::NotPhysical { link, reason };
-        if !(l.mass > 0.0) {
+        if l.mass.is_nan() || l.mass <= 0.0 {
             return Err(bad(format!("its mass {} kg is not positive", l.mass)));
         }
         let ig = l
@@ -182,14 +186,14 @@ impl Inertial {
         let eig = SymmetricEigen::new(ig).eigenvalues;
         let mut e = [eig[0], eig[1], eig[2]];
         e.sort_by(f64::total_cmp);
-        if !(e[0] > 0.0) {
+        if e.iter().any(|x| x.is_nan()) || e[0] <= 0.0 {
             return Err(bad(format!(
                 "its inertia about the centre of mass has the principal moments \
                  [{:.6e}, {:.6e}, {:.6e}] kg·m², not all positive",
                 e[0], e[1], e[2]
             )));
         }
-        if !(e[0] + e[1] > e[2]) {
+        if e[0] + e[1] <= e[2] {
             return Err(bad(format!(
                 "its principal moments about the centre of mass [{:.6e}, {:.6e}, {:.6e}] kg·m² \
                  break the triangle inequality ({:.6e} + {:.6e} < {:.6e})",
@@ -444,7 +448,7 @@ pub fn to_mjcf(params: &Params, opts: &MjcfOptions) -> Result<String, MjcfError>
     let _ = writeln!(
         w,
         "<!--\n  ARAS-Diamond spherical parallel robot (coaxial spherical five-bar), \
-         exported by `aras export-mjcf`.\n  Frames, joints and the parameter mapping: \
+         {GENERATOR_MARK}.\n  Frames, joints and the parameter mapping: \
          docs/mjcf.md. Units SI, angles in radians.\n  qpos = [theta1, hinge_c, theta2, \
          hinge_b]; motor1 drives theta1 (link 2), motor2 drives theta2 (link 1).\n  \
          Geometry: alpha = {} rad, beta = {} rad. The loop is closed by the connect \

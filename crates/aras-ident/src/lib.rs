@@ -12,6 +12,8 @@
 //!    normal equations), σ% per parameter, residual variance, condition
 //!    number; weighted LS with per-joint noise variances. Data that do not
 //!    excite some base parameters give [`IdentError::NotExcited`] naming them.
+//!    [`covariance`]: the uncertainty for correlated residuals (HAC sandwich
+//!    with a data-driven bandwidth), which σ, σ% and the tests should use.
 //! 3. `ConsistentLs` (67)–(73): the physically consistent estimate as one
 //!    convex SDP over the links' pseudo-inertias (default feature `sdp`).
 //! 4. [`validate`]: fitness (78), workspace positive definiteness of the mass
@@ -51,6 +53,7 @@
 #![allow(clippy::needless_range_loop)]
 
 mod base;
+pub mod covariance;
 mod dense;
 mod error;
 mod groups;
@@ -67,6 +70,7 @@ pub mod streaming;
 pub mod validate;
 
 pub use base::{BaseParameters, COEFFICIENT_CLEAN, DEFAULT_RANK_TOLERANCE, RankMargin};
+pub use covariance::{HacCovariance, hac_covariance};
 pub use dense::symmetric_eigenvalues;
 pub use error::IdentError;
 pub use groups::RowGroups;

@@ -24,7 +24,7 @@ use crate::identify::{consistent_fit, process_options, with_standard};
 use crate::output::OutDir;
 use crate::stages::Stages;
 use crate::summary::{
-    BASE_FORMAT, BaseEntry, BaseFile, Fitness, PseudoInertia, SdpReport, Summary,
+    BASE_FORMAT, BaseEntry, BaseFile, DataKind, Fitness, PseudoInertia, SdpReport, Summary,
 };
 use crate::validate::{parameter_errors, pd_check, pseudo_inertia_min};
 
@@ -106,7 +106,7 @@ fn estimated_rows(path: &Path) -> Option<u64> {
 }
 
 /// Everything after streaming: OLS/WLS, SDP, checks, and the output files
-/// (params.json, params_ols.json, base.json, summary.json, report.md).
+/// (params.json, robot.xml, params_ols.json, base.json, summary.json, report.md).
 #[allow(clippy::too_many_arguments)]
 pub fn fit_and_write(
     r: &StreamingResult,
@@ -145,7 +145,15 @@ pub fn fit_and_write(
         sdp: f_sdp,
         ols_kept: f_ols,
         sdp_kept: f_sdp,
-        paper: None,
+        data: if truth.is_some() {
+            DataKind::Simulated
+        } else {
+            DataKind::Measured
+        },
+        // Streaming keeps no samples to evaluate the truth on.
+        noise_ceiling: None,
+        noise_ceiling_kept: None,
+        paper_real_robot: None,
     }];
     let mut pd = BTreeMap::new();
     pd.insert("ols".to_string(), pd_check(&ols_params, cfg)?);
@@ -172,6 +180,7 @@ pub fn fit_and_write(
         None => None,
     };
     out.write("params.json", sdp_params.to_json_string() + "\n")?;
+    crate::cmd::export_mjcf::write_beside(out, &sdp_params)?;
     out.write("params_ols.json", ols_params.to_json_string() + "\n")?;
     out.write_json(
         "base.json",

@@ -90,6 +90,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
             cfg: &cfg,
             nominal: &nominal,
             truth: Some(&truth),
+            friction_smoothing: cfg.simulation.friction_smoothing,
             cross_validate: true,
             log: &log,
             period: None,
@@ -108,7 +109,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
     let dir = out.commit()?;
     println!("{}", fit::terminal_table(&summary));
     println!(
-        "outputs in {} (report.html, report.md, summary.json, params.json, base.json)",
+        "outputs in {} (report.html, report.md, summary.json, params.json, robot.xml, base.json)",
         dir.display()
     );
     Ok(())
