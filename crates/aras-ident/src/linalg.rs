@@ -109,6 +109,7 @@ mod tests {
     fn only_this_module_calls_faer_kernels() {
         let sources = [
             ("base.rs", include_str!("base.rs")),
+            ("covariance.rs", include_str!("covariance.rs")),
             ("dense.rs", include_str!("dense.rs")),
             ("groups.rs", include_str!("groups.rs")),
             ("ls.rs", include_str!("ls.rs")),
