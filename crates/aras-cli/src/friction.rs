@@ -6,10 +6,6 @@
 //! predictions.
 
 use anyhow::{Context, Result, bail};
-use aras_ident::selection::{
-    Accumulator, CandidateEvaluation, CandidateSpec, Layout, SelectionOptions, SelectionStatus,
-    select,
-};
 use aras_friction::{
     CoulombViscous, Dahl, FrictionModel, JointLog, LuGre, Motion, Separable, Stribeck,
     effects::{Effect, EffectValue, LibrarySettings, Profile, library, residual_profiles},
@@ -17,6 +13,10 @@ use aras_friction::{
         Estimate, FitSettings, FitStatus, Fitted, Metrics, Problem, estimates_with_extra,
         fit_coulomb_viscous, fit_dahl, fit_lugre, fit_stribeck, lugre_starts, metrics,
     },
+};
+use aras_ident::selection::{
+    Accumulator, CandidateEvaluation, CandidateSpec, Layout, SelectionOptions, SelectionStatus,
+    select,
 };
 use serde::{Deserialize, Serialize};
 
@@ -309,7 +309,10 @@ pub fn report_diagnosis(run: &FrictionRun, r: &mut crate::report::Report) {
     let row = |name: String, rms: &[f64], fit: &[f64]| {
         let mut row = vec![name, format!("{:.5}", rms[0])];
         for (k, f) in fit.iter().enumerate() {
-            row.push(format!("{:.5}", rms.get(k + 1).copied().unwrap_or(f64::NAN)));
+            row.push(format!(
+                "{:.5}",
+                rms.get(k + 1).copied().unwrap_or(f64::NAN)
+            ));
             row.push(format!("{f:.2}"));
         }
         row
@@ -415,7 +418,10 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     train: &JointLog,
     vals: &[JointLog],
     settings: &FrictionSettings,
-) -> Result<(DiagnosisResult, Option<(ModelResult, AnyModel, Vec<(Effect, Vec<f64>)>)>)> {
+) -> Result<(
+    DiagnosisResult,
+    Option<(ModelResult, AnyModel, Vec<(Effect, Vec<f64>)>)>,
+)> {
     let effects = library(train, &settings.library);
     let logs: Vec<&JointLog> = std::iter::once(train).chain(vals).collect();
     let motions: Vec<Motion> = logs
@@ -430,7 +436,12 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     let cand_cols: Vec<Vec<Vec<Vec<f64>>>> = logs
         .iter()
         .zip(&preds)
-        .map(|(l, p)| effects.iter().map(|e| e.columns(l, p)).collect::<Result<Vec<_>, _>>())
+        .map(|(l, p)| {
+            effects
+                .iter()
+                .map(|e| e.columns(l, p))
+                .collect::<Result<Vec<_>, _>>()
+        })
         .collect::<Result<_, _>>()?;
     let specs: Vec<CandidateSpec> = effects
         .iter()
@@ -443,7 +454,12 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
         .enumerate()
         .map(|(k, l)| accumulate(&layout, &bases[k], &cand_cols[k], &l.tau))
         .collect::<Result<_>>()?;
-    let resid: Vec<f64> = train.tau.iter().zip(&preds[0]).map(|(a, b)| a - b).collect();
+    let resid: Vec<f64> = train
+        .tau
+        .iter()
+        .zip(&preds[0])
+        .map(|(a, b)| a - b)
+        .collect();
     let tau_int = aras_ident::stats::integrated_time(&resid, 1000).max(1.0);
     let opts = SelectionOptions {
         alpha: settings.alpha,
@@ -469,15 +485,16 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
             })
             .collect()
     };
-    let coefs_of = |fit: &aras_ident::selection::ModelFit, k: usize| -> (Vec<f64>, Vec<Option<f64>>) {
-        layout
-            .candidate_columns(k)
-            .map(|c| match fit.columns.iter().position(|&x| x == c) {
-                Some(i) => (fit.estimate[i], Some(fit.std_dev[i]).filter(|s| *s > 0.0)),
-                None => (0.0, None),
-            })
-            .unzip()
-    };
+    let coefs_of =
+        |fit: &aras_ident::selection::ModelFit, k: usize| -> (Vec<f64>, Vec<Option<f64>>) {
+            layout
+                .candidate_columns(k)
+                .map(|c| match fit.columns.iter().position(|&x| x == c) {
+                    Some(i) => (fit.estimate[i], Some(fit.std_dev[i]).filter(|s| *s > 0.0)),
+                    None => (0.0, None),
+                })
+                .unzip()
+        };
     let mean_fit = |fit: &aras_ident::selection::ModelFit| -> Vec<f64> {
         fit.fitness.iter().map(|f| f[0]).collect()
     };
@@ -531,10 +548,19 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
         };
         lugre_starts(&motions[0], &st, &settings.fit).0
     } else {
-        M::structure_info().iter().map(|i| (i.lower, i.upper)).collect()
+        M::structure_info()
+            .iter()
+            .map(|i| (i.lower, i.upper))
+            .collect()
     };
     let prob = Problem::<M>::new(motions[0], &train.tau, &extra, &bounds)?;
-    let fit = prob.solve(&[theta0], &FitSettings { starts: 1, ..settings.fit.clone() })?;
+    let fit = prob.solve(
+        &[theta0],
+        &FitSettings {
+            starts: 1,
+            ..settings.fit.clone()
+        },
+    )?;
     let nc = M::coefficient_info().len();
     let refined = M::from_parts(&fit.theta, &fit.beta[..nc]);
     let extra_beta = fit.beta[nc..].to_vec();
