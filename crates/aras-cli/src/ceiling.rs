@@ -75,10 +75,10 @@ pub fn noise_ceiling(
         }
     }
     let mut kept = [0.0; 2];
-    for j in 0..2 {
+    for (j, k) in kept.iter_mut().enumerate() {
         let rows = (j * n..(j + 1) * n).filter(|&i| keep.get(i).copied().unwrap_or(false));
         let (m, p): (Vec<f64>, Vec<f64>) = rows.map(|i| (prep.t()[i], tau[i])).unzip();
-        kept[j] = aras_ident::validate::fitness(&m, &p)
+        *k = aras_ident::validate::fitness(&m, &p)
             .with_context(|| format!("the noise ceiling of joint {} on the kept rows", j + 1))?;
     }
     Ok(Ceiling { all, kept })

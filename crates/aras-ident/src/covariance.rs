@@ -19,9 +19,9 @@
 //! **Bandwidth.** `L_g` follows the residual's own correlation: its
 //! integrated autocorrelation time `τ_g = 1 + 2 Σ_{k=1}^{M} ρ_k` with
 //! Sokal's self-consistent window (the smallest `M ≥ 6 τ_g(M)`), and
-//! `L_g = ⌈4 τ_g⌉`, capped at a quarter of the group's rows. The Bartlett
+//! `L_g = ⌈10 τ_g⌉`, capped at a quarter of the group's rows. The Bartlett
 //! estimate's relative bias is about `−Σ|l|γ_l / ((L+1) Σγ_l)`, a few
-//! percent for `L = 4τ`; longer windows trade that bias for variance
+//! percent for `L = 10τ`; longer windows trade that bias for variance
 //! (about `2L/(3n)` relative).
 //!
 //! Periodic data (one averaged period) wrap around: lags are taken
@@ -35,7 +35,7 @@ use crate::groups::RowGroups;
 use crate::ls::OlsEstimate;
 
 /// Number of integrated autocorrelation times the bandwidth spans.
-pub const BANDWIDTH_TAUS: f64 = 4.0;
+pub const BANDWIDTH_TAUS: f64 = 10.0;
 
 /// Sokal's window factor: the autocorrelation sum stops at the smallest
 /// `M ≥ SOKAL_WINDOW · τ(M)`.
