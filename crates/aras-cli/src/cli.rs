@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 /// ARAS-Diamond dynamics toolkit: excitation design, simulation,
-/// identification, validation and prediction (spec/ARAS-DIAMOND.md).
+/// identification, validation and prediction (docs/model.md).
 #[derive(Debug, Parser)]
 #[command(name = "aras", version, about, long_about = None)]
 pub struct Cli {
@@ -26,7 +26,7 @@ pub enum Command {
     Excite(ExciteArgs),
     /// Simulate the robot tracking a trajectory → LOG.csv + LOG.json.
     Simulate(SimulateArgs),
-    /// Identify the dynamic parameters from a log → params.json, base.json, report.
+    /// Identify the dynamic parameters from a log → params.json, robot.xml (MJCF), base.json, report.
     Identify(IdentifyArgs),
     /// Validate a parameter file: cross-validation on (79), workspace PD check.
     Validate(ValidateArgs),
@@ -35,10 +35,27 @@ pub enum Command {
     /// Find where model and measurement disagree, name the missing effect,
     /// add it and show the gap shrink → diagnosis.{md,html,json} (issue 8).
     Diagnose(DiagnoseArgs),
+    /// Write the robot of a parameter file as a MuJoCo model (MJCF):
+    /// bodies, joints, the loop constraint, friction and actuators (docs/mjcf.md).
+    ExportMjcf(ExportMjcfArgs),
     /// Friction of one joint of any robot from its log: classical and
     /// dynamic models, then the diagnosis of what they miss →
     /// friction.json, report.html, pred_<log>.csv (docs/friction.md).
     Friction(FrictionArgs),
+}
+
+/// `aras export-mjcf`.
+#[derive(Debug, Args)]
+pub struct ExportMjcfArgs {
+    /// Parameter file (e.g. params.json from identify: physically consistent).
+    #[arg(long, value_name = "P.json")]
+    pub params: PathBuf,
+    /// Output MJCF file.
+    #[arg(long, default_value = "robot.xml", value_name = "robot.xml")]
+    pub out: PathBuf,
+    /// Shared options.
+    #[command(flatten)]
+    pub common: Common,
 }
 
 /// `aras friction`.
@@ -245,7 +262,7 @@ pub struct PredictArgs {
     /// Output CSV with columns t,tau1,tau2.
     #[arg(long, value_name = "PRED.csv")]
     pub out: PathBuf,
-    /// Average periods of this length (s) first (default: none, the whole log is predicted).
+    /// Period (s) of the motion for the harmonic fit (default: the sidecar's, else detected from the angles; every row of the log is predicted either way).
     #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub period: Option<f64>,
     /// Sidecar file (default: LOG.json next to the log, if present).

@@ -4,26 +4,28 @@
 //! The mathematics lives in `aras-signal` (processing), `aras-dyn`
 //! (regressor) and `aras-ident` (base parameters, least squares, SDP); this
 //! module wires them with the configured settings, the way
-//! `crates/aras-ident/tests/acceptance.rs` does (`docs/validation.md`):
+//! `crates/aras-pipeline/tests/acceptance.rs` does (`docs/validation.md`):
 //! **parallel filtering** (spec §6 NOTE: the same zero-phase low-pass on the
 //! torques and every regressor column, so a Coulomb jump is smeared
 //! identically on both sides of `T = W β`), **reversal exclusion** (rows of
 //! a joint near its velocity reversals, where (49)'s `sign(θ̇)` is wrong,
-//! widened by the filter's reach) and the **filter-corrected σ**.
+//! widened by the filter's reach) and **σ from the HAC covariance**
+//! (`aras_ident::covariance`: correlated residuals, data-driven bandwidth).
 
 use anyhow::{Context, Result, bail};
 use aras_dyn::{Model, Params};
-use aras_ident::robot::{
-    self, FilterMode, Stacked, consistent_problem, filter, filter_reach, keep_rows, noise_gain,
-    params_from_solution, reversal_mask, stack,
-};
 use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{
     BaseParameters, NoiseVariances, OlsEstimate, ReducedLs, SdpSettings, SdpSolution,
 };
 use aras_kin::{Geometry, Workspace};
+use aras_pipeline::robot::{
+    self, FilterMode, Stacked, consistent_problem, filter, filter_reach, keep_rows, noise_gain,
+    params_from_solution, reversal_mask, stack,
+};
 use aras_signal::{
-    Butterworth, DerivativeMethod, FilterSpec, Log, PeriodSource, ProcessOptions, Processed, Sos,
+    Bandwidth, Butterworth, DerivativeMethod, FilterSpec, Log, OutputRows, PeriodSource,
+    ProcessOptions, Processed, Sos,
 };
 use faer::MatRef;
 use nalgebra::Vector2;
@@ -38,10 +40,14 @@ pub fn process_options(
 ) -> ProcessOptions {
     let s = &cfg.signal;
     ProcessOptions {
-        filter: (s.cutoff_hz > 0.0).then_some(FilterSpec {
-            order: s.filter_order,
-            cutoff_hz: s.cutoff_hz,
-        }),
+        filter: match s.cutoff_hz {
+            None => Bandwidth::Auto,
+            Some(c) if c > 0.0 => Bandwidth::Fixed(FilterSpec {
+                order: s.filter_order,
+                cutoff_hz: c,
+            }),
+            Some(_) => Bandwidth::Off,
+        },
         period: period.map_or(PeriodSource::FromSidecar, PeriodSource::Seconds),
         settling_s: s.settling_s,
         max_period_spread: s.max_period_spread,
@@ -55,12 +61,13 @@ pub fn process_options(
             },
         },
         use_logged_derivatives: logged_derivatives,
+        rows: OutputRows::Averaged,
     }
 }
 
 /// Data ready for least squares: the processed samples and the stacked
 /// regressor (`2N × n`, joint 1's rows first) with its torques, filtered as
-/// the filtering mode says (`aras_ident::robot::filter`).
+/// the filtering mode says (`aras_pipeline::robot::filter`).
 pub struct Prepared {
     /// What `aras-signal` produced.
     pub processed: Processed,
@@ -68,6 +75,9 @@ pub struct Prepared {
     pub stacked: Stacked,
     /// The zero-phase filter applied, if any.
     pub filter: Option<Sos>,
+    /// The regressor before that filter (kept only when one was applied):
+    /// predictions compared with the raw torques use it.
+    pub unfiltered: Option<Stacked>,
 }
 
 impl Prepared {
@@ -118,7 +128,7 @@ impl Prepared {
 }
 
 /// Processes a log and stacks the model's regressor on it
-/// (`aras_ident::robot::{stack, filter}`).
+/// (`aras_pipeline::robot::{stack, filter}`).
 pub fn prepare(
     log: &Log,
     opts: &ProcessOptions,
@@ -139,7 +149,10 @@ pub fn prepare(
     }
     let mut stacked = stack(model, geometry, &processed.samples)
         .with_context(|| format!("regressor of {}", log.name))?;
-    let filter = match opts.filter {
+    let unfiltered = processed.summary.filter.is_some().then(|| stacked.clone());
+    // The Butterworth the processing applied to θ, if any, on the torques
+    // and every regressor column alike (none after a harmonic series).
+    let filter = match &processed.summary.filter {
         Some(spec) => {
             let sos =
                 Butterworth::lowpass(spec.order, spec.cutoff_hz, processed.summary.sample_rate_hz)?;
@@ -157,10 +170,11 @@ pub fn prepare(
         processed,
         stacked,
         filter,
+        unfiltered,
     })
 }
 
-/// Base parameters (58)–(61) of `model` (`aras_ident::robot::base_parameters`)
+/// Base parameters (58)–(61) of `model` (`aras_pipeline::robot::base_parameters`)
 /// on `identification.base_samples` quasi-random states filling the
 /// workspace box and rate limits of `[trajectory]`.
 pub fn base_parameters(model: &Model, geometry: &Geometry, cfg: &Config) -> Result<BaseParameters> {
@@ -180,8 +194,8 @@ pub struct Identification {
     pub names: Vec<String>,
     /// Base parameters.
     pub base: BaseParameters,
-    /// OLS (or WLS) estimate of the base parameters, σ corrected for the
-    /// filter (`OlsEstimate::with_filtered_noise`).
+    /// OLS (or WLS) estimate of the base parameters, σ from the HAC
+    /// sandwich covariance (`OlsEstimate::with_hac`).
     pub ols: OlsEstimate,
     /// The SDP solution.
     pub sdp: SdpSolution,
@@ -193,11 +207,13 @@ pub struct Identification {
     pub predicted_ols: Vec<f64>,
     /// SDP predictions.
     pub predicted_sdp: Vec<f64>,
-    /// Fitness (78) per joint, OLS, on every row.
+    /// Fitness (78) per joint, OLS, against the log's raw torques on every
+    /// row (the paper's figure).
     pub fitness_ols: [f64; 2],
-    /// Fitness (78) per joint, SDP, on every row.
+    /// Fitness (78) per joint, SDP, against the log's raw torques on every row.
     pub fitness_sdp: [f64; 2],
-    /// Fitness (78) per joint, OLS, on the fitted rows (away from reversals).
+    /// Fitness (78) per joint, OLS, on the fitted rows (away from
+    /// reversals, averaged and filtered as fitted).
     pub fitness_ols_kept: [f64; 2],
     /// Fitness (78) per joint, SDP, on the fitted rows.
     pub fitness_sdp_kept: [f64; 2],
@@ -209,6 +225,31 @@ pub fn fitness_per_joint(measured: &[f64], predicted: &[f64]) -> Result<[f64; 2]
     Ok([
         aras_ident::validate::fitness(&measured[..n], &predicted[..n])?,
         aras_ident::validate::fitness(&measured[n..], &predicted[n..])?,
+    ])
+}
+
+/// Fitness (78) per joint of the base parameters `beta_b` against the log's
+/// raw torques on every row (78): the prediction from the unfiltered
+/// regressor, repeated on every period of an averaged log.
+pub fn fitness_on_log_rows(
+    prepared: &Prepared,
+    base: &BaseParameters,
+    beta_b: &[f64],
+) -> Result<[f64; 2]> {
+    let st = prepared.unfiltered.as_ref().unwrap_or(&prepared.stacked);
+    let w_b = base.base_regressor(st.w.as_ref())?;
+    let p = predict(w_b.as_ref(), beta_b)?;
+    raw_fitness(&prepared.processed, &p)
+}
+
+/// Fitness (78) per joint of a stacked per-sample prediction against the
+/// log's raw torques on every row that has a sample.
+pub fn raw_fitness(processed: &Processed, predicted: &[f64]) -> Result<[f64; 2]> {
+    let n = processed.samples.len();
+    let [a, b] = processed.on_log_rows([&predicted[..n], &predicted[n..]]);
+    Ok([
+        aras_ident::validate::fitness(&a.0, &a.1)?,
+        aras_ident::validate::fitness(&b.0, &b.1)?,
     ])
 }
 
@@ -265,7 +306,8 @@ pub fn consistent_fit(
 
 /// OLS and SDP on prepared data, with `nominal` as the SDP's reference:
 /// rows near velocity reversals are left out (`identification.min_speed`,
-/// widened by the filter's reach), σ is corrected for the filter.
+/// widened by the filter's reach), σ is the HAC sandwich's
+/// (`aras_ident::covariance`).
 pub fn identify(
     prepared: &Prepared,
     base: &BaseParameters,
@@ -289,10 +331,16 @@ pub fn identify(
         );
     }
     let w_fit = base.base_regressor(fit.w.as_ref())?;
+    // σ, σ% and the covariance: the HAC sandwich (`aras_ident::covariance`)
+    // on the rows as fitted (scaled by 1/σ_joint for WLS).
+    let periodic = prepared.periodic();
     let (ols, reduced) = match ic.weighting {
         Weighting::Ols => {
             let r = ReducedLs::new(w_fit.as_ref(), &fit.t, &bnames)?;
-            (r.ols()?, r)
+            let (e, _) = r
+                .ols()?
+                .with_hac(w_fit.as_ref(), &fit.t, &fit.groups, periodic)?;
+            (e, r)
         }
         Weighting::Wls => {
             let e = aras_ident::wls(
@@ -302,10 +350,22 @@ pub fn identify(
                 &fit.groups,
                 NoiseVariances::FromResiduals,
             )?;
-            (e.estimate, e.reduced)
+            let scale: Vec<f64> = fit
+                .groups
+                .labels()
+                .iter()
+                .map(|&g| 1.0 / e.variances[g].sqrt())
+                .collect();
+            let ww = faer::Mat::from_fn(w_fit.nrows(), w_fit.ncols(), |i, j| {
+                w_fit[(i, j)] * scale[i]
+            });
+            let tw: Vec<f64> = fit.t.iter().zip(&scale).map(|(t, s)| t * s).collect();
+            let (est, _) = e
+                .estimate
+                .with_hac(ww.as_ref(), &tw, &fit.groups, periodic)?;
+            (est, e.reduced)
         }
     };
-    let ols = ols.with_filtered_noise(prepared.noise_gain()?)?;
     let sdp = consistent_fit(&reduced, base, model, nominal, cfg)?;
     let reference: Vec<f64> = nominal
         .standard_vector(model)
@@ -320,8 +380,8 @@ pub fn identify(
     let w_b = base.base_regressor(prepared.w_ref())?;
     let predicted_ols = predict(w_b.as_ref(), &ols.estimate)?;
     let predicted_sdp = predict(w_b.as_ref(), &sdp.base)?;
-    let fitness_ols = fitness_per_joint(prepared.t(), &predicted_ols)?;
-    let fitness_sdp = fitness_per_joint(prepared.t(), &predicted_sdp)?;
+    let fitness_ols = fitness_on_log_rows(prepared, base, &ols.estimate)?;
+    let fitness_sdp = fitness_on_log_rows(prepared, base, &sdp.base)?;
     let fitness_ols_kept = fitness_of(&fit, base, &ols.estimate)?;
     let fitness_sdp_kept = fitness_of(&fit, base, &sdp.base)?;
     Ok(Identification {

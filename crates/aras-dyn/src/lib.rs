@@ -1,7 +1,7 @@
 //! Dynamics of the ARAS-Diamond spherical parallel robot in linear-regressor
 //! form, an independent Lagrange check, and a simulated robot that writes
-//! measurement logs (spec §3 and §6; equation numbers refer to
-//! `spec/ARAS-DIAMOND.md`).
+//! measurement logs (equation numbers are the source paper's, restated in
+//! `docs/model.md`).
 //!
 //! # Model
 //!
@@ -68,6 +68,7 @@ mod dynamics;
 mod error;
 mod json;
 mod lagrange;
+pub mod mjcf;
 mod model;
 mod params;
 mod regressor;

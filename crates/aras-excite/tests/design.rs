@@ -14,7 +14,6 @@ use test_support::{StandIn, base_projection};
 fn quick() -> DesignSettings {
     DesignSettings {
         starts: 3,
-        progress: false,
         ..DesignSettings::default()
     }
 }
@@ -54,8 +53,9 @@ fn design_is_feasible_and_better_than_random() {
         med / d.condition_number
     );
     // The stand-in has only 10 well-separated base columns, so random
-    // trajectories are already decent; the paper model's 5× is checked in
-    // paper_model.rs. Here: clearly better than the typical random one.
+    // trajectories are already decent; the paper model's acceptance (2.5×
+    // below the random median, within 5 % of the best of 32 starts) is in
+    // paper_model.rs. Here: at least 2× below the typical random one.
     assert!(d.condition_number < med / 2.0);
     assert_eq!(d.value, d.condition_number);
     for t in &random {

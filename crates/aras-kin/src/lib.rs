@@ -4,8 +4,8 @@
 //! A 2-DOF spherical five-bar: two coaxial motors on axis `a` drive the
 //! proximal links; distal links hinged at the elbows `b`, `c` meet at the
 //! end-effector axis `d`. Every link turns about the remote centre of motion
-//! (RCM), the origin of every frame here. Equation numbers refer to
-//! `spec/ARAS-DIAMOND.md` (the source paper's numbering).
+//! (RCM), the origin of every frame here. Equation numbers are the source
+//! paper's (`docs/model.md`).
 //!
 //! # Conventions
 //!
@@ -61,7 +61,6 @@ pub mod links;
 mod pose;
 mod sample;
 mod scalar;
-pub mod simd;
 mod workspace;
 
 pub use error::KinError;

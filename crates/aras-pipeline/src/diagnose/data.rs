@@ -7,8 +7,8 @@ use aras_kin::Geometry;
 use aras_signal::{Samples, Sos};
 use faer::Mat;
 
-use crate::error::IdentError;
 use crate::robot::{FilterMode, Stacked, filter, filter_reach, reversal_mask, stack};
+use aras_ident::IdentError;
 
 /// A processed data set: the samples as `aras_signal::process` produced
 /// them, and the zero-phase filter it applied (so every regressor column is
@@ -19,7 +19,8 @@ pub struct Dataset {
     pub name: String,
     /// Processed samples.
     pub samples: Samples,
-    /// The low-pass that was applied to θ and τ (`None`: unfiltered).
+    /// The low-pass that was applied to θ (`None`: unfiltered); the blocks
+    /// apply it to the torques and every regressor column alike.
     pub filter: Option<Sos>,
     /// True if the samples are one period-averaged period (the periodic
     /// filter and circular shifts then apply).

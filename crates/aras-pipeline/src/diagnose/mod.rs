@@ -37,13 +37,13 @@
 //!
 //! ## σ of the fitted parameters
 //! The σ reported with every fitted parameter ([`NamedValue::std_dev`]) is
-//! the OLS σ of (64)–(66) divided by `√g`, `g = Σ h²` the filter's noise
-//! gain ([`Dataset::noise_gain`]), as in identification
-//! (`OlsEstimate::with_filtered_noise`). `g` and `2 B T / N` are the same
-//! number (Parseval), so σ and the F-test account for the filter once each
-//! and consistently: σ through `g`, the F-test through `N_eff` with the
-//! uncorrected residual sum of squares (for one added column `F ≈ z²`,
-//! `z = β̂/σ`). Residual bins use `σ_rms / √(g n)` for the same reason.
+//! that of the HAC sandwich covariance ([`crate::covariance`],
+//! `OlsEstimate::with_hac`), as in identification: it counts the filtered,
+//! correlated residual (and any slow misfit) with a bandwidth taken from
+//! the residual's own autocorrelation time. The F-test uses the
+//! uncorrected residual sums of squares with `N_eff` degrees of freedom
+//! (the filter's `2 B T / N = Σ h²`, Parseval, or `N / τ_int`); residual
+//! bins use `σ_rms / √(g n)`.
 //!
 //! Performance: the regressor blocks of every candidate setting are stacked
 //! and filtered once per data set; each fit is one tall-skinny QR.
@@ -54,7 +54,7 @@ mod data;
 pub mod residual;
 mod select;
 
-pub use crate::stats::{chi2_sf, f_sf, integrated_time, ljung_box};
+pub use aras_ident::stats::{chi2_sf, f_sf, integrated_time, ljung_box};
 pub use candidates::{CANDIDATE_IDS, Candidate, CandidateGrid, explanation};
 pub use data::Dataset;
 pub use residual::{Finding, ResidualAnalysis, Whiteness};

@@ -12,12 +12,11 @@ use serde::Serialize;
 use super::candidates::{Candidate, CandidateGrid};
 use super::data::{Dataset, Design, columns, design, effect_columns, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse};
-use crate::base::BaseParameters;
-use crate::error::IdentError;
-use crate::ls::ReducedLs;
+use aras_ident::stats::{f_sf, integrated_time};
+use aras_ident::validate::fitness;
+use aras_ident::{BaseParameters, IdentError, ReducedLs};
+
 use crate::robot::{Stacked, consistent_problem};
-use crate::stats::{f_sf, integrated_time};
-use crate::validate::fitness;
 
 /// Settings of [`diagnose`]; `Default` gives the documented values.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -83,10 +82,9 @@ pub struct NamedValue {
     pub name: String,
     /// Value (SI).
     pub value: f64,
-    /// Standard deviation: the OLS σ of (64)–(66) corrected for the
-    /// zero-phase filter's noise gain (divided by `√g`, [`Dataset::noise_gain`]),
-    /// since the filtered residual is correlated over `≈ 1/g` samples;
-    /// 0 if unknown (never NaN).
+    /// Standard deviation from the HAC sandwich covariance
+    /// ([`crate::covariance`]), which accounts for the filtered residual's
+    /// correlation; 0 if unknown (never NaN).
     pub std_dev: f64,
 }
 
@@ -230,17 +228,16 @@ struct Fit {
     split: usize,
 }
 
-/// OLS of design `d` on `base`, with σ corrected for TRAIN's filter noise
-/// gain `noise_gain` (`OlsEstimate::with_filtered_noise`). Only σ is
-/// corrected here; the F-test does not use σ but RSS ratios with the
-/// effective sample count `N_eff ≤ g N` (see [`n_eff`]), which is the same
-/// correction expressed as degrees of freedom: for one added column,
-/// `F ≈ (β/σ_corrected)²` when `N_eff = g N`. Applying both to one
-/// statistic would count the filter twice.
-fn fit(d: &Design, base: &BaseParameters, noise_gain: f64) -> Result<Fit, IdentError> {
+/// OLS of design `d` on `base`, with σ from the HAC sandwich
+/// (`OlsEstimate::with_hac`, the covariance every σ of the toolkit uses),
+/// which accounts for the filtered, correlated residual. The F-test does
+/// not use σ but RSS ratios with the effective sample count `N_eff ≤ g N`
+/// (see [`n_eff`]).
+fn fit(d: &Design, base: &BaseParameters, periodic: bool) -> Result<Fit, IdentError> {
     let wb = base.base_regressor(d.w.as_ref())?;
     let red = ReducedLs::new(wb.as_ref(), &d.t, &base.base_names())?;
-    let ols = red.ols()?.with_filtered_noise(noise_gain)?;
+    let groups = aras_ident::RowGroups::contiguous(&[d.split(), d.t.len() - d.split()])?;
+    let (ols, _) = red.ols()?.with_hac(wb.as_ref(), &d.t, &groups, periodic)?;
     let b = Col::from_fn(ols.estimate.len(), |i| ols.estimate[i]);
     let pred = &wb * &b;
     let residual: Vec<f64> = (0..d.t.len()).map(|i| d.t[i] - pred[i]).collect();
@@ -310,8 +307,6 @@ struct Context<'a> {
     vals: &'a [Dataset],
     vals_p: Vec<Prepared>,
     base_samples: usize,
-    /// TRAIN's filter noise gain `g` ([`Dataset::noise_gain`]) for σ.
-    noise_gain: f64,
 }
 
 impl Context<'_> {
@@ -349,7 +344,7 @@ impl Context<'_> {
         let f = fit(
             &self.design(&self.train_p, self.train, s),
             &base,
-            self.noise_gain,
+            self.train.periodic,
         )?;
         let fits = self
             .vals
@@ -446,7 +441,6 @@ pub fn diagnose(
         train,
         vals: validation,
         base_samples: opts.base_samples.max(50),
-        noise_gain: train.noise_gain()?,
     };
     // The filter's independent fraction of samples (= the σ correction's
     // noise gain, see `n_eff`), for the F-test's degrees of freedom.

@@ -4,14 +4,15 @@
 mod common;
 
 use aras_dyn::{Model, Params};
-use aras_ident::robot::{filter, filter_reach, keep_rows, noise_gain, reversal_mask, stack};
-use aras_ident::streaming::{
-    Accumulation, QrAccumulator, RegressorStage, States, StreamingOptions, StreamingRoute,
-    identify_log, synthetic,
-};
+use aras_ident::streaming::{Accumulation, QrAccumulator, RegressorStage, States};
 use aras_ident::{BaseParameters, NoiseVariances, ReducedLs, RowGroups, wls};
 use aras_kin::Geometry;
-use aras_signal::{Butterworth, FilterSpec, PeriodSource, ReadOptions, process, read_log};
+use aras_pipeline::TaskRegressor;
+use aras_pipeline::robot::{filter, filter_reach, keep_rows, noise_gain, reversal_mask, stack};
+use aras_pipeline::streaming::{StreamingOptions, StreamingRoute, identify_log, synthetic};
+use aras_signal::{
+    Bandwidth, Butterworth, FilterSpec, PeriodSource, ReadOptions, process, read_log,
+};
 use faer::Mat;
 use proptest::prelude::*;
 
@@ -169,6 +170,12 @@ struct Robot {
     beta: Vec<f64>,
 }
 
+impl Robot {
+    fn regressor(&self) -> TaskRegressor {
+        TaskRegressor::new(self.model.clone(), self.geo)
+    }
+}
+
 fn robot() -> Robot {
     let p = Params::aras_diamond();
     let model = p.model().unwrap();
@@ -216,7 +223,7 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
         .unwrap();
     let run = |chunk: usize| {
         let mut stage =
-            RegressorStage::with_accumulation(&r.model, &r.geo, &r.base, Accumulation::Qr).unwrap();
+            RegressorStage::with_accumulation(r.regressor(), &r.base, Accumulation::Qr).unwrap();
         for c0 in (0..n).step_by(chunk) {
             let c1 = (c0 + chunk).min(n);
             let states = States {
@@ -250,7 +257,7 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
     // column-scaled regressor at worst, still bit-identical for the same
     // chunks.
     let gram = |chunk: usize| {
-        let mut stage = RegressorStage::new(&r.model, &r.geo, &r.base).unwrap();
+        let mut stage = RegressorStage::new(r.regressor(), &r.base).unwrap();
         for c0 in (0..n).step_by(chunk) {
             let c1 = (c0 + chunk).min(n);
             let states = States {
@@ -280,7 +287,7 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
 #[test]
 fn regressor_stage_names_the_failing_sample() {
     let r = robot();
-    let mut stage = RegressorStage::new(&r.model, &r.geo, &r.base).unwrap();
+    let mut stage = RegressorStage::new(r.regressor(), &r.base).unwrap();
     let s = synthetic::states(&r.model, &r.geo, &r.beta, 3000, 1000.0, 0.0).unwrap();
     let mut gamma = s[0][1].clone();
     gamma[2500] = 0.0; // γ = 0 is a singularity
@@ -335,7 +342,7 @@ fn in_memory(path: &std::path::Path, r: &Robot, o: &StreamingOptions) -> Referen
     let periodic = pr.summary.periods.is_some();
     let n = pr.samples.len();
     let (mut guard, mut gain) = (0, 1.0);
-    if let Some(f) = o.process.filter {
+    if let Some(f) = &pr.summary.filter {
         let sos = Butterworth::lowpass(f.order, f.cutoff_hz, pr.summary.sample_rate_hz).unwrap();
         filter(&mut st, &sos, o.filter_mode, periodic).unwrap();
         guard = filter_reach(&sos, n, periodic, o.reversal_reach).unwrap();
@@ -431,7 +438,7 @@ fn identify_log_matches_the_in_memory_identification_on_every_route() {
         // 1. Logged derivatives, no filter: the fast path.
         let mut o = base_opts.clone();
         o.process.use_logged_derivatives = true;
-        o.process.filter = None;
+        o.process.filter = Bandwidth::Off;
         o.process.period = PeriodSource::Off;
         check_route(&path, &r, &o, StreamingRoute::LoggedDerivatives);
         let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
@@ -441,7 +448,7 @@ fn identify_log_matches_the_in_memory_identification_on_every_route() {
         // 2. Non-periodic, filtered, θ differentiated: overlapping blocks.
         let mut o = base_opts.clone();
         o.process.period = PeriodSource::Off;
-        o.process.filter = Some(FilterSpec {
+        o.process.filter = Bandwidth::Fixed(FilterSpec {
             order: 4,
             cutoff_hz: 20.0,
         });
