@@ -7,12 +7,14 @@
 //!
 //! * `cargo xtask test [ARGS…]`: the whole test suite (`cargo test --workspace --release`).
 //! * `cargo xtask deps`: only the system-library check and install.
-//! * `cargo xtask check-mjcf [--reuse-venv] [ARGS…]`: verifies the MJCF export in
-//!   MuJoCo itself (`docs/mjcf.md`): builds `aras`, creates a throwaway Python
-//!   environment with `mujoco` and `numpy` from PyPI in `target/check-mjcf/venv`
-//!   and runs `scripts/check_mjcf.py` (ARGS go to the script, e.g. `--params P.json`).
+//! * `cargo xtask check-mjcf [--reuse-venv] [--no-build] [ARGS…]`: verifies the MJCF
+//!   export in MuJoCo itself (`docs/mjcf.md`): builds `aras` (`--no-build`: use the
+//!   `target/release/aras` a test run left), creates a throwaway Python environment
+//!   with `mujoco` and `numpy` from PyPI in `target/check-mjcf/venv` (`--reuse-venv`:
+//!   keep an existing one) and runs `scripts/check_mjcf.py` (ARGS go to the script,
+//!   e.g. `--params P.json`).
 //! * `cargo xtask <command> [ARGS…]`: every other command (`pipeline`, `excite`,
-//!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `--help`) is
+//!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `friction`, `--help`) is
 //!   passed to the `aras` binary of the `aras-cli` package (`export-mjcf` too).
 //!
 //! When a library is missing it says which, why, and the exact command that
@@ -227,7 +229,7 @@ fn main() -> ExitCode {
     }
     let Some(first) = args.first().map(String::as_str) else {
         eprintln!(
-            "usage: cargo xtask [--no-install] <pipeline|excite|simulate|identify|validate|predict|diagnose|export-mjcf|check-mjcf|test|deps> [ARGS…]\n\
+            "usage: cargo xtask [--no-install] <pipeline|excite|simulate|identify|validate|predict|diagnose|friction|export-mjcf|check-mjcf|test|deps> [ARGS…]\n\
              `cargo xtask --help` lists the commands of the toolkit; --no-install (or\n\
              ARAS_NO_INSTALL=1) never installs missing system libraries, it prints the command."
         );
@@ -268,8 +270,8 @@ fn main() -> ExitCode {
 /// against the same MuJoCo (update both together).
 const CHECK_MJCF_PACKAGES: [&str; 2] = ["mujoco==4.0.0", "numpy==2.4.6"];
 
-/// Marker file: the venv directory was made by this command, so it may
-/// remove it again.
+/// Marker file: the venv (or scratch) directory was made by this command,
+/// so it may remove it again.
 const VENV_MARKER: &str = ".made-by-cargo-xtask-check-mjcf";
 
 /// `cargo xtask check-mjcf`: build `aras`, make the throwaway venv, run the script.
@@ -284,19 +286,35 @@ fn check_mjcf(args: &[String]) -> ExitCode {
     let base = target.join("check-mjcf");
     let venv = base.join("venv");
     let reuse = args.iter().any(|a| a == "--reuse-venv");
-    let script_args: Vec<&String> = args.iter().filter(|a| *a != "--reuse-venv").collect();
+    let no_build = args.iter().any(|a| a == "--no-build");
+    let script_args: Vec<&String> = args
+        .iter()
+        .filter(|a| *a != "--reuse-venv" && *a != "--no-build")
+        .collect();
+    let aras = target.join("release").join("aras");
 
-    let mut build = cargo();
-    build.args([
-        "build",
-        "--quiet",
-        "--release",
-        "--package",
-        "aras-cli",
-        "--bin",
-        "aras",
-    ]);
-    if run(build) != ExitCode::SUCCESS {
+    if no_build {
+        if !aras.is_file() {
+            eprintln!(
+                "xtask: --no-build, but {} does not exist; build it (cargo build --release -p aras-cli) or drop --no-build",
+                aras.display()
+            );
+            return ExitCode::FAILURE;
+        }
+    } else if run({
+        let mut build = cargo();
+        build.args([
+            "build",
+            "--quiet",
+            "--release",
+            "--package",
+            "aras-cli",
+            "--bin",
+            "aras",
+        ]);
+        build
+    }) != ExitCode::SUCCESS
+    {
         return ExitCode::FAILURE;
     }
     let python = venv.join("bin").join("python");
@@ -346,8 +364,24 @@ fn check_mjcf(args: &[String]) -> ExitCode {
             return ExitCode::FAILURE;
         }
     }
+    // A fresh scratch directory each run (only one this command made is removed).
     let work = base.join("work");
-    if let Err(e) = std::fs::create_dir_all(&work) {
+    if work.exists() {
+        if !work.join(VENV_MARKER).exists() {
+            eprintln!(
+                "xtask: {} exists but was not made by check-mjcf; remove it or move it away",
+                work.display()
+            );
+            return ExitCode::FAILURE;
+        }
+        if let Err(e) = std::fs::remove_dir_all(&work) {
+            eprintln!("xtask: cannot remove the old {}: {e}", work.display());
+            return ExitCode::FAILURE;
+        }
+    }
+    if let Err(e) =
+        std::fs::create_dir_all(&work).and_then(|()| std::fs::write(work.join(VENV_MARKER), b""))
+    {
         eprintln!("xtask: cannot create {}: {e}", work.display());
         return ExitCode::FAILURE;
     }
@@ -355,7 +389,7 @@ fn check_mjcf(args: &[String]) -> ExitCode {
     check
         .arg(root.join("scripts").join("check_mjcf.py"))
         .arg("--aras")
-        .arg(target.join("release").join("aras"))
+        .arg(&aras)
         .arg("--work")
         .arg(&work)
         .arg("--identified")

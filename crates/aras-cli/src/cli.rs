@@ -38,6 +38,10 @@ pub enum Command {
     /// Write the robot of a parameter file as a MuJoCo model (MJCF):
     /// bodies, joints, the loop constraint, friction and actuators (docs/mjcf.md).
     ExportMjcf(ExportMjcfArgs),
+    /// Friction of one joint of any robot from its log: classical and
+    /// dynamic models, then the diagnosis of what they miss →
+    /// friction.json, report.html, pred_<log>.csv (docs/friction.md).
+    Friction(FrictionArgs),
 }
 
 /// `aras export-mjcf`.
@@ -52,6 +56,36 @@ pub struct ExportMjcfArgs {
     /// Shared options.
     #[command(flatten)]
     pub common: Common,
+}
+
+/// `aras friction`.
+#[derive(Debug, Args)]
+pub struct FrictionArgs {
+    /// The training log: CSV with a header and columns t (s), q (rad),
+    /// dq (rad/s, computed from q when absent), tau (N·m, the friction
+    /// torque), optional ddq (rad/s²); other columns are ignored.
+    #[arg(long, value_name = "TRAIN.csv")]
+    pub data: PathBuf,
+    /// A validation log, same format (repeat for several).
+    #[arg(long, value_name = "VAL.csv")]
+    pub validate: Vec<PathBuf>,
+    /// Output directory.
+    #[arg(long, default_value = "out-friction", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Your column names, e.g. `t=time,q=q2,dq=dq2,tau=tau_f` (roles: t, q,
+    /// dq, tau, ddq; roles not given keep their default names).
+    #[arg(long, value_name = "ROLE=NAME,…")]
+    pub columns: Option<String>,
+    /// Hold the Stribeck shape exponent δ of the Stribeck and LuGre models
+    /// at this value (2 is the classical LuGre shape) instead of fitting it.
+    #[arg(long, value_name = "DELTA", value_parser = positive, allow_hyphen_values = true)]
+    pub shape: Option<f64>,
+    /// Replace an existing output directory, only if aras wrote it.
+    #[arg(long)]
+    pub force: bool,
+    /// No progress display and no stage lines on stderr.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 /// `aras diagnose`.
@@ -228,7 +262,7 @@ pub struct PredictArgs {
     /// Output CSV with columns t,tau1,tau2.
     #[arg(long, value_name = "PRED.csv")]
     pub out: PathBuf,
-    /// Average periods of this length (s) first (default: none, the whole log is predicted).
+    /// Period (s) of the motion for the harmonic fit (default: the sidecar's, else detected from the angles; every row of the log is predicted either way).
     #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub period: Option<f64>,
     /// Sidecar file (default: LOG.json next to the log, if present).

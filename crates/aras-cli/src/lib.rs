@@ -26,6 +26,7 @@ pub mod cli;
 pub mod cmd;
 pub mod config;
 pub mod excite;
+pub mod friction;
 pub mod identify;
 pub mod output;
 pub mod paper;

@@ -17,6 +17,7 @@ fn main() -> ExitCode {
         Command::Predict(a) => cmd::predict::run(a),
         Command::Diagnose(a) => cmd::diagnose::run(a),
         Command::ExportMjcf(a) => cmd::export_mjcf::run(a),
+        Command::Friction(a) => cmd::friction::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -176,7 +176,7 @@ impl Inertial {
     /// (28)); `link` (1–4) names it in errors.
     pub fn from_link(link: usize, l: &LinkParams) -> Result<Self, MjcfError> {
         let bad = |reason: String| MjcfError::NotPhysical { link, reason };
-        if !(l.mass > 0.0) {
+        if l.mass.is_nan() || l.mass <= 0.0 {
             return Err(bad(format!("its mass {} kg is not positive", l.mass)));
         }
         let ig = l
@@ -186,14 +186,14 @@ impl Inertial {
         let eig = SymmetricEigen::new(ig).eigenvalues;
         let mut e = [eig[0], eig[1], eig[2]];
         e.sort_by(f64::total_cmp);
-        if !(e[0] > 0.0) {
+        if e.iter().any(|x| x.is_nan()) || e[0] <= 0.0 {
             return Err(bad(format!(
                 "its inertia about the centre of mass has the principal moments \
                  [{:.6e}, {:.6e}, {:.6e}] kg·m², not all positive",
                 e[0], e[1], e[2]
             )));
         }
-        if !(e[0] + e[1] > e[2]) {
+        if e[0] + e[1] <= e[2] {
             return Err(bad(format!(
                 "its principal moments about the centre of mass [{:.6e}, {:.6e}, {:.6e}] kg·m² \
                  break the triangle inequality ({:.6e} + {:.6e} < {:.6e})",

@@ -12,6 +12,11 @@
 //!   separable structure `τ = Φ(θ) β` ([`Separable`]) for fitting.
 //! * [`log`]: the joint log format (CSV with `t, q, dq, tau`, optional `ddq`),
 //!   column mapping ([`ColumnMap`]), derivatives on irregular grids.
+//! * [`fit`]: variable-projection fits with physical bounds, several starts
+//!   and σ of every parameter; RMS and fitness (78).
+//! * [`effects`]: candidate effects beyond a model (ripple, asymmetry,
+//!   drift, hysteresis, delay, inertia) as column blocks for a forward
+//!   selection, and residual profiles.
 //! * [`sim`]: a single-joint simulator with known friction (LuGre with
 //!   internal state, ripple, drift, asymmetry, noise, irregular sampling).
 //!
@@ -31,6 +36,7 @@
 // Small dense linear algebra reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
+pub mod effects;
 mod error;
 pub mod fit;
 mod linalg;

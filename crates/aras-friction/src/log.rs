@@ -248,6 +248,30 @@ impl JointLog {
         self.t.is_empty()
     }
 
+    /// The log as CSV text with header `t,q,dq,tau[,ddq]`, every number in
+    /// its shortest exact (round-trip) form.
+    pub fn to_csv(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::with_capacity(self.len() * 90);
+        s.push_str(if self.ddq.is_some() {
+            "t,q,dq,tau,ddq\n"
+        } else {
+            "t,q,dq,tau\n"
+        });
+        for i in 0..self.len() {
+            let _ = write!(
+                s,
+                "{},{},{},{}",
+                self.t[i], self.q[i], self.dq[i], self.tau[i]
+            );
+            if let Some(a) = &self.ddq {
+                let _ = write!(s, ",{}", a[i]);
+            }
+            s.push('\n');
+        }
+        s
+    }
+
     /// Acceleration: the logged `ddq`, or the derivative of `dq` on the
     /// log's own grid ([`derivative`]).
     pub fn acceleration(&self) -> Vec<f64> {

@@ -26,8 +26,8 @@ use aras_pipeline::robot::{
     noise_gain, params_from_solution, reversal_mask, stack,
 };
 use aras_signal::{
-    Butterworth, FilterSpec, PeriodSource, ProcessOptions, Processed, ReadOptions, process,
-    read_log,
+    Bandwidth, Butterworth, FilterSpec, PeriodSource, ProcessOptions, Processed, ReadOptions,
+    process, read_log,
 };
 use nalgebra::Vector2;
 
@@ -138,7 +138,7 @@ fn pipeline(
 ) -> (Processed, Stacked, f64) {
     let s = setup();
     let opts = ProcessOptions {
-        filter: Some(FilterSpec {
+        filter: Bandwidth::Fixed(FilterSpec {
             order: 4,
             cutoff_hz: CUTOFF,
         }),
@@ -173,7 +173,7 @@ fn noise_free_ols_recovers_the_truth() {
     // 2·exp(−2·0.4/0.03) ≈ 5e-12 of Fc at the threshold (at 0.2 rad/s the
     // 3e-6 tail, amplified by κ ≈ 5e3, would cost 1e-2 relative).
     let opts = ProcessOptions {
-        filter: None,
+        filter: Bandwidth::Off,
         period: PeriodSource::Off,
         use_logged_derivatives: true,
         ..ProcessOptions::default()

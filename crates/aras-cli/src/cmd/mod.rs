@@ -5,6 +5,7 @@ pub mod diagnose;
 pub mod excite;
 pub mod export_mjcf;
 pub mod fit;
+pub mod friction;
 pub mod identify;
 pub mod identify_streaming;
 pub mod pipeline;

@@ -269,3 +269,77 @@ mod tests {
         assert!(b.contains("<rect"));
     }
 }
+
+/// Points (e.g. measurements) under lines (e.g. model curves) on shared axes.
+/// Point sets are thinned to at most `max_points` points each (evenly over
+/// the samples) to keep SVGs small; lines are drawn in full order.
+pub fn scatter(
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    points: &[Series],
+    curves: &[Series],
+    max_points: usize,
+) -> Result<String> {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 420)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let all = || points.iter().chain(curves);
+        let xr = range(all().flat_map(|s| s.x.iter().copied()));
+        let yr = range(all().flat_map(|s| s.y.iter().copied()));
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_label)
+            .y_desc(y_label)
+            .light_line_style(RGBColor(235, 235, 235))
+            .draw()
+            .map_err(err)?;
+        let greys = [RGBColor(150, 150, 150), RGBColor(120, 170, 210)];
+        for (i, s) in points.iter().enumerate() {
+            let color = greys[i % greys.len()];
+            let n = s.x.len().min(s.y.len());
+            let step = n.div_ceil(max_points.max(2)).max(1);
+            let pts: Vec<(f64, f64)> = (0..n)
+                .step_by(step)
+                .map(|k| (s.x[k], s.y[k]))
+                .filter(|p| p.0.is_finite() && p.1.is_finite())
+                .collect();
+            chart
+                .draw_series(pts.into_iter().map(|p| Circle::new(p, 1, color.filled())))
+                .map_err(err)?
+                .label(s.name.clone())
+                .legend(move |(x, y)| Circle::new((x + 9, y), 3, color.filled()));
+        }
+        for (i, s) in curves.iter().enumerate() {
+            let color = PALETTE[i % PALETTE.len()];
+            let n = s.x.len().min(s.y.len());
+            let pts = (0..n)
+                .map(|k| (s.x[k], s.y[k]))
+                .filter(|p| p.0.is_finite() && p.1.is_finite());
+            chart
+                .draw_series(LineSeries::new(pts, color.stroke_width(2)))
+                .map_err(err)?
+                .label(s.name.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.3))
+            .position(SeriesLabelPosition::UpperLeft)
+            .draw()
+            .map_err(err)?;
+        root.present().map_err(err)?;
+    }
+    Ok(svg)
+}

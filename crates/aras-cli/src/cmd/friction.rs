@@ -1,0 +1,342 @@
+//! `aras friction`: reads the joint logs, runs [`crate::friction::analyse`],
+//! writes `friction.json`, `report.html` (with its SVG figures) and
+//! `pred_<log>.csv` (columns `t,tau`: the final model's prediction) for TRAIN
+//! and every validation log.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use aras_friction::{ColumnMap, JointLog, read_joint_log};
+
+use crate::cli::FrictionArgs;
+use crate::friction::{FrictionRun, FrictionSettings, analyse};
+use crate::output::OutDir;
+use crate::report::Report;
+use crate::report::plots::{Series, scatter};
+use crate::stages::Stages;
+
+/// Runs `friction`.
+pub fn run(args: &FrictionArgs) -> Result<()> {
+    let columns: ColumnMap = match &args.columns {
+        Some(c) => c.parse()?,
+        None => ColumnMap::default(),
+    };
+    let inputs: Vec<PathBuf> = std::iter::once(args.data.clone())
+        .chain(args.validate.iter().cloned())
+        .collect();
+    let out = OutDir::create(&args.out, args.force, &inputs)?;
+    let mut stages = Stages::new(args.quiet);
+    let read = |p: &Path| read_joint_log(p, &columns).map_err(anyhow::Error::from);
+    let train = stages.run("read TRAIN", |_| read(&args.data))?;
+    let vals = stages.run("read validation logs", |_| {
+        args.validate
+            .iter()
+            .map(|p| read(p))
+            .collect::<Result<Vec<_>>>()
+    })?;
+    let mut settings = FrictionSettings::default();
+    settings.fit.shape = args.shape;
+    let run = stages.run("fit models + diagnosis", |_| {
+        analyse(&train, &vals, &settings)
+    })?;
+    let logs: Vec<&JointLog> = std::iter::once(&train).chain(&vals).collect();
+    let names = prediction_names(&logs);
+    stages.run("write outputs", |_| -> Result<()> {
+        out.write_json("friction.json", &run)?;
+        for (log, name) in logs.iter().zip(&names) {
+            let pred = run.final_prediction(log)?;
+            out.write(name, prediction_csv(&log.t, &pred))?;
+        }
+        let report = build(&run, &logs)?;
+        for (file, svg) in report.figures() {
+            out.write(file, svg)?;
+        }
+        out.write("report.html", report.to_html())?;
+        Ok(())
+    })?;
+    let dir = out.commit()?;
+    if !args.quiet {
+        for m in &run.models {
+            let v: Vec<String> = m
+                .validation
+                .iter()
+                .map(|x| format!("{:.4}", x.rms))
+                .collect();
+            eprintln!(
+                "{:<16} RMS train {:.4} N·m, validation [{}]",
+                m.name,
+                m.train.rms,
+                v.join(", ")
+            );
+        }
+    }
+    println!("{}", run.conclusion());
+    println!("outputs in {}", dir.display());
+    Ok(())
+}
+
+/// `pred_<stem>.csv` for each log; a stem used twice gets `_2`, `_3`, ….
+fn prediction_names(logs: &[&JointLog]) -> Vec<String> {
+    let mut seen: Vec<String> = Vec::new();
+    logs.iter()
+        .map(|l| {
+            let mut name = format!("pred_{}.csv", l.name);
+            let mut k = 2;
+            while seen.contains(&name) {
+                name = format!("pred_{}_{k}.csv", l.name);
+                k += 1;
+            }
+            seen.push(name.clone());
+            name
+        })
+        .collect()
+}
+
+fn prediction_csv(t: &[f64], tau: &[f64]) -> String {
+    let mut s = String::with_capacity(t.len() * 40);
+    s.push_str("t,tau\n");
+    for (t, y) in t.iter().zip(tau) {
+        let _ = writeln!(s, "{t},{y}");
+    }
+    s
+}
+
+fn fmt(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e4).contains(&x.abs()) {
+        format!("{x:.5}")
+    } else {
+        format!("{x:.4e}")
+    }
+}
+
+fn fmt_opt(x: Option<f64>) -> String {
+    x.map_or_else(|| "—".into(), fmt)
+}
+
+/// The report: models table, τ–v scatter, hysteresis at a reversal,
+/// residuals against q and t, the diagnosis steps.
+fn build(run: &FrictionRun, logs: &[&JointLog]) -> Result<Report> {
+    let train = logs[0];
+    let mut r = Report::new(format!("Friction of joint log `{}`", train.name));
+    r.paragraph(format!(
+        "TRAIN `{}`: {} samples over {:.1} s, steps {:.1}–{:.1} ms{}. Validation: {}.",
+        run.train.name,
+        run.train.rows,
+        run.train.duration,
+        run.train.steps[0] * 1e3,
+        run.train.steps[1] * 1e3,
+        if run.train.dq_from_q {
+            " (velocity computed from q)"
+        } else {
+            ""
+        },
+        if run.validation.is_empty() {
+            "none".to_string()
+        } else {
+            run.validation
+                .iter()
+                .map(|v| format!("`{}` ({} samples)", v.name, v.rows))
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
+    ));
+    r.heading(2, "Conclusion").paragraph(run.conclusion());
+    r.heading(2, "Models");
+    let mut header = vec![
+        "model".to_string(),
+        "RMS train N·m".into(),
+        "fit train %".into(),
+    ];
+    for v in &run.validation {
+        header.push(format!("RMS {} N·m", v.name));
+        header.push(format!("fit {} %", v.name));
+    }
+    let rows = run
+        .models
+        .iter()
+        .chain(run.final_model.iter())
+        .map(|m| {
+            let mut row = vec![m.name.clone(), fmt(m.train.rms), fmt_opt(m.train.fitness)];
+            for v in &m.validation {
+                row.push(fmt(v.rms));
+                row.push(fmt_opt(v.fitness));
+            }
+            row
+        })
+        .collect();
+    let h: Vec<&str> = header.iter().map(String::as_str).collect();
+    r.table(&h, rows);
+    for m in run.models.iter().chain(run.final_model.iter()) {
+        r.heading(3, format!("`{}`", m.name));
+        r.table(
+            &["parameter", "value", "σ", "unit", "note"],
+            m.parameters
+                .iter()
+                .map(|p| {
+                    vec![
+                        p.name.clone(),
+                        fmt(p.value),
+                        fmt_opt(p.sigma),
+                        p.unit.clone(),
+                        if p.fixed {
+                            "fixed".into()
+                        } else if p.at_bound {
+                            "at bound".into()
+                        } else {
+                            String::new()
+                        },
+                    ]
+                })
+                .collect(),
+        );
+    }
+
+    // τ–v scatter with each model's steady-state curve.
+    let vmax = train.dq.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let vgrid: Vec<f64> = (0..=400)
+        .map(|i| -vmax + 2.0 * vmax * i as f64 / 400.0)
+        .collect();
+    let curves: Vec<(String, Vec<f64>)> = run
+        .fitted
+        .iter()
+        .map(|m| {
+            (
+                m.name().to_string(),
+                vgrid.iter().map(|&v| m.steady_state(v)).collect(),
+            )
+        })
+        .collect();
+    let svg = scatter(
+        "friction torque against velocity (TRAIN) and each model's steady state",
+        "dq (rad/s)",
+        "tau (N·m)",
+        &[Series {
+            name: "measured".into(),
+            x: &train.dq,
+            y: &train.tau,
+        }],
+        &curves
+            .iter()
+            .map(|(n, y)| Series {
+                name: n.clone(),
+                x: &vgrid,
+                y,
+            })
+            .collect::<Vec<_>>(),
+        6000,
+    )?;
+    r.figure(
+        "tau_v.svg",
+        "Measured friction torque against velocity with the steady-state curve of every model.",
+        svg,
+    );
+
+    // Hysteresis loop at the slowest reversal of TRAIN.
+    if let Some((a, b)) = reversal_window(train) {
+        let dx: Vec<f64> = train.q[a..b].iter().map(|q| q - train.q[a]).collect();
+        let preds: Vec<(String, Vec<f64>)> = run
+            .fitted
+            .iter()
+            .map(|m| Ok((m.name().to_string(), m.predict(train)?[a..b].to_vec())))
+            .collect::<Result<_>>()?;
+        let svg = scatter(
+            "hysteresis at a reversal (TRAIN)",
+            "q − q(start) (rad)",
+            "tau (N·m)",
+            &[Series {
+                name: "measured".into(),
+                x: &dx,
+                y: &train.tau[a..b],
+            }],
+            &preds
+                .iter()
+                .map(|(n, y)| Series {
+                    name: n.clone(),
+                    x: &dx,
+                    y,
+                })
+                .collect::<Vec<_>>(),
+            4000,
+        )?;
+        r.figure(
+            "hysteresis.svg",
+            format!(
+                "Torque against position around the slowest reversal, t = {:.2}–{:.2} s.",
+                train.t[a],
+                train.t[b - 1]
+            ),
+            svg,
+        );
+    }
+
+    // Residuals against q and t: best classical and final model.
+    let best = &run.fitted[run.best];
+    let rb: Vec<f64> = train
+        .tau
+        .iter()
+        .zip(best.predict(train)?)
+        .map(|(a, b)| a - b)
+        .collect();
+    let rf: Vec<f64> = train
+        .tau
+        .iter()
+        .zip(run.final_prediction(train)?)
+        .map(|(a, b)| a - b)
+        .collect();
+    for (axis, x, unit, file) in [
+        ("position", &train.q, "q (rad)", "residual_q.svg"),
+        ("time", &train.t, "t (s)", "residual_t.svg"),
+    ] {
+        let svg = scatter(
+            &format!("TRAIN residual against {axis}"),
+            unit,
+            "tau − model (N·m)",
+            &[
+                Series {
+                    name: format!("{} (best classical)", best.name()),
+                    x,
+                    y: &rb,
+                },
+                Series {
+                    name: "final model".into(),
+                    x,
+                    y: &rf,
+                },
+            ],
+            &[],
+            5000,
+        )?;
+        r.figure(file, format!("TRAIN residual against {axis}."), svg);
+    }
+    r.heading(2, "Residual of the best classical model (TRAIN)");
+    r.table(
+        &["axis", "share of residual variance explained by bin means"],
+        run.residual
+            .iter()
+            .map(|p| {
+                vec![
+                    format!("{:?}", p.axis).to_lowercase(),
+                    format!("{:.3}", p.explained),
+                ]
+            })
+            .collect(),
+    );
+    crate::friction::report_diagnosis(run, &mut r);
+    Ok(r)
+}
+
+/// The window (sample range) around the TRAIN reversal with the smallest
+/// acceleration, ±1.5 s, where presliding hysteresis shows best.
+fn reversal_window(log: &JointLog) -> Option<(usize, usize)> {
+    let acc = log.acceleration();
+    let n = log.len();
+    let k = (1..n)
+        .filter(|&i| log.dq[i - 1] * log.dq[i] < 0.0)
+        .min_by(|&a, &b| acc[a].abs().total_cmp(&acc[b].abs()))?;
+    let t0 = log.t[k] - 1.5;
+    let t1 = log.t[k] + 1.5;
+    let a = log.t.partition_point(|&t| t < t0);
+    let b = log.t.partition_point(|&t| t <= t1);
+    (b > a + 2).then_some((a, b))
+}

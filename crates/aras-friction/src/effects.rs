@@ -1,0 +1,396 @@
+//! Candidate effects beyond a friction model, as regressor column blocks,
+//! and the residual's profile against the joint's state.
+//!
+//! A diagnosis fits a friction model, then asks which of these effects the
+//! residual still contains. Each [`Effect`] is linear in its coefficients
+//! given the log (and, for the delay, the model's own prediction), so a
+//! forward selection can test them as column blocks added to the model's
+//! columns:
+//!
+//! | effect | columns | coefficients |
+//! |---|---|---|
+//! | [`Effect::Ripple`] `k` | `sin(k q)`, `cos(k q)` | `a`, `b`: amplitude `√(a²+b²)` N·m |
+//! | [`Effect::ViscousAsymmetry`] | `|v|` | N·m·s/rad: viscous friction differs by `±` that between directions |
+//! | [`Effect::CoulombDrift`] | `(t − t₀) sgn(v)` | N·m/s: the Coulomb level drifts (warming) |
+//! | [`Effect::OffsetDrift`] | `t − t₀` | N·m/s: the offset drifts |
+//! | [`Effect::Hysteresis`] `x_d` | Dahl state `w(x_d)` | N·m: a presliding hysteresis of length `x_d` |
+//! | [`Effect::Delay`] | `−dτ̂/dt` | s: the torque lags the motion |
+//! | [`Effect::Inertia`] | `q̈` | kg·m²: inertia not removed by the rigid-body model |
+//!
+//! `t₀` is each log's first time stamp: every log starts its own drift.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Dahl, FrictionError, JointLog, Motion, Separable, log::derivative, sgn};
+
+/// A candidate effect (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Effect {
+    /// Position ripple or load: `a sin(k q) + b cos(k q)`, `k` cycles per
+    /// revolution (`k = 1`: gravity-like load).
+    Ripple {
+        /// Cycles per revolution.
+        harmonic: u32,
+    },
+    /// Viscous friction that differs between directions: `c |v|`.
+    ViscousAsymmetry,
+    /// Drift of the Coulomb level in time: `c (t − t₀) sgn(v)`.
+    CoulombDrift,
+    /// Drift of the offset in time: `c (t − t₀)`.
+    OffsetDrift,
+    /// A presliding hysteresis element: `c w(x_d)`, `w` the normalised Dahl
+    /// state with presliding length `x_d`.
+    Hysteresis {
+        /// Presliding length `x_d`, rad.
+        length: f64,
+    },
+    /// Delay of the torque behind the motion: `τ(t − d) ≈ τ̂ − d dτ̂/dt`.
+    Delay,
+    /// Residual inertia: `J q̈`.
+    Inertia,
+}
+
+/// One physical value of a fitted effect.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EffectValue {
+    /// Name (`amplitude`, `phase`, `rate`, …).
+    pub name: String,
+    /// Value.
+    pub value: f64,
+    /// Standard deviation, when known.
+    pub sigma: Option<f64>,
+    /// SI unit.
+    pub unit: String,
+}
+
+impl Effect {
+    /// Short identifier, e.g. `ripple:12`, `coulomb_drift`.
+    pub fn id(&self) -> String {
+        match self {
+            Effect::Ripple { harmonic } => format!("ripple:{harmonic}"),
+            Effect::ViscousAsymmetry => "viscous_asymmetry".into(),
+            Effect::CoulombDrift => "coulomb_drift".into(),
+            Effect::OffsetDrift => "offset_drift".into(),
+            Effect::Hysteresis { length } => format!("hysteresis:{length:.3e}"),
+            Effect::Delay => "delay".into(),
+            Effect::Inertia => "inertia".into(),
+        }
+    }
+
+    /// The family: members of a grid over one nonlinear setting share it
+    /// (at most one of them is added). Every ripple harmonic is its own
+    /// family, so several harmonics can be found.
+    pub fn family(&self) -> String {
+        match self {
+            Effect::Hysteresis { .. } => "hysteresis".into(),
+            other => other.id(),
+        }
+    }
+
+    /// What the effect means, in words.
+    pub fn label(&self) -> String {
+        match self {
+            Effect::Ripple { harmonic: 1 } => {
+                "position-dependent load (one cycle per revolution)".into()
+            }
+            Effect::Ripple { harmonic } => {
+                format!("position ripple, {harmonic} cycles per revolution")
+            }
+            Effect::ViscousAsymmetry => "direction asymmetry of the viscous friction".into(),
+            Effect::CoulombDrift => "slow drift of the Coulomb level (e.g. warming)".into(),
+            Effect::OffsetDrift => "slow drift of the torque offset".into(),
+            Effect::Hysteresis { length } => {
+                format!("presliding hysteresis over {length:.2e} rad")
+            }
+            Effect::Delay => "delay of the torque behind the motion".into(),
+            Effect::Inertia => "inertia not removed by the rigid-body model".into(),
+        }
+    }
+
+    /// Number of columns.
+    pub fn width(&self) -> usize {
+        match self {
+            Effect::Ripple { .. } => 2,
+            _ => 1,
+        }
+    }
+
+    /// The effect's columns along a log. `prediction` is the friction
+    /// model's prediction on that log (used by [`Effect::Delay`]).
+    pub fn columns(
+        &self,
+        log: &JointLog,
+        prediction: &[f64],
+    ) -> Result<Vec<Vec<f64>>, FrictionError> {
+        let n = log.len();
+        let t0 = log.t.first().copied().unwrap_or(0.0);
+        Ok(match *self {
+            Effect::Ripple { harmonic } => {
+                let k = f64::from(harmonic);
+                let (s, c): (Vec<f64>, Vec<f64>) = log.q.iter().map(|&q| (k * q).sin_cos()).unzip();
+                vec![s, c]
+            }
+            Effect::ViscousAsymmetry => vec![log.dq.iter().map(|v| v.abs()).collect()],
+            Effect::CoulombDrift => vec![
+                log.t
+                    .iter()
+                    .zip(&log.dq)
+                    .map(|(t, &v)| (t - t0) * sgn(v))
+                    .collect(),
+            ],
+            Effect::OffsetDrift => vec![log.t.iter().map(|t| t - t0).collect()],
+            Effect::Hysteresis { length } => {
+                let m = Motion::new(&log.t, &log.q, &log.dq)?;
+                let cols = Dahl::columns(&[length], &m);
+                vec![cols[1].clone()]
+            }
+            Effect::Delay => {
+                if prediction.len() != n {
+                    return Err(FrictionError::LengthMismatch {
+                        what: "model prediction",
+                        expected: n,
+                        found: prediction.len(),
+                    });
+                }
+                vec![
+                    derivative(&log.t, prediction)
+                        .into_iter()
+                        .map(|d| -d)
+                        .collect(),
+                ]
+            }
+            Effect::Inertia => vec![log.acceleration()],
+        })
+    }
+
+    /// Physical values from the fitted coefficients (and their σ).
+    pub fn values(&self, coef: &[f64], sigma: &[Option<f64>]) -> Vec<EffectValue> {
+        let v = |name: &str, value: f64, sigma: Option<f64>, unit: &str| EffectValue {
+            name: name.into(),
+            value,
+            sigma,
+            unit: unit.into(),
+        };
+        let s0 = sigma.first().copied().flatten();
+        match self {
+            Effect::Ripple { .. } => {
+                let (a, b) = (coef[0], coef.get(1).copied().unwrap_or(0.0));
+                let amp = a.hypot(b);
+                // Delta method, covariance neglected (sin and cos columns are
+                // nearly orthogonal over many cycles).
+                let sa = match (s0, sigma.get(1).copied().flatten()) {
+                    (Some(sa), Some(sb)) if amp > 0.0 => {
+                        Some(((a * sa).powi(2) + (b * sb).powi(2)).sqrt() / amp)
+                    }
+                    _ => None,
+                };
+                vec![
+                    v("amplitude", amp, sa, "N·m"),
+                    v("phase", b.atan2(a), None, "rad"),
+                ]
+            }
+            Effect::ViscousAsymmetry => vec![v("coefficient", coef[0], s0, "N·m·s/rad")],
+            Effect::CoulombDrift | Effect::OffsetDrift => vec![v("rate", coef[0], s0, "N·m/s")],
+            Effect::Hysteresis { length } => vec![
+                v("level", coef[0], s0, "N·m"),
+                v("length", *length, None, "rad"),
+            ],
+            Effect::Delay => vec![v("delay", coef[0], s0, "s")],
+            Effect::Inertia => vec![v("inertia", coef[0], s0, "kg·m²")],
+        }
+    }
+}
+
+/// Settings of the candidate library.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct LibrarySettings {
+    /// Highest ripple harmonic (cycles per revolution) tried.
+    pub max_harmonic: u32,
+    /// Hysteresis lengths tried: this many, log-spaced between 1e-5 rad and
+    /// a hundredth of the travelled range.
+    pub hysteresis_lengths: usize,
+    /// Try a delay of the torque.
+    pub delay: bool,
+    /// Try a residual inertia.
+    pub inertia: bool,
+}
+
+impl Default for LibrarySettings {
+    fn default() -> Self {
+        Self {
+            max_harmonic: 40,
+            hysteresis_lengths: 4,
+            delay: true,
+            inertia: true,
+        }
+    }
+}
+
+/// The candidate effects for a training log: ripple harmonics up to the
+/// highest one the log resolves (at least 8 samples per ripple period at
+/// the 90th percentile of the position step, and at most
+/// [`LibrarySettings::max_harmonic`]), asymmetry, drifts, hysteresis,
+/// delay and inertia.
+pub fn library(train: &JointLog, settings: &LibrarySettings) -> Vec<Effect> {
+    let mut steps: Vec<f64> = train.q.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    let resolved = if steps.is_empty() {
+        1
+    } else {
+        let k = ((steps.len() as f64) * 0.9) as usize;
+        let k = k.min(steps.len() - 1);
+        let dq90 = *steps.select_nth_unstable_by(k, f64::total_cmp).1;
+        if dq90 > 0.0 {
+            (std::f64::consts::TAU / (8.0 * dq90)).floor().min(1e6) as u32
+        } else {
+            settings.max_harmonic
+        }
+    };
+    let kmax = settings.max_harmonic.min(resolved).max(1);
+    let mut v: Vec<Effect> = (1..=kmax).map(|k| Effect::Ripple { harmonic: k }).collect();
+    v.extend([
+        Effect::ViscousAsymmetry,
+        Effect::CoulombDrift,
+        Effect::OffsetDrift,
+    ]);
+    let range = train.q.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+        - train.q.iter().cloned().fold(f64::INFINITY, f64::min);
+    if settings.hysteresis_lengths > 0 && range > 0.0 {
+        for length in
+            crate::fit::log_grid(1e-5, (0.01 * range).max(2e-5), settings.hysteresis_lengths)
+        {
+            v.push(Effect::Hysteresis { length });
+        }
+    }
+    if settings.delay {
+        v.push(Effect::Delay);
+    }
+    if settings.inertia {
+        v.push(Effect::Inertia);
+    }
+    v
+}
+
+/// What a residual is binned against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Axis {
+    /// Velocity `dq`, rad/s.
+    Velocity,
+    /// Position `q`, rad.
+    Position,
+    /// Time, s.
+    Time,
+    /// Acceleration, rad/s².
+    Acceleration,
+    /// Direction of motion (`sgn dq`: −1, 0, +1).
+    Direction,
+}
+
+/// One bin of a residual profile.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Bin {
+    /// Lower edge.
+    pub lo: f64,
+    /// Upper edge.
+    pub hi: f64,
+    /// Samples.
+    pub count: usize,
+    /// Mean residual, N·m.
+    pub mean: f64,
+    /// RMS residual, N·m.
+    pub rms: f64,
+}
+
+/// The residual binned against one axis.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Profile {
+    /// The axis.
+    pub axis: Axis,
+    /// Bins in increasing order.
+    pub bins: Vec<Bin>,
+    /// Share of the residual's variance explained by the bin means, in
+    /// [0, 1]: how much of the residual is a function of this axis.
+    pub explained: f64,
+}
+
+/// The residual binned against velocity, position, time, acceleration
+/// (equal-count bins) and direction.
+pub fn residual_profiles(log: &JointLog, residual: &[f64], bins: usize) -> Vec<Profile> {
+    let acc = log.acceleration();
+    let dir: Vec<f64> = log.dq.iter().map(|&v| sgn(v)).collect();
+    let axes: [(Axis, &[f64]); 5] = [
+        (Axis::Velocity, &log.dq),
+        (Axis::Position, &log.q),
+        (Axis::Time, &log.t),
+        (Axis::Acceleration, &acc),
+        (Axis::Direction, &dir),
+    ];
+    axes.iter()
+        .map(|&(axis, x)| {
+            profile(
+                axis,
+                x,
+                residual,
+                if axis == Axis::Direction { 3 } else { bins },
+            )
+        })
+        .collect()
+}
+
+fn profile(axis: Axis, x: &[f64], r: &[f64], bins: usize) -> Profile {
+    let n = x.len().min(r.len());
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
+    let mut out = Vec::new();
+    let total_mean = r[..n].iter().sum::<f64>() / n.max(1) as f64;
+    let total_var: f64 = r[..n].iter().map(|v| (v - total_mean).powi(2)).sum();
+    let mut between = 0.0;
+    if axis == Axis::Direction {
+        for s in [-1.0, 0.0, 1.0] {
+            let idx: Vec<usize> = (0..n).filter(|&i| x[i] == s).collect();
+            if let Some(b) = bin(&idx, s, s, r) {
+                between += b.count as f64 * (b.mean - total_mean).powi(2);
+                out.push(b);
+            }
+        }
+    } else {
+        let bins = bins.max(1);
+        for k in 0..bins {
+            let idx = &order[k * n / bins..(k + 1) * n / bins];
+            if idx.is_empty() {
+                continue;
+            }
+            if let Some(b) = bin(idx, x[idx[0]], x[idx[idx.len() - 1]], r) {
+                between += b.count as f64 * (b.mean - total_mean).powi(2);
+                out.push(b);
+            }
+        }
+    }
+    Profile {
+        axis,
+        bins: out,
+        explained: if total_var > 0.0 {
+            (between / total_var).min(1.0)
+        } else {
+            0.0
+        },
+    }
+}
+
+fn bin(idx: &[usize], lo: f64, hi: f64, r: &[f64]) -> Option<Bin> {
+    if idx.is_empty() {
+        return None;
+    }
+    let c = idx.len() as f64;
+    let mean = idx.iter().map(|&i| r[i]).sum::<f64>() / c;
+    let rms = (idx.iter().map(|&i| r[i] * r[i]).sum::<f64>() / c).sqrt();
+    Some(Bin {
+        lo,
+        hi,
+        count: idx.len(),
+        mean,
+        rms,
+    })
+}
