@@ -352,7 +352,7 @@ fn added_effect_sigma_equals_in_memory_corrected_sigma() {
     assert_eq!(step.parameters.len(), 2);
     for p in &step.parameters {
         let k = (0..base.n_base())
-            .find(|&k| base.expression(k) == p.name)
+            .find(|&k| base.expression(k).ends_with(&format!("= {}", p.name)))
             .unwrap_or_else(|| panic!("{} not in the in-memory base", p.name));
         eprintln!(
             "{}: {:.6} ± {:.2e} (in memory {:.6} ± {:.2e})",

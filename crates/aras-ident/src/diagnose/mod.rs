@@ -50,6 +50,7 @@
 //! Deterministic: no randomness (the base parameters use a Halton set).
 
 mod candidates;
+mod chunks;
 mod data;
 pub mod residual;
 mod select;
