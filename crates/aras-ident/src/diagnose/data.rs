@@ -54,6 +54,20 @@ impl Dataset {
         })
     }
 
+    /// [`Self::from_processed`] taking ownership of the samples instead of
+    /// copying them: the peak memory of loading a long log is one copy of
+    /// its processed samples, not two.
+    pub fn from_processed_owned(
+        name: impl Into<String>,
+        processed: aras_signal::Processed,
+    ) -> Result<Self, IdentError> {
+        let mut p = processed;
+        let samples = std::mem::take(&mut p.samples);
+        let mut d = Self::from_processed(name, &p)?;
+        d.samples = samples;
+        Ok(d)
+    }
+
     /// Samples per joint.
     pub fn len(&self) -> usize {
         self.samples.len()

@@ -17,7 +17,7 @@ use crate::error::IdentError;
 use crate::robot::consistent_problem;
 use crate::selection::{
     Accumulator, CandidateEvaluation, CandidateSpec, EvaluationStatus, Layout, ModelFit,
-    SelectionOptions, SelectionStatus, select,
+    SelectionOptions, SelectionStatus, fit_model, select,
 };
 use crate::streaming::QrAccumulator;
 
@@ -152,6 +152,43 @@ pub struct Step {
     pub parameters: Vec<NamedValue>,
     /// The evidence.
     pub evidence: CandidateScore,
+    /// The candidate's nonlinear setting refined between the grid points
+    /// (`stribeck_friction`'s `v_s`); `None` for candidates without one
+    /// refined.
+    pub refinement: Option<Refinement>,
+}
+
+/// Whether a refined setting lies inside its search interval.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RefinementStatus {
+    /// A minimum inside the interval; `std_dev` from its curvature.
+    Interior,
+    /// The minimum is at an end of the interval (the true value may lie
+    /// beyond it); `std_dev` is 0 (unknown).
+    AtBound,
+}
+
+/// A nonlinear setting refined by a one-dimensional search after the grid.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Refinement {
+    /// The setting's name (e.g. `v_s`, rad/s).
+    pub name: String,
+    /// The grid value the selection chose.
+    pub grid_value: f64,
+    /// The value minimising the TRAIN residual (golden-section search on
+    /// its logarithm over a factor 3 either side of the grid value).
+    pub value: f64,
+    /// Standard deviation from the curvature of the profile
+    /// `N_eff ln RSS(ln v)` (a drop of 1 is one σ; `N_eff` as in the F-test);
+    /// 0 if unknown.
+    pub std_dev: f64,
+    /// Interior minimum or at a bound.
+    pub status: RefinementStatus,
+    /// The effect's parameters refitted at the refined value.
+    pub parameters: Vec<NamedValue>,
+    /// Validation fitness per set and joint at the refined value (%).
+    pub fitness: Vec<[f64; 2]>,
 }
 
 /// Validation fitness after a step.
@@ -256,22 +293,33 @@ impl Context<'_> {
     /// `[start base regressor | every candidate's columns | τ]`, a delay
     /// candidate's column being the shifted torque.
     fn accumulate(&self, d: &Dataset, p: &Prepared) -> Result<Accumulator, IdentError> {
+        self.accumulate_with(d, p, &self.cands, &self.effect_models, &self.layout)
+    }
+
+    /// [`Self::accumulate`] for another candidate list and its layout.
+    fn accumulate_with(
+        &self,
+        d: &Dataset,
+        p: &Prepared,
+        cands: &[Candidate],
+        effect_models: &[Option<Model>],
+        layout: &Layout,
+    ) -> Result<Accumulator, IdentError> {
         let (lo, hi) = self.range(d);
-        let width = self.layout.width();
-        let target = self.layout.target_column();
-        let pb = self.layout.base_columns();
+        let width = layout.width();
+        let target = layout.target_column();
+        let pb = layout.base_columns();
         let lanes = in_lanes(
             &p.plan,
             lo,
             hi,
-            || Accumulator::new(&self.layout),
+            || Accumulator::new(layout),
             |acc, a, b| {
                 let (wl, wh) = p.plan.window(a, b);
                 let nw = wh - wl;
                 let s = window_columns(self.start, self.geometry, d, wl, wh)?;
                 let wb = self.base.base_regressor(s.w.as_ref())?;
-                let blocks = self
-                    .effect_models
+                let blocks = effect_models
                     .iter()
                     .map(|m| match m {
                         Some(m) => window_columns(m, self.geometry, d, wl, wh).map(|s| Some(s.w)),
@@ -286,8 +334,8 @@ impl Context<'_> {
                         for j in 0..pb {
                             m[(r, j)] = wb[(row, j)];
                         }
-                        for (k, c) in self.cands.iter().enumerate() {
-                            let cols = self.layout.candidate_columns(k);
+                        for (k, c) in cands.iter().enumerate() {
+                            let cols = layout.candidate_columns(k);
                             match (&blocks[k], c) {
                                 (Some(bk), _) => {
                                     for (jj, j) in cols.enumerate() {
@@ -308,7 +356,7 @@ impl Context<'_> {
             },
         )?;
         let mut it = lanes.into_iter();
-        let mut acc = it.next().unwrap_or_else(|| Accumulator::new(&self.layout));
+        let mut acc = it.next().unwrap_or_else(|| Accumulator::new(layout));
         for l in it {
             acc.merge(&l)?;
         }
@@ -625,12 +673,36 @@ pub fn diagnose(
             aliases: st.aliases.clone(),
             parameters,
             evidence: score_of(c, &st.evaluation),
+            refinement: None,
         });
         fitness_rows.push(FitnessRow {
             step: steps.len(),
             model: describe(start, &steps),
             fitness: pair_rows(&st.fit),
         });
+    }
+    // Nonlinear settings between the grid points: one pass over TRAIN per
+    // trial value (bounded memory), the other selected candidates kept.
+    for k in 0..steps.len() {
+        if let Candidate::Effect {
+            effect: Effect::StribeckFriction { v_s },
+        } = steps[k].candidate
+        {
+            let others: Vec<Candidate> = sel
+                .steps
+                .iter()
+                .map(|st| ctx.cands[st.candidate])
+                .filter(|c| *c != steps[k].candidate)
+                .collect();
+            steps[k].refinement = Some(refine_stribeck(
+                &ctx,
+                (train, &train_p),
+                (validation, &vals_p),
+                &others,
+                v_s,
+                &sel_opts,
+            )?);
+        }
     }
     let mut rounds: Vec<Vec<CandidateScore>> = sel
         .rounds
@@ -797,6 +869,130 @@ pub fn diagnose(
         estimate,
         consistent,
         elapsed_s: clock.elapsed().as_secs_f64(),
+    })
+}
+
+/// Golden-section search of `ln v_s` over a factor 3 either side of the
+/// grid value `v0`, then the profile's curvature for σ.
+fn refine_stribeck(
+    ctx: &Context<'_>,
+    train: (&Dataset, &Prepared),
+    validation: (&[Dataset], &[Prepared]),
+    others: &[Candidate],
+    v0: f64,
+    opts: &SelectionOptions,
+) -> Result<Refinement, IdentError> {
+    let setup = |v: f64| -> Result<(Vec<Candidate>, Vec<Option<Model>>, Layout), IdentError> {
+        let mut cands = others.to_vec();
+        cands.push(Candidate::Effect {
+            effect: Effect::StribeckFriction { v_s: v },
+        });
+        let models = cands
+            .iter()
+            .map(|c| match c {
+                Candidate::Effect { effect } => Model::new(vec![*effect], ctx.start.gravity())
+                    .map(Some)
+                    .map_err(|e| IdentError::Adapter {
+                        context: format!("candidate {}", effect.id()),
+                        message: e.to_string(),
+                    }),
+                Candidate::TimeDelay { .. } => Ok(None),
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let specs = cands
+            .iter()
+            .zip(&models)
+            .map(|(c, m)| match m {
+                Some(m) => CandidateSpec::columns(c.label(), m.columns()).in_family(c.id()),
+                None => CandidateSpec::target(c.label()).in_family(c.id()),
+            })
+            .collect();
+        let layout = Layout::new(ctx.base.n_base(), specs, 2)?;
+        Ok((cands, models, layout))
+    };
+    let all = |n: usize| (0..n).collect::<Vec<_>>();
+    // TRAIN only during the search (its own sums stand in for the
+    // validation set, whose figures are not used).
+    let rss = |u: f64| -> Result<f64, IdentError> {
+        let (c, m, l) = setup(u.exp())?;
+        let acc = ctx.accumulate_with(train.0, train.1, &c, &m, &l)?;
+        let f = fit_model(&acc, std::slice::from_ref(&acc), &all(c.len()), opts)?;
+        Ok(f.total_rss())
+    };
+    let (lo, hi) = (v0.ln() - 3f64.ln(), v0.ln() + 3f64.ln());
+    let phi = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut a, mut b) = (lo, hi);
+    let mut x1 = b - phi * (b - a);
+    let mut x2 = a + phi * (b - a);
+    let (mut f1, mut f2) = (rss(x1)?, rss(x2)?);
+    // 14 steps shrink the interval by 0.618¹⁴ ≈ 1.2e-3: ±0.1 % in v_s.
+    for _ in 0..14 {
+        if f1 <= f2 {
+            b = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = b - phi * (b - a);
+            f1 = rss(x1)?;
+        } else {
+            a = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = a + phi * (b - a);
+            f2 = rss(x2)?;
+        }
+    }
+    let (u, fu) = if f1 <= f2 { (x1, f1) } else { (x2, f2) };
+    let edge = 0.01 * (hi - lo);
+    let status = if u - lo < edge || hi - u < edge {
+        RefinementStatus::AtBound
+    } else {
+        RefinementStatus::Interior
+    };
+    let v = u.exp();
+    let (c, m, l) = setup(v)?;
+    let tacc = ctx.accumulate_with(train.0, train.1, &c, &m, &l)?;
+    let ne = opts.effective_fraction * tacc.rows().iter().sum::<usize>() as f64;
+    let std_dev = if status == RefinementStatus::Interior && fu > 0.0 {
+        let h = 0.05;
+        let (fm, fp) = (rss(u - h)?, rss(u + h)?);
+        let j2 = ne * (fp.ln() - 2.0 * fu.ln() + fm.ln()) / (h * h);
+        if j2 > 0.0 {
+            u.exp() * (2.0 / j2).sqrt()
+        } else {
+            0.0
+        }
+    } else {
+        0.0
+    };
+    let vaccs = validation
+        .0
+        .iter()
+        .zip(validation.1)
+        .map(|(d, p)| ctx.accumulate_with(d, p, &c, &m, &l))
+        .collect::<Result<Vec<_>, _>>()?;
+    let f = fit_model(&tacc, &vaccs, &all(c.len()), opts)?;
+    let last = c.len() - 1;
+    let names = Effect::StribeckFriction { v_s: v }.names();
+    let parameters = l
+        .candidate_columns(last)
+        .zip(&names)
+        .filter_map(|(col, name)| {
+            let k = f.columns.iter().position(|x| *x == col)?;
+            Some(NamedValue {
+                name: name.clone(),
+                value: f.estimate[k],
+                std_dev: f.std_dev[k],
+            })
+        })
+        .collect();
+    Ok(Refinement {
+        name: "v_s".into(),
+        grid_value: v0,
+        value: v,
+        std_dev,
+        status,
+        parameters,
+        fitness: f.fitness.iter().map(|x| fitness_pair(x)).collect(),
     })
 }
 
