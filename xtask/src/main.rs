@@ -7,9 +7,13 @@
 //!
 //! * `cargo xtask test [ARGS…]`: the whole test suite (`cargo test --workspace --release`).
 //! * `cargo xtask deps`: only the system-library check and install.
+//! * `cargo xtask check-mjcf [--reuse-venv] [ARGS…]`: verifies the MJCF export in
+//!   MuJoCo itself (`docs/mjcf.md`): builds `aras`, creates a throwaway Python
+//!   environment with `mujoco` and `numpy` from PyPI in `target/check-mjcf/venv`
+//!   and runs `scripts/check_mjcf.py` (ARGS go to the script, e.g. `--params P.json`).
 //! * `cargo xtask <command> [ARGS…]`: every other command (`pipeline`, `excite`,
 //!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `--help`) is
-//!   passed to the `aras` binary of the `aras-cli` package.
+//!   passed to the `aras` binary of the `aras-cli` package (`export-mjcf` too).
 //!
 //! When a library is missing it says which, why, and the exact command that
 //! installs it. It runs that command itself only with `apt-get` (the one
@@ -223,7 +227,7 @@ fn main() -> ExitCode {
     }
     let Some(first) = args.first().map(String::as_str) else {
         eprintln!(
-            "usage: cargo xtask [--no-install] <pipeline|excite|simulate|identify|validate|predict|diagnose|test|deps> [ARGS…]\n\
+            "usage: cargo xtask [--no-install] <pipeline|excite|simulate|identify|validate|predict|diagnose|export-mjcf|check-mjcf|test|deps> [ARGS…]\n\
              `cargo xtask --help` lists the commands of the toolkit; --no-install (or\n\
              ARAS_NO_INSTALL=1) never installs missing system libraries, it prints the command."
         );
@@ -235,6 +239,7 @@ fn main() -> ExitCode {
     }
     match first {
         "deps" => ExitCode::SUCCESS,
+        "check-mjcf" => check_mjcf(&args[1..]),
         "test" => {
             let mut cmd = cargo();
             cmd.args(["test", "--workspace", "--release"])
@@ -257,6 +262,105 @@ fn main() -> ExitCode {
             run(cmd)
         }
     }
+}
+
+/// Python packages of the MuJoCo check, pinned so that every machine checks
+/// against the same MuJoCo (update both together).
+const CHECK_MJCF_PACKAGES: [&str; 2] = ["mujoco==4.0.0", "numpy==2.4.6"];
+
+/// Marker file: the venv directory was made by this command, so it may
+/// remove it again.
+const VENV_MARKER: &str = ".made-by-cargo-xtask-check-mjcf";
+
+/// `cargo xtask check-mjcf`: build `aras`, make the throwaway venv, run the script.
+fn check_mjcf(args: &[String]) -> ExitCode {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives inside the workspace")
+        .to_path_buf();
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root.join("target"));
+    let base = target.join("check-mjcf");
+    let venv = base.join("venv");
+    let reuse = args.iter().any(|a| a == "--reuse-venv");
+    let script_args: Vec<&String> = args.iter().filter(|a| *a != "--reuse-venv").collect();
+
+    let mut build = cargo();
+    build.args([
+        "build",
+        "--quiet",
+        "--release",
+        "--package",
+        "aras-cli",
+        "--bin",
+        "aras",
+    ]);
+    if run(build) != ExitCode::SUCCESS {
+        return ExitCode::FAILURE;
+    }
+    let python = venv.join("bin").join("python");
+    if !(reuse && python.exists()) {
+        if venv.exists() {
+            if !venv.join(VENV_MARKER).exists() {
+                eprintln!(
+                    "xtask: {} exists but was not made by check-mjcf; remove it or move it away",
+                    venv.display()
+                );
+                return ExitCode::FAILURE;
+            }
+            if let Err(e) = std::fs::remove_dir_all(&venv) {
+                eprintln!("xtask: cannot remove the old {}: {e}", venv.display());
+                return ExitCode::FAILURE;
+            }
+        }
+        eprintln!(
+            "xtask: creating {} with {}…",
+            venv.display(),
+            CHECK_MJCF_PACKAGES.join(", ")
+        );
+        let mut mk = Command::new("python3");
+        mk.args(["-m", "venv"]).arg(&venv);
+        if run(mk) != ExitCode::SUCCESS {
+            eprintln!("xtask: `python3 -m venv` failed; install python3 and python3-venv");
+            return ExitCode::FAILURE;
+        }
+        if let Err(e) = std::fs::write(venv.join(VENV_MARKER), b"") {
+            eprintln!("xtask: cannot write into {}: {e}", venv.display());
+            return ExitCode::FAILURE;
+        }
+        let mut pip = Command::new(&python);
+        pip.args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+        ])
+        .args(CHECK_MJCF_PACKAGES);
+        if run(pip) != ExitCode::SUCCESS {
+            eprintln!(
+                "xtask: installing {} from PyPI failed",
+                CHECK_MJCF_PACKAGES.join(" ")
+            );
+            return ExitCode::FAILURE;
+        }
+    }
+    let work = base.join("work");
+    if let Err(e) = std::fs::create_dir_all(&work) {
+        eprintln!("xtask: cannot create {}: {e}", work.display());
+        return ExitCode::FAILURE;
+    }
+    let mut check = Command::new(&python);
+    check
+        .arg(root.join("scripts").join("check_mjcf.py"))
+        .arg("--aras")
+        .arg(target.join("release").join("aras"))
+        .arg("--work")
+        .arg(&work)
+        .arg("--identified")
+        .args(script_args);
+    run(check)
 }
 
 #[cfg(test)]

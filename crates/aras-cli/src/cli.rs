@@ -26,7 +26,7 @@ pub enum Command {
     Excite(ExciteArgs),
     /// Simulate the robot tracking a trajectory → LOG.csv + LOG.json.
     Simulate(SimulateArgs),
-    /// Identify the dynamic parameters from a log → params.json, base.json, report.
+    /// Identify the dynamic parameters from a log → params.json, robot.xml (MJCF), base.json, report.
     Identify(IdentifyArgs),
     /// Validate a parameter file: cross-validation on (79), workspace PD check.
     Validate(ValidateArgs),
@@ -35,6 +35,23 @@ pub enum Command {
     /// Find where model and measurement disagree, name the missing effect,
     /// add it and show the gap shrink → diagnosis.{md,html,json} (issue 8).
     Diagnose(DiagnoseArgs),
+    /// Write the robot of a parameter file as a MuJoCo model (MJCF):
+    /// bodies, joints, the loop constraint, friction and actuators (docs/mjcf.md).
+    ExportMjcf(ExportMjcfArgs),
+}
+
+/// `aras export-mjcf`.
+#[derive(Debug, Args)]
+pub struct ExportMjcfArgs {
+    /// Parameter file (e.g. params.json from identify: physically consistent).
+    #[arg(long, value_name = "P.json")]
+    pub params: PathBuf,
+    /// Output MJCF file.
+    #[arg(long, default_value = "robot.xml", value_name = "robot.xml")]
+    pub out: PathBuf,
+    /// Shared options.
+    #[command(flatten)]
+    pub common: Common,
 }
 
 /// `aras diagnose`.

@@ -3,10 +3,11 @@
 
 use anyhow::{Context, Result};
 use aras_dyn::Params;
-use aras_excite::{Criterion, Design, DesignSettings, DynRegressor, Limits};
+use aras_excite::{Criterion, Design, DesignProgress, DesignSettings, DynRegressor, Limits};
 use aras_ident::BaseParameters;
-use aras_ident::robot::base_projection;
 use aras_kin::Workspace;
+use aras_pipeline::robot::base_projection;
+use indicatif::ProgressBar;
 use nalgebra::Vector2;
 
 use crate::config::{Config, CriterionChoice};
@@ -36,16 +37,24 @@ pub fn settings(cfg: &Config, nominal: &Params) -> Result<DesignSettings> {
         seed: t.seed,
         max_outer_iterations: t.max_outer_iterations,
         max_inner_iterations: t.max_inner_iterations,
-        // The caller's stage spinner shows progress; two bars would fight.
-        progress: false,
         ..DesignSettings::default()
     })
 }
 
-/// Designs the excitation for the nominal robot's paper model.
-pub fn design(cfg: &Config, nominal: &Params, base: &BaseParameters) -> Result<Design> {
+/// Designs the excitation for the nominal robot's paper model, counting
+/// the finished starts on the stage's spinner.
+pub fn design(
+    cfg: &Config,
+    nominal: &Params,
+    base: &BaseParameters,
+    spinner: &ProgressBar,
+) -> Result<Design> {
     let reg = DynRegressor::new(paper_model(nominal)?, nominal.geometry()?);
     let settings = settings(cfg, nominal)?;
-    aras_excite::design(&reg, &base_projection(base), &settings)
+    let stage = spinner.message();
+    let progress = |p: DesignProgress| {
+        spinner.set_message(format!("{stage}: {}/{} starts", p.done, p.total));
+    };
+    aras_excite::design_with_progress(&reg, &base_projection(base), &settings, &progress)
         .context("designing the excitation trajectory")
 }

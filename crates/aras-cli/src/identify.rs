@@ -4,7 +4,7 @@
 //! The mathematics lives in `aras-signal` (processing), `aras-dyn`
 //! (regressor) and `aras-ident` (base parameters, least squares, SDP); this
 //! module wires them with the configured settings, the way
-//! `crates/aras-ident/tests/acceptance.rs` does (`docs/validation.md`):
+//! `crates/aras-pipeline/tests/acceptance.rs` does (`docs/validation.md`):
 //! **parallel filtering** (spec §6 NOTE: the same zero-phase low-pass on the
 //! torques and every regressor column, so a Coulomb jump is smeared
 //! identically on both sides of `T = W β`), **reversal exclusion** (rows of
@@ -13,15 +13,15 @@
 
 use anyhow::{Context, Result, bail};
 use aras_dyn::{Model, Params};
-use aras_ident::robot::{
-    self, FilterMode, Stacked, consistent_problem, filter, filter_reach, keep_rows, noise_gain,
-    params_from_solution, reversal_mask, stack,
-};
 use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{
     BaseParameters, NoiseVariances, OlsEstimate, ReducedLs, SdpSettings, SdpSolution,
 };
 use aras_kin::{Geometry, Workspace};
+use aras_pipeline::robot::{
+    self, FilterMode, Stacked, consistent_problem, filter, filter_reach, keep_rows, noise_gain,
+    params_from_solution, reversal_mask, stack,
+};
 use aras_signal::{
     Butterworth, DerivativeMethod, FilterSpec, Log, PeriodSource, ProcessOptions, Processed, Sos,
 };
@@ -60,7 +60,7 @@ pub fn process_options(
 
 /// Data ready for least squares: the processed samples and the stacked
 /// regressor (`2N × n`, joint 1's rows first) with its torques, filtered as
-/// the filtering mode says (`aras_ident::robot::filter`).
+/// the filtering mode says (`aras_pipeline::robot::filter`).
 pub struct Prepared {
     /// What `aras-signal` produced.
     pub processed: Processed,
@@ -118,7 +118,7 @@ impl Prepared {
 }
 
 /// Processes a log and stacks the model's regressor on it
-/// (`aras_ident::robot::{stack, filter}`).
+/// (`aras_pipeline::robot::{stack, filter}`).
 pub fn prepare(
     log: &Log,
     opts: &ProcessOptions,
@@ -160,7 +160,7 @@ pub fn prepare(
     })
 }
 
-/// Base parameters (58)–(61) of `model` (`aras_ident::robot::base_parameters`)
+/// Base parameters (58)–(61) of `model` (`aras_pipeline::robot::base_parameters`)
 /// on `identification.base_samples` quasi-random states filling the
 /// workspace box and rate limits of `[trajectory]`.
 pub fn base_parameters(model: &Model, geometry: &Geometry, cfg: &Config) -> Result<BaseParameters> {

@@ -21,6 +21,7 @@
 
 #![warn(missing_docs)]
 
+pub mod ceiling;
 pub mod cli;
 pub mod cmd;
 pub mod config;

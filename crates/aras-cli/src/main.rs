@@ -16,6 +16,7 @@ fn main() -> ExitCode {
         Command::Validate(a) => cmd::validate::run(a),
         Command::Predict(a) => cmd::predict::run(a),
         Command::Diagnose(a) => cmd::diagnose::run(a),
+        Command::ExportMjcf(a) => cmd::export_mjcf::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

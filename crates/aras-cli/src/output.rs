@@ -432,6 +432,9 @@ pub enum FileKind {
     /// `aras simulate`: a log whose sidecar (LOG.json) holds the simulator's
     /// ground truth (`truth`), which only the simulator writes.
     SimulatedLog,
+    /// `aras export-mjcf`: an MJCF file carrying the exporter's mark
+    /// ([`aras_dyn::mjcf::GENERATOR_MARK`]) in its opening comment.
+    Mjcf,
 }
 
 impl FileKind {
@@ -448,6 +451,12 @@ impl FileKind {
                 v.get("format").and_then(|f| f.as_str()) == Some("aras-log/1")
                     && v.get("truth").is_some()
             }),
+            Self::Mjcf => fs::read(path)
+                .map(|b| {
+                    let head = String::from_utf8_lossy(&b[..b.len().min(512)]).into_owned();
+                    head.contains(aras_dyn::mjcf::GENERATOR_MARK)
+                })
+                .unwrap_or(false),
         }
     }
 
@@ -458,6 +467,7 @@ impl FileKind {
             Self::SimulatedLog => {
                 "a log written by `aras simulate` (its sidecar LOG.json holds the simulator's truth)"
             }
+            Self::Mjcf => "an MJCF file written by `aras export-mjcf`",
         }
     }
 }

@@ -34,9 +34,31 @@ pub struct Fitness {
     pub ols_kept: [f64; 2],
     /// SDP on the rows away from velocity reversals (%).
     pub sdp_kept: [f64; 2],
-    /// The paper's value for this dataset, when published (%).
+    /// Where `ols`/`sdp` were scored: the simulated robot or a measured log.
+    pub data: DataKind,
+    /// Noise ceiling (%): the fitness of the true robot's noise-free torques
+    /// against the same log (`crate::ceiling`); known for simulated data only.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub paper: Option<[f64; 2]>,
+    pub noise_ceiling: Option<[f64; 2]>,
+    /// The noise ceiling on the rows away from velocity reversals (compare
+    /// with `ols_kept`, `sdp_kept`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise_ceiling_kept: Option<[f64; 2]>,
+    /// The paper's value for this kind of dataset (%), measured on the
+    /// **real** robot (§7, Table 2): another experiment, shown for
+    /// orientation, not a score to beat.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub paper_real_robot: Option<[f64; 2]>,
+}
+
+/// Where a fitness was measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DataKind {
+    /// A log of the simulated robot (the truth is known).
+    Simulated,
+    /// A log whose truth is unknown (e.g. the real robot).
+    Measured,
 }
 
 /// The SDP solver's report.
@@ -125,10 +147,13 @@ pub struct Summary {
 }
 
 /// Builds the fitness list from the excitation fit and cross-validation.
+/// `excitation_ceiling` is the noise ceiling of the identification log
+/// (simulated logs only); cross-validation logs are always simulated.
 pub fn fitness_list(
     id: &Identification,
     xv: &[CrossValidation],
     excitation_paper: bool,
+    excitation_ceiling: Option<crate::ceiling::Ceiling>,
 ) -> Vec<Fitness> {
     let mut v = vec![Fitness {
         dataset: "excitation".into(),
@@ -137,7 +162,14 @@ pub fn fitness_list(
         sdp: id.fitness_sdp,
         ols_kept: id.fitness_ols_kept,
         sdp_kept: id.fitness_sdp_kept,
-        paper: excitation_paper.then_some(crate::paper::EXCITATION_FITNESS),
+        data: if excitation_ceiling.is_some() {
+            DataKind::Simulated
+        } else {
+            DataKind::Measured
+        },
+        noise_ceiling: excitation_ceiling.map(|c| c.all),
+        noise_ceiling_kept: excitation_ceiling.map(|c| c.kept),
+        paper_real_robot: excitation_paper.then_some(crate::paper::EXCITATION_FITNESS),
     }];
     for x in xv {
         v.push(Fitness {
@@ -147,7 +179,10 @@ pub fn fitness_list(
             sdp: x.fitness[1],
             ols_kept: x.fitness_kept[0],
             sdp_kept: x.fitness_kept[1],
-            paper: crate::paper::table2(x.frequency_hz),
+            data: DataKind::Simulated,
+            noise_ceiling: Some(x.ceiling.all),
+            noise_ceiling_kept: Some(x.ceiling.kept),
+            paper_real_robot: crate::paper::table2(x.frequency_hz),
         });
     }
     v

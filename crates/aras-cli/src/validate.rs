@@ -8,8 +8,8 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use aras_dyn::{Dynamics, Model, Params, Sinusoid};
 use aras_ident::BaseParameters;
-use aras_ident::robot::{Stacked, keep_rows};
 use aras_ident::validate::{PdRegion, check_positive_definite};
+use aras_pipeline::robot::{Stacked, keep_rows};
 use aras_signal::{ReadOptions, read_log};
 use nalgebra::Vector2;
 use serde::Serialize;
@@ -29,6 +29,9 @@ pub struct CrossValidation {
     /// The same on the rows away from velocity reversals
     /// (`identification.min_speed`, `validation.reversal_reach`).
     pub fitness_kept: Vec<[f64; 2]>,
+    /// Noise ceiling (78) per joint: the true robot's noise-free torques
+    /// against the same log (`crate::ceiling`).
+    pub ceiling: crate::ceiling::Ceiling,
     /// Time, measured and predicted torques of one averaged period, for plots.
     #[serde(skip)]
     pub traces: Traces,
@@ -99,10 +102,18 @@ pub fn cross_validate(
             fitness_kept.push(fitness_standard(&kept, beta)?);
             predicted.push(p);
         }
+        let ceiling = crate::ceiling::noise_ceiling(
+            &prep,
+            truth,
+            cfg.simulation.friction_smoothing,
+            cfg.identification.filtering,
+            &keep,
+        )?;
         out.push(CrossValidation {
             frequency_hz: f,
             fitness,
             fitness_kept,
+            ceiling,
             traces: Traces {
                 t: prep.processed.samples.t.clone(),
                 measured: prep.t().to_vec(),

@@ -50,6 +50,7 @@ fn pipeline_identify_predict_end_to_end() {
         "log.csv",
         "log.json",
         "params.json",
+        "robot.xml",
         "params_ols.json",
         "base.json",
         "summary.json",
@@ -68,24 +69,55 @@ fn pipeline_identify_predict_end_to_end() {
     );
     // With g ⟂ a the paper model has 23 base parameters (spec §4 NOTE).
     assert_eq!(s["base_parameters"], 23);
-    // Every cross-validation entry beats the paper's Table 2 (OLS and SDP).
+    // Our fitness is read against the noise ceiling (the true robot's
+    // noise-free torques on the same log), never against the paper's
+    // real-robot figures, which are only carried along, labelled.
+    //  * Kept rows (away from reversals, where the model's friction holds):
+    //    within 1.0 point of the ceiling. What separates them is the
+    //    estimation error of 23 parameters and the processing (filtered
+    //    derivatives) that fitted parameters partly absorb and the truth
+    //    does not, so ours may also lie slightly above it; measured
+    //    |ours − ceiling| ≤ 0.52 points over seeds 1 and 7 (3 datasets × 2
+    //    joints × OLS/SDP each), 1.0 is twice that.
+    //  * All rows: never more than 0.5 above the ceiling (measured ≤ 0.03;
+    //    in-sample fitting of noise is worth ≈ b/N ≪ 0.5 %). Below it, the
+    //    gap is the sign-Coulomb friction (49) missing the simulated robot's
+    //    smooth friction at reversals (up to ≈ 11 points on τ2 here).
     let fit = s["fitness"].as_array().unwrap();
     assert_eq!(fit.len(), 3);
     for f in fit {
-        let paper = f["paper"].as_array().unwrap();
-        for est in ["ols", "sdp"] {
+        assert_eq!(f["data"], "simulated", "{f}");
+        assert!(f["paper_real_robot"].is_array(), "{f}");
+        assert!(f.get("paper").is_none(), "unlabelled paper figures: {f}");
+        let ceiling = f["noise_ceiling"].as_array().unwrap();
+        let ceiling_kept = f["noise_ceiling_kept"].as_array().unwrap();
+        for (est, kept) in [("ols", "ols_kept"), ("sdp", "sdp_kept")] {
             for j in 0..2 {
-                let ours = f[est][j].as_f64().unwrap();
-                let p = paper[j].as_f64().unwrap();
+                let (ours, c) = (f[est][j].as_f64().unwrap(), ceiling[j].as_f64().unwrap());
+                let (ours_k, ck) = (
+                    f[kept][j].as_f64().unwrap(),
+                    ceiling_kept[j].as_f64().unwrap(),
+                );
                 assert!(
-                    ours > p,
-                    "{} {est} τ{}: {ours} ≤ paper {p}",
+                    c <= 100.0 && ours <= c + 0.5,
+                    "{} {est} τ{}: {ours} vs ceiling {c}",
+                    f["dataset"],
+                    j + 1
+                );
+                assert!(
+                    (ours_k - ck).abs() <= 1.0,
+                    "{} {kept} τ{}: {ours_k} vs kept ceiling {ck}",
                     f["dataset"],
                     j + 1
                 );
             }
         }
     }
+    let table = String::from_utf8_lossy(&r.stdout);
+    assert!(
+        table.contains("SIMULATED") && table.contains("REAL robot") && table.contains("ceiling"),
+        "{table}"
+    );
     // The SDP's mass matrix is PD over the workspace, its links consistent.
     assert_eq!(s["pd_check"]["sdp"]["positive_definite"], true);
     for v in s["pseudo_inertia_min_eigenvalue"]["sdp"]
@@ -116,6 +148,12 @@ fn pipeline_identify_predict_end_to_end() {
     let params =
         aras_dyn::Params::load(out.join("params.json")).expect("params.json is a parameter file");
     assert!(params.links.iter().all(|l| l.mass > 0.0));
+    // robot.xml is the MJCF of exactly this (physically consistent) set.
+    let xml = std::fs::read_to_string(out.join("robot.xml")).unwrap();
+    assert_eq!(
+        xml,
+        aras_dyn::mjcf::to_mjcf(&params, &Default::default()).unwrap()
+    );
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(
         html.contains("<svg") && !html.contains("src=\""),

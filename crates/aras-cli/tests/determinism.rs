@@ -35,6 +35,7 @@ fn same_seed_gives_byte_identical_outputs() {
     let (a, b) = (run("a"), run("b"));
     for f in [
         "params.json",
+        "robot.xml",
         "params_ols.json",
         "base.json",
         "summary.json",

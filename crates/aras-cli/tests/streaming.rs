@@ -93,6 +93,7 @@ fn streaming_on_and_off_give_the_same_estimates() {
     for d in ["qr", "gram"] {
         for f in [
             "params.json",
+            "robot.xml",
             "params_ols.json",
             "summary.json",
             "report.md",

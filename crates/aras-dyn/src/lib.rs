@@ -68,6 +68,7 @@ mod dynamics;
 mod error;
 mod json;
 mod lagrange;
+pub mod mjcf;
 mod model;
 mod params;
 mod regressor;

@@ -14,7 +14,6 @@ fn benches(c: &mut Criterion) {
     let reg = DynRegressor::aras_diamond().unwrap();
     let e = test_support::base_projection(&reg, 400, 7);
     let settings = DesignSettings {
-        progress: false,
         ..DesignSettings::default()
     };
     let traj = random_feasible(&settings, 1, 5).unwrap().remove(0);

@@ -28,7 +28,6 @@ fn main() {
     let reg = DynRegressor::aras_diamond().expect("the paper's model");
     let e = test_support::base_projection(&reg, 400, 7);
     let s = DesignSettings {
-        progress: false,
         ..DesignSettings::default()
     };
     let random = random_feasible(&s, 100, 99).expect("default settings are valid");

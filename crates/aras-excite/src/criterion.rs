@@ -153,8 +153,8 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         state: impl Fn(usize) -> [Vector2<f64>; 3],
     ) -> Result<(), ExciteError> {
         // Start the scalar loop clean whatever ran on this thread before
-        // (see `aras_kin::simd`).
-        aras_kin::simd::clear_upper_state();
+        // (see `aras_ident::simd`).
+        aras_ident::simd::clear_upper_state();
         let n = self.reg.columns();
         let ns = self.samples;
         for s in 0..ns {
@@ -179,8 +179,8 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         state: impl Fn(usize) -> [Vector2<f64>; 3],
     ) -> Result<(), ExciteError> {
         // Start the scalar loop clean whatever ran on this thread before
-        // (see `aras_kin::simd`).
-        aras_kin::simd::clear_upper_state();
+        // (see `aras_ident::simd`).
+        aras_ident::simd::clear_upper_state();
         let n = self.reg.columns();
         let ns = self.samples;
         for s in 0..ns {
@@ -223,7 +223,7 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
     /// Analyses the current `W`; with `adjoint`, also fills
     /// [`contraction`](Self::contraction) (needs [`fill_derivatives`](Self::fill_derivatives)).
     pub fn analyse(&mut self, adjoint: bool) -> Result<Analysis, ExciteError> {
-        let wb = &self.w * &self.e;
+        let wb = aras_ident::linalg::product(self.w.as_ref(), self.e.as_ref());
         let b = wb.ncols();
         let ns = self.samples;
         let norms: Vec<f64> = (0..b).map(|j| wb.col(j).norm_l2()).collect();
@@ -238,18 +238,15 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
             )));
         }
         let ws = Mat::from_fn(wb.nrows(), b, |i, j| wb[(i, j)] / norms[j]);
-        let svd_s = ws
-            .thin_svd()
-            .map_err(|e| degenerate(format!("SVD failed: {e:?}")))?;
-        let svd_b = wb
-            .thin_svd()
-            .map_err(|e| degenerate(format!("SVD failed: {e:?}")))?;
-        // faer's SVDs can leave the AVX upper state dirty, which makes the
-        // scalar code after them (the contraction below, the next
-        // iteration's dual-number kinematics) several times slower.
-        aras_kin::simd::clear_upper_state();
-        let ss: Vec<f64> = svd_s.S().column_vector().iter().copied().collect();
-        let sb: Vec<f64> = svd_b.S().column_vector().iter().copied().collect();
+        // Through aras-ident's faer facade, which leaves the vector unit
+        // clean for the scalar code after it (the contraction below, the
+        // next iteration's dual-number kinematics).
+        let svd_s = aras_ident::linalg::thin_svd(ws.as_ref())
+            .map_err(|e| degenerate(format!("SVD failed: {e}")))?;
+        let svd_b = aras_ident::linalg::thin_svd(wb.as_ref())
+            .map_err(|e| degenerate(format!("SVD failed: {e}")))?;
+        let ss: Vec<f64> = svd_s.s.clone();
+        let sb: Vec<f64> = svd_b.s.clone();
         let (smax, smin) = (ss[0], ss[b - 1]);
         let kappa = smax / smin;
         let logdet: f64 = sb.iter().map(|s| (s * s / ns as f64).ln()).sum();
@@ -272,7 +269,7 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         if adjoint {
             let g = match self.criterion {
                 Criterion::Condition => {
-                    let (u, v) = (svd_s.U(), svd_s.V());
+                    let (u, v) = (&svd_s.u, &svd_s.v);
                     let mut g = Mat::<f64>::zeros(wb.nrows(), b);
                     for (idx, scale) in [(0, 1.0 / smax), (b - 1, -1.0 / smin)] {
                         let sigma = ss[idx];
@@ -288,13 +285,12 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
                     g
                 }
                 Criterion::DOptimal => {
-                    let (u, v) = (svd_b.U(), svd_b.V());
+                    let (u, v) = (&svd_b.u, &svd_b.v);
                     let scaled = Mat::from_fn(u.nrows(), b, |r, i| -2.0 * u[(r, i)] / sb[i]);
-                    &scaled * v.transpose()
+                    aras_ident::linalg::product(scaled.as_ref(), v.transpose())
                 }
             };
-            let a = &g * self.e.transpose();
-            aras_kin::simd::clear_upper_state();
+            let a = aras_ident::linalg::product(g.as_ref(), self.e.transpose());
             let n = a.ncols();
             for s in 0..ns {
                 let mut acc = [0.0; DIRS];

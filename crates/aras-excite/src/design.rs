@@ -18,11 +18,10 @@
 //! in continuous time.
 
 use std::cell::RefCell;
-use std::io::IsTerminal;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use aras_kin::{Geometry, evaluate};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use nalgebra::{DMatrix, Vector2};
 use optimization_engine::alm::{
     AlmCache, AlmFactory, AlmOptimizer, AlmProblem, NO_JACOBIAN_MAPPING, NO_MAPPING,
@@ -86,8 +85,6 @@ pub struct DesignSettings {
     pub max_time_per_start: Option<Duration>,
     /// Worker threads for the starts (0 = rayon's global pool).
     pub threads: usize,
-    /// Show a progress bar on stderr (only when stderr is a terminal).
-    pub progress: bool,
 }
 
 impl Default for DesignSettings {
@@ -109,7 +106,6 @@ impl Default for DesignSettings {
             max_inner_iterations: 200,
             max_time_per_start: None,
             threads: 0,
-            progress: true,
         }
     }
 }
@@ -352,6 +348,27 @@ pub fn design<R: Regressor>(
     projection: &DMatrix<f64>,
     settings: &DesignSettings,
 ) -> Result<Design, ExciteError> {
+    design_with_progress(regressor, projection, settings, &|_| {})
+}
+
+/// How far a [`design`] has come: starts finished of the total.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DesignProgress {
+    /// Starts finished so far.
+    pub done: usize,
+    /// Starts in total ([`DesignSettings::starts`]).
+    pub total: usize,
+}
+
+/// [`design`], calling `progress` after each finished start (from the
+/// worker thread that ran it; the library draws nothing, a program shows
+/// the progress as it likes).
+pub fn design_with_progress<R: Regressor>(
+    regressor: &R,
+    projection: &DMatrix<f64>,
+    settings: &DesignSettings,
+    progress: &(dyn Fn(DesignProgress) + Sync),
+) -> Result<Design, ExciteError> {
     let started = Instant::now();
     settings.validate()?;
     check_projection(projection, regressor.columns())?;
@@ -369,21 +386,15 @@ pub fn design<R: Regressor>(
         })
         .collect();
 
-    let bar = if settings.progress && std::io::stderr().is_terminal() {
-        ProgressBar::with_draw_target(Some(points.len() as u64), ProgressDrawTarget::stderr())
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template("excitation design {bar:30} {pos}/{len} starts, {elapsed}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let done = AtomicUsize::new(0);
+    let total = points.len();
     let run = || -> Vec<(Vec<f64>, StartReport)> {
         points
             .par_iter()
             .map(|p0| {
                 let r = run_start(regressor, projection, settings, &cons, &grid, p0.clone());
-                bar.inc(1);
+                let done = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress(DesignProgress { done, total });
                 r
             })
             .collect()
@@ -397,7 +408,6 @@ pub fn design<R: Regressor>(
     } else {
         run()
     };
-    bar.finish_and_clear();
 
     let mut best: Option<(usize, f64)> = None;
     for (k, (_, rep)) in outcomes.iter().enumerate() {

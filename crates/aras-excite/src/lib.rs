@@ -46,7 +46,8 @@
 //! * `nalgebra`: the small fixed-size vectors of the kinematics API, and the
 //!   projection matrix `E` at the API edge.
 //! * `rand`: seeded random feasible starts (`Xoshiro256PlusPlus`, portable).
-//! * `rayon`: the starts run in parallel; `indicatif`: the progress bar.
+//! * `rayon`: the starts run in parallel (progress through a callback,
+//!   [`design_with_progress`]).
 //! * `serde`/`serde_json`: the trajectory file format; `thiserror`: errors.
 //! * `aras-dyn`: the robot's regressor ([`DynRegressor`]) and the
 //!   simulator's `Trajectory` trait, implemented by [`FourierTrajectory`].
@@ -64,7 +65,10 @@ mod regressor;
 
 pub use constraints::{DEFAULT_MAX_ACCEL_DEG, Limits, Margins};
 pub use criterion::{Assessment, Criterion};
-pub use design::{Design, DesignSettings, StartReport, assess, design, random_feasible};
+pub use design::{
+    Design, DesignProgress, DesignSettings, StartReport, assess, design, design_with_progress,
+    random_feasible,
+};
 pub use dyn_model::DynRegressor;
 pub use error::ExciteError;
 pub use fourier::{

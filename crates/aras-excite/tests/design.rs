@@ -14,7 +14,6 @@ use test_support::{StandIn, base_projection};
 fn quick() -> DesignSettings {
     DesignSettings {
         starts: 3,
-        progress: false,
         ..DesignSettings::default()
     }
 }

@@ -17,7 +17,6 @@ fn paper_model_design() {
     let e = test_support::base_projection(&reg, 400, 7);
     assert_eq!(e.ncols(), 23);
     let s = DesignSettings {
-        progress: false,
         ..DesignSettings::default()
     };
     let d = design(&reg, &e, &s).unwrap();

@@ -76,4 +76,13 @@ pub enum FrictionError {
         /// Upper bound.
         upper: f64,
     },
+    /// No start of the search gave a usable fit.
+    #[error(
+        "{model}: no start gave a usable fit (the regressor columns are dependent everywhere); \
+         the log may not move the joint or the torque may be constant"
+    )]
+    NoFit {
+        /// Which model.
+        model: &'static str,
+    },
 }

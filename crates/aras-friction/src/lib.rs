@@ -10,6 +10,10 @@
 //!   each with its equations, parameter vector with physical bounds
 //!   ([`ParamInfo`]), prediction along a motion ([`FrictionModel`]) and its
 //!   separable structure `τ = Φ(θ) β` ([`Separable`]) for fitting.
+//! * [`log`]: the joint log format (CSV with `t, q, dq, tau`, optional `ddq`),
+//!   column mapping ([`ColumnMap`]), derivatives on irregular grids.
+//! * [`sim`]: a single-joint simulator with known friction (LuGre with
+//!   internal state, ripple, drift, asymmetry, noise, irregular sampling).
 //!
 //! ## Conventions
 //! SI units and radians: s, rad, rad/s, N·m. `sgn(0) = 0`. Dynamic models
@@ -19,15 +23,24 @@
 //!
 //! ## Dependencies, and why
 //! * `nalgebra`: QR least squares on small tall regressors.
+//! * `rayon`: the finite-difference Jacobian columns of the nonlinear
+//!   search are independent model evaluations, run in parallel.
 //! * `serde`: models and results serialise for reports; `thiserror`: the
 //!   error type.
 #![warn(missing_docs)]
+// Small dense linear algebra reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
 
 mod error;
+pub mod fit;
+mod linalg;
+pub mod log;
 pub mod models;
 mod motion;
+pub mod sim;
 
 pub use error::FrictionError;
+pub use log::{ColumnMap, JointLog, LogError, read_joint_log, read_joint_log_from};
 pub use models::{
     CoulombViscous, Dahl, FrictionModel, LuGre, ParamInfo, Separable, Stribeck, predict_parts, sgn,
     stribeck_decay,

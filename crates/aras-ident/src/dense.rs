@@ -10,9 +10,7 @@
 //! rank-deficient is redone with the plain QR.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::qr::no_pivoting::factor::{
-    qr_in_place, qr_in_place_scratch, recommended_block_size,
-};
+use faer::linalg::qr::no_pivoting::factor::{qr_in_place_scratch, recommended_block_size};
 use faer::{Mat, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
@@ -175,15 +173,9 @@ fn faer_block_r(mut a: Mat<f64>) -> Option<Mat<f64>> {
         Par::Seq,
         Default::default(),
     ));
-    let info = qr_in_place(
-        a.as_mut(),
-        h.as_mut(),
-        Par::Seq,
-        MemStack::new(&mut mem),
-        Default::default(),
-    );
-    crate::simd::clear_upper_state();
-    (info.rank == k).then(|| Mat::from_fn(k, n, |i, j| if i <= j { a[(i, j)] } else { 0.0 }))
+    let rank =
+        crate::linalg::householder_qr_in_place(a.as_mut(), h.as_mut(), MemStack::new(&mut mem));
+    (rank == k).then(|| Mat::from_fn(k, n, |i, j| if i <= j { a[(i, j)] } else { 0.0 }))
 }
 
 /// `R` factor of one block by the never-skipping Householder QR.

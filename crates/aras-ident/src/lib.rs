@@ -12,19 +12,22 @@
 //!    normal equations), σ% per parameter, residual variance, condition
 //!    number; weighted LS with per-joint noise variances. Data that do not
 //!    excite some base parameters give [`IdentError::NotExcited`] naming them.
-//! 3. [`ConsistentLs`] (67)–(73): the physically consistent estimate as one
-//!    convex SDP over the links' pseudo-inertias.
+//!    [`covariance`]: the uncertainty for correlated residuals (HAC sandwich
+//!    with a data-driven bandwidth), which σ, σ% and the tests should use.
+//! 3. `ConsistentLs` (67)–(73): the physically consistent estimate as one
+//!    convex SDP over the links' pseudo-inertias (default feature `sdp`).
 //! 4. [`validate`]: fitness (78), workspace positive definiteness of the mass
 //!    matrix (80), parameter errors against a known truth.
-//! 5. [`robot`]: the adapter to the ARAS-Diamond crates (stacked regressor
-//!    from `aras-dyn` and `aras-signal`, parallel filtering, the four links'
-//!    SDP layout, results back into `aras_dyn::Params`).
-//! 6. [`streaming`]: the same least squares from logs of any length in
-//!    bounded memory (incremental QR, chunked CSV reading).
-//! 7. [`selection`]: which of many candidate column blocks a model is
+//! 5. [`streaming`]: the same least squares from data of any length in
+//!    bounded memory (incremental QR or Gram accumulation), for any
+//!    [`LinearModel`].
+//! 6. [`selection`]: which of many candidate column blocks a model is
 //!    missing, from one pass over the data in bounded memory (forward
 //!    selection on accumulated Gram blocks, validated on every held-out
 //!    set); [`stats`]: the F, χ² and autocorrelation tools it uses.
+//!
+//! The robot-specific orchestration (the ARAS-Diamond's regressor, reading
+//! and processing logs, the diagnosis) lives in `aras-pipeline`.
 //!
 //! ## Conventions
 //! SI units and radians throughout. A stacked regressor has one row per
@@ -37,10 +40,11 @@
 //! ## Dependencies, and why
 //! * `faer`: fast blocked QR and SVD of tall regressors (hundreds of
 //!   thousands of rows).
-//! * `clarabel`: interior-point conic solver with PSD cones for the SDP; its
-//!   PSD cones call LAPACK, provided by the system OpenBLAS through
-//!   `openblas-src` (see `docs/blas.md`).
-//! * `aras-kin`, `aras-dyn`, `aras-signal`, `nalgebra`: only in [`robot`].
+//! * `clarabel` (feature `sdp`, default): interior-point conic solver with
+//!   PSD cones for the SDP; its PSD cones call LAPACK through `openblas-src`,
+//!   whose flavour (`system` or `static`) the final binary chooses, as with
+//!   clarabel itself (see `docs/blas.md`). Without `sdp` the crate needs no
+//!   system library.
 //! * `rayon`: parallel tall-skinny QR, streaming regressor blocks and
 //!   workspace scans.
 //! * `serde`: results serialise for reports; `thiserror`: the error type.
@@ -48,29 +52,31 @@
 // Dense linear algebra on small fixed matrices reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-// Links the system OpenBLAS that clarabel's PSD cones call (LAPACK).
-use openblas_src as _;
-
 mod base;
+pub mod covariance;
 mod dense;
-pub mod diagnose;
 mod error;
 mod groups;
+pub mod linalg;
 mod ls;
+mod model;
 mod rank;
-pub mod robot;
+#[cfg(feature = "sdp")]
 mod sdp;
 pub mod selection;
-mod simd;
+pub mod simd;
 pub mod stats;
 pub mod streaming;
 pub mod validate;
 
 pub use base::{BaseParameters, COEFFICIENT_CLEAN, DEFAULT_RANK_TOLERANCE, RankMargin};
+pub use covariance::{HacCovariance, hac_covariance};
 pub use dense::symmetric_eigenvalues;
 pub use error::IdentError;
 pub use groups::RowGroups;
 pub use ls::{NoiseVariances, OlsEstimate, ReducedLs, WlsEstimate, ols, wls};
+pub use model::LinearModel;
+#[cfg(feature = "sdp")]
 pub use sdp::{
     ActiveConstraint, ConsistentLs, ConstraintKind, LinkLayout, LinkReport, SdpSettings,
     SdpSolution, pseudo_inertia_min_eigenvalue,

@@ -225,12 +225,12 @@ impl ReducedLs {
             .map(|(x, s)| 100.0 * s / x.abs())
             .collect();
         let mut singular_values =
-            self.r
-                .singular_values()
-                .map_err(|_| IdentError::SolverFailed {
+            crate::linalg::singular_values(self.r.as_ref()).map_err(|_| {
+                IdentError::SolverFailed {
                     status: "SVD did not converge".into(),
                     iterations: 0,
-                })?;
+                }
+            })?;
         singular_values.sort_by(|x, y| y.total_cmp(x));
         let condition_number = singular_values[0] / singular_values[b - 1];
         Ok(OlsEstimate {

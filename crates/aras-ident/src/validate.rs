@@ -22,8 +22,8 @@ pub fn predict(w: MatRef<'_, f64>, beta: &[f64]) -> Result<Vec<f64>, IdentError>
         });
     }
     let b = Col::from_fn(beta.len(), |i| beta[i]);
-    let y = w * &b;
-    Ok((0..y.nrows()).map(|i| y[i]).collect())
+    let y = crate::linalg::product(w, b.as_mat());
+    Ok((0..y.nrows()).map(|i| y[(i, 0)]).collect())
 }
 
 /// NRMSE fitness (78) in percent:

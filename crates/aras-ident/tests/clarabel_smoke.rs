@@ -1,5 +1,6 @@
 //! Proves that clarabel's PSD cones link (OpenBLAS) and solve here, and pins
 //! the packing convention the SDP module relies on.
+#![cfg(feature = "sdp")]
 #![allow(clippy::needless_range_loop)]
 
 use clarabel::algebra::CscMatrix;

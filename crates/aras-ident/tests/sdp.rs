@@ -1,4 +1,5 @@
 //! The physically consistent SDP on synthetic rigid bodies with known answers.
+#![cfg(feature = "sdp")]
 #![allow(clippy::needless_range_loop)]
 
 mod common;

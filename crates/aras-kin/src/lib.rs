@@ -61,7 +61,6 @@ pub mod links;
 mod pose;
 mod sample;
 mod scalar;
-pub mod simd;
 mod workspace;
 
 pub use error::KinError;

@@ -1,12 +1,12 @@
 //! `aras diagnose` (issue 8): where the model and the measurement disagree,
 //! which missing effect explains it, and how much the gap shrinks once it
-//! is added. The statistics live in `aras_ident::diagnose`; this command
+//! is added. The statistics live in `aras_pipeline::diagnose`; this command
 //! reads and processes the logs, runs it, and writes
 //! `diagnosis.json`, `diagnosis.md`, `diagnosis.html` and the plots.
 
 use anyhow::{Context, Result};
-use aras_ident::diagnose::residual::Profile;
-use aras_ident::diagnose::{Dataset, DiagnoseOptions, Diagnosis, diagnose};
+use aras_pipeline::diagnose::residual::Profile;
+use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, diagnose};
 use aras_signal::read_log;
 
 use crate::cli::DiagnoseArgs;

@@ -27,8 +27,8 @@ pub fn run(args: &ExciteArgs) -> Result<()> {
     let base = stages.run("base parameters (58)", |_| {
         base_parameters(&model, &nominal.geometry()?, &cfg)
     })?;
-    let d = stages.run("excitation design (74)–(77)", |_| {
-        crate::excite::design(&cfg, &nominal, &base)
+    let d = stages.run("excitation design (74)–(77)", |bar| {
+        crate::excite::design(&cfg, &nominal, &base, bar)
     })?;
     write_atomic(&args.out, (d.trajectory.to_json() + "\n").as_bytes())?;
     println!(

@@ -28,6 +28,9 @@ pub struct FitInput<'a> {
     pub nominal: &'a Params,
     /// The truth, when known (simulated logs).
     pub truth: Option<&'a Params>,
+    /// The simulator's friction smoothing width (rad/s) that made the log,
+    /// for the noise ceiling (`crate::ceiling`) when `truth` is known.
+    pub friction_smoothing: f64,
     /// Simulate and score the cross-validation trajectories (79) with the truth.
     pub cross_validate: bool,
     /// The log.
@@ -132,9 +135,23 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         }
         None => None,
     };
-    let fitness = fitness_list(&id, &xv, input.design.is_some());
+    let ceiling = match input.truth {
+        Some(truth) => Some(crate::ceiling::noise_ceiling(
+            &prepared,
+            truth,
+            input.friction_smoothing,
+            cfg.identification.filtering,
+            &prepared.keep_mask(
+                cfg.identification.min_speed,
+                cfg.identification.reversal_reach,
+            )?,
+        )?),
+        None => None,
+    };
+    let fitness = fitness_list(&id, &xv, input.design.is_some(), ceiling);
 
     out.write("params.json", id.sdp_params.to_json_string() + "\n")?;
+    crate::cmd::export_mjcf::write_beside(out, &id.sdp_params)?;
     out.write("params_ols.json", id.ols_params.to_json_string() + "\n")?;
     out.write_json("base.json", &base_file(&id, truth_base.as_deref()))?;
 
@@ -190,28 +207,48 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
     Ok(summary)
 }
 
-/// The short terminal table: paper vs ours.
+/// The short terminal table: ours (on the simulated robot or the given
+/// log) next to the noise ceiling, and the paper's real-robot figures
+/// labelled as such.
 pub fn terminal_table(s: &Summary) -> String {
-    let mut t = String::from(
-        "fitness (78) %, all rows; kept: OLS on the rows away from velocity reversals\n\
-         dataset          paper τ1  ours τ1 (OLS/SDP)   paper τ2  ours τ2 (OLS/SDP)   kept τ1/τ2\n",
-    );
+    use crate::summary::DataKind;
+    let simulated = s.fitness.iter().any(|f| f.data == DataKind::Simulated);
+    let mut t = String::from("fitness (78) %, all rows");
+    if simulated {
+        t += "; ours: on the SIMULATED robot's logs; ceiling: the true robot's noise-free \
+              torques on the same log (the best attainable)";
+    } else {
+        t += "; ours: on the given log";
+    }
+    t += "; kept: OLS on the rows away from velocity reversals";
+    if s.fitness.iter().any(|f| f.paper_real_robot.is_some()) {
+        t += "; paper: the REAL robot (§7, Table 2), another experiment, for orientation only";
+    }
+    t += "\ndataset          ours τ1 (OLS/SDP)  ceiling τ1   ours τ2 (OLS/SDP)  ceiling τ2   kept τ1/τ2 (ceiling)              paper τ1/τ2\n";
     for f in &s.fitness {
-        let p = |j: usize| {
-            f.paper
-                .map_or("    –".to_string(), |p| format!("{:5.1}", p[j]))
+        let ceil = |j: usize| {
+            f.noise_ceiling
+                .map_or("     –".to_string(), |c| format!("{:6.2}", c[j]))
         };
+        let kept_ceiling = f
+            .noise_ceiling_kept
+            .map_or(String::new(), |c| format!(" ({:6.2} / {:6.2})", c[0], c[1]));
+        let paper = f.paper_real_robot.map_or("   –".to_string(), |p| {
+            format!("{:4.1} / {:4.1}", p[0], p[1])
+        });
         t += &format!(
-            "{:<16} {:>8}  {:6.2} / {:6.2}     {:>8}  {:6.2} / {:6.2}     {:6.2} / {:6.2}\n",
+            "{:<16} {:6.2} / {:6.2}      {:>6}     {:6.2} / {:6.2}      {:>6}     {:6.2} / {:6.2}{:<20}   {}\n",
             f.dataset,
-            p(0),
             f.ols[0],
             f.sdp[0],
-            p(1),
+            ceil(0),
             f.ols[1],
             f.sdp[1],
+            ceil(1),
             f.ols_kept[0],
-            f.ols_kept[1]
+            f.ols_kept[1],
+            kept_ceiling,
+            paper
         );
     }
     t += &format!("base parameters: {}", s.base_parameters);

@@ -1,5 +1,5 @@
 //! `aras identify --streaming`: identification from a log of any length in
-//! bounded memory (`aras_ident::streaming::identify_log`, docs/scale.md),
+//! bounded memory (`aras_pipeline::streaming::identify_log`, docs/scale.md),
 //! with the same settings as the in-memory path (processing, parallel
 //! filter, reversal exclusion, filter-corrected σ, OLS/WLS, SDP) and the
 //! same output files. What a single bounded pass cannot give: the fitness
@@ -12,11 +12,10 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use aras_dyn::{Model, Params};
-use aras_ident::robot::{FilterMode, params_from_solution};
-use aras_ident::streaming::{
-    Accumulation, StreamingOptions, StreamingResult, identify_log_with_progress,
-};
+use aras_ident::streaming::Accumulation;
 use aras_ident::{BaseParameters, NoiseVariances};
+use aras_pipeline::robot::{FilterMode, params_from_solution};
+use aras_pipeline::streaming::{StreamingOptions, StreamingResult, identify_log_with_progress};
 use indicatif::ProgressBar;
 
 use crate::cli::{AccumulationArg, IdentifyArgs};
@@ -25,7 +24,7 @@ use crate::identify::{consistent_fit, process_options, with_standard};
 use crate::output::OutDir;
 use crate::stages::Stages;
 use crate::summary::{
-    BASE_FORMAT, BaseEntry, BaseFile, Fitness, PseudoInertia, SdpReport, Summary,
+    BASE_FORMAT, BaseEntry, BaseFile, DataKind, Fitness, PseudoInertia, SdpReport, Summary,
 };
 use crate::validate::{parameter_errors, pd_check, pseudo_inertia_min};
 
@@ -107,7 +106,7 @@ fn estimated_rows(path: &Path) -> Option<u64> {
 }
 
 /// Everything after streaming: OLS/WLS, SDP, checks, and the output files
-/// (params.json, params_ols.json, base.json, summary.json, report.md).
+/// (params.json, robot.xml, params_ols.json, base.json, summary.json, report.md).
 #[allow(clippy::too_many_arguments)]
 pub fn fit_and_write(
     r: &StreamingResult,
@@ -146,7 +145,15 @@ pub fn fit_and_write(
         sdp: f_sdp,
         ols_kept: f_ols,
         sdp_kept: f_sdp,
-        paper: None,
+        data: if truth.is_some() {
+            DataKind::Simulated
+        } else {
+            DataKind::Measured
+        },
+        // Streaming keeps no samples to evaluate the truth on.
+        noise_ceiling: None,
+        noise_ceiling_kept: None,
+        paper_real_robot: None,
     }];
     let mut pd = BTreeMap::new();
     pd.insert("ols".to_string(), pd_check(&ols_params, cfg)?);
@@ -173,6 +180,7 @@ pub fn fit_and_write(
         None => None,
     };
     out.write("params.json", sdp_params.to_json_string() + "\n")?;
+    crate::cmd::export_mjcf::write_beside(out, &sdp_params)?;
     out.write("params_ols.json", ols_params.to_json_string() + "\n")?;
     out.write_json(
         "base.json",

@@ -3,6 +3,7 @@
 
 pub mod diagnose;
 pub mod excite;
+pub mod export_mjcf;
 pub mod fit;
 pub mod identify;
 pub mod identify_streaming;

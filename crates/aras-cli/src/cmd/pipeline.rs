@@ -38,8 +38,8 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
     let base = stages.run("base parameters (58)", |_| {
         base_parameters(&model, &geometry, &cfg)
     })?;
-    let design = stages.run("excitation design (74)–(77)", |_| {
-        crate::excite::design(&cfg, &nominal, &base)
+    let design = stages.run("excitation design (74)–(77)", |bar| {
+        crate::excite::design(&cfg, &nominal, &base, bar)
     })?;
     out.write("trajectory.json", design.trajectory.to_json() + "\n")?;
 
@@ -90,6 +90,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
             cfg: &cfg,
             nominal: &nominal,
             truth: Some(&truth),
+            friction_smoothing: cfg.simulation.friction_smoothing,
             cross_validate: true,
             log: &log,
             period: None,
@@ -108,7 +109,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
     let dir = out.commit()?;
     println!("{}", fit::terminal_table(&summary));
     println!(
-        "outputs in {} (report.html, report.md, summary.json, params.json, base.json)",
+        "outputs in {} (report.html, report.md, summary.json, params.json, robot.xml, base.json)",
         dir.display()
     );
     Ok(())

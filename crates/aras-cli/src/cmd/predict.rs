@@ -46,7 +46,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let fit = fitness_per_joint(prep.t(), &predict_standard(&prep, &beta)?)?;
     // The model torque itself: the regressor of the processed samples,
     // unfiltered.
-    let raw = aras_ident::robot::stack(&model, &geometry, &prep.processed.samples)?;
+    let raw = aras_pipeline::robot::stack(&model, &geometry, &prep.processed.samples)?;
     let tau = aras_ident::validate::predict(raw.w.as_ref(), &beta)?;
     let n = prep.n();
     let mut csv = String::with_capacity(n * 48);

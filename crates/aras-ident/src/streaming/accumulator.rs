@@ -3,9 +3,7 @@
 //! constant memory and the result is the same [`ReducedLs`] as in memory.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::qr::no_pivoting::factor::{
-    qr_in_place, qr_in_place_scratch, recommended_block_size,
-};
+use faer::linalg::qr::no_pivoting::factor::{qr_in_place_scratch, recommended_block_size};
 use faer::{Mat, MatMut, MatRef, Par};
 
 use crate::error::{IdentError, check_finite_mat, check_finite_vec};
@@ -490,15 +488,12 @@ impl BlockQr {
         if k == 0 {
             return self.r.as_ref();
         }
-        let info = qr_in_place(
+        let rank = crate::linalg::householder_qr_in_place(
             self.a.as_mut().submatrix_mut(0, 0, rows, kc),
             self.h.as_mut().submatrix_mut(0, 0, self.bs, k),
-            Par::Seq,
             MemStack::new(&mut self.mem),
-            Default::default(),
         );
-        crate::simd::clear_upper_state();
-        if info.rank == k {
+        if rank == k {
             for q in 0..kc {
                 for p in 0..=q.min(k - 1) {
                     let (i, j) = if compact { (keep[p], keep[q]) } else { (p, q) };

@@ -10,8 +10,7 @@
 //! check [`GramCheck`] measures `κ` on the final factor and says when the QR
 //! accumulation ([`Accumulation::Qr`]) should be used instead.
 
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par, Side};
+use faer::{Mat, MatRef};
 use serde::Serialize;
 
 use crate::error::IdentError;
@@ -70,14 +69,13 @@ impl GramCheck {
             let (ci, cj) = (cols[i], cols[j]);
             r[(ci, cj)] / norms[cj]
         });
-        let condition = match scaled.singular_values() {
+        let condition = match crate::linalg::singular_values(scaled.as_ref()) {
             Ok(s) if !s.is_empty() => {
                 let (hi, lo) = (s[0], s[s.len() - 1]);
                 if lo > 0.0 { hi / lo } else { f64::INFINITY }
             }
             _ => f64::INFINITY,
         };
-        crate::simd::clear_upper_state();
         let error_bound = condition * condition * f64::EPSILON;
         Self {
             condition,
@@ -124,15 +122,7 @@ impl GramSum {
         // The full product, though only the lower triangle is used: faer's
         // triangular-destination product was 2.4× slower at this shape
         // (2048 × 24: 129 µs vs 53 µs, 44 GFlop/s).
-        matmul(
-            self.block.as_mut(),
-            Accum::Replace,
-            a.transpose(),
-            a,
-            1.0,
-            Par::Seq,
-        );
-        crate::simd::clear_upper_state();
+        crate::linalg::gram_into(self.block.as_mut(), a);
         let c = self.sum.ncols();
         for j in 0..c {
             for i in j..c {
@@ -215,9 +205,8 @@ impl GramSum {
             .collect();
         let scaled = Mat::from_fn(c, c, |i, j| g(i, j) / (d[i] * d[j]));
         let mut data = vec![0.0; c * c];
-        match scaled.self_adjoint_eigen(Side::Lower) {
-            Ok(evd) => {
-                let (u, s) = (evd.U(), evd.S());
+        match crate::linalg::symmetric_eigen(scaled.as_ref()) {
+            Ok((u, s)) => {
                 // Row k of F = sqrt(λ_k) v_kᵀ D, column-major.
                 for j in 0..c {
                     for k in 0..c {
@@ -231,7 +220,6 @@ impl GramSum {
             // instead of returning a wrong estimate.
             Err(_) => data.iter_mut().for_each(|v| *v = f64::NAN),
         }
-        crate::simd::clear_upper_state();
         crate::dense::HouseholderQr::new(data, c, c).r()
     }
 }

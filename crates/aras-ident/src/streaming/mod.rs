@@ -1,5 +1,4 @@
-//! Identification from logs of any length in bounded memory (issue 9,
-//! "Scale").
+//! Least squares from data of any length in bounded memory.
 //!
 //! The least-squares problem `min ‖W_b β_b − T‖` (62)–(66) never needs the
 //! stacked regressor, only its QR factor: `[W_b | T] = Q [[R, z], [0, ρ]]`.
@@ -15,38 +14,27 @@
 //! sum once at the end, about 3× faster than **Qr** (per-block Householder
 //! QR, orthogonal transformations only); its accuracy cost, `κ² ε` instead
 //! of `κ ε`, is checked on the final factor ([`GramCheck`],
-//! [`GRAM_ERROR_LIMIT`]). Reversal exclusion and the filter's noise gain
-//! are applied as in memory ([`StreamingOptions::min_speed`],
-//! [`StreamingResult::noise_gain`]).
+//! [`GRAM_ERROR_LIMIT`]).
 //!
-//! * [`QrAccumulator`]: robot-agnostic; push blocks of rows per row group,
-//!   merge accumulators, then [`QrAccumulator::reduced`], `ols`, `wls`
+//! * [`QrAccumulator`]: push blocks of rows per row group, merge
+//!   accumulators, then [`QrAccumulator::reduced`], `ols`, `wls`
 //!   (per-group weights, including weights from the first pass's
 //!   residuals, in one pass).
-//! * [`RegressorStage`]: task-space states → ARAS regressor
-//!   (`aras_kin::evaluate`, `aras_dyn::Model::fill`, no allocation per
-//!   sample) → base columns → accumulator, in parallel blocks merged in a
-//!   fixed order (results do not depend on the thread count).
-//! * [`identify_log`]: a CSV log → [`StreamingResult`], read in chunks,
-//!   with three bounded-memory routes ([`StreamingRoute`]).
-//! * [`synthetic`]: a fast synthetic run (states or a CSV log of any
-//!   length) for the scale tests and benchmarks.
+//! * [`RegressorStage`]: states → a [`crate::LinearModel`]'s regressor (no
+//!   allocation per sample) → base columns → accumulator, in parallel
+//!   blocks merged in a fixed order (results do not depend on the thread
+//!   count).
 //!
-//! Accuracy check against the in-memory path: `tests/streaming.rs`
-//! (accumulated in chunks vs `ReducedLs::new` on the same rows: estimates
-//! agree to 1e-10 relative; `identify_log` vs read → process → stack →
-//! filter → OLS in memory). Performance and the scale study:
-//! `benches/streaming.rs`, `examples/scale_study.rs`, `docs/scale.md`.
+//! Reading logs in chunks, filtering blocks with overlap and excluding
+//! velocity reversals is the robot pipeline's part (`aras-pipeline`).
+//! Accuracy against the in-memory path: accumulated in chunks vs
+//! `ReducedLs::new` on the same rows agree to 1e-10 relative
+//! (`aras-pipeline/tests/streaming.rs`).
 
 pub(crate) mod accumulator;
 pub(crate) mod gram;
-mod log;
 mod stage;
-pub mod synthetic;
 
 pub use accumulator::QrAccumulator;
 pub use gram::{Accumulation, GRAM_ERROR_LIMIT, GramCheck};
-pub use log::{
-    StreamingOptions, StreamingResult, StreamingRoute, identify_log, identify_log_with_progress,
-};
 pub use stage::{RegressorStage, STAGE_BLOCK_SAMPLES, States};

@@ -2,16 +2,14 @@
 //! rows → running QR factors, in fixed-size blocks, in parallel, without
 //! allocation per sample.
 
-use aras_dyn::Model;
-use aras_kin::Geometry;
 use faer::{Mat, MatMut};
-use nalgebra::Vector2;
 use rayon::prelude::*;
 
 use super::accumulator::{BlockQr, QrAccumulator};
 use super::gram::{Accumulation, GramSum};
 use crate::base::BaseParameters;
 use crate::error::IdentError;
+use crate::model::LinearModel;
 
 /// Samples per block: two 2048 × (b+1) column-major blocks (one per joint,
 /// 400 kB each for b = 23) stay in the L2 cache while they are filled and
@@ -92,12 +90,13 @@ struct Work {
     error: Option<IdentError>,
 }
 
-/// Turns task-space states into the base regressor of a [`Model`] and
-/// accumulates `[W_b | T]` into a [`QrAccumulator`] (two row groups: joint 1,
-/// joint 2), the per-sample work of streaming identification.
+/// Turns states into the base regressor of a [`LinearModel`] with two
+/// coordinates and two outputs and accumulates `[W_b | T]` into a
+/// [`QrAccumulator`] (two row groups: joint 1, joint 2), the per-sample work
+/// of streaming identification.
 ///
-/// Per sample: `aras_kin::evaluate` (kinematics (1)–(25)), `Model::fill`
-/// (regressor (45)–(53), into a reused buffer), the base columns `W_b = W E`
+/// Per sample: [`LinearModel::fill`] (into a reused buffer), the base
+/// columns `W_b = W E`
 /// (61) copied into the joint's block. Per block of
 /// [`STAGE_BLOCK_SAMPLES`], per joint, depending on [`Accumulation`]:
 /// * **Gram** (default): `G += AᵀA` (one triangular matrix product,
@@ -114,9 +113,8 @@ struct Work {
 /// Rows are the regressor *unfiltered*; streaming with the parallel filter
 /// is done by [`super::identify_log`], which filters blocks with overlap
 /// before they get here.
-pub struct RegressorStage {
-    model: Model,
-    geometry: Geometry,
+pub struct RegressorStage<M> {
+    model: M,
     columns: Vec<usize>,
     names: Vec<String>,
     works: Vec<Work>,
@@ -124,25 +122,33 @@ pub struct RegressorStage {
     accumulation: Accumulation,
 }
 
-impl RegressorStage {
-    /// A stage for `model` on `geometry`, keeping the base columns of `base`
-    /// (which must have been found on the same model's columns), with the
-    /// default [`Accumulation::Gram`].
-    pub fn new(
-        model: &Model,
-        geometry: &Geometry,
-        base: &BaseParameters,
-    ) -> Result<Self, IdentError> {
-        Self::with_accumulation(model, geometry, base, Accumulation::default())
+impl<M: LinearModel> RegressorStage<M> {
+    /// A stage for `model`, keeping the base columns of `base` (which must
+    /// have been found on the same model's columns), with the default
+    /// [`Accumulation::Gram`].
+    pub fn new(model: M, base: &BaseParameters) -> Result<Self, IdentError> {
+        Self::with_accumulation(model, base, Accumulation::default())
     }
 
     /// [`Self::new`] with a chosen accumulation.
     pub fn with_accumulation(
-        model: &Model,
-        geometry: &Geometry,
+        model: M,
         base: &BaseParameters,
         accumulation: Accumulation,
     ) -> Result<Self, IdentError> {
+        for (what, found) in [
+            ("streaming stage: model coordinates", model.coordinates()),
+            ("streaming stage: model outputs", model.outputs()),
+        ] {
+            if found != 2 {
+                return Err(IdentError::DimensionMismatch {
+                    what,
+                    expected: 2,
+                    found,
+                    hint: "the streaming stage accumulates models with two coordinates and two actuators",
+                });
+            }
+        }
         if base.standard_names() != model.names().as_slice() {
             return Err(IdentError::DimensionMismatch {
                 what: "base analysis columns vs model columns",
@@ -176,8 +182,7 @@ impl RegressorStage {
             })
             .collect();
         Ok(Self {
-            model: model.clone(),
-            geometry: *geometry,
+            model,
             columns: base.independent().to_vec(),
             names: base.base_names(),
             works,
@@ -244,7 +249,7 @@ impl RegressorStage {
     }
 
     /// [`Self::push`] keeping only joint `j`'s rows where `keep[j]` is true
-    /// (e.g. away from velocity reversals, [`crate::robot::reversal_mask`]);
+    /// (e.g. away from velocity reversals);
     /// `None` keeps every row. Every sample's kinematics are still
     /// evaluated and checked, as in memory.
     pub fn push_selected(
@@ -273,7 +278,7 @@ impl RegressorStage {
         let starts: Vec<usize> = (0..n).step_by(STAGE_BLOCK_SAMPLES).collect();
         let saved: Vec<(Saved, [usize; 2])> =
             self.works.iter().map(|w| (w.sums.save(), w.rows)).collect();
-        let (model, geometry, columns) = (&self.model, &self.geometry, &self.columns[..]);
+        let (model, columns) = (&self.model, &self.columns[..]);
         let offset = self.samples;
         for wave in starts.chunks(LANES) {
             self.works[..wave.len()]
@@ -288,7 +293,7 @@ impl RegressorStage {
                         rows,
                         offset,
                     };
-                    w.error = run_block(w, model, geometry, columns, &block).err();
+                    w.error = run_block(w, model, columns, &block).err();
                 });
             if let Some(e) = self.works.iter_mut().find_map(|w| w.error.take()) {
                 for (w, (sums, rows)) in self.works.iter_mut().zip(saved) {
@@ -354,12 +359,11 @@ impl Block<'_, '_> {
 
 /// Writes the block's rows into `a[j]` from row `top` (masked rows as
 /// zeros, which add nothing to `AᵀA`); returns the rows kept per joint.
-fn fill_block(
+fn fill_block<M: LinearModel>(
     a: [MatMut<'_, f64>; 2],
     top: usize,
     y: &mut [f64],
-    model: &Model,
-    geometry: &Geometry,
+    model: &M,
     columns: &[usize],
     bl: &Block<'_, '_>,
 ) -> Result<[usize; 2], IdentError> {
@@ -368,7 +372,7 @@ fn fill_block(
     let [mut a0, mut a1] = a;
     for i in 0..bl.rows {
         let k = bl.start + i;
-        fill_sample(model, geometry, bl.st, k, bl.offset, y)?;
+        fill_sample(model, bl.st, k, bl.offset, y)?;
         for (j, a) in [&mut a0, &mut a1].into_iter().enumerate() {
             if bl.kept(j, k) {
                 for (jb, &col) in columns.iter().enumerate() {
@@ -389,11 +393,10 @@ fn fill_block(
 /// [`fill_block`] into transposed blocks (`c × samples`, column `i` = row
 /// of sample `i`), through plain slices: the per-sample copy of the hot
 /// path.
-fn fill_block_transposed(
+fn fill_block_transposed<M: LinearModel>(
     a: &mut [Mat<f64>; 2],
     y: &mut [f64],
-    model: &Model,
-    geometry: &Geometry,
+    model: &M,
     columns: &[usize],
     bl: &Block<'_, '_>,
 ) -> Result<[usize; 2], IdentError> {
@@ -401,7 +404,7 @@ fn fill_block_transposed(
     let mut kept = [0, 0];
     for i in 0..bl.rows {
         let k = bl.start + i;
-        fill_sample(model, geometry, bl.st, k, bl.offset, y)?;
+        fill_sample(model, bl.st, k, bl.offset, y)?;
         for (j, a) in a.iter_mut().enumerate() {
             let col = a
                 .as_mut()
@@ -426,10 +429,9 @@ fn fill_block_transposed(
 }
 
 /// Fills and accumulates one block.
-fn run_block(
+fn run_block<M: LinearModel>(
     w: &mut Work,
-    model: &Model,
-    geometry: &Geometry,
+    model: &M,
     columns: &[usize],
     bl: &Block<'_, '_>,
 ) -> Result<(), IdentError> {
@@ -438,7 +440,7 @@ fn run_block(
     let rows = bl.rows;
     let kept = match &mut w.sums {
         Sums::Gram(blocks, grams) => {
-            let kept = fill_block_transposed(blocks, &mut w.y, model, geometry, columns, bl)?;
+            let kept = fill_block_transposed(blocks, &mut w.y, model, columns, bl)?;
             for j in 0..2 {
                 grams[j].add_transposed(blocks[j].as_ref().subcols(0, rows));
             }
@@ -451,7 +453,7 @@ fn run_block(
                 let mut a1 = q1.block_mut();
                 a0.as_mut().subrows_mut(0, c).copy_from(&r[0]);
                 a1.as_mut().subrows_mut(0, c).copy_from(&r[1]);
-                fill_block([a0, a1], c, &mut w.y, model, geometry, columns, bl)?
+                fill_block([a0, a1], c, &mut w.y, model, columns, bl)?
             };
             for j in 0..2 {
                 let lane = &r[j];
@@ -464,7 +466,7 @@ fn run_block(
                     for i in 0..rows {
                         let k = bl.start + i;
                         let ok = bl.kept(j, k)
-                            && fill_sample(model, geometry, bl.st, k, bl.offset, &mut y).is_ok();
+                            && fill_sample(model, bl.st, k, bl.offset, &mut y).is_ok();
                         for (jb, &col) in columns.iter().enumerate() {
                             a[(c + i, jb)] = if ok { y[2 * col + j] } else { 0.0 };
                         }
@@ -494,11 +496,10 @@ fn run_block(
     Ok(())
 }
 
-/// Kinematics and regressor of sample `k` into `y` (2 × n, column-major).
+/// The model's regressor of sample `k` into `y` (2 × n, column-major).
 #[inline]
-fn fill_sample(
-    model: &Model,
-    geometry: &Geometry,
+fn fill_sample<M: LinearModel>(
+    model: &M,
     st: &States<'_>,
     k: usize,
     offset: usize,
@@ -516,18 +517,15 @@ fn fill_sample(
             });
         }
     }
-    let s = aras_kin::evaluate(
-        geometry,
-        &Vector2::new(st.x[0][k], st.x[1][k]),
-        &Vector2::new(st.x_dot[0][k], st.x_dot[1][k]),
-        &Vector2::new(st.x_ddot[0][k], st.x_ddot[1][k]),
-    )
-    .map_err(|e| IdentError::Adapter {
-        context: format!("streaming regressor, kinematics of sample {}", offset + k),
-        message: e.to_string(),
-    })?;
-    model.fill(&s, y).map_err(|e| IdentError::Adapter {
-        context: format!("streaming regressor, sample {}", offset + k),
-        message: e.to_string(),
-    })
+    model
+        .fill(
+            &[st.x[0][k], st.x[1][k]],
+            &[st.x_dot[0][k], st.x_dot[1][k]],
+            &[st.x_ddot[0][k], st.x_ddot[1][k]],
+            y,
+        )
+        .map_err(|e| IdentError::Adapter {
+            context: format!("streaming regressor, sample {}", offset + k),
+            message: e.to_string(),
+        })
 }

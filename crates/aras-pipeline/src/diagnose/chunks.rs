@@ -17,7 +17,7 @@ use aras_signal::Samples;
 use rayon::prelude::*;
 
 use super::data::Dataset;
-use crate::error::IdentError;
+use aras_ident::IdentError;
 use crate::robot::{FilterMode, Stacked, filter, filter_reach, stack};
 
 /// Samples per chunk: with ≈ 170 columns the window's columns of both

@@ -1,7 +1,7 @@
 //! Adapter to the ARAS-Diamond crates: stacked regressors from `aras-dyn`'s
 //! model and `aras-signal`'s samples, parallel filtering (spec §6 NOTE), the
 //! SDP layout of the four links, and the way back into `aras-dyn`'s
-//! parameter type. Everything else in this crate is robot-agnostic.
+//! parameter type.
 
 use aras_dyn::{Effect, Model, Params};
 use aras_kin::{Geometry, Workspace};
@@ -10,10 +10,9 @@ use faer::Mat;
 use nalgebra::Vector2;
 use rayon::prelude::*;
 
-use crate::base::{BaseParameters, DEFAULT_RANK_TOLERANCE};
-use crate::error::IdentError;
-use crate::groups::RowGroups;
-use crate::sdp::{ConsistentLs, SdpSolution};
+use aras_ident::{
+    BaseParameters, ConsistentLs, DEFAULT_RANK_TOLERANCE, IdentError, RowGroups, SdpSolution,
+};
 
 /// A stacked, joint-major regressor with its torques: rows `0..N` are
 /// joint 1, `N..2N` joint 2.

@@ -12,14 +12,14 @@ use super::candidates::{Candidate, CandidateGrid};
 use super::chunks::{Plan, filtered_torques, in_lanes, window_columns};
 use super::data::{Dataset, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse};
-use crate::base::BaseParameters;
-use crate::error::IdentError;
+use aras_ident::BaseParameters;
+use aras_ident::IdentError;
 use crate::robot::consistent_problem;
-use crate::selection::{
+use aras_ident::selection::{
     Accumulator, CandidateEvaluation, CandidateSpec, EvaluationStatus, Layout, ModelFit,
     SelectionOptions, SelectionStatus, fit_model, select,
 };
-use crate::streaming::QrAccumulator;
+use aras_ident::streaming::QrAccumulator;
 
 /// Settings of [`diagnose`]; `Default` gives the documented values.
 #[derive(Debug, Clone, PartialEq, Serialize)]

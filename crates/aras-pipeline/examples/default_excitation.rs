@@ -2,11 +2,11 @@
 //! acceptance tests use:
 //!
 //! ```text
-//! cargo run --release -p aras-ident --example default_excitation
+//! cargo run --release -p aras-pipeline --example default_excitation
 //! ```
 //!
 //! Paper model (42 columns, 23 base parameters) of `Params::aras_diamond()`,
-//! base projection from [`aras_ident::robot::base_parameters`] (400 Halton
+//! base projection from [`aras_pipeline::robot::base_parameters`] (400 Halton
 //! states), `DesignSettings::default()` (L = 5, ω_f = 2π/10, box and rates
 //! (77), condition criterion, 8 starts) with seed 1. Writes
 //! `fixtures/trajectories/default-excitation.json` (or the path given as the
@@ -16,8 +16,8 @@ use std::path::PathBuf;
 
 use aras_dyn::Params;
 use aras_excite::{DesignSettings, DynRegressor, design};
-use aras_ident::robot::{base_parameters, base_projection};
 use aras_kin::Workspace;
+use aras_pipeline::robot::{base_parameters, base_projection};
 
 /// Samples of the base analysis (the acceptance tests use the same number).
 pub const BASE_SAMPLES: usize = 400;

@@ -11,12 +11,10 @@ use aras_signal::{
 use nalgebra::Vector2;
 use serde::Serialize;
 
-use super::accumulator::QrAccumulator;
-use super::gram::{Accumulation, GramCheck};
-use super::stage::{RegressorStage, States};
-use crate::base::BaseParameters;
-use crate::error::IdentError;
-use crate::ls::{OlsEstimate, ReducedLs};
+use aras_ident::streaming::{Accumulation, GramCheck, QrAccumulator, RegressorStage, States};
+use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
+
+use crate::TaskRegressor;
 use crate::robot::{FilterMode, filter, filter_reach, noise_gain, reversal_mask, stack};
 
 /// Options of [`identify_log`]. `Default` gives the documented defaults.
@@ -229,8 +227,11 @@ pub fn identify_log_with_progress(
             reason: "give a fraction of the impulse response's peak in (0, 1), e.g. 1e-3",
         });
     }
-    let mut stage =
-        RegressorStage::with_accumulation(model, &options.geometry, base, options.accumulation)?;
+    let mut stage = RegressorStage::with_accumulation(
+        TaskRegressor::new(model.clone(), options.geometry),
+        base,
+        options.accumulation,
+    )?;
     let mut acc = QrAccumulator::new(stage.names(), 2)?;
     let period = match options.process.period {
         PeriodSource::FromSidecar => reader.sidecar().excitation.period_s,

@@ -4,7 +4,7 @@
 
 use aras_signal::{Samples, Sos};
 
-use crate::error::IdentError;
+use aras_ident::IdentError;
 use crate::robot::{filter_reach, reversal_mask};
 
 /// A processed data set: the samples as `aras_signal::process` produced

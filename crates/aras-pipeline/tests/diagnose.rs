@@ -28,12 +28,12 @@ use std::sync::OnceLock;
 use aras_dyn::sim::{SimConfig, simulate, write_log};
 use aras_dyn::{Cogging, Effect, Model, Params, Sinusoid, Stribeck, Trajectory};
 use aras_excite::FourierTrajectory;
-use aras_ident::diagnose::{Dataset, DiagnoseOptions, Diagnosis, diagnose};
-use aras_ident::robot::{
-    FilterMode, base_parameters, filter, filter_reach, keep_rows, reversal_mask, stack,
-};
 use aras_ident::{BaseParameters, OlsEstimate, ols};
 use aras_kin::Workspace;
+use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, diagnose};
+use aras_pipeline::robot::{
+    FilterMode, base_parameters, filter, filter_reach, keep_rows, reversal_mask, stack,
+};
 use aras_signal::{PeriodSource, ProcessOptions, ReadOptions, process, read_log};
 use rayon::prelude::*;
 
@@ -237,7 +237,7 @@ fn check_named_first(id: &str, gain: f64, d: &Diagnosis) {
 
 /// True if step `s` names `id`, directly or as an alias (the same
 /// hypothesis on these data).
-fn names(s: &aras_ident::diagnose::Step, id: &str) -> bool {
+fn names(s: &aras_pipeline::diagnose::Step, id: &str) -> bool {
     s.id == id || s.aliases.iter().any(|a| a == id)
 }
 
@@ -537,7 +537,7 @@ fn robustness_magnitudes() {
     let mut cases: Vec<(&str, f64, u64)> = Vec::new();
     for seed in ROBUST_SEEDS {
         cases.push(("control", 0.0, seed));
-        for id in aras_ident::diagnose::CANDIDATE_IDS {
+        for id in aras_pipeline::diagnose::CANDIDATE_IDS {
             for &scale in robust_grid(id) {
                 cases.push((id, scale, seed));
             }
@@ -604,7 +604,7 @@ fn robustness_magnitudes() {
         })
         .collect();
     let mut summary = Vec::new();
-    for id in aras_ident::diagnose::CANDIDATE_IDS
+    for id in aras_pipeline::diagnose::CANDIDATE_IDS
         .iter()
         .copied()
         .chain(["control"])

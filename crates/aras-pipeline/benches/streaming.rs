@@ -4,8 +4,10 @@
 
 use aras_dyn::Params;
 use aras_ident::BaseParameters;
-use aras_ident::robot::stack;
-use aras_ident::streaming::{Accumulation, RegressorStage, States, synthetic};
+use aras_ident::streaming::{Accumulation, RegressorStage, States};
+use aras_pipeline::TaskRegressor;
+use aras_pipeline::robot::stack;
+use aras_pipeline::streaming::synthetic;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nalgebra::Vector2;
 use std::hint::black_box;
@@ -50,8 +52,12 @@ fn bench(c: &mut Criterion) {
     ] {
         g.bench_function(name, |b| {
             b.iter(|| {
-                let mut stage =
-                    RegressorStage::with_accumulation(&model, &geo, &base, how).unwrap();
+                let mut stage = RegressorStage::with_accumulation(
+                    TaskRegressor::new(model.clone(), geo),
+                    &base,
+                    how,
+                )
+                .unwrap();
                 stage.push(&states).unwrap();
                 black_box(stage.accumulator().rows())
             })
@@ -68,7 +74,8 @@ fn bench(c: &mut Criterion) {
         |b| {
             b.iter(|| {
                 one.install(|| {
-                    let mut stage = RegressorStage::new(&model, &geo, &base).unwrap();
+                    let mut stage =
+                        RegressorStage::new(TaskRegressor::new(model.clone(), geo), &base).unwrap();
                     stage.push(&states).unwrap();
                     black_box(stage.accumulator().rows())
                 })

@@ -5,7 +5,7 @@
 
 use serde::Serialize;
 
-use crate::stats::{integrated_time, ljung_box};
+use aras_ident::stats::{integrated_time, ljung_box};
 
 /// What a residual is binned against.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]

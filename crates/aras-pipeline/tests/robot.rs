@@ -5,10 +5,10 @@
 mod common;
 
 use aras_dyn::{Effect, Model, Params};
-use aras_ident::robot::{FilterMode, consistent_problem, filter, params_from_solution, stack};
 use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{BaseParameters, ReducedLs, RowGroups};
 use aras_kin::Workspace;
+use aras_pipeline::robot::{FilterMode, consistent_problem, filter, params_from_solution, stack};
 use aras_signal::{Butterworth, Samples};
 use faer::Mat;
 use nalgebra::{Vector2, Vector3};
@@ -235,7 +235,7 @@ fn mass_tolerance_sets_every_links_bounds_and_rejects_bad_fractions() {
 /// i if |θ̇_j| < v_min anywhere within `guard` samples, circularly when
 /// periodic), for any rates, guards from 0 to beyond the record, both modes.
 mod reversal_mask_sweep {
-    use aras_ident::robot::reversal_mask;
+    use aras_pipeline::robot::reversal_mask;
     use proptest::prelude::*;
 
     fn by_definition(td: &[Vec<f64>; 2], v_min: f64, guard: usize, periodic: bool) -> Vec<bool> {

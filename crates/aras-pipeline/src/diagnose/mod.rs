@@ -11,7 +11,7 @@
 //!    (cycles per revolution scanned, order configurable),
 //!    `quadratic_damping`, `time_delay` (torque shifted against the angles).
 //! 3. **Selection** ([`diagnose`]) by the robot-agnostic engine
-//!    [`crate::selection`]: one chunked pass per data set accumulates, per
+//!    [`aras_ident::selection`]: one chunked pass per data set accumulates, per
 //!    joint, the Gram matrix of `[starting model's base regressor | every
 //!    candidate setting's filtered columns | τ | τ shifted by every delay]`;
 //!    every candidate fit, its F-test and its validation fitness follow from
@@ -65,7 +65,7 @@ mod data;
 pub mod residual;
 mod select;
 
-pub use crate::stats::{chi2_sf, f_sf, integrated_time, ljung_box};
+pub use aras_ident::stats::{chi2_sf, f_sf, integrated_time, ljung_box};
 pub use candidates::{CANDIDATE_IDS, Candidate, CandidateGrid, explanation};
 pub use data::Dataset;
 pub use residual::{Finding, ResidualAnalysis, Whiteness};

@@ -4,13 +4,12 @@
 mod common;
 
 use aras_dyn::{Model, Params};
-use aras_ident::robot::{filter, filter_reach, keep_rows, noise_gain, reversal_mask, stack};
-use aras_ident::streaming::{
-    Accumulation, QrAccumulator, RegressorStage, States, StreamingOptions, StreamingRoute,
-    identify_log, synthetic,
-};
+use aras_ident::streaming::{Accumulation, QrAccumulator, RegressorStage, States};
 use aras_ident::{BaseParameters, NoiseVariances, ReducedLs, RowGroups, wls};
 use aras_kin::Geometry;
+use aras_pipeline::TaskRegressor;
+use aras_pipeline::robot::{filter, filter_reach, keep_rows, noise_gain, reversal_mask, stack};
+use aras_pipeline::streaming::{StreamingOptions, StreamingRoute, identify_log, synthetic};
 use aras_signal::{Butterworth, FilterSpec, PeriodSource, ReadOptions, process, read_log};
 use faer::Mat;
 use proptest::prelude::*;
@@ -169,6 +168,12 @@ struct Robot {
     beta: Vec<f64>,
 }
 
+impl Robot {
+    fn regressor(&self) -> TaskRegressor {
+        TaskRegressor::new(self.model.clone(), self.geo)
+    }
+}
+
 fn robot() -> Robot {
     let p = Params::aras_diamond();
     let model = p.model().unwrap();
@@ -216,7 +221,7 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
         .unwrap();
     let run = |chunk: usize| {
         let mut stage =
-            RegressorStage::with_accumulation(&r.model, &r.geo, &r.base, Accumulation::Qr).unwrap();
+            RegressorStage::with_accumulation(r.regressor(), &r.base, Accumulation::Qr).unwrap();
         for c0 in (0..n).step_by(chunk) {
             let c1 = (c0 + chunk).min(n);
             let states = States {
@@ -250,7 +255,7 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
     // column-scaled regressor at worst, still bit-identical for the same
     // chunks.
     let gram = |chunk: usize| {
-        let mut stage = RegressorStage::new(&r.model, &r.geo, &r.base).unwrap();
+        let mut stage = RegressorStage::new(r.regressor(), &r.base).unwrap();
         for c0 in (0..n).step_by(chunk) {
             let c1 = (c0 + chunk).min(n);
             let states = States {
@@ -280,7 +285,7 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
 #[test]
 fn regressor_stage_names_the_failing_sample() {
     let r = robot();
-    let mut stage = RegressorStage::new(&r.model, &r.geo, &r.base).unwrap();
+    let mut stage = RegressorStage::new(r.regressor(), &r.base).unwrap();
     let s = synthetic::states(&r.model, &r.geo, &r.beta, 3000, 1000.0, 0.0).unwrap();
     let mut gamma = s[0][1].clone();
     gamma[2500] = 0.0; // γ = 0 is a singularity

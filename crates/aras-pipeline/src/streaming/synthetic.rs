@@ -12,7 +12,7 @@ use aras_kin::Geometry;
 use nalgebra::Vector2;
 use rayon::prelude::*;
 
-use crate::error::IdentError;
+use aras_ident::IdentError;
 
 /// Period of the synthetic trajectory (s).
 pub const PERIOD_S: f64 = 10.0;

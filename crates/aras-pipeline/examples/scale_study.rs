@@ -12,8 +12,8 @@ use std::time::Instant;
 
 use aras_dyn::Params;
 use aras_ident::BaseParameters;
-use aras_ident::robot::stack;
-use aras_ident::streaming::{StreamingOptions, identify_log, synthetic};
+use aras_pipeline::robot::stack;
+use aras_pipeline::streaming::{StreamingOptions, identify_log, synthetic};
 use aras_signal::{FilterSpec, PeriodSource};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

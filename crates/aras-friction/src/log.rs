@@ -1,0 +1,509 @@
+//! Reading a joint log: a CSV file with a header and one row per sample.
+//!
+//! Required columns: `t` (s), `q` (rad), `tau` (N·m, the joint's friction
+//! torque: measured torque minus the rigid-body model). Optional: `dq` (rad/s)
+//! — used as given; only when it is absent it is computed from `q` —, and
+//! `ddq` (rad/s²). Other columns are ignored; [`ColumnMap`] maps a lab's own
+//! names (`t=time,q=q2,dq=dq2,tau=tau_f`). Lines starting with `#` and blank
+//! lines are skipped. Time must increase strictly; the steps may be irregular
+//! (jitter, gaps). Every defect is a [`LogError`] naming the file, line,
+//! column and value.
+
+use std::{fmt, io::BufRead, path::Path, str::FromStr};
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::{FrictionError, Motion};
+
+/// Errors reading a joint log. `line` and `column` are 1-based.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum LogError {
+    /// The file could not be opened or read.
+    #[error("{file}: cannot read the log: {message}")]
+    Io {
+        /// File name.
+        file: String,
+        /// The operating system's message.
+        message: String,
+    },
+    /// No header line.
+    #[error(
+        "{file}: no header line; the first non-comment line must name the columns (t,q,dq,tau)"
+    )]
+    NoHeader {
+        /// File name.
+        file: String,
+    },
+    /// A required column is not in the header.
+    #[error(
+        "{file}:{line}: column `{name}` (for {role}) is missing; the header has: {header}. \
+         Map your own names with --columns {role}=NAME"
+    )]
+    MissingColumn {
+        /// File name.
+        file: String,
+        /// Header line.
+        line: u64,
+        /// The role (`t`, `q`, `dq`, `tau`, `ddq`).
+        role: &'static str,
+        /// The column name looked for.
+        name: String,
+        /// The header's columns.
+        header: String,
+    },
+    /// A row with fewer fields than the columns used need.
+    #[error("{file}:{line}: the row has {found} fields but the header has {expected}")]
+    RowLength {
+        /// File name.
+        file: String,
+        /// Line.
+        line: u64,
+        /// Fields in the header.
+        expected: usize,
+        /// Fields in this row.
+        found: usize,
+    },
+    /// A field that is not a number.
+    #[error("{file}:{line}:{column}: `{name}` value {text:?} is not a number")]
+    NotANumber {
+        /// File name.
+        file: String,
+        /// Line.
+        line: u64,
+        /// Column.
+        column: usize,
+        /// Column name.
+        name: String,
+        /// The field's text.
+        text: String,
+    },
+    /// A NaN or infinite value.
+    #[error(
+        "{file}:{line}:{column}: `{name}` value {text:?} is not finite; drop or repair the row"
+    )]
+    NonFinite {
+        /// File name.
+        file: String,
+        /// Line.
+        line: u64,
+        /// Column.
+        column: usize,
+        /// Column name.
+        name: String,
+        /// The field's text.
+        text: String,
+    },
+    /// Time that does not increase.
+    #[error(
+        "{file}:{line}:{column}: time does not increase: t = {value} s follows t = {previous} s; \
+         sort the rows by time and drop duplicates"
+    )]
+    TimeNotIncreasing {
+        /// File name.
+        file: String,
+        /// Line.
+        line: u64,
+        /// Column of `t`.
+        column: usize,
+        /// Previous time, s.
+        previous: f64,
+        /// This time, s.
+        value: f64,
+    },
+    /// Too few rows for fitting.
+    #[error("{file}: {found} data rows; at least {needed} are needed")]
+    TooFewRows {
+        /// File name.
+        file: String,
+        /// Rows read.
+        found: usize,
+        /// Minimum.
+        needed: usize,
+    },
+    /// A malformed `--columns` mapping.
+    #[error("--columns {text:?}: {reason}; write e.g. t=time,q=q2,dq=dq2,tau=tau_f")]
+    BadMapping {
+        /// The mapping text.
+        text: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// Which CSV column holds each quantity. Defaults: `t`, `q`, `dq`, `tau`,
+/// `ddq`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ColumnMap {
+    /// Time column (s).
+    pub t: String,
+    /// Position column (rad).
+    pub q: String,
+    /// Velocity column (rad/s); computed from `q` when absent unless
+    /// [`ColumnMap::dq_required`].
+    pub dq: String,
+    /// Friction torque column (N·m).
+    pub tau: String,
+    /// Acceleration column (rad/s²), optional.
+    pub ddq: String,
+    /// True when the user named the velocity column explicitly, so its
+    /// absence is an error instead of a reason to differentiate `q`.
+    pub dq_required: bool,
+}
+
+impl Default for ColumnMap {
+    fn default() -> Self {
+        Self {
+            t: "t".into(),
+            q: "q".into(),
+            dq: "dq".into(),
+            tau: "tau".into(),
+            ddq: "ddq".into(),
+            dq_required: false,
+        }
+    }
+}
+
+impl FromStr for ColumnMap {
+    type Err = LogError;
+    /// Parses `role=name` pairs separated by commas; roles not given keep
+    /// their default names.
+    fn from_str(text: &str) -> Result<Self, LogError> {
+        let bad = |reason: String| LogError::BadMapping {
+            text: text.to_string(),
+            reason,
+        };
+        let mut m = Self::default();
+        for pair in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let (role, name) = pair
+                .split_once('=')
+                .ok_or_else(|| bad(format!("`{pair}` is not role=name")))?;
+            let (role, name) = (role.trim(), name.trim());
+            if name.is_empty() {
+                return Err(bad(format!("no column name for `{role}`")));
+            }
+            match role {
+                "t" => m.t = name.into(),
+                "q" => m.q = name.into(),
+                "dq" => {
+                    m.dq = name.into();
+                    m.dq_required = true;
+                }
+                "tau" => m.tau = name.into(),
+                "ddq" => m.ddq = name.into(),
+                other => {
+                    return Err(bad(format!(
+                        "unknown role `{other}` (roles: t, q, dq, tau, ddq)"
+                    )));
+                }
+            }
+        }
+        Ok(m)
+    }
+}
+
+impl fmt::Display for ColumnMap {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "t={},q={},dq={},tau={},ddq={}",
+            self.t, self.q, self.dq, self.tau, self.ddq
+        )
+    }
+}
+
+/// One joint's log: samples on the log's own time grid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JointLog {
+    /// Name for reports and output files (the file stem).
+    pub name: String,
+    /// Time, s.
+    pub t: Vec<f64>,
+    /// Position, rad.
+    pub q: Vec<f64>,
+    /// Velocity, rad/s.
+    pub dq: Vec<f64>,
+    /// Friction torque, N·m.
+    pub tau: Vec<f64>,
+    /// Acceleration, rad/s², when logged.
+    pub ddq: Option<Vec<f64>>,
+    /// True when `dq` was computed from `q` (no velocity column).
+    pub dq_from_q: bool,
+}
+
+impl JointLog {
+    /// The motion (t, q, dq) of this log.
+    pub fn motion(&self) -> Result<Motion<'_>, FrictionError> {
+        Motion::new(&self.t, &self.q, &self.dq)
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// True when the log has no samples.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
+    /// Acceleration: the logged `ddq`, or the derivative of `dq` on the
+    /// log's own grid ([`derivative`]).
+    pub fn acceleration(&self) -> Vec<f64> {
+        match &self.ddq {
+            Some(a) => a.clone(),
+            None => derivative(&self.t, &self.dq),
+        }
+    }
+}
+
+/// Minimum number of rows for a log to be usable.
+pub const MIN_ROWS: usize = 10;
+
+/// Reads a joint log from a file (see the module docs).
+pub fn read_joint_log(path: &Path, columns: &ColumnMap) -> Result<JointLog, LogError> {
+    let file = path.display().to_string();
+    let f = std::fs::File::open(path).map_err(|e| LogError::Io {
+        file: file.clone(),
+        message: e.to_string(),
+    })?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "log".into());
+    read_joint_log_from(std::io::BufReader::new(f), &file, &name, columns)
+}
+
+/// Reads a joint log from any reader; `file` names the source in errors and
+/// `name` becomes [`JointLog::name`].
+pub fn read_joint_log_from(
+    reader: impl BufRead,
+    file: &str,
+    name: &str,
+    columns: &ColumnMap,
+) -> Result<JointLog, LogError> {
+    let io = |e: std::io::Error| LogError::Io {
+        file: file.to_string(),
+        message: e.to_string(),
+    };
+    let mut lines = reader.lines().enumerate();
+    let mut header: Option<(u64, Vec<String>)> = None;
+    for (i, line) in lines.by_ref() {
+        let line = line.map_err(io)?;
+        let s = line.trim();
+        if s.is_empty() || s.starts_with('#') {
+            continue;
+        }
+        header = Some((
+            i as u64 + 1,
+            s.split(',').map(|f| f.trim().to_string()).collect(),
+        ));
+        break;
+    }
+    let (hline, names) = header.ok_or_else(|| LogError::NoHeader {
+        file: file.to_string(),
+    })?;
+    let find = |name: &str| names.iter().position(|n| n == name);
+    let missing = |role: &'static str, name: &str| LogError::MissingColumn {
+        file: file.to_string(),
+        line: hline,
+        role,
+        name: name.to_string(),
+        header: names.join(","),
+    };
+    let it = find(&columns.t).ok_or_else(|| missing("t", &columns.t))?;
+    let iq = find(&columns.q).ok_or_else(|| missing("q", &columns.q))?;
+    let itau = find(&columns.tau).ok_or_else(|| missing("tau", &columns.tau))?;
+    let idq = find(&columns.dq);
+    if idq.is_none() && columns.dq_required {
+        return Err(missing("dq", &columns.dq));
+    }
+    let iddq = find(&columns.ddq);
+    let used: Vec<(usize, &str)> = [
+        Some((it, columns.t.as_str())),
+        Some((iq, columns.q.as_str())),
+        Some((itau, columns.tau.as_str())),
+        idq.map(|i| (i, columns.dq.as_str())),
+        iddq.map(|i| (i, columns.ddq.as_str())),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    let need = used.iter().map(|u| u.0).max().unwrap_or(0) + 1;
+    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); used.len()];
+    for (i, line) in lines {
+        let line = line.map_err(io)?;
+        let s = line.trim();
+        if s.is_empty() || s.starts_with('#') {
+            continue;
+        }
+        let lno = i as u64 + 1;
+        let fields: Vec<&str> = s.split(',').map(str::trim).collect();
+        if fields.len() < need {
+            return Err(LogError::RowLength {
+                file: file.to_string(),
+                line: lno,
+                expected: names.len(),
+                found: fields.len(),
+            });
+        }
+        for (k, &(c, cname)) in used.iter().enumerate() {
+            let text = fields[c];
+            let v: f64 = text.parse().map_err(|_| LogError::NotANumber {
+                file: file.to_string(),
+                line: lno,
+                column: c + 1,
+                name: cname.to_string(),
+                text: text.to_string(),
+            })?;
+            if !v.is_finite() {
+                return Err(LogError::NonFinite {
+                    file: file.to_string(),
+                    line: lno,
+                    column: c + 1,
+                    name: cname.to_string(),
+                    text: text.to_string(),
+                });
+            }
+            if k == 0
+                && let Some(&prev) = cols[0].last()
+                && v <= prev
+            {
+                return Err(LogError::TimeNotIncreasing {
+                    file: file.to_string(),
+                    line: lno,
+                    column: c + 1,
+                    previous: prev,
+                    value: v,
+                });
+            }
+            cols[k].push(v);
+        }
+    }
+    if cols[0].len() < MIN_ROWS {
+        return Err(LogError::TooFewRows {
+            file: file.to_string(),
+            found: cols[0].len(),
+            needed: MIN_ROWS,
+        });
+    }
+    let mut it = cols.into_iter();
+    let t = it.next().unwrap_or_default();
+    let q = it.next().unwrap_or_default();
+    let tau = it.next().unwrap_or_default();
+    let dq_logged = if idq.is_some() { it.next() } else { None };
+    let ddq = if iddq.is_some() { it.next() } else { None };
+    let dq_from_q = dq_logged.is_none();
+    let dq = dq_logged.unwrap_or_else(|| derivative(&t, &q));
+    Ok(JointLog {
+        name: name.to_string(),
+        t,
+        q,
+        dq,
+        tau,
+        ddq,
+        dq_from_q,
+    })
+}
+
+/// Derivative of samples `y(t)` on an irregular grid: at interior points the
+/// slope of the parabola through the sample and its two neighbours
+/// (second-order accurate for any step ratio), at the ends the one-sided
+/// three-point parabola. With fewer than three samples, the secant.
+pub fn derivative(t: &[f64], y: &[f64]) -> Vec<f64> {
+    let n = t.len().min(y.len());
+    if n < 2 {
+        return vec![0.0; n];
+    }
+    if n == 2 {
+        let s = (y[1] - y[0]) / (t[1] - t[0]);
+        return vec![s, s];
+    }
+    // Slope at t[i] of the parabola through (a, b, c) = (i0, i0+1, i0+2).
+    let parabola = |i0: usize, at: f64| {
+        let (t0, t1, t2) = (t[i0], t[i0 + 1], t[i0 + 2]);
+        let (y0, y1, y2) = (y[i0], y[i0 + 1], y[i0 + 2]);
+        // Derivatives of the Lagrange basis polynomials at `at`.
+        let l0 = ((at - t1) + (at - t2)) / ((t0 - t1) * (t0 - t2));
+        let l1 = ((at - t0) + (at - t2)) / ((t1 - t0) * (t1 - t2));
+        let l2 = ((at - t0) + (at - t1)) / ((t2 - t0) * (t2 - t1));
+        y0 * l0 + y1 * l1 + y2 * l2
+    };
+    let mut d = Vec::with_capacity(n);
+    d.push(parabola(0, t[0]));
+    for i in 1..n - 1 {
+        d.push(parabola(i - 1, t[i]));
+    }
+    d.push(parabola(n - 3, t[n - 1]));
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(text: &str, map: &ColumnMap) -> Result<JointLog, LogError> {
+        read_joint_log_from(text.as_bytes(), "x.csv", "x", map)
+    }
+
+    fn rows(header: &str, n: usize) -> String {
+        let mut s = format!("# comment\n{header}\n");
+        for i in 0..n {
+            let t = i as f64 * 0.01 + if i % 2 == 1 { 0.003 } else { 0.0 };
+            s += &format!("{t},{},{},{},7\n", t.sin(), t.cos(), 0.1 * t);
+        }
+        s
+    }
+
+    #[test]
+    fn reads_mapped_columns_and_ignores_others() {
+        let map: ColumnMap = "t=time,q=q2,dq=dq2,tau=tau_f".parse().unwrap();
+        let log = read(&rows("time,q2,dq2,tau_f,other", 20), &map).unwrap();
+        assert_eq!(log.len(), 20);
+        assert!(!log.dq_from_q);
+        assert!((log.dq[3] - log.t[3].cos()).abs() < 1e-12);
+        assert!(log.ddq.is_none());
+    }
+
+    #[test]
+    fn missing_velocity_is_derived_unless_mapped() {
+        let log = read(&rows("t,q,vel,tau,x", 50), &ColumnMap::default()).unwrap();
+        assert!(log.dq_from_q);
+        // Second-order formula on a jittered 10 ms grid: error ≈ h²/6 |q'''| ≈ 2e-5.
+        for i in 0..log.len() {
+            assert!((log.dq[i] - log.t[i].cos()).abs() < 1e-4, "{i}");
+        }
+        let map: ColumnMap = "dq=speed".parse().unwrap();
+        let e = read(&rows("t,q,vel,tau,x", 50), &map).unwrap_err();
+        assert!(e.to_string().contains("`speed`"), "{e}");
+    }
+
+    #[test]
+    fn errors_name_file_line_column_value() {
+        let s = "# c\nt,q,dq,tau\n0,0,0,0\n0.1,abc,0,0\n";
+        let e = read(s, &ColumnMap::default()).unwrap_err().to_string();
+        assert!(e.starts_with("x.csv:4:2:") && e.contains("\"abc\""), "{e}");
+        let s = "t,q,dq,tau\n0,0,0,0\n0.1,0,0,inf\n";
+        let e = read(s, &ColumnMap::default()).unwrap_err().to_string();
+        assert!(e.starts_with("x.csv:3:4:") && e.contains("inf"), "{e}");
+        let s = "t,q,dq,tau\n0,0,0,0\n0,0,0,0\n";
+        let e = read(s, &ColumnMap::default()).unwrap_err().to_string();
+        assert!(e.starts_with("x.csv:3:1:"), "{e}");
+        let e = read("a,b\n1,2\n", &ColumnMap::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("column `t`") && e.contains("a,b"), "{e}");
+        assert!("t=time,z=3".parse::<ColumnMap>().is_err());
+    }
+
+    #[test]
+    fn derivative_is_exact_for_parabolas_on_irregular_grids() {
+        let t = [0.0, 0.001, 0.017, 0.02, 0.5, 0.51];
+        let y: Vec<f64> = t.iter().map(|t| 3.0 + 2.0 * t - 5.0 * t * t).collect();
+        let d = derivative(&t, &y);
+        for (ti, di) in t.iter().zip(&d) {
+            assert!((di - (2.0 - 10.0 * ti)).abs() < 1e-9, "{ti}: {di}");
+        }
+    }
+}

@@ -1,0 +1,35 @@
+//! # aras-pipeline: identification of the ARAS-Diamond from its logs
+//!
+//! The robot-specific half of identification, on top of the robot-agnostic
+//! `aras-ident`:
+//!
+//! 1. [`robot`]: the ARAS-Diamond's regressor (`aras-dyn`'s model seen
+//!    through `aras-kin`'s kinematics) as an [`aras_ident::LinearModel`]
+//!    ([`TaskRegressor`]), stacked regressors from `aras-signal`'s
+//!    samples, parallel filtering (spec §6 NOTE), the velocity-reversal
+//!    mask, the SDP layout of the four links and the way back into
+//!    `aras_dyn::Params`.
+//! 2. [`streaming`]: identification from a CSV log of any length in bounded
+//!    memory (chunked reading, filtering with overlap, reversal exclusion,
+//!    `aras_ident`'s accumulators).
+//! 3. [`diagnose`]: where model and measurement disagree, which missing
+//!    effect explains it, and how much the gap shrinks once it is added.
+//!
+//! ## Dependencies, and why
+//! * `aras-kin`, `aras-dyn`, `aras-signal`, `aras-ident`: the robot's
+//!   kinematics and model, the log reader and signal processing, and the
+//!   estimation this crate wires together.
+//! * `faer`: the stacked regressors handed to `aras-ident`; `nalgebra`: the
+//!   robot crates' small vectors; `rayon`: parallel filtering and
+//!   candidate fits; `serde`: results serialise for reports; `thiserror`:
+//!   the regressor's error type.
+#![warn(missing_docs)]
+// Dense linear algebra on small fixed matrices reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
+pub mod diagnose;
+mod regressor;
+pub mod robot;
+pub mod streaming;
+
+pub use regressor::{RegressorError, TaskRegressor};

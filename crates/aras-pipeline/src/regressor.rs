@@ -1,0 +1,86 @@
+//! The ARAS-Diamond's regressor as an [`aras_ident::LinearModel`].
+
+use aras_dyn::{DynError, Model};
+use aras_ident::LinearModel;
+use aras_kin::{Geometry, KinError};
+use nalgebra::Vector2;
+use thiserror::Error;
+
+/// An `aras-dyn` [`Model`] seen through the kinematics of a [`Geometry`]:
+/// task coordinates `q = X = [φ, γ]` (rad) and their rates in, the 2 × n
+/// regressor (45)–(53) out (one row per actuator). This is what
+/// `aras-ident`'s robot-agnostic machinery (the streaming
+/// [`RegressorStage`](aras_ident::streaming::RegressorStage)) sees of the
+/// robot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TaskRegressor {
+    model: Model,
+    geometry: Geometry,
+}
+
+impl TaskRegressor {
+    /// Wraps a model and the geometry its kinematics use.
+    pub fn new(model: Model, geometry: Geometry) -> Self {
+        Self { model, geometry }
+    }
+
+    /// The wrapped model.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// The geometry.
+    pub fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+}
+
+/// Why the regressor of a sample could not be evaluated.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum RegressorError {
+    /// The kinematics (1)–(25) failed: outside the workspace or singular.
+    #[error("kinematics: {0}")]
+    Kinematics(KinError),
+    /// The model rejected the sample or the buffer.
+    #[error("model: {0}")]
+    Model(DynError),
+}
+
+impl LinearModel for TaskRegressor {
+    type Error = RegressorError;
+
+    fn coordinates(&self) -> usize {
+        2
+    }
+
+    fn outputs(&self) -> usize {
+        2
+    }
+
+    fn names(&self) -> Vec<String> {
+        self.model.names()
+    }
+
+    fn columns(&self) -> usize {
+        self.model.columns()
+    }
+
+    #[inline]
+    fn fill(
+        &self,
+        q: &[f64],
+        q_dot: &[f64],
+        q_ddot: &[f64],
+        rows: &mut [f64],
+    ) -> Result<(), RegressorError> {
+        let s = aras_kin::evaluate(
+            &self.geometry,
+            &Vector2::new(q[0], q[1]),
+            &Vector2::new(q_dot[0], q_dot[1]),
+            &Vector2::new(q_ddot[0], q_ddot[1]),
+        )
+        .map_err(RegressorError::Kinematics)?;
+        self.model.fill(&s, rows).map_err(RegressorError::Model)
+    }
+}
