@@ -17,8 +17,8 @@ use aras_signal::Samples;
 use rayon::prelude::*;
 
 use super::data::Dataset;
-use aras_ident::IdentError;
 use crate::robot::{FilterMode, Stacked, filter, filter_reach, stack};
+use aras_ident::IdentError;
 
 /// Samples per chunk: with ≈ 170 columns the window's columns of both
 /// joints take ≈ 15 MB per lane.

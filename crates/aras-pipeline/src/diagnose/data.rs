@@ -4,8 +4,8 @@
 
 use aras_signal::{Samples, Sos};
 
-use aras_ident::IdentError;
 use crate::robot::{filter_reach, reversal_mask};
+use aras_ident::IdentError;
 
 /// A processed data set: the samples as `aras_signal::process` produced
 /// them, and the zero-phase filter it applied (so every regressor column is

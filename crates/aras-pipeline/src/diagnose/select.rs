@@ -12,9 +12,9 @@ use super::candidates::{Candidate, CandidateGrid};
 use super::chunks::{Plan, filtered_torques, in_lanes, window_columns};
 use super::data::{Dataset, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse};
+use crate::robot::consistent_problem;
 use aras_ident::BaseParameters;
 use aras_ident::IdentError;
-use crate::robot::consistent_problem;
 use aras_ident::selection::{
     Accumulator, CandidateEvaluation, CandidateSpec, EvaluationStatus, Layout, ModelFit,
     SelectionOptions, SelectionStatus, fit_model, select,
@@ -252,6 +252,12 @@ struct Prepared {
     plan: Plan,
 }
 
+/// A residual per joint with the sample index of each entry.
+type JointResidual = ([Vec<f64>; 2], [Vec<usize>; 2]);
+
+/// Candidates, their single-effect models and their layout for one trial.
+type TrialLayout = (Vec<Candidate>, Vec<Option<Model>>, Layout);
+
 /// Everything the passes over the data share.
 struct Context<'a> {
     geometry: &'a Geometry,
@@ -371,7 +377,7 @@ impl Context<'_> {
         d: &Dataset,
         p: &Prepared,
         fit: &ModelFit,
-    ) -> Result<([Vec<f64>; 2], [Vec<usize>; 2]), IdentError> {
+    ) -> Result<JointResidual, IdentError> {
         let (lo, hi) = self.range(d);
         let pb = self.layout.base_columns();
         // Coefficient of every layout column (0 if not in the model).
@@ -443,6 +449,7 @@ impl Context<'_> {
 
     /// Model `model` with base `base` on `d`: calls `f(state, g, W_b rows,
     /// torques)` chunk by chunk (torques shifted by `delay`).
+    #[allow(clippy::too_many_arguments)]
     fn model_pass<T: Send>(
         &self,
         d: &Dataset,
@@ -882,7 +889,7 @@ fn refine_stribeck(
     v0: f64,
     opts: &SelectionOptions,
 ) -> Result<Refinement, IdentError> {
-    let setup = |v: f64| -> Result<(Vec<Candidate>, Vec<Option<Model>>, Layout), IdentError> {
+    let setup = |v: f64| -> Result<TrialLayout, IdentError> {
         let mut cands = others.to_vec();
         cands.push(Candidate::Effect {
             effect: Effect::StribeckFriction { v_s: v },
