@@ -321,18 +321,18 @@ fn identify_in_memory(model: &Model, train: &Dataset) -> (BaseParameters, OlsEst
     let st = keep_rows(&st, &keep).unwrap();
     let base = base_parameters(model, &geometry, &Workspace::paper(), 600).unwrap();
     let wb = base.base_regressor(st.w.as_ref()).unwrap();
-    let (est, _) = ols(wb.as_ref(), &st.t, &base.base_names())
+    let est = ols(wb.as_ref(), &st.t, &base.base_names())
         .unwrap()
-        .with_hac(wb.as_ref(), &st.t, &st.groups, train.periodic)
+        .with_filtered_noise(train.noise_gain().unwrap())
         .unwrap();
     (base, est)
 }
 
 /// The σ `diagnose` reports for an added effect's parameters is the
-/// in-memory identification's HAC σ of the same model on the same data
-/// (one covariance function for both: `OlsEstimate::with_hac`).
+/// in-memory identification's filter-corrected σ of the same model on the
+/// same data (and not the white-noise σ, √(1/g) ≈ 7.4× smaller).
 #[test]
-fn added_effect_sigma_equals_in_memory_hac_sigma() {
+fn added_effect_sigma_equals_in_memory_corrected_sigma() {
     let (s, d) = offset_case();
     let step = &d.steps[0];
     assert_eq!(step.id, "torque_offset");
@@ -352,7 +352,7 @@ fn added_effect_sigma_equals_in_memory_hac_sigma() {
     assert_eq!(step.parameters.len(), 2);
     for p in &step.parameters {
         let k = (0..base.n_base())
-            .find(|&k| base.expression(k) == p.name)
+            .find(|&k| base.expression(k).ends_with(&format!("= {}", p.name)))
             .unwrap_or_else(|| panic!("{} not in the in-memory base", p.name));
         eprintln!(
             "{}: {:.6} ± {:.2e} (in memory {:.6} ± {:.2e})",
@@ -371,7 +371,68 @@ fn added_effect_sigma_equals_in_memory_hac_sigma() {
     }
 }
 
-/// Timing: a 160 s TRAIN log (16 periods of the excitation) and
+/// Hidden torque offset and quadratic damping, TRAIN only, noise seeds 1–8:
+/// the error of each fitted effect parameter divided by its reported
+/// (filter-corrected) σ. Honest σ: RMS of the 32 ratios near 1. For 32
+/// independent standard normals the RMS lies in [0.72, 1.27] with 99 %
+/// probability (χ²₃₂); the four parameters of one seed share the noise, so
+/// they are not quite independent, and the base model's own misfit near
+/// reversals adds bias: the band asserted is [0.5, 2.0]. The white-noise σ
+/// would give an RMS ≈ 7× larger, far outside it.
+#[test]
+fn added_effect_sigma_is_honest_over_noise_seeds() {
+    let mut truth = Params::aras_diamond();
+    truth.extra.torque_offset = Some([0.02, -0.03]);
+    truth.extra.quadratic_damping = Some([0.005, 0.005]);
+    let model = truth.model().unwrap();
+    let beta = truth.standard_vector(&model).unwrap();
+    let period = excitation().period();
+    let z: Vec<(f64, f64)> = (1..=8u64)
+        .into_par_iter()
+        .flat_map_iter(|seed| {
+            let train = dataset(
+                &truth,
+                excitation(),
+                TRAIN_PERIODS * period,
+                0,
+                seed,
+                &format!("honest-{seed}"),
+            );
+            let (base, est) = identify_in_memory(&model, &train);
+            let truth_b = base.to_base(beta.as_slice()).unwrap();
+            let std_names = base.standard_names();
+            let g = train.noise_gain().unwrap();
+            base.independent()
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| {
+                    ["tau0_1", "tau0_2", "Fq1", "Fq2"].contains(&std_names[**c].as_str())
+                })
+                .map(|(k, _)| {
+                    let e = est.estimate[k] - truth_b[k];
+                    eprintln!(
+                        "seed {seed} {}: error {e:.2e}, σ {:.2e}, z {:.2}",
+                        base.expression(k),
+                        est.std_dev[k],
+                        e / est.std_dev[k]
+                    );
+                    (e / est.std_dev[k], e / (est.std_dev[k] * g.sqrt()))
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    assert_eq!(z.len(), 32);
+    let rms = |v: &mut dyn Iterator<Item = f64>| {
+        let x: Vec<f64> = v.collect();
+        (x.iter().map(|a| a * a).sum::<f64>() / x.len() as f64).sqrt()
+    };
+    let honest = rms(&mut z.iter().map(|x| x.0));
+    let white = rms(&mut z.iter().map(|x| x.1));
+    eprintln!("RMS error/σ: corrected {honest:.2}, white-noise σ {white:.2}");
+    assert!((0.5..=2.0).contains(&honest), "{honest}");
+}
+
+/// Timing (issue 8): a 160 s TRAIN log (16 periods of the excitation) and
 /// two validation logs, all 7 candidates, with one hidden effect so that
 /// two rounds run. Ignored: the simulation itself takes a few seconds.
 #[test]
@@ -626,6 +687,37 @@ fn robustness_magnitudes() {
         assert!(
             e["false_discoveries"].as_array().unwrap().is_empty(),
             "{e}: false discovery"
+        );
+    }
+}
+
+/// Stribeck friction hidden off the grid (v_s = 0.28 rad/s, between the
+/// grid's 0.2 and 0.4): named first, and the refinement moves v_s from the
+/// grid value to within ±30 % of the truth (the issue's tolerance for the
+/// low-speed study), with the refitted levels within 30 % of the hidden
+/// [0.06, 0.12] N·m and a positive, finite σ. The simulator evaluates the
+/// same Stribeck law as the candidate column (aras-dyn's effect), so this
+/// tests the search, not an independent friction model.
+#[test]
+fn refines_stribeck_velocity_off_the_grid() {
+    let mut p = Params::aras_diamond();
+    p.extra.stribeck_friction = Some(Stribeck {
+        v_s: 0.28,
+        level: [0.06, 0.12],
+    });
+    let d = run(&p, 0, "stribeck_off_grid");
+    let s = d.steps.first().expect("nothing found");
+    assert_eq!(s.id, "stribeck_friction", "{}", s.label);
+    let r = s.refinement.as_ref().expect("no refinement");
+    eprintln!("refinement: {r:?}");
+    assert!((r.value - 0.28).abs() <= 0.3 * 0.28, "v_s {}", r.value);
+    assert!(r.std_dev > 0.0 && r.std_dev.is_finite(), "σ {}", r.std_dev);
+    for (q, want) in r.parameters.iter().zip([0.06, 0.12]) {
+        assert!(
+            (q.value - want).abs() <= 0.3 * want,
+            "{}: {}",
+            q.name,
+            q.value
         );
     }
 }

@@ -51,7 +51,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
             || path.display().to_string(),
             |f| f.to_string_lossy().into(),
         );
-        Ok(Dataset::from_processed(name, &p)?)
+        Ok(Dataset::from_processed_owned(name, p)?)
     };
     let train = stages.run("read + process TRAIN", |_| load(&args.data))?;
     let vals = stages.run("read + process validation logs", |_| {

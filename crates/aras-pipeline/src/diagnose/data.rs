@@ -2,12 +2,9 @@
 //! diagnosis fits: the current model's columns, each candidate's columns,
 //! and the torque shift of the `time_delay` candidate.
 
-use aras_dyn::{Effect, Model};
-use aras_kin::Geometry;
 use aras_signal::{Samples, Sos};
-use faer::Mat;
 
-use crate::robot::{FilterMode, Stacked, filter, filter_reach, reversal_mask, stack};
+use crate::robot::{filter_reach, reversal_mask};
 use aras_ident::IdentError;
 
 /// A processed data set: the samples as `aras_signal::process` produced
@@ -56,6 +53,20 @@ impl Dataset {
             periodic: s.periods.is_some(),
             sample_rate_hz: s.sample_rate_hz,
         })
+    }
+
+    /// [`Self::from_processed`] taking ownership of the samples instead of
+    /// copying them: the peak memory of loading a long log is one copy of
+    /// its processed samples, not two.
+    pub fn from_processed_owned(
+        name: impl Into<String>,
+        processed: aras_signal::Processed,
+    ) -> Result<Self, IdentError> {
+        let mut p = processed;
+        let samples = std::mem::take(&mut p.samples);
+        let mut d = Self::from_processed(name, &p)?;
+        d.samples = samples;
+        Ok(d)
     }
 
     /// Samples per joint.
@@ -122,34 +133,6 @@ impl Dataset {
     }
 }
 
-/// Filtered regressor columns of `model` on `data` (`2N × n`, joint-major)
-/// with the torques.
-pub(crate) fn columns(
-    model: &Model,
-    geometry: &Geometry,
-    data: &Dataset,
-) -> Result<Stacked, IdentError> {
-    let mut s = stack(model, geometry, &data.samples)?;
-    if let Some(sos) = &data.filter {
-        filter(&mut s, sos, FilterMode::Parallel, data.periodic)?;
-    }
-    Ok(s)
-}
-
-/// Filtered columns of a single extra effect.
-pub(crate) fn effect_columns(
-    effect: Effect,
-    gravity: nalgebra::Vector3<f64>,
-    geometry: &Geometry,
-    data: &Dataset,
-) -> Result<Mat<f64>, IdentError> {
-    let m = Model::new(vec![effect], gravity).map_err(|e| IdentError::Adapter {
-        context: format!("candidate {}", effect.id()),
-        message: e.to_string(),
-    })?;
-    Ok(columns(&m, geometry, data)?.w)
-}
-
 /// Per joint, the samples used in fits and scores: the identification's
 /// reversal exclusion ([`reversal_mask`]) — joint `j`'s rows where
 /// `|θ̇_j| < min_speed`, widened by the zero-phase filter's reach down to
@@ -191,74 +174,3 @@ pub(crate) fn moving_mask(
 
 /// Fewest rows per joint a diagnosis data set must keep after the exclusion.
 const MIN_ROWS: usize = 100;
-
-/// A design ready for least squares: regressor rows and torques after the
-/// torque shift and the rest exclusion, joint 1's rows first.
-pub(crate) struct Design {
-    pub w: Mat<f64>,
-    pub t: Vec<f64>,
-    /// Sample index (of the angles) of each joint's rows.
-    pub idx: [Vec<usize>; 2],
-}
-
-impl Design {
-    /// Rows of joint 1 (joint 2's start there).
-    pub fn split(&self) -> usize {
-        self.idx[0].len()
-    }
-}
-
-/// Assembles `[base | blocks…]` with the torques shifted by `delay`
-/// samples (`τ[k + delay]` pairs with the angles of sample `k`): circular
-/// for a periodic record, otherwise the rows without a partner are dropped;
-/// rows outside `mask` are dropped too.
-pub(crate) fn design(
-    base: &Stacked,
-    blocks: &[&Mat<f64>],
-    delay: i64,
-    periodic: bool,
-    mask: &[Vec<bool>; 2],
-) -> Design {
-    let n_all = base.groups.counts()[0];
-    let d = delay.unsigned_abs() as usize;
-    let (lo, hi) = if periodic || d == 0 {
-        (0, n_all)
-    } else if delay < 0 {
-        (d, n_all)
-    } else {
-        (0, n_all.saturating_sub(d))
-    };
-    let idx: [Vec<usize>; 2] = std::array::from_fn(|g| (lo..hi).filter(|&i| mask[g][i]).collect());
-    let rows = idx[0].len() + idx[1].len();
-    let cols = base.w.ncols() + blocks.iter().map(|b| b.ncols()).sum::<usize>();
-    let mut w = Mat::zeros(rows, cols);
-    let mut t = vec![0.0; rows];
-    let mut r = 0;
-    for g in 0..2 {
-        for &i in &idx[g] {
-            let k = (i as i64 + delay).rem_euclid(n_all as i64) as usize;
-            t[r] = base.t[g * n_all + k];
-            r += 1;
-        }
-    }
-    let mut c = 0;
-    let mut copy = |m: &Mat<f64>, j: usize, w: &mut Mat<f64>| {
-        let mut r = 0;
-        for g in 0..2 {
-            for &i in &idx[g] {
-                w[(r, c)] = m[(g * n_all + i, j)];
-                r += 1;
-            }
-        }
-        c += 1;
-    };
-    for j in 0..base.w.ncols() {
-        copy(&base.w, j, &mut w);
-    }
-    for b in blocks {
-        for j in 0..b.ncols() {
-            copy(b, j, &mut w);
-        }
-    }
-    Design { w, t, idx }
-}

@@ -10,30 +10,33 @@
 //!    `stribeck_friction` (v_s scanned), `passive_joint_viscous`, `cogging`
 //!    (cycles per revolution scanned, order configurable),
 //!    `quadratic_damping`, `time_delay` (torque shifted against the angles).
-//! 3. **Selection** ([`diagnose`]): each candidate is fitted with the current
-//!    model on TRAIN (base-parameter OLS on the augmented, parallel-filtered
-//!    regressor) and scored twice: the cross-validated fitness (78) gain per
-//!    joint on the validation data, and a nested-model F-test whose
-//!    denominator degrees of freedom are the *effective* number of
-//!    independent samples (see below); it must also gain ≥ `min_gain` points
-//!    on every validation set. The significant candidate with the lowest ΔBIC
-//!    is added (aliases listed) and the search repeats; rows near velocity
-//!    reversals are excluded exactly as in identification
-//!    (`robot::reversal_mask`); each identifier is added at most once,
-//!    so the loop ends. Finally the model is re-identified physically
-//!    consistently (SDP on the links, friction-like levels `≥ 0`).
+//! 3. **Selection** ([`diagnose`]) by the robot-agnostic engine
+//!    [`aras_ident::selection`]: one chunked pass per data set accumulates, per
+//!    joint, the Gram matrix of `[starting model's base regressor | every
+//!    candidate setting's filtered columns | τ | τ shifted by every delay]`;
+//!    every candidate fit, its F-test and its validation fitness follow from
+//!    these blocks. A candidate must be significant on TRAIN (F-test with
+//!    the effective number of samples, below) and gain ≥ `min_gain` points
+//!    on every validation set; the significant candidate with the lowest
+//!    ΔBIC is added (aliases listed) and the search repeats; rows near
+//!    velocity reversals are excluded as in identification
+//!    (`robot::reversal_mask`); each identifier is added at most once, so
+//!    the loop ends. Finally the model is re-identified physically
+//!    consistently (SDP on the links, friction-like levels `≥ 0`) from a
+//!    chunked incremental QR of the final model.
 //!
 //! ## Effective number of samples
 //! Filtered and period-averaged samples are strongly correlated: a 10 Hz
 //! zero-phase low-pass at 1 kHz leaves about one independent value per
 //! 50 samples. Treating 10 000 samples as independent would make every
-//! candidate "significant". The F-test therefore uses, per joint,
-//! `N_eff = min(2 B T, N / τ_int)`: `2 B T` with `B` the filter's
-//! equivalent noise bandwidth ([`Dataset::filter_dof`]), and `N/τ_int` with
-//! `τ_int` the integrated autocorrelation time of the augmented model's
-//! residual (which also counts slow, systematic misfit as correlated). The
-//! significance level is divided by the number of candidate settings tried
-//! in a round (Bonferroni for the grid scans).
+//! candidate "significant". The F-test therefore uses `N_eff = 2 B T` per
+//! joint, `B` the filter's equivalent noise bandwidth
+//! ([`Dataset::filter_dof`]). Slow systematic misfit is not counted as
+//! correlated here (that needs the residual's autocorrelation, i.e. a pass
+//! per candidate); the requirement of a gain on every independent
+//! validation set is the guard against fitting it. The significance level
+//! is divided by the number of candidate settings tried in a round
+//! (Bonferroni for the grid scans).
 //!
 //! ## σ of the fitted parameters
 //! The σ reported with every fitted parameter ([`NamedValue::std_dev`]) is
@@ -45,11 +48,19 @@
 //! (the filter's `2 B T / N = Σ h²`, Parseval, or `N / τ_int`); residual
 //! bins use `σ_rms / √(g n)`.
 //!
-//! Performance: the regressor blocks of every candidate setting are stacked
-//! and filtered once per data set; each fit is one tall-skinny QR.
-//! Deterministic: no randomness (the base parameters use a Halton set).
+//! ## Memory and time
+//! Nothing proportional to the log's length is held but the processed
+//! samples themselves and the filtered torques: the candidate columns are
+//! computed chunk by chunk (4096 samples) on windows widened by the
+//! zero-phase filter's reach to 1e-9 of its peak, so a chunk's filtered
+//! rows equal the whole-record filter's to that accuracy; the sums are
+//! `joints × width²` numbers per data set (width ≈ 170 with the default
+//! grid). The residual analysis keeps each validation set's residual per
+//! joint (8 bytes per row). Deterministic: fixed accumulation lanes, no
+//! randomness (the base parameters use a Halton set).
 
 mod candidates;
+mod chunks;
 mod data;
 pub mod residual;
 mod select;
@@ -59,6 +70,6 @@ pub use candidates::{CANDIDATE_IDS, Candidate, CandidateGrid, explanation};
 pub use data::Dataset;
 pub use residual::{Finding, ResidualAnalysis, Whiteness};
 pub use select::{
-    CandidateScore, ConsistentFit, DiagnoseOptions, Diagnosis, FitnessRow, NamedValue, Step,
-    diagnose,
+    CandidateScore, ConsistentFit, DiagnoseOptions, Diagnosis, FitnessRow, NamedValue, Refinement,
+    RefinementStatus, Step, diagnose,
 };

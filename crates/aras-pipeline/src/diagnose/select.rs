@@ -5,18 +5,21 @@ use std::time::Instant;
 
 use aras_dyn::{Effect, Model, Params};
 use aras_kin::{Geometry, Workspace};
-use faer::{Col, Mat};
-use rayon::prelude::*;
+use faer::{Mat, MatRef};
 use serde::Serialize;
 
 use super::candidates::{Candidate, CandidateGrid};
-use super::data::{Dataset, Design, columns, design, effect_columns, moving_mask};
+use super::chunks::{Plan, filtered_torques, in_lanes, window_columns};
+use super::data::{Dataset, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse};
-use aras_ident::stats::{f_sf, integrated_time};
-use aras_ident::validate::fitness;
-use aras_ident::{BaseParameters, IdentError, ReducedLs};
-
-use crate::robot::{Stacked, consistent_problem};
+use crate::robot::consistent_problem;
+use aras_ident::BaseParameters;
+use aras_ident::IdentError;
+use aras_ident::selection::{
+    Accumulator, CandidateEvaluation, CandidateSpec, EvaluationStatus, Layout, ModelFit,
+    SelectionOptions, SelectionStatus, fit_model, select,
+};
+use aras_ident::streaming::QrAccumulator;
 
 /// Settings of [`diagnose`]; `Default` gives the documented values.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -82,9 +85,10 @@ pub struct NamedValue {
     pub name: String,
     /// Value (SI).
     pub value: f64,
-    /// Standard deviation from the HAC sandwich covariance
-    /// ([`aras_ident::covariance`]), which accounts for the filtered residual's
-    /// correlation; 0 if unknown (never NaN).
+    /// Standard deviation: the OLS σ of (64)–(66) corrected for the
+    /// zero-phase filter's noise gain (divided by `√g`, [`Dataset::noise_gain`]),
+    /// since the filtered residual is correlated over `≈ 1/g` samples;
+    /// 0 if unknown (never NaN).
     pub std_dev: f64,
 }
 
@@ -148,6 +152,43 @@ pub struct Step {
     pub parameters: Vec<NamedValue>,
     /// The evidence.
     pub evidence: CandidateScore,
+    /// The candidate's nonlinear setting refined between the grid points
+    /// (`stribeck_friction`'s `v_s`); `None` for candidates without one
+    /// refined.
+    pub refinement: Option<Refinement>,
+}
+
+/// Whether a refined setting lies inside its search interval.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RefinementStatus {
+    /// A minimum inside the interval; `std_dev` from its curvature.
+    Interior,
+    /// The minimum is at an end of the interval (the true value may lie
+    /// beyond it); `std_dev` is 0 (unknown).
+    AtBound,
+}
+
+/// A nonlinear setting refined by a one-dimensional search after the grid.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Refinement {
+    /// The setting's name (e.g. `v_s`, rad/s).
+    pub name: String,
+    /// The grid value the selection chose.
+    pub grid_value: f64,
+    /// The value minimising the TRAIN residual (golden-section search on
+    /// its logarithm over a factor 3 either side of the grid value).
+    pub value: f64,
+    /// Standard deviation from the curvature of the profile
+    /// `N_eff ln RSS(ln v)` (a drop of 1 is one σ; `N_eff` as in the F-test);
+    /// 0 if unknown.
+    pub std_dev: f64,
+    /// Interior minimum or at a bound.
+    pub status: RefinementStatus,
+    /// The effect's parameters refitted at the refined value.
+    pub parameters: Vec<NamedValue>,
+    /// Validation fitness per set and joint at the refined value (%).
+    pub fitness: Vec<[f64; 2]>,
 }
 
 /// Validation fitness after a step.
@@ -203,165 +244,271 @@ pub struct Diagnosis {
     pub elapsed_s: f64,
 }
 
-/// Per data set: the starting model's filtered columns and every candidate
-/// block.
+/// Per data set: the rows used (per joint), the whole-record filtered
+/// torques and the chunk plan.
 struct Prepared {
-    base: Stacked,
-    blocks: Vec<Option<Mat<f64>>>,
     mask: [Vec<bool>; 2],
+    tau: [Vec<f64>; 2],
+    plan: Plan,
 }
 
-/// One candidate's outcome in a round: index, score, state, and its fit if
-/// significant.
-type Scored = (
-    usize,
-    CandidateScore,
-    State,
-    Option<(BaseParameters, Fit, Vec<[f64; 2]>)>,
-);
+/// A residual per joint with the sample index of each entry.
+type JointResidual = ([Vec<f64>; 2], [Vec<usize>; 2]);
 
-struct Fit {
-    beta: Vec<f64>,
-    std_dev: Vec<f64>,
-    rss: f64,
-    residual: Vec<f64>,
-    split: usize,
-}
+/// Candidates, their single-effect models and their layout for one trial.
+type TrialLayout = (Vec<Candidate>, Vec<Option<Model>>, Layout);
 
-/// OLS of design `d` on `base`, with σ from the HAC sandwich
-/// (`OlsEstimate::with_hac`, the covariance every σ of the toolkit uses),
-/// which accounts for the filtered, correlated residual. The F-test does
-/// not use σ but RSS ratios with the effective sample count `N_eff ≤ g N`
-/// (see [`n_eff`]).
-fn fit(d: &Design, base: &BaseParameters, periodic: bool) -> Result<Fit, IdentError> {
-    let wb = base.base_regressor(d.w.as_ref())?;
-    let red = ReducedLs::new(wb.as_ref(), &d.t, &base.base_names())?;
-    let groups = aras_ident::RowGroups::contiguous(&[d.split(), d.t.len() - d.split()])?;
-    let (ols, _) = red.ols()?.with_hac(wb.as_ref(), &d.t, &groups, periodic)?;
-    let b = Col::from_fn(ols.estimate.len(), |i| ols.estimate[i]);
-    let pred = &wb * &b;
-    let residual: Vec<f64> = (0..d.t.len()).map(|i| d.t[i] - pred[i]).collect();
-    let rss = residual.iter().map(|r| r * r).sum();
-    Ok(Fit {
-        std_dev: ols
-            .std_dev
-            .iter()
-            .map(|s| if s.is_finite() { *s } else { 0.0 })
-            .collect(),
-        beta: ols.estimate,
-        rss,
-        residual,
-        split: d.split(),
-    })
-}
-
-/// Validation residual and fitness per joint of base parameters `beta`.
-fn evaluate(
-    d: &Design,
-    base: &BaseParameters,
-    beta: &[f64],
-) -> Result<(Vec<f64>, [f64; 2]), IdentError> {
-    let wb = base.base_regressor(d.w.as_ref())?;
-    let b = Col::from_fn(beta.len(), |i| beta[i]);
-    let pred = &wb * &b;
-    let p: Vec<f64> = (0..d.t.len()).map(|i| pred[i]).collect();
-    let residual = d.t.iter().zip(&p).map(|(t, p)| t - p).collect();
-    let n = d.split();
-    let f = [fitness(&d.t[..n], &p[..n])?, fitness(&d.t[n..], &p[n..])?];
-    Ok((residual, f))
-}
-
-/// Effective independent samples of a two-joint residual: per joint
-/// `min(2BT, N/τ_int)`.
-/// `dof_ratio` is the filter's independent fraction of samples, `2BT/N`
-/// ([`Dataset::filter_dof`]), equal to the noise gain `g` that corrects σ
-/// in [`fit`]: the F-test accounts for the filter here, through its
-/// degrees of freedom, and uses the *uncorrected* RSS; σ accounts for it
-/// through `g`. `τ_int` additionally counts slow systematic misfit as
-/// correlated, which the σ correction (pure noise) does not.
-fn n_eff(residual: &[f64], split: usize, dof_ratio: f64) -> f64 {
-    let (a, b) = residual.split_at(split);
-    [a, b]
-        .iter()
-        .map(|r| {
-            let n = r.len() as f64;
-            let tau = integrated_time(r, r.len() / 4);
-            (n / tau).min(dof_ratio * n)
-        })
-        .sum()
-}
-
-/// The state of the search: effects added (as candidate indices) and delay.
-#[derive(Clone)]
-struct State {
-    blocks: Vec<usize>,
-    delay: i64,
-}
-
+/// Everything the passes over the data share.
 struct Context<'a> {
     geometry: &'a Geometry,
     start: &'a Model,
+    /// Structural base of the starting model: its base regressor is the
+    /// selection's base block.
+    base: BaseParameters,
     cands: Vec<Candidate>,
-    train: &'a Dataset,
-    train_p: Prepared,
-    vals: &'a [Dataset],
-    vals_p: Vec<Prepared>,
-    base_samples: usize,
+    /// One single-effect model per candidate (`None` for delays).
+    effect_models: Vec<Option<Model>>,
+    layout: Layout,
+    /// Largest torque shift of the delay candidates (rows lost at each end
+    /// of a non-periodic record, for every model alike).
+    max_shift: usize,
 }
 
 impl Context<'_> {
-    fn model(&self, s: &State) -> Result<Model, IdentError> {
-        let mut m = self.start.clone();
-        for &i in &s.blocks {
-            if let Candidate::Effect { effect } = self.cands[i] {
-                m = m.with_effect(effect).map_err(|e| IdentError::Adapter {
-                    context: "extending the model".into(),
-                    message: e.to_string(),
-                })?;
+    fn range(&self, d: &Dataset) -> (usize, usize) {
+        if d.periodic {
+            (0, d.len())
+        } else {
+            (self.max_shift, d.len().saturating_sub(self.max_shift))
+        }
+    }
+
+    /// Rows of joint `g` in chunk `[a, b)`.
+    fn rows(p: &Prepared, g: usize, a: usize, b: usize) -> Vec<usize> {
+        (a..b).filter(|&i| p.mask[g][i]).collect()
+    }
+
+    /// The torque of sample `i` shifted by `delay` samples (circular for a
+    /// periodic record; the range keeps non-periodic shifts inside).
+    fn shifted(p: &Prepared, g: usize, i: usize, delay: i64) -> f64 {
+        let n = p.tau[g].len() as i64;
+        p.tau[g][(i as i64 + delay).rem_euclid(n) as usize]
+    }
+
+    /// The selection rows of `d` chunk by chunk into one [`Accumulator`]:
+    /// `[start base regressor | every candidate's columns | τ]`, a delay
+    /// candidate's column being the shifted torque.
+    fn accumulate(&self, d: &Dataset, p: &Prepared) -> Result<Accumulator, IdentError> {
+        self.accumulate_with(d, p, &self.cands, &self.effect_models, &self.layout)
+    }
+
+    /// [`Self::accumulate`] for another candidate list and its layout.
+    fn accumulate_with(
+        &self,
+        d: &Dataset,
+        p: &Prepared,
+        cands: &[Candidate],
+        effect_models: &[Option<Model>],
+        layout: &Layout,
+    ) -> Result<Accumulator, IdentError> {
+        let (lo, hi) = self.range(d);
+        let width = layout.width();
+        let target = layout.target_column();
+        let pb = layout.base_columns();
+        let lanes = in_lanes(
+            &p.plan,
+            lo,
+            hi,
+            || Accumulator::new(layout),
+            |acc, a, b| {
+                let (wl, wh) = p.plan.window(a, b);
+                let nw = wh - wl;
+                let s = window_columns(self.start, self.geometry, d, wl, wh)?;
+                let wb = self.base.base_regressor(s.w.as_ref())?;
+                let blocks = effect_models
+                    .iter()
+                    .map(|m| match m {
+                        Some(m) => window_columns(m, self.geometry, d, wl, wh).map(|s| Some(s.w)),
+                        None => Ok(None),
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                for g in 0..2 {
+                    let idx = Self::rows(p, g, a, b);
+                    let mut m = Mat::<f64>::zeros(idx.len(), width);
+                    for (r, &i) in idx.iter().enumerate() {
+                        let row = g * nw + (i - wl);
+                        for j in 0..pb {
+                            m[(r, j)] = wb[(row, j)];
+                        }
+                        for (k, c) in cands.iter().enumerate() {
+                            let cols = layout.candidate_columns(k);
+                            match (&blocks[k], c) {
+                                (Some(bk), _) => {
+                                    for (jj, j) in cols.enumerate() {
+                                        m[(r, j)] = bk[(row, jj)];
+                                    }
+                                }
+                                (None, Candidate::TimeDelay { samples }) => {
+                                    m[(r, cols.start)] = Self::shifted(p, g, i, *samples);
+                                }
+                                (None, Candidate::Effect { .. }) => {}
+                            }
+                        }
+                        m[(r, target)] = p.tau[g][i];
+                    }
+                    acc.push(g, m.as_ref())?;
+                }
+                Ok(())
+            },
+        )?;
+        let mut it = lanes.into_iter();
+        let mut acc = it.next().unwrap_or_else(|| Accumulator::new(layout));
+        for l in it {
+            acc.merge(&l)?;
+        }
+        Ok(acc)
+    }
+
+    /// Residual per joint of the selected model `fit` on `d` (rows used,
+    /// in order) with their sample indices: only the columns of the model
+    /// are computed.
+    fn residual(
+        &self,
+        d: &Dataset,
+        p: &Prepared,
+        fit: &ModelFit,
+    ) -> Result<JointResidual, IdentError> {
+        let (lo, hi) = self.range(d);
+        let pb = self.layout.base_columns();
+        // Coefficient of every layout column (0 if not in the model).
+        let mut beta = vec![0.0; self.layout.width()];
+        for (c, v) in fit.columns.iter().zip(&fit.estimate) {
+            beta[*c] = *v;
+        }
+        let delay = (0..self.cands.len())
+            .find(|&k| self.layout.candidate_columns(k).start == fit.target && k < self.cands.len())
+            .and_then(|k| match self.cands[k] {
+                Candidate::TimeDelay { samples } if fit.target != self.layout.target_column() => {
+                    Some(samples)
+                }
+                _ => None,
+            })
+            .unwrap_or(0);
+        let used: Vec<usize> = (0..self.cands.len())
+            .filter(|&k| {
+                self.effect_models[k].is_some()
+                    && self.layout.candidate_columns(k).any(|c| beta[c] != 0.0)
+            })
+            .collect();
+        type Piece = (usize, [Vec<f64>; 2], [Vec<usize>; 2]);
+        let lanes = in_lanes(&p.plan, lo, hi, Vec::<Piece>::new, |out, a, b| {
+            let (wl, wh) = p.plan.window(a, b);
+            let nw = wh - wl;
+            let s = window_columns(self.start, self.geometry, d, wl, wh)?;
+            let wb = self.base.base_regressor(s.w.as_ref())?;
+            let blocks = used
+                .iter()
+                .map(|&k| match &self.effect_models[k] {
+                    Some(m) => window_columns(m, self.geometry, d, wl, wh).map(|s| (k, s.w)),
+                    None => Ok((k, Mat::zeros(0, 0))),
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let mut res: [Vec<f64>; 2] = [vec![], vec![]];
+            let mut ids: [Vec<usize>; 2] = [vec![], vec![]];
+            for g in 0..2 {
+                for i in Self::rows(p, g, a, b) {
+                    let row = g * nw + (i - wl);
+                    let mut pred = 0.0;
+                    for j in 0..pb {
+                        pred += beta[j] * wb[(row, j)];
+                    }
+                    for (k, bk) in &blocks {
+                        for (jj, j) in self.layout.candidate_columns(*k).enumerate() {
+                            pred += beta[j] * bk[(row, jj)];
+                        }
+                    }
+                    res[g].push(Self::shifted(p, g, i, delay) - pred);
+                    ids[g].push(i);
+                }
+            }
+            out.push((a, res, ids));
+            Ok(())
+        })?;
+        let mut pieces: Vec<Piece> = lanes.into_iter().flatten().collect();
+        pieces.sort_by_key(|x| x.0);
+        let mut res: [Vec<f64>; 2] = [vec![], vec![]];
+        let mut ids: [Vec<usize>; 2] = [vec![], vec![]];
+        for (_, r, i) in pieces {
+            for g in 0..2 {
+                res[g].extend(&r[g]);
+                ids[g].extend(&i[g]);
             }
         }
-        Ok(m)
+        Ok((res, ids))
     }
 
-    fn design(&self, p: &Prepared, data: &Dataset, s: &State) -> Design {
-        let blocks: Vec<&Mat<f64>> = s
-            .blocks
-            .iter()
-            .filter_map(|&i| p.blocks[i].as_ref())
-            .collect();
-        design(&p.base, &blocks, s.delay, data.periodic, &p.mask)
-    }
-
-    /// Fit on TRAIN and validation fitness of state `s`.
-    fn run(&self, s: &State) -> Result<(BaseParameters, Fit, Vec<[f64; 2]>), IdentError> {
-        let model = self.model(s)?;
-        let base = crate::robot::base_parameters(
-            &model,
-            self.geometry,
-            &Workspace::paper(),
-            self.base_samples,
-        )?;
-        let f = fit(
-            &self.design(&self.train_p, self.train, s),
-            &base,
-            self.train.periodic,
-        )?;
-        let fits = self
-            .vals
-            .iter()
-            .zip(&self.vals_p)
-            .map(|(v, p)| evaluate(&self.design(p, v, s), &base, &f.beta).map(|r| r.1))
-            .collect::<Result<Vec<_>, _>>()?;
-        Ok((base, f, fits))
+    /// Model `model` with base `base` on `d`: calls `f(state, g, W_b rows,
+    /// torques)` chunk by chunk (torques shifted by `delay`).
+    #[allow(clippy::too_many_arguments)]
+    fn model_pass<T: Send>(
+        &self,
+        d: &Dataset,
+        p: &Prepared,
+        model: &Model,
+        base: &BaseParameters,
+        delay: i64,
+        init: impl Fn() -> T + Sync,
+        f: impl Fn(&mut T, usize, MatRef<'_, f64>, &[f64]) -> Result<(), IdentError> + Sync,
+    ) -> Result<Vec<T>, IdentError> {
+        let (lo, hi) = self.range(d);
+        in_lanes(&p.plan, lo, hi, init, |st, a, b| {
+            let (wl, wh) = p.plan.window(a, b);
+            let nw = wh - wl;
+            let s = window_columns(model, self.geometry, d, wl, wh)?;
+            let wb = base.base_regressor(s.w.as_ref())?;
+            for g in 0..2 {
+                let idx = Self::rows(p, g, a, b);
+                let m = Mat::from_fn(idx.len(), wb.ncols(), |r, j| wb[(g * nw + idx[r] - wl, j)]);
+                let t: Vec<f64> = idx.iter().map(|&i| Self::shifted(p, g, i, delay)).collect();
+                f(st, g, m.as_ref(), &t)?;
+            }
+            Ok(())
+        })
     }
 }
 
-fn mean_fit(v: &[[f64; 2]]) -> [f64; 2] {
-    let k = v.len().max(1) as f64;
+fn fitness_pair(v: &[f64]) -> [f64; 2] {
     [
-        v.iter().map(|x| x[0]).sum::<f64>() / k,
-        v.iter().map(|x| x[1]).sum::<f64>() / k,
+        v.first().copied().unwrap_or(0.0),
+        v.get(1).copied().unwrap_or(0.0),
     ]
+}
+
+fn mean_pair(v: &[f64]) -> [f64; 2] {
+    fitness_pair(v)
+}
+
+fn score_of(c: Candidate, e: &CandidateEvaluation) -> CandidateScore {
+    CandidateScore {
+        candidate: c,
+        label: c.label(),
+        added_parameters: e.added_parameters,
+        rss_drop_percent: e.rss_drop_percent,
+        n_eff: e.n_eff,
+        f: e.f,
+        p_value: e.p_value,
+        delta_bic: e.delta_bic,
+        gain: mean_pair(&e.gain),
+        mean_gain: e.mean_gain,
+        gain_per_set: e.gain_per_set.clone(),
+        significant: e.status == EvaluationStatus::Significant,
+        note: match e.status {
+            EvaluationStatus::NoNewParameters => {
+                "its columns lie in the span of the model's on these rows".into()
+            }
+            _ => e.note.clone(),
+        },
+    }
 }
 
 fn describe(start: &Model, steps: &[Step]) -> String {
@@ -415,259 +562,183 @@ pub fn diagnose(
             Candidate::TimeDelay { .. } => true,
         })
         .collect();
-    let prep = |d: &Dataset, tol: f64| -> Result<Prepared, IdentError> {
-        let base = columns(start, geometry, d)?;
-        let blocks = cands
-            .par_iter()
-            .map(|c| match c {
-                Candidate::Effect { effect } => {
-                    effect_columns(*effect, start.gravity(), geometry, d).map(Some)
-                }
-                Candidate::TimeDelay { .. } => Ok(None),
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        let mask = moving_mask(d, opts.min_speed, tol)?;
-        Ok(Prepared { base, blocks, mask })
-    };
+    let effect_models = cands
+        .iter()
+        .map(|c| match c {
+            Candidate::Effect { effect } => Model::new(vec![*effect], start.gravity())
+                .map(Some)
+                .map_err(|e| IdentError::Adapter {
+                    context: format!("candidate {}", effect.id()),
+                    message: e.to_string(),
+                }),
+            Candidate::TimeDelay { .. } => Ok(None),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let base = crate::robot::base_parameters(
+        start,
+        geometry,
+        &Workspace::paper(),
+        opts.base_samples.max(50),
+    )?;
+    let specs: Vec<CandidateSpec> = cands
+        .iter()
+        .zip(&effect_models)
+        .map(|(c, m)| match m {
+            Some(m) => CandidateSpec::columns(c.label(), m.columns()).in_family(c.id()),
+            None => CandidateSpec::target(c.label()).in_family(c.id()),
+        })
+        .collect();
+    let layout = Layout::new(base.n_base(), specs, 2)?;
+    let max_shift = cands
+        .iter()
+        .map(|c| match c {
+            Candidate::TimeDelay { samples } => samples.unsigned_abs() as usize,
+            Candidate::Effect { .. } => 0,
+        })
+        .max()
+        .unwrap_or(0);
     let ctx = Context {
         geometry,
         start,
-        train_p: prep(train, opts.reach_tol)?,
-        vals_p: validation
-            .iter()
-            .map(|v| prep(v, opts.validation_reach_tol))
-            .collect::<Result<_, _>>()?,
+        base,
         cands,
-        train,
-        vals: validation,
-        base_samples: opts.base_samples.max(50),
+        effect_models,
+        layout,
+        max_shift,
     };
-    // The filter's independent fraction of samples (= the σ correction's
-    // noise gain, see `n_eff`), for the F-test's degrees of freedom.
-    let dof_ratio = train.filter_dof() / train.len() as f64;
-
-    let mut state = State {
-        blocks: vec![],
-        delay: 0,
+    let prep = |d: &Dataset, tol: f64| -> Result<Prepared, IdentError> {
+        Ok(Prepared {
+            mask: moving_mask(d, opts.min_speed, tol)?,
+            tau: filtered_torques(d)?,
+            plan: Plan::new(d)?,
+        })
     };
-    let (mut cur_base, mut cur_fit, mut cur_val) = ctx.run(&state)?;
+    let train_p = prep(train, opts.reach_tol)?;
+    let vals_p: Vec<Prepared> = validation
+        .iter()
+        .map(|v| prep(v, opts.validation_reach_tol))
+        .collect::<Result<_, _>>()?;
+    let train_acc = ctx.accumulate(train, &train_p)?;
+    let val_accs: Vec<Accumulator> = validation
+        .iter()
+        .zip(&vals_p)
+        .map(|(v, p)| ctx.accumulate(v, p))
+        .collect::<Result<_, _>>()?;
+    // The filter's independent fraction of samples for the F-test and its
+    // noise gain for σ: the same number (Parseval), applied once each.
+    let dof_ratio = (train.filter_dof() / train.len() as f64).clamp(1e-9, 1.0);
+    let sel_opts = SelectionOptions {
+        alpha: opts.alpha,
+        min_gain: opts.min_gain,
+        max_steps: opts.max_steps,
+        effective_fraction: dof_ratio,
+        noise_gain: train.noise_gain()?.clamp(1e-12, 1.0),
+        ..SelectionOptions::default()
+    };
+    let sel = select(&train_acc, &val_accs, &sel_opts)?;
+    let pair_rows =
+        |f: &ModelFit| -> Vec<[f64; 2]> { f.fitness.iter().map(|v| fitness_pair(v)).collect() };
     let mut fitness_rows = vec![FitnessRow {
         step: 0,
         model: describe(start, &[]),
-        fitness: cur_val.clone(),
+        fitness: pair_rows(&sel.initial),
     }];
-    let initial_state = state.clone();
     let mut steps: Vec<Step> = Vec::new();
-    let mut rounds = Vec::new();
-    let mut used: Vec<&'static str> = Vec::new();
-    let mut stopped_clean = false;
-    while steps.len() < opts.max_steps {
-        let trial: Vec<usize> = (0..ctx.cands.len())
-            .filter(|&i| !used.contains(&ctx.cands[i].id()))
-            .collect();
-        if trial.is_empty() {
-            break;
-        }
-        let level = opts.alpha / trial.len() as f64;
-        let before = mean_fit(&cur_val);
-        let p0 = cur_base.n_base();
-        let scored: Vec<Scored> = trial
-            .par_iter()
-            .map(|&i| {
-                let c = ctx.cands[i];
-                let mut s = state.clone();
-                match c {
-                    Candidate::Effect { .. } => s.blocks.push(i),
-                    Candidate::TimeDelay { samples } => s.delay = samples,
-                }
-                let (base, f, val) = match ctx.run(&s) {
-                    Ok(x) => x,
-                    // A candidate the kept rows do not excite (or that makes
-                    // the fit rank deficient) is not evidence; it is scored
-                    // as insignificant with the reason.
-                    Err(e) => {
-                        let score = CandidateScore {
-                            candidate: c,
-                            label: c.label(),
-                            added_parameters: 0,
-                            rss_drop_percent: 0.0,
-                            n_eff: 0.0,
-                            f: 0.0,
-                            p_value: 1.0,
-                            delta_bic: 0.0,
-                            gain: [0.0; 2],
-                            mean_gain: 0.0,
-                            gain_per_set: vec![0.0; cur_val.len()],
-                            significant: false,
-                            note: e.to_string(),
-                        };
-                        return (i, score, s, None);
-                    }
-                };
-                let added = match c {
-                    Candidate::Effect { .. } => base.n_base().saturating_sub(p0),
-                    Candidate::TimeDelay { .. } => 1,
-                };
-                let ne = n_eff(&f.residual, f.split, dof_ratio);
-                let p1 = base.n_base() as f64;
-                // A shifted record loses |d| rows: compare RSS per row.
-                let rss0 = cur_fit.rss / cur_fit.residual.len() as f64;
-                let rss1 = f.rss / f.residual.len() as f64;
-                let drop = (rss0 - rss1) / rss0;
-                let (fstat, p) = if added == 0 || ne <= p1 + 1.0 || rss1 <= 0.0 {
-                    (0.0, 1.0)
-                } else {
-                    let k = added as f64;
-                    let fs = ((rss0 - rss1) / k) / (rss1 / (ne - p1));
-                    (fs.max(0.0), f_sf(fs, k, ne - p1))
-                };
-                let after = mean_fit(&val);
-                let gain = [after[0] - before[0], after[1] - before[1]];
-                let mean_gain = 0.5 * (gain[0] + gain[1]);
-                let gain_per_set: Vec<f64> = val
-                    .iter()
-                    .zip(&cur_val)
-                    .map(|(a, b)| 0.5 * ((a[0] - b[0]) + (a[1] - b[1])))
-                    .collect();
-                let every = gain_per_set.iter().all(|g| *g >= opts.min_gain);
-                let score = CandidateScore {
-                    candidate: c,
-                    label: c.label(),
-                    added_parameters: added,
-                    rss_drop_percent: 100.0 * drop,
-                    n_eff: ne,
-                    f: fstat,
-                    p_value: p,
-                    delta_bic: if rss1 > 0.0 && rss0 > 0.0 && ne > 1.0 {
-                        ne * (rss1 / rss0).ln() + added as f64 * ne.ln()
-                    } else {
-                        0.0
-                    },
-                    gain,
-                    mean_gain,
-                    gain_per_set,
-                    significant: p < level && every,
-                    note: String::new(),
-                };
-                let keep = score.significant.then_some((base, f, val));
-                (i, score, s, keep)
-            })
-            .collect();
-        let top = scored
-            .iter()
-            .filter(|x| x.1.significant)
-            .min_by(|a, b| a.1.delta_bic.total_cmp(&b.1.delta_bic).then(a.0.cmp(&b.0)));
-        // Candidates of other identifiers that explain the TRAIN data as
-        // well as the best one (aliases) are listed with it; among them the
-        // first in the library's order is named, so the choice does not hang
-        // on round-off.
-        let alias_of = |x: &Scored, best: &CandidateScore| {
-            x.1.candidate.id() != best.candidate.id()
-                && x.1.added_parameters == best.added_parameters
-                && (x.1.rss_drop_percent - best.rss_drop_percent).abs()
-                    <= 1e-3 * best.rss_drop_percent.abs()
-        };
-        let best = top.map(|t| {
-            scored
-                .iter()
-                .filter(|x| x.1.significant && (x.0 == t.0 || alias_of(x, &t.1)))
-                .map(|x| x.0)
-                .min()
-                .unwrap_or(t.0)
-        });
-        let mut round: Vec<CandidateScore> = scored.iter().map(|x| x.1.clone()).collect();
-        round.sort_by(|a, b| b.mean_gain.total_cmp(&a.mean_gain));
-        rounds.push(round);
-        let Some(bi) = best else {
-            stopped_clean = true;
-            break;
-        };
-        let best_score = scored
-            .iter()
-            .find(|x| x.0 == bi)
-            .map(|x| x.1.clone())
-            .ok_or(IdentError::InvalidSetting {
-                name: "selected candidate",
-                value: bi as f64,
-                reason: "internal: the selected candidate is missing from its round",
-            })?;
-        let mut aliases: Vec<String> = scored
-            .iter()
-            .filter(|x| x.0 != bi && alias_of(x, &best_score))
-            .map(|x| x.1.candidate.id().to_owned())
-            .collect();
-        aliases.sort();
-        aliases.dedup();
-        let Some((i, score, s, Some((base, f, val)))) = scored.into_iter().find(|x| x.0 == bi)
-        else {
-            return Err(IdentError::InvalidSetting {
-                name: "selected candidate",
-                value: bi as f64,
-                reason: "internal: a significant candidate lost its fit",
-            });
-        };
-        let c = ctx.cands[i];
+    let mut delay_samples = 0;
+    for st in &sel.steps {
+        let c = ctx.cands[st.candidate];
         let parameters = match c {
             Candidate::Effect { effect } => {
-                // Base parameter k stands for standard column independent()[k]
-                // (plus its regrouped aliases, none for an effect's own columns
-                // unless they are collinear with the model's).
                 let names = effect.names();
-                let std_names = base.standard_names();
-                base.independent()
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, c)| names.contains(&std_names[**c]))
-                    .map(|(k, _)| NamedValue {
-                        name: base.expression(k),
-                        value: f.beta[k],
-                        std_dev: f.std_dev[k],
+                ctx.layout
+                    .candidate_columns(st.candidate)
+                    .zip(&names)
+                    .filter_map(|(col, name)| {
+                        let k = st.fit.columns.iter().position(|c| *c == col)?;
+                        Some(NamedValue {
+                            name: name.clone(),
+                            value: st.fit.estimate[k],
+                            std_dev: st.fit.std_dev[k],
+                        })
                     })
                     .collect()
             }
-            Candidate::TimeDelay { samples } => vec![NamedValue {
-                name: "delay_samples".into(),
-                value: samples as f64,
-                std_dev: 0.0,
-            }],
+            Candidate::TimeDelay { samples } => {
+                delay_samples = samples;
+                vec![NamedValue {
+                    name: "delay_samples".into(),
+                    value: samples as f64,
+                    std_dev: 0.0,
+                }]
+            }
         };
-        used.push(c.id());
-        state = s;
         steps.push(Step {
             id: c.id().to_owned(),
             label: c.label(),
             candidate: c,
             explanation: c.explanation().to_owned(),
-            aliases,
+            aliases: st.aliases.clone(),
             parameters,
-            evidence: score,
+            evidence: score_of(c, &st.evaluation),
+            refinement: None,
         });
         fitness_rows.push(FitnessRow {
             step: steps.len(),
             model: describe(start, &steps),
-            fitness: val.clone(),
+            fitness: pair_rows(&st.fit),
         });
-        cur_base = base;
-        cur_fit = f;
-        cur_val = val;
     }
+    // Nonlinear settings between the grid points: one pass over TRAIN per
+    // trial value (bounded memory), the other selected candidates kept.
+    for k in 0..steps.len() {
+        if let Candidate::Effect {
+            effect: Effect::StribeckFriction { v_s },
+        } = steps[k].candidate
+        {
+            let others: Vec<Candidate> = sel
+                .steps
+                .iter()
+                .map(|st| ctx.cands[st.candidate])
+                .filter(|c| *c != steps[k].candidate)
+                .collect();
+            steps[k].refinement = Some(refine_stribeck(
+                &ctx,
+                (train, &train_p),
+                (validation, &vals_p),
+                &others,
+                v_s,
+                &sel_opts,
+            )?);
+        }
+    }
+    let mut rounds: Vec<Vec<CandidateScore>> = sel
+        .rounds
+        .iter()
+        .map(|r| {
+            r.iter()
+                .map(|e| score_of(ctx.cands[e.candidate], e))
+                .collect()
+        })
+        .collect();
+    for r in &mut rounds {
+        r.sort_by(|a, b| b.mean_gain.total_cmp(&a.mean_gain));
+    }
+    let stopped_clean = sel.status == SelectionStatus::NothingSignificant;
+    let final_fit = sel.final_fit().clone();
 
     // Residual analyses before and after.
-    let analyse_state = |s: &State, base: &BaseParameters, beta: &[f64]| {
+    let analyse_fit = |fit: &ModelFit| {
         validation
             .iter()
-            .zip(&ctx.vals_p)
+            .zip(&vals_p)
             .map(|(v, p)| -> Result<ResidualAnalysis, IdentError> {
-                let d = ctx.design(p, v, s);
-                let (r, _) = evaluate(&d, base, beta)?;
-                let m = d.split();
-                let res = [&r[..m], &r[m..]];
+                let (res, idx) = ctx.residual(v, p, fit)?;
                 let sm = &v.samples;
                 let rms = |x: &[f64]| {
                     (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
                 };
                 let pick =
-                    |x: &[f64], g: usize| -> Vec<f64> { d.idx[g].iter().map(|&i| x[i]).collect() };
+                    |x: &[f64], g: usize| -> Vec<f64> { idx[g].iter().map(|&i| x[i]).collect() };
                 let cols: Vec<[Vec<f64>; 4]> = (0..2)
                     .map(|g| {
                         [
@@ -679,13 +750,13 @@ pub fn diagnose(
                     })
                     .collect();
                 let jd = |g: usize| JointData {
-                    residual: res[g],
+                    residual: &res[g],
                     theta: &cols[g][0],
                     theta_dot: &cols[g][1],
                     theta_ddot: &cols[g][2],
                     t: &cols[g][3],
                 };
-                let sigma = [rms(res[0]), rms(res[1])];
+                let sigma = [rms(&res[0]), rms(&res[1])];
                 Ok(analyse(
                     &v.name,
                     &[jd(0), jd(1)],
@@ -695,9 +766,8 @@ pub fn diagnose(
             })
             .collect::<Result<Vec<_>, _>>()
     };
-    let (b0, f0, _) = ctx.run(&initial_state)?;
-    let before = analyse_state(&initial_state, &b0, &f0.beta)?;
-    let after = analyse_state(&state, &cur_base, &cur_fit.beta)?;
+    let before = analyse_fit(&sel.initial)?;
+    let after = analyse_fit(&final_fit)?;
     let white = after
         .iter()
         .all(|a| a.whiteness.iter().all(|w| w.is_white()));
@@ -742,27 +812,60 @@ pub fn diagnose(
         )
     };
 
-    let final_model = ctx.model(&state)?;
-    let estimate = cur_base
-        .base_names()
-        .iter()
-        .enumerate()
-        .map(|(k, _)| NamedValue {
-            name: cur_base.expression(k),
-            value: cur_fit.beta[k],
-            std_dev: cur_fit.std_dev[k],
-        })
-        .collect();
+    let mut final_model = start.clone();
+    for s in &steps {
+        if let Candidate::Effect { effect } = s.candidate {
+            final_model = final_model
+                .with_effect(effect)
+                .map_err(|e| IdentError::Adapter {
+                    context: "extending the model".into(),
+                    message: e.to_string(),
+                })?;
+        }
+    }
+    let mut estimate: Vec<NamedValue> = Vec::new();
+    for (k, col) in final_fit.columns.iter().enumerate() {
+        let name = if *col < ctx.layout.base_columns() {
+            ctx.base.expression(*col)
+        } else {
+            (0..ctx.cands.len())
+                .find_map(|c| {
+                    let r = ctx.layout.candidate_columns(c);
+                    let off = col.checked_sub(r.start)?;
+                    if !r.contains(col) {
+                        return None;
+                    }
+                    ctx.effect_models[c]
+                        .as_ref()
+                        .map(|m| m.names()[off].clone())
+                })
+                .unwrap_or_default()
+        };
+        estimate.push(NamedValue {
+            name,
+            value: final_fit.estimate[k],
+            std_dev: final_fit.std_dev[k],
+        });
+    }
     let consistent = match &opts.reference {
-        Some(reference) if final_model.effects().contains(&Effect::RigidLinks) => Some(
-            consistent_fit(&ctx, &state, &final_model, &cur_base, reference)?,
-        ),
+        Some(reference) if final_model.effects().contains(&Effect::RigidLinks) => {
+            Some(consistent_fit(
+                &ctx,
+                (train, &train_p),
+                validation,
+                &vals_p,
+                &final_model,
+                delay_samples,
+                reference,
+                opts.base_samples.max(50),
+            )?)
+        }
         _ => None,
     };
     Ok(Diagnosis {
         initial_model: start.effects().to_vec(),
         final_model: final_model.effects().to_vec(),
-        delay_samples: state.delay,
+        delay_samples,
         steps,
         rounds,
         fitness: fitness_rows,
@@ -776,16 +879,149 @@ pub fn diagnose(
     })
 }
 
+/// Golden-section search of `ln v_s` over a factor 3 either side of the
+/// grid value `v0`, then the profile's curvature for σ.
+fn refine_stribeck(
+    ctx: &Context<'_>,
+    train: (&Dataset, &Prepared),
+    validation: (&[Dataset], &[Prepared]),
+    others: &[Candidate],
+    v0: f64,
+    opts: &SelectionOptions,
+) -> Result<Refinement, IdentError> {
+    let setup = |v: f64| -> Result<TrialLayout, IdentError> {
+        let mut cands = others.to_vec();
+        cands.push(Candidate::Effect {
+            effect: Effect::StribeckFriction { v_s: v },
+        });
+        let models = cands
+            .iter()
+            .map(|c| match c {
+                Candidate::Effect { effect } => Model::new(vec![*effect], ctx.start.gravity())
+                    .map(Some)
+                    .map_err(|e| IdentError::Adapter {
+                        context: format!("candidate {}", effect.id()),
+                        message: e.to_string(),
+                    }),
+                Candidate::TimeDelay { .. } => Ok(None),
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let specs = cands
+            .iter()
+            .zip(&models)
+            .map(|(c, m)| match m {
+                Some(m) => CandidateSpec::columns(c.label(), m.columns()).in_family(c.id()),
+                None => CandidateSpec::target(c.label()).in_family(c.id()),
+            })
+            .collect();
+        let layout = Layout::new(ctx.base.n_base(), specs, 2)?;
+        Ok((cands, models, layout))
+    };
+    let all = |n: usize| (0..n).collect::<Vec<_>>();
+    // TRAIN only during the search (its own sums stand in for the
+    // validation set, whose figures are not used).
+    let rss = |u: f64| -> Result<f64, IdentError> {
+        let (c, m, l) = setup(u.exp())?;
+        let acc = ctx.accumulate_with(train.0, train.1, &c, &m, &l)?;
+        let f = fit_model(&acc, std::slice::from_ref(&acc), &all(c.len()), opts)?;
+        Ok(f.total_rss())
+    };
+    let (lo, hi) = (v0.ln() - 3f64.ln(), v0.ln() + 3f64.ln());
+    let phi = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut a, mut b) = (lo, hi);
+    let mut x1 = b - phi * (b - a);
+    let mut x2 = a + phi * (b - a);
+    let (mut f1, mut f2) = (rss(x1)?, rss(x2)?);
+    // 14 steps shrink the interval by 0.618¹⁴ ≈ 1.2e-3: ±0.1 % in v_s.
+    for _ in 0..14 {
+        if f1 <= f2 {
+            b = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = b - phi * (b - a);
+            f1 = rss(x1)?;
+        } else {
+            a = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = a + phi * (b - a);
+            f2 = rss(x2)?;
+        }
+    }
+    let (u, fu) = if f1 <= f2 { (x1, f1) } else { (x2, f2) };
+    let edge = 0.01 * (hi - lo);
+    let status = if u - lo < edge || hi - u < edge {
+        RefinementStatus::AtBound
+    } else {
+        RefinementStatus::Interior
+    };
+    let v = u.exp();
+    let (c, m, l) = setup(v)?;
+    let tacc = ctx.accumulate_with(train.0, train.1, &c, &m, &l)?;
+    let ne = opts.effective_fraction * tacc.rows().iter().sum::<usize>() as f64;
+    let std_dev = if status == RefinementStatus::Interior && fu > 0.0 {
+        let h = 0.05;
+        let (fm, fp) = (rss(u - h)?, rss(u + h)?);
+        let j2 = ne * (fp.ln() - 2.0 * fu.ln() + fm.ln()) / (h * h);
+        if j2 > 0.0 {
+            u.exp() * (2.0 / j2).sqrt()
+        } else {
+            0.0
+        }
+    } else {
+        0.0
+    };
+    let vaccs = validation
+        .0
+        .iter()
+        .zip(validation.1)
+        .map(|(d, p)| ctx.accumulate_with(d, p, &c, &m, &l))
+        .collect::<Result<Vec<_>, _>>()?;
+    let f = fit_model(&tacc, &vaccs, &all(c.len()), opts)?;
+    let last = c.len() - 1;
+    let names = Effect::StribeckFriction { v_s: v }.names();
+    let parameters = l
+        .candidate_columns(last)
+        .zip(&names)
+        .filter_map(|(col, name)| {
+            let k = f.columns.iter().position(|x| *x == col)?;
+            Some(NamedValue {
+                name: name.clone(),
+                value: f.estimate[k],
+                std_dev: f.std_dev[k],
+            })
+        })
+        .collect();
+    Ok(Refinement {
+        name: "v_s".into(),
+        grid_value: v0,
+        value: v,
+        std_dev,
+        status,
+        parameters,
+        fitness: f.fitness.iter().map(|x| fitness_pair(x)).collect(),
+    })
+}
+
 /// Friction-like levels that must not be negative (dissipation).
 const NONNEGATIVE: [&str; 7] = ["Fs1", "Fs2", "Fpb", "Fpc", "Fpd", "Fq1", "Fq2"];
 
+/// The physically consistent re-identification of the final model: its
+/// reduced least-squares problem accumulated chunk by chunk (incremental
+/// QR), its validation fitness from a second pass per set.
+#[allow(clippy::too_many_arguments)]
 fn consistent_fit(
     ctx: &Context<'_>,
-    s: &State,
+    train: (&Dataset, &Prepared),
+    validation: &[Dataset],
+    vals_p: &[Prepared],
     model: &Model,
-    base: &BaseParameters,
+    delay: i64,
     reference: &Params,
+    base_samples: usize,
 ) -> Result<ConsistentFit, IdentError> {
+    let base =
+        crate::robot::base_parameters(model, ctx.geometry, &Workspace::paper(), base_samples)?;
     let mut problem = consistent_problem(model, reference)?;
     let names = model.names();
     let extra: Vec<&str> = NONNEGATIVE
@@ -794,16 +1030,71 @@ fn consistent_fit(
         .filter(|n| names.iter().any(|m| m == n))
         .collect();
     problem.nonnegative(&extra)?;
-    let d = ctx.design(&ctx.train_p, ctx.train, s);
-    let wb = base.base_regressor(d.w.as_ref())?;
-    let red = ReducedLs::new(wb.as_ref(), &d.t, &base.base_names())?;
-    let sol = problem.solve(base, &red)?;
+    let bn = base.base_names();
+    let lanes = ctx.model_pass(
+        train.0,
+        train.1,
+        model,
+        &base,
+        delay,
+        || QrAccumulator::new(&bn, 2),
+        |acc, g, w, t| acc.as_mut().map_err(|e| e.clone())?.push_rows(g, w, t),
+    )?;
+    let mut it = lanes.into_iter();
+    let mut acc = it.next().ok_or(IdentError::InvalidSetting {
+        name: "accumulation lanes",
+        value: 0.0,
+        reason: "internal: no lane",
+    })??;
+    for l in it {
+        acc.merge(&l?)?;
+    }
+    let red = acc.reduced()?;
+    let sol = problem.solve(&base, &red)?;
     let beta_b = base.to_base(&sol.standard)?;
-    let fitness = ctx
-        .vals
+    let fitness = validation
         .iter()
-        .zip(&ctx.vals_p)
-        .map(|(v, p)| evaluate(&ctx.design(p, v, s), base, &beta_b).map(|r| r.1))
+        .zip(vals_p)
+        .map(|(v, p)| -> Result<[f64; 2], IdentError> {
+            // Per joint: Σ y, Σ y², Σ (y − ŷ)², n.
+            let lanes = ctx.model_pass(
+                v,
+                p,
+                model,
+                &base,
+                delay,
+                || [[0.0f64; 4]; 2],
+                |s, g, w, t| {
+                    for (r, y) in t.iter().enumerate() {
+                        let pred: f64 = (0..w.ncols()).map(|j| w[(r, j)] * beta_b[j]).sum();
+                        s[g][0] += y;
+                        s[g][1] += y * y;
+                        s[g][2] += (y - pred) * (y - pred);
+                        s[g][3] += 1.0;
+                    }
+                    Ok(())
+                },
+            )?;
+            let mut tot = [[0.0f64; 4]; 2];
+            for l in lanes {
+                for g in 0..2 {
+                    for k in 0..4 {
+                        tot[g][k] += l[g][k];
+                    }
+                }
+            }
+            let f = |s: [f64; 4], g: usize| -> Result<f64, IdentError> {
+                let den = s[1] - s[0] * s[0] / s[3].max(1.0);
+                if den <= 0.0 {
+                    return Err(IdentError::ConstantSignal {
+                        group: g,
+                        len: s[3] as usize,
+                    });
+                }
+                Ok(100.0 * (1.0 - (s[2] / den).sqrt()))
+            };
+            Ok([f(tot[0], 0)?, f(tot[1], 1)?])
+        })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(ConsistentFit {
         status: sol.status.clone(),
