@@ -111,7 +111,7 @@ struct Work {
 /// threads (bit-identical).
 ///
 /// Rows are the regressor *unfiltered*; streaming with the parallel filter
-/// is done by [`super::identify_log`], which filters blocks with overlap
+/// is done by `aras_pipeline::streaming::identify_log`, which filters blocks with overlap
 /// before they get here.
 pub struct RegressorStage<M> {
     model: M,

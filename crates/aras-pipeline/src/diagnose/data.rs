@@ -91,7 +91,7 @@ impl Dataset {
     /// without a filter). White noise of variance `σ²` leaves the filter
     /// with variance `g σ²`, correlated over about `1/g` samples; the OLS σ
     /// of a parameter whose regressor lies in the pass band is divided by
-    /// `√g` to be honest ([`crate::OlsEstimate::with_filtered_noise`]).
+    /// `√g` to be honest ([`aras_ident::OlsEstimate::with_filtered_noise`]).
     /// It is the same quantity as [`Self::filter_dof`]` / len` (Parseval:
     /// `Σ h² = ∫ |H|⁴ df / f_s`), computed in the time domain.
     pub fn noise_gain(&self) -> Result<f64, IdentError> {

@@ -37,7 +37,7 @@
 //!
 //! ## σ of the fitted parameters
 //! The σ reported with every fitted parameter ([`NamedValue::std_dev`]) is
-//! that of the HAC sandwich covariance ([`crate::covariance`],
+//! that of the HAC sandwich covariance ([`aras_ident::covariance`],
 //! `OlsEstimate::with_hac`), as in identification: it counts the filtered,
 //! correlated residual (and any slow misfit) with a bandwidth taken from
 //! the residual's own autocorrelation time. The F-test uses the

@@ -83,7 +83,7 @@ pub struct NamedValue {
     /// Value (SI).
     pub value: f64,
     /// Standard deviation from the HAC sandwich covariance
-    /// ([`crate::covariance`]), which accounts for the filtered residual's
+    /// ([`aras_ident::covariance`]), which accounts for the filtered residual's
     /// correlation; 0 if unknown (never NaN).
     pub std_dev: f64,
 }
