@@ -40,7 +40,7 @@ pub enum Command {
     ExportMjcf(ExportMjcfArgs),
     /// Friction of one joint of any robot from its log: classical and
     /// dynamic models, then the diagnosis of what they miss →
-    /// friction.json, report.html, pred_<log>.csv (docs/friction.md).
+    /// `friction.json`, `report.html`, `pred_<log>.csv` (docs/friction.md).
     Friction(FrictionArgs),
 }
 
@@ -262,7 +262,7 @@ pub struct PredictArgs {
     /// Output CSV with columns t,tau1,tau2.
     #[arg(long, value_name = "PRED.csv")]
     pub out: PathBuf,
-    /// Average periods of this length (s) first (default: none, the whole log is predicted).
+    /// Period (s) of the motion for the harmonic fit (default: the sidecar's, else detected from the angles; every row of the log is predicted either way).
     #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub period: Option<f64>,
     /// Sidecar file (default: LOG.json next to the log, if present).

@@ -211,8 +211,11 @@ pub enum DerivativeChoice {
 pub struct SignalConfig {
     /// Butterworth order of one pass.
     pub filter_order: usize,
-    /// Cut-off (Hz); 0 disables the low-pass.
-    pub cutoff_hz: f64,
+    /// Cut-off (Hz) of a fixed low-pass; 0 disables filtering; absent
+    /// (the default): chosen from the data (`aras_signal::Bandwidth::Auto`:
+    /// a harmonic series up to the noise floor for a periodic log, else a
+    /// cut-off that follows the angle spectrum).
+    pub cutoff_hz: Option<f64>,
     /// Seconds dropped at the start before period averaging.
     pub settling_s: f64,
     /// Largest accepted relative RMS spread of θ between periods.
@@ -229,7 +232,7 @@ impl Default for SignalConfig {
     fn default() -> Self {
         Self {
             filter_order: 4,
-            cutoff_hz: 10.0,
+            cutoff_hz: None,
             settling_s: 0.0,
             max_period_spread: 0.1,
             derivative: DerivativeChoice::Auto,
@@ -633,8 +636,9 @@ impl Config {
                 ),
             );
         }
-        nonneg("signal.cutoff_hz", g.cutoff_hz)?;
-        if g.cutoff_hz > 0.0 && g.cutoff_hz >= 0.5 * s.rate_hz {
+        let cutoff = g.cutoff_hz.unwrap_or(0.0);
+        nonneg("signal.cutoff_hz", cutoff)?;
+        if cutoff > 0.0 && cutoff >= 0.5 * s.rate_hz {
             return bad(
                 "signal.cutoff_hz",
                 format!(
@@ -696,12 +700,11 @@ impl Config {
                     format!("frequencies must be positive, found {f}"),
                 );
             }
-            if g.cutoff_hz > 0.0 && f * 2.0 > g.cutoff_hz {
+            if cutoff > 0.0 && f * 2.0 > cutoff {
                 return bad(
                     "validation.frequencies_hz",
                     format!(
-                        "{f} Hz is too close to the low-pass cut-off signal.cutoff_hz = {} Hz (keep f ≤ cut-off/2)",
-                        g.cutoff_hz
+                        "{f} Hz is too close to the low-pass cut-off signal.cutoff_hz = {cutoff} Hz (keep f ≤ cut-off/2, or leave signal.cutoff_hz out to let the data choose)"
                     ),
                 );
             }

@@ -24,7 +24,8 @@ use aras_pipeline::robot::{
     params_from_solution, reversal_mask, stack,
 };
 use aras_signal::{
-    Butterworth, DerivativeMethod, FilterSpec, Log, PeriodSource, ProcessOptions, Processed, Sos,
+    Bandwidth, Butterworth, DerivativeMethod, FilterSpec, Log, OutputRows, PeriodSource,
+    ProcessOptions, Processed, Sos,
 };
 use faer::MatRef;
 use nalgebra::Vector2;
@@ -39,10 +40,14 @@ pub fn process_options(
 ) -> ProcessOptions {
     let s = &cfg.signal;
     ProcessOptions {
-        filter: (s.cutoff_hz > 0.0).then_some(FilterSpec {
-            order: s.filter_order,
-            cutoff_hz: s.cutoff_hz,
-        }),
+        filter: match s.cutoff_hz {
+            None => Bandwidth::Auto,
+            Some(c) if c > 0.0 => Bandwidth::Fixed(FilterSpec {
+                order: s.filter_order,
+                cutoff_hz: c,
+            }),
+            Some(_) => Bandwidth::Off,
+        },
         period: period.map_or(PeriodSource::FromSidecar, PeriodSource::Seconds),
         settling_s: s.settling_s,
         max_period_spread: s.max_period_spread,
@@ -56,6 +61,7 @@ pub fn process_options(
             },
         },
         use_logged_derivatives: logged_derivatives,
+        rows: OutputRows::Averaged,
     }
 }
 
@@ -69,6 +75,9 @@ pub struct Prepared {
     pub stacked: Stacked,
     /// The zero-phase filter applied, if any.
     pub filter: Option<Sos>,
+    /// The regressor before that filter (kept only when one was applied):
+    /// predictions compared with the raw torques use it.
+    pub unfiltered: Option<Stacked>,
 }
 
 impl Prepared {
@@ -140,7 +149,10 @@ pub fn prepare(
     }
     let mut stacked = stack(model, geometry, &processed.samples)
         .with_context(|| format!("regressor of {}", log.name))?;
-    let filter = match opts.filter {
+    let unfiltered = processed.summary.filter.is_some().then(|| stacked.clone());
+    // The Butterworth the processing applied to θ, if any, on the torques
+    // and every regressor column alike (none after a harmonic series).
+    let filter = match &processed.summary.filter {
         Some(spec) => {
             let sos =
                 Butterworth::lowpass(spec.order, spec.cutoff_hz, processed.summary.sample_rate_hz)?;
@@ -158,6 +170,7 @@ pub fn prepare(
         processed,
         stacked,
         filter,
+        unfiltered,
     })
 }
 
@@ -194,11 +207,13 @@ pub struct Identification {
     pub predicted_ols: Vec<f64>,
     /// SDP predictions.
     pub predicted_sdp: Vec<f64>,
-    /// Fitness (78) per joint, OLS, on every row.
+    /// Fitness (78) per joint, OLS, against the log's raw torques on every
+    /// row (the paper's figure).
     pub fitness_ols: [f64; 2],
-    /// Fitness (78) per joint, SDP, on every row.
+    /// Fitness (78) per joint, SDP, against the log's raw torques on every row.
     pub fitness_sdp: [f64; 2],
-    /// Fitness (78) per joint, OLS, on the fitted rows (away from reversals).
+    /// Fitness (78) per joint, OLS, on the fitted rows (away from
+    /// reversals, averaged and filtered as fitted).
     pub fitness_ols_kept: [f64; 2],
     /// Fitness (78) per joint, SDP, on the fitted rows.
     pub fitness_sdp_kept: [f64; 2],
@@ -210,6 +225,31 @@ pub fn fitness_per_joint(measured: &[f64], predicted: &[f64]) -> Result<[f64; 2]
     Ok([
         aras_ident::validate::fitness(&measured[..n], &predicted[..n])?,
         aras_ident::validate::fitness(&measured[n..], &predicted[n..])?,
+    ])
+}
+
+/// Fitness (78) per joint of the base parameters `beta_b` against the log's
+/// raw torques on every row (78): the prediction from the unfiltered
+/// regressor, repeated on every period of an averaged log.
+pub fn fitness_on_log_rows(
+    prepared: &Prepared,
+    base: &BaseParameters,
+    beta_b: &[f64],
+) -> Result<[f64; 2]> {
+    let st = prepared.unfiltered.as_ref().unwrap_or(&prepared.stacked);
+    let w_b = base.base_regressor(st.w.as_ref())?;
+    let p = predict(w_b.as_ref(), beta_b)?;
+    raw_fitness(&prepared.processed, &p)
+}
+
+/// Fitness (78) per joint of a stacked per-sample prediction against the
+/// log's raw torques on every row that has a sample.
+pub fn raw_fitness(processed: &Processed, predicted: &[f64]) -> Result<[f64; 2]> {
+    let n = processed.samples.len();
+    let [a, b] = processed.on_log_rows([&predicted[..n], &predicted[n..]]);
+    Ok([
+        aras_ident::validate::fitness(&a.0, &a.1)?,
+        aras_ident::validate::fitness(&b.0, &b.1)?,
     ])
 }
 
@@ -340,8 +380,8 @@ pub fn identify(
     let w_b = base.base_regressor(prepared.w_ref())?;
     let predicted_ols = predict(w_b.as_ref(), &ols.estimate)?;
     let predicted_sdp = predict(w_b.as_ref(), &sdp.base)?;
-    let fitness_ols = fitness_per_joint(prepared.t(), &predicted_ols)?;
-    let fitness_sdp = fitness_per_joint(prepared.t(), &predicted_sdp)?;
+    let fitness_ols = fitness_on_log_rows(prepared, base, &ols.estimate)?;
+    let fitness_sdp = fitness_on_log_rows(prepared, base, &sdp.base)?;
     let fitness_ols_kept = fitness_of(&fit, base, &ols.estimate)?;
     let fitness_sdp_kept = fitness_of(&fit, base, &sdp.base)?;
     Ok(Identification {

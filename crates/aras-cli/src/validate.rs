@@ -9,13 +9,13 @@ use anyhow::{Context, Result};
 use aras_dyn::{Dynamics, Model, Params, Sinusoid};
 use aras_ident::BaseParameters;
 use aras_ident::validate::{PdRegion, check_positive_definite};
-use aras_pipeline::robot::{Stacked, keep_rows};
-use aras_signal::{ReadOptions, read_log};
+use aras_pipeline::robot::{Stacked, keep_rows, reversal_mask, stack};
+use aras_signal::{OutputRows, ReadOptions, read_log};
 use nalgebra::Vector2;
 use serde::Serialize;
 
 use crate::config::Config;
-use crate::identify::{Prepared, fitness_per_joint, prepare, process_options};
+use crate::identify::{Prepared, fitness_per_joint, process_options};
 use crate::simulate;
 
 /// Fitness of each candidate on one cross-validation trajectory.
@@ -23,8 +23,8 @@ use crate::simulate;
 pub struct CrossValidation {
     /// Frequency of (79) (Hz).
     pub frequency_hz: f64,
-    /// Fitness (78) per joint for each candidate, in the order given, on
-    /// every sample.
+    /// Fitness (78) per joint for each candidate, in the order given,
+    /// against the log's raw torques on every row.
     pub fitness: Vec<[f64; 2]>,
     /// The same on the rows away from velocity reversals
     /// (`identification.min_speed`, `validation.reversal_reach`).
@@ -32,7 +32,8 @@ pub struct CrossValidation {
     /// Noise ceiling (78) per joint: the true robot's noise-free torques
     /// against the same log (`crate::ceiling`).
     pub ceiling: crate::ceiling::Ceiling,
-    /// Time, measured and predicted torques of one averaged period, for plots.
+    /// Time, raw measured and predicted torques of the first two periods,
+    /// for plots.
     #[serde(skip)]
     pub traces: Traces,
 }
@@ -87,20 +88,47 @@ pub fn cross_validate(
         let path = dir.join(format!("xv_{f}hz.csv"));
         aras_dyn::sim::write_log(&path, &log, true)?;
         let read = read_log(&path, &ReadOptions::default())?;
-        // Averaged over whole blocks of periods (aras-signal: 7 periods of
-        // 0.7 Hz at 1 kHz), the period coming from the sidecar.
-        let opts = process_options(cfg, None, false);
-        let prep = prepare(&read, &opts, cfg.identification.filtering, model, &geometry)?;
-        let keep = prep.keep_mask(cfg.identification.min_speed, cfg.validation.reversal_reach)?;
+        // θ, θ̇, θ̈ on every row with the data-chosen bandwidth (a harmonic
+        // series in the sidecar's period), the prediction from the
+        // unfiltered regressor, compared with the raw torques (78).
+        let mut opts = process_options(cfg, None, false);
+        opts.rows = OutputRows::EveryRow;
+        let processed = aras_signal::process(&read, &opts, &geometry)
+            .with_context(|| format!("processing {}", path.display()))?;
+        let stacked = stack(model, &geometry, &processed.samples)?;
+        let prep = Prepared {
+            processed,
+            stacked,
+            filter: None,
+            unfiltered: None,
+        };
+        let keep = reversal_mask(
+            &prep.processed.samples.theta_dot,
+            cfg.identification.min_speed,
+            0,
+            false,
+        )?;
         let kept = keep_rows(&prep.stacked, &keep)?;
         let mut fitness = Vec::new();
         let mut fitness_kept = Vec::new();
         let mut predicted = Vec::new();
+        // Traces: the first two periods.
+        let t0 = prep.processed.samples.t.first().copied().unwrap_or(0.0);
+        let rows = prep
+            .processed
+            .samples
+            .t
+            .iter()
+            .take_while(|t| **t - t0 <= 2.0 / f)
+            .count();
+        let n = prep.n();
+        let pick =
+            |v: &[f64]| -> Vec<f64> { v[..rows].iter().chain(&v[n..n + rows]).copied().collect() };
         for beta in candidates {
             let p = predict_standard(&prep, beta)?;
             fitness.push(fitness_per_joint(prep.t(), &p)?);
             fitness_kept.push(fitness_standard(&kept, beta)?);
-            predicted.push(p);
+            predicted.push(pick(&p));
         }
         let ceiling = crate::ceiling::noise_ceiling(
             &prep,
@@ -115,8 +143,8 @@ pub fn cross_validate(
             fitness_kept,
             ceiling,
             traces: Traces {
-                t: prep.processed.samples.t.clone(),
-                measured: prep.t().to_vec(),
+                t: prep.processed.samples.t[..rows].to_vec(),
+                measured: pick(prep.t()),
                 predicted,
             },
         });

@@ -301,7 +301,7 @@ impl<'a, M: Separable + Sync> Problem<'a, M> {
         let n = self.y.len();
         let d = self.box_lo.len();
         if d == 0 || settings.coarse_rows == 0 || n <= settings.coarse_rows {
-            return self.multistart(starts, settings);
+            return self.multistart(starts, settings, FINE_TOL);
         }
         let k = n.div_ceil(settings.coarse_rows);
         let mut idx: Vec<usize> = (0..n).step_by(k).collect();
@@ -326,11 +326,11 @@ impl<'a, M: Separable + Sync> Problem<'a, M> {
             box_hi: self.box_hi.clone(),
             _m: std::marker::PhantomData,
         };
-        let c = coarse.multistart(starts, settings)?;
+        let c = coarse.multistart(starts, settings, COARSE_TOL)?;
         let u0: Vec<f64> = c.theta.iter().map(|t| t.ln()).collect();
-        let mut fine = self.levenberg_marquardt(u0, settings.max_iterations);
+        let mut fine = self.levenberg_marquardt(u0, settings.max_iterations, FINE_TOL);
         if !fine.rss.is_finite() {
-            return self.multistart(starts, settings);
+            return self.multistart(starts, settings, FINE_TOL);
         }
         fine.evaluations += c.evaluations;
         Ok(fine)
@@ -340,6 +340,7 @@ impl<'a, M: Separable + Sync> Problem<'a, M> {
         &self,
         starts: &[Vec<f64>],
         settings: &FitSettings,
+        tol: f64,
     ) -> Result<SeparableFit, FrictionError> {
         let d = self.box_lo.len();
         let mut evaluations = 0;
@@ -364,7 +365,7 @@ impl<'a, M: Separable + Sync> Problem<'a, M> {
         scored.dedup_by(|a, b| a.1 == b.1);
         let mut best: Option<SeparableFit> = None;
         for (_, u0) in scored.iter().take(settings.starts.max(1)) {
-            let r = self.levenberg_marquardt(u0.clone(), settings.max_iterations);
+            let r = self.levenberg_marquardt(u0.clone(), settings.max_iterations, tol);
             evaluations += r.evaluations;
             if best.as_ref().is_none_or(|b| r.rss < b.rss) {
                 best = Some(r);
@@ -379,7 +380,12 @@ impl<'a, M: Separable + Sync> Problem<'a, M> {
         Ok(best)
     }
 
-    fn levenberg_marquardt(&self, mut u: Vec<f64>, max_iterations: usize) -> SeparableFit {
+    fn levenberg_marquardt(
+        &self,
+        mut u: Vec<f64>,
+        max_iterations: usize,
+        tol: f64,
+    ) -> SeparableFit {
         let d = u.len();
         let mut evaluations = 1;
         let Some((mut beta, mut pred, mut rss)) = self.eval(&u) else {
@@ -473,7 +479,7 @@ impl<'a, M: Separable + Sync> Problem<'a, M> {
                             pred = p2;
                             rss = r2;
                             lambda = (lambda / 3.0).max(1e-12);
-                            if rel < 1e-8 {
+                            if rel < tol {
                                 status = FitStatus::Converged;
                                 break 'outer;
                             }
@@ -500,6 +506,14 @@ impl<'a, M: Separable + Sync> Problem<'a, M> {
         }
     }
 }
+
+/// Relative cost decrease below which the final search stops: far below
+/// any parameter's uncertainty (a cost change of 1e-8 is a parameter change
+/// of 1e-4 σ).
+const FINE_TOL: f64 = 1e-8;
+
+/// The coarse searches only choose the basin the final search refines.
+const COARSE_TOL: f64 = 1e-4;
 
 fn bound(x: f64) -> f64 {
     // The parameter tables use ±1e6 for "unbounded" offsets and levels.

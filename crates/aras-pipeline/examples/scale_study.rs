@@ -14,7 +14,7 @@ use aras_dyn::Params;
 use aras_ident::BaseParameters;
 use aras_pipeline::robot::stack;
 use aras_pipeline::streaming::{StreamingOptions, identify_log, synthetic};
-use aras_signal::{FilterSpec, PeriodSource};
+use aras_signal::{Bandwidth, FilterSpec, PeriodSource};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -46,9 +46,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut o = StreamingOptions::default();
             o.process.period = PeriodSource::Off;
             if args.get(3).map(String::as_str) == Some("filtered") {
-                o.process.filter = Some(FilterSpec::default());
+                o.process.filter = Bandwidth::Fixed(FilterSpec::default());
             } else {
-                o.process.filter = None;
+                o.process.filter = Bandwidth::Off;
                 o.process.use_logged_derivatives = true;
             }
             let t0 = Instant::now();

@@ -10,7 +10,9 @@ use aras_kin::Geometry;
 use aras_pipeline::TaskRegressor;
 use aras_pipeline::robot::{filter, filter_reach, keep_rows, noise_gain, reversal_mask, stack};
 use aras_pipeline::streaming::{StreamingOptions, StreamingRoute, identify_log, synthetic};
-use aras_signal::{Butterworth, FilterSpec, PeriodSource, ReadOptions, process, read_log};
+use aras_signal::{
+    Bandwidth, Butterworth, FilterSpec, PeriodSource, ReadOptions, process, read_log,
+};
 use faer::Mat;
 use proptest::prelude::*;
 
@@ -340,7 +342,7 @@ fn in_memory(path: &std::path::Path, r: &Robot, o: &StreamingOptions) -> Referen
     let periodic = pr.summary.periods.is_some();
     let n = pr.samples.len();
     let (mut guard, mut gain) = (0, 1.0);
-    if let Some(f) = o.process.filter {
+    if let Some(f) = &pr.summary.filter {
         let sos = Butterworth::lowpass(f.order, f.cutoff_hz, pr.summary.sample_rate_hz).unwrap();
         filter(&mut st, &sos, o.filter_mode, periodic).unwrap();
         guard = filter_reach(&sos, n, periodic, o.reversal_reach).unwrap();
@@ -436,7 +438,7 @@ fn identify_log_matches_the_in_memory_identification_on_every_route() {
         // 1. Logged derivatives, no filter: the fast path.
         let mut o = base_opts.clone();
         o.process.use_logged_derivatives = true;
-        o.process.filter = None;
+        o.process.filter = Bandwidth::Off;
         o.process.period = PeriodSource::Off;
         check_route(&path, &r, &o, StreamingRoute::LoggedDerivatives);
         let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
@@ -446,7 +448,7 @@ fn identify_log_matches_the_in_memory_identification_on_every_route() {
         // 2. Non-periodic, filtered, θ differentiated: overlapping blocks.
         let mut o = base_opts.clone();
         o.process.period = PeriodSource::Off;
-        o.process.filter = Some(FilterSpec {
+        o.process.filter = Bandwidth::Fixed(FilterSpec {
             order: 4,
             cutoff_hz: 20.0,
         });

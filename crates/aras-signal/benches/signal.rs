@@ -7,7 +7,9 @@ use std::f64::consts::TAU;
 use std::hint::black_box;
 
 use aras_kin::{Geometry, inverse};
-use aras_signal::{Butterworth, PeriodSource, ProcessOptions, ReadOptions, process, read_log_from};
+use aras_signal::{
+    Butterworth, OutputRows, PeriodSource, ProcessOptions, ReadOptions, process, read_log_from,
+};
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Vector2;
 
@@ -84,6 +86,20 @@ fn processing(c: &mut Criterion) {
     };
     c.bench_function("process 160 s @ 1 kHz, no averaging", |b| {
         b.iter(|| black_box(process(&log, &plain, &g).unwrap()))
+    });
+    // No sidecar: the period is detected from the angles.
+    let detected = ProcessOptions::default();
+    c.bench_function("process 160 s @ 1 kHz, period detected", |b| {
+        b.iter(|| black_box(process(&log, &detected, &g).unwrap()))
+    });
+    // Prediction: θ, θ̇, θ̈ on every row (series + aperiodic remainder).
+    let every = ProcessOptions {
+        period: PeriodSource::Seconds(10.0),
+        rows: OutputRows::EveryRow,
+        ..ProcessOptions::default()
+    };
+    c.bench_function("process 160 s @ 1 kHz, every row (prediction)", |b| {
+        b.iter(|| black_box(process(&log, &every, &g).unwrap()))
     });
 }
 

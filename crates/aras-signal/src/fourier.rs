@@ -68,4 +68,40 @@ impl Fourier {
             *v = b.re * scale;
         }
     }
+
+    /// The DFT of `x` (length [`len`](Self::len)).
+    pub fn spectrum(&mut self, x: &[f64]) -> Vec<Complex64> {
+        debug_assert_eq!(x.len(), self.len());
+        for (b, &v) in self.buf.iter_mut().zip(x.iter()) {
+            *b = Complex64::new(v, 0.0);
+        }
+        self.forward
+            .process_with_scratch(&mut self.buf, &mut self.scratch);
+        self.buf.clone()
+    }
+
+    /// Writes `IDFT(m(k) · spec)` (real part) into `out`, with `m` given
+    /// the signed frequency index as in [`apply`](Self::apply).
+    pub fn synthesise(
+        &mut self,
+        spec: &[Complex64],
+        out: &mut [f64],
+        m: impl Fn(i64) -> Complex64,
+    ) {
+        let n = self.len();
+        for (k, (b, s)) in self.buf.iter_mut().zip(spec).enumerate() {
+            let signed = if 2 * k <= n {
+                k as i64
+            } else {
+                k as i64 - n as i64
+            };
+            *b = *s * m(signed);
+        }
+        self.inverse
+            .process_with_scratch(&mut self.buf, &mut self.scratch);
+        let scale = 1.0 / n as f64;
+        for (v, b) in out.iter_mut().zip(self.buf.iter()) {
+            *v = b.re * scale;
+        }
+    }
 }

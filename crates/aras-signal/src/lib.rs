@@ -68,6 +68,7 @@
 
 #![warn(missing_docs)]
 
+mod bandwidth;
 mod butterworth;
 mod derivative;
 mod error;
@@ -77,6 +78,11 @@ mod periods;
 mod process;
 mod sos;
 
+pub use bandwidth::{
+    CUTOFF_MARGIN, HARMONIC_FALSE_ALARM, HarmonicSelection, MIN_PERIOD_CORRELATION,
+    PeriodDetection, PeriodOrigin, SPECTRUM_THRESHOLD, SpectrumCutoff, detect_period,
+    spectrum_cutoff,
+};
 pub use butterworth::{Butterworth, MAX_ORDER};
 pub use derivative::{DerivativeMethod, Derivatives, derivatives, resolve};
 pub use error::{FilterError, LogError, ProcessError};
@@ -87,7 +93,7 @@ pub use log::{
 };
 pub use periods::{MAX_BLOCK_MISMATCH, MAX_DRIFT, PeriodAverage, average_periods};
 pub use process::{
-    FilterSpec, FilterSummary, PeriodSource, PeriodSummary, ProcessOptions, ProcessSummary,
-    Processed, Samples, process,
+    Bandwidth, BandwidthChoice, BandwidthMethod, FilterSpec, FilterSummary, OutputRows,
+    PeriodSource, PeriodSummary, ProcessOptions, ProcessSummary, Processed, Samples, process,
 };
 pub use sos::{Sos, TransferFunction};

@@ -17,6 +17,10 @@
 use nalgebra::Vector2;
 use serde::Serialize;
 
+use crate::bandwidth::{
+    CUTOFF_MARGIN, HarmonicSelection, PeriodDetection, PeriodOrigin, SpectrumCutoff, detect_period,
+    harmonic_fit, hermite_at, resample, spectrum_cutoff, uniform_derivatives,
+};
 use crate::derivative::{DerivativeMethod, derivatives, resolve, spectral_with};
 use crate::error::ProcessError;
 use crate::fourier::Fourier;
@@ -48,21 +52,51 @@ impl Default for FilterSpec {
 /// Where the excitation period comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
 pub enum PeriodSource {
-    /// `excitation.period_s` of the sidecar if present, else no averaging.
+    /// `excitation.period_s` of the sidecar if present, else the period
+    /// [`detect_period`] finds in the angles (no averaging if it declines).
     #[default]
     FromSidecar,
     /// This period (s).
     Seconds(f64),
-    /// No period averaging.
+    /// No period averaging and no harmonic fit.
     Off,
+}
+
+/// The processing's bandwidth.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Bandwidth {
+    /// Chosen from the data ([`crate::bandwidth`](crate::detect_period)'s
+    /// rules): a harmonic series up to the noise floor for a periodic
+    /// record, else a Butterworth whose cut-off follows the angle spectrum.
+    #[default]
+    Auto,
+    /// This zero-phase Butterworth, whatever the data.
+    Fixed(FilterSpec),
+    /// No filtering.
+    Off,
+}
+
+/// Which samples [`process`] returns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OutputRows {
+    /// One averaged block for a periodic record (fast identification),
+    /// every row otherwise.
+    #[default]
+    Averaged,
+    /// One sample per row of the log, with the log's raw torques: what a
+    /// prediction is compared with (fitness (78) on all rows).
+    EveryRow,
 }
 
 /// Options of [`process`]. `Default` gives the documented defaults.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ProcessOptions {
-    /// Low-pass filter; `None` for no filtering (default [`FilterSpec::default`]).
-    pub filter: Option<FilterSpec>,
-    /// Period for averaging (default: from the sidecar).
+    /// Bandwidth (default [`Bandwidth::Auto`]).
+    pub filter: Bandwidth,
+    /// Period for averaging and the harmonic fit (default: from the
+    /// sidecar, else detected).
     pub period: PeriodSource,
     /// Seconds dropped at the start before averaging (default 0).
     pub settling_s: f64,
@@ -70,23 +104,28 @@ pub struct ProcessOptions {
     /// relative to the average period's standard deviation (default 0.1).
     /// Torque periods are only reported (noise makes them spread more).
     pub max_period_spread: f64,
-    /// Derivative method (default [`DerivativeMethod::Auto`]).
+    /// Derivative method (default [`DerivativeMethod::Auto`]: the harmonic
+    /// series' own derivatives, or central differences after the
+    /// Butterworth).
     pub derivative: DerivativeMethod,
     /// Use the log's `dtheta`/`ddtheta` columns when present instead of
     /// differentiating θ (default false: the paper differentiates encoder
-    /// angles).
+    /// angles). They are used exactly as given: no column is filtered.
     pub use_logged_derivatives: bool,
+    /// Which samples to return (default [`OutputRows::Averaged`]).
+    pub rows: OutputRows,
 }
 
 impl Default for ProcessOptions {
     fn default() -> Self {
         Self {
-            filter: Some(FilterSpec::default()),
+            filter: Bandwidth::Auto,
             period: PeriodSource::FromSidecar,
             settling_s: 0.0,
             max_period_spread: 0.1,
             derivative: DerivativeMethod::Auto,
             use_logged_derivatives: false,
+            rows: OutputRows::Averaged,
         }
     }
 }
@@ -109,7 +148,7 @@ pub struct Samples {
     pub x_dot: [Vec<f64>; 2],
     /// Task accelerations Ẍ.
     pub x_ddot: [Vec<f64>; 2],
-    /// Joint torques τ1, τ2.
+    /// Joint torques τ1, τ2 (never filtered: raw, or averaged over periods).
     pub tau: [Vec<f64>; 2],
 }
 
@@ -125,7 +164,8 @@ impl Samples {
     }
 }
 
-/// The filter that was applied.
+/// The Butterworth filter that was applied to θ (and that a fit must apply
+/// to the torques and every regressor column alike).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FilterSummary {
     /// Butterworth order.
@@ -161,6 +201,46 @@ pub struct PeriodSummary {
     pub spread_rms: [f64; 4],
 }
 
+/// How θ was smoothed and differentiated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BandwidthMethod {
+    /// Least-squares Fourier series in the harmonics of the period.
+    HarmonicSeries,
+    /// Zero-phase Butterworth low-pass.
+    Butterworth,
+    /// No smoothing.
+    None,
+    /// The log's derivative columns, used as given (nothing filtered).
+    LoggedDerivatives,
+}
+
+/// The bandwidth [`process`] chose and why, for reports and `summary.json`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BandwidthChoice {
+    /// What was done.
+    pub method: BandwidthMethod,
+    /// The period used (s), if any.
+    pub period_s: Option<f64>,
+    /// Where the period came from.
+    pub period_origin: Option<PeriodOrigin>,
+    /// The detector's verdict, when it ran.
+    pub detection: Option<PeriodDetection>,
+    /// Per joint, the harmonic series kept ([`BandwidthMethod::HarmonicSeries`]).
+    pub harmonics: Option<[HarmonicSelection; 2]>,
+    /// The Butterworth applied ([`BandwidthMethod::Butterworth`]).
+    pub filter: Option<FilterSpec>,
+    /// The spectrum that chose the automatic cut-off.
+    pub spectrum: Option<SpectrumCutoff>,
+    /// Prediction on every row of a periodic log: the spectrum that chose
+    /// the low-pass of the aperiodic remainder (θ minus the series).
+    pub aperiodic: Option<SpectrumCutoff>,
+    /// Irregular time steps: how the log was brought to a uniform grid.
+    pub resampling: Option<String>,
+    /// The choice in one sentence.
+    pub reason: String,
+}
+
 /// What [`process`] did, for the report.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ProcessSummary {
@@ -170,12 +250,15 @@ pub struct ProcessSummary {
     pub output_samples: usize,
     /// Sample rate (Hz).
     pub sample_rate_hz: f64,
-    /// Filter, if any.
+    /// The Butterworth applied to θ, if any.
     pub filter: Option<FilterSummary>,
     /// Period averaging, if any.
     pub periods: Option<PeriodSummary>,
+    /// The bandwidth choice and its reason.
+    pub bandwidth: BandwidthChoice,
     /// Input samples not represented in the output: settling, tail, and the
-    /// derivative's edge loss.
+    /// derivative's edge loss (0 with [`OutputRows::EveryRow`] and the
+    /// automatic derivatives).
     pub samples_dropped: usize,
     /// Derivative method actually used.
     pub derivative: DerivativeMethod,
@@ -185,6 +268,15 @@ pub struct ProcessSummary {
     pub angle_source: String,
     /// Where torques came from.
     pub torque_source: String,
+}
+
+/// Which output sample stands for each row of the log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+enum RowMap {
+    /// Row `i` is sample `i − edge`.
+    Direct { edge: usize },
+    /// Row `i` is sample `(i − start) mod per` (an averaged block).
+    Periodic { start: usize, per: usize },
 }
 
 /// The result of [`process`].
@@ -198,11 +290,65 @@ pub struct Processed {
     pub notes: Vec<String>,
     /// Warnings (the log's and processing's).
     pub warnings: Vec<Warning>,
+    /// The log's raw torques τ1, τ2, every row.
+    pub log_tau: [Vec<f64>; 2],
+    map: RowMap,
 }
+
+impl Processed {
+    /// The output sample that stands for row `row` of the log (`None` for
+    /// rows lost at the derivative's edges).
+    pub fn sample_of_row(&self, row: usize) -> Option<usize> {
+        let n = self.samples.len();
+        match self.map {
+            RowMap::Direct { edge } => row.checked_sub(edge).filter(|i| *i < n),
+            RowMap::Periodic { start, per } => {
+                let i = (row as i64 - start as i64).rem_euclid(per as i64) as usize;
+                (i < n).then_some(i)
+            }
+        }
+    }
+
+    /// Pairs the log's raw torques with a per-sample prediction
+    /// (`predicted[j]` of length `samples.len()`) on every row that has a
+    /// sample: `(measured, predicted)` per joint. For an averaged block
+    /// the prediction repeats on every period, settling and tail included,
+    /// so the fitness (78) of the pair is the paper's, on all rows.
+    pub fn on_log_rows(&self, predicted: [&[f64]; 2]) -> [(Vec<f64>, Vec<f64>); 2] {
+        std::array::from_fn(|j| {
+            let rows = self.log_tau[j].len();
+            let mut m = Vec::with_capacity(rows);
+            let mut p = Vec::with_capacity(rows);
+            for r in 0..rows {
+                if let Some(i) = self.sample_of_row(r) {
+                    m.push(self.log_tau[j][r]);
+                    p.push(predicted[j][i]);
+                }
+            }
+            (m, p)
+        })
+    }
+}
+
+/// One series per joint.
+type Pair = [Vec<f64>; 2];
 
 const CHANNELS: [&str; 4] = ["theta1", "theta2", "tau1", "tau2"];
 
-/// Turns a validated log into samples ready for identification.
+/// Largest relative deviation of a time step from the nominal one that is
+/// still treated as uniform (rounding of printed times).
+const UNIFORM_TOLERANCE: f64 = 1e-6;
+
+/// Turns a validated log into samples ready for identification or
+/// prediction.
+///
+/// Steps: (0) irregular time steps are resampled onto the nominal grid by
+/// cubic Hermite interpolation (stated in the summary); (1) period
+/// averaging when a period is known or detected; (2) the bandwidth
+/// ([`Bandwidth`]): harmonic series, Butterworth or none, θ only (torques
+/// are never filtered here; a fit filters torques and regressor alike);
+/// (3) derivatives; (4) kinematics. Logged derivative columns, when used,
+/// are taken as given and nothing is filtered.
 pub fn process(
     log: &Log,
     opts: &ProcessOptions,
@@ -219,8 +365,6 @@ pub fn process(
             reason: "give a positive relative RMS such as 0.1".into(),
         });
     }
-
-    // Channels: θ1, θ2, τ1, τ2, then logged θ̇, θ̈ if used.
     let logged_vel = opts
         .use_logged_derivatives
         .then_some(log.theta_dot.as_ref())
@@ -233,38 +377,170 @@ pub fn process(
                 .into(),
         );
     }
-    let mut raw: Vec<&[f64]> = vec![&log.theta[0], &log.theta[1], &log.tau[0], &log.tau[1]];
-    if let Some(v) = logged_vel {
-        raw.extend([v[0].as_slice(), v[1].as_slice()]);
-    }
-    if let Some(a) = logged_acc {
-        raw.extend([a[0].as_slice(), a[1].as_slice()]);
+    let every_row = opts.rows == OutputRows::EveryRow;
+
+    // Logged derivatives, every row: the log as it is.
+    if let (Some(v), Some(a), true) = (logged_vel, logged_acc, every_row) {
+        let mut s = samples_from(
+            log.t.clone(),
+            log.theta.clone(),
+            v.clone(),
+            a.clone(),
+            log.tau.clone(),
+        );
+        task_space(&mut s, geometry)?;
+        return Ok(Processed {
+            summary: ProcessSummary {
+                input_samples: log.len(),
+                output_samples: s.len(),
+                sample_rate_hz: fs,
+                filter: None,
+                periods: None,
+                bandwidth: BandwidthChoice {
+                    method: BandwidthMethod::LoggedDerivatives,
+                    period_s: None,
+                    period_origin: None,
+                    detection: None,
+                    harmonics: None,
+                    filter: None,
+                    spectrum: None,
+                    aperiodic: None,
+                    resampling: None,
+                    reason: "the log's dtheta/ddtheta columns are used exactly as given, with the \
+                             logged angles and torques: nothing is filtered or averaged"
+                        .into(),
+                },
+                samples_dropped: 0,
+                derivative: DerivativeMethod::Auto,
+                derivative_source: "logged dtheta/ddtheta columns".into(),
+                angle_source: log.summary.angle_source.clone(),
+                torque_source: log.summary.torque_source.clone(),
+            },
+            samples: s,
+            notes,
+            warnings,
+            log_tau: log.tau.clone(),
+            map: RowMap::Direct { edge: 0 },
+        });
     }
 
-    // 1. Period averaging.
-    let period = match opts.period {
-        PeriodSource::FromSidecar => log.sidecar.excitation.period_s,
-        PeriodSource::Seconds(p) => Some(p),
-        PeriodSource::Off => None,
+    // 0. A uniform grid.
+    let irregular = log
+        .summary
+        .worst_step
+        .is_some_and(|w| (w.ratio - 1.0).abs() > UNIFORM_TOLERANCE);
+    let mut raw: Vec<Vec<f64>> = Vec::new();
+    let mut push = |c: &[f64]| raw.push(c.to_vec());
+    let resampling;
+    let t_uniform: Vec<f64>;
+    if irregular {
+        let t0 = log.t[0];
+        let span = log.t[log.len() - 1] - t0;
+        let n = (span / dt + 1e-9).floor() as usize + 1;
+        t_uniform = (0..n).map(|k| t0 + k as f64 * dt).collect();
+        let mut chans: Vec<&[f64]> = vec![&log.theta[0], &log.theta[1], &log.tau[0], &log.tau[1]];
+        if let Some(v) = logged_vel {
+            chans.extend([v[0].as_slice(), v[1].as_slice()]);
+        }
+        if let Some(a) = logged_acc {
+            chans.extend([a[0].as_slice(), a[1].as_slice()]);
+        }
+        for c in chans {
+            push(&resample(&log.t, c, t0, dt, n));
+        }
+        let w = log.summary.worst_step.expect("irregular");
+        resampling = Some(format!(
+            "time steps vary (worst {:.4} s = {:.3}× the nominal {:.4} s at t = {:.3} s): all \
+             columns resampled onto the nominal grid by cubic Hermite interpolation (three-point \
+             slopes of the non-uniform grid); the outputs are evaluated back at the logged times",
+            w.step_s, w.ratio, dt, w.t
+        ));
+    } else {
+        t_uniform = log.t.clone();
+        for c in [&log.theta[0], &log.theta[1], &log.tau[0], &log.tau[1]] {
+            push(c);
+        }
+        if let Some(v) = logged_vel {
+            push(&v[0]);
+            push(&v[1]);
+        }
+        if let Some(a) = logged_acc {
+            push(&a[0]);
+            push(&a[1]);
+        }
+        resampling = None;
+    }
+    let nu = t_uniform.len();
+
+    // 1. Period: given, from the sidecar, or detected.
+    let mut detection = None;
+    let (period, origin) = match opts.period {
+        PeriodSource::Seconds(p) => (Some(p), Some(PeriodOrigin::Given)),
+        PeriodSource::Off => (None, None),
+        PeriodSource::FromSidecar => match log.sidecar.excitation.period_s {
+            Some(p) => (Some(p), Some(PeriodOrigin::Sidecar)),
+            None if logged_vel.is_none() && opts.filter == Bandwidth::Auto => {
+                let d = detect_period([&raw[0], &raw[1]], dt);
+                let p = d.period_s;
+                detection = Some(d);
+                (p, p.map(|_| PeriodOrigin::Detected))
+            }
+            None => (None, None),
+        },
     };
-    let (mut data, t, period_summary, mut dropped) = match period {
-        Some(p) => {
-            let avg = average_periods(&raw, dt, p, opts.settling_s)?;
-            for (c, channel) in CHANNELS.iter().enumerate().take(2) {
-                if avg.spread_relative[c] > opts.max_period_spread {
-                    let k = avg.worst_block[c];
-                    let i0 = avg.start + k * avg.samples_per_block;
-                    return Err(ProcessError::PeriodsDisagree {
-                        channel,
-                        index: k,
-                        t_start: log.t[i0],
-                        t_end: log.t[i0 + avg.samples_per_block - 1],
-                        relative: avg.spread_relative[c],
-                        limit: opts.max_period_spread,
-                        period_s: p,
-                    });
+    let detected = origin == Some(PeriodOrigin::Detected);
+    let views: Vec<&[f64]> = raw.iter().map(|c| c.as_slice()).collect();
+    let mut averaged = None;
+    if let Some(p) = period {
+        match average_periods(&views, dt, p, opts.settling_s) {
+            Ok(avg) => {
+                let worst = (0..2).find(|&c| avg.spread_relative[c] > opts.max_period_spread);
+                match worst {
+                    Some(c) if !detected => {
+                        let k = avg.worst_block[c];
+                        let i0 = avg.start + k * avg.samples_per_block;
+                        return Err(ProcessError::PeriodsDisagree {
+                            channel: CHANNELS[c],
+                            index: k,
+                            t_start: t_uniform[i0],
+                            t_end: t_uniform[i0 + avg.samples_per_block - 1],
+                            relative: avg.spread_relative[c],
+                            limit: opts.max_period_spread,
+                            period_s: p,
+                        });
+                    }
+                    Some(c) => notes.push(format!(
+                        "detected period {p:.6} s not used: {} spreads {:.1} % between periods \
+                         (limit {:.1} %)",
+                        CHANNELS[c],
+                        100.0 * avg.spread_relative[c],
+                        100.0 * opts.max_period_spread
+                    )),
+                    None => averaged = Some(avg),
                 }
             }
+            Err(e) if detected => {
+                notes.push(format!("detected period {p:.6} s not used: {e}"));
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    let period_used = averaged.as_ref().and(period);
+    // Prediction on every row: periods that are outliers (a start-up
+    // transient) are left out of the average, and what is not periodic is
+    // kept as an aperiodic remainder (below).
+    let aperiodic_input = (every_row
+        && averaged.is_some()
+        && !irregular
+        && logged_vel.is_none()
+        && opts.filter == Bandwidth::Auto)
+        .then(|| [raw[0].clone(), raw[1].clone()]);
+    let mut rejected = 0;
+    if let (Some(avg), Some(_)) = (&mut averaged, &aperiodic_input) {
+        rejected = reject_outlier_blocks(avg, &raw);
+    }
+    let (mut data, t, period_summary, mut dropped, map) = match averaged {
+        Some(avg) => {
             for (c, channel) in CHANNELS.iter().enumerate().skip(2) {
                 if avg.spread_relative[c] > opts.max_period_spread {
                     warnings.push(Warning::PeriodSpread {
@@ -273,9 +549,9 @@ pub fn process(
                     });
                 }
             }
-            let t = log.t[avg.start..avg.start + avg.samples_per_block].to_vec();
+            let t = t_uniform[avg.start..avg.start + avg.samples_per_block].to_vec();
             let summary = PeriodSummary {
-                period_s: p,
+                period_s: period.expect("averaged"),
                 periods_per_block: avg.periods_per_block,
                 samples_per_block: avg.samples_per_block,
                 blocks_averaged: avg.blocks,
@@ -285,22 +561,73 @@ pub fn process(
                 spread_relative: std::array::from_fn(|c| avg.spread_relative[c]),
                 spread_rms: std::array::from_fn(|c| avg.spread_rms[c]),
             };
-            let dropped = log.len() - avg.samples_per_block * avg.blocks;
-            (avg.channels, t, Some(summary), dropped)
+            let dropped = nu - avg.samples_per_block * avg.blocks;
+            let map = RowMap::Periodic {
+                start: avg.start,
+                per: avg.samples_per_block,
+            };
+            (avg.channels, t, Some(summary), dropped, map)
         }
-        None => (
-            raw.iter().map(|c| c.to_vec()).collect::<Vec<_>>(),
-            log.t.clone(),
-            None,
-            0,
-        ),
+        None => (raw, t_uniform.clone(), None, 0, RowMap::Direct { edge: 0 }),
     };
     let periodic = period_summary.is_some();
     let n = t.len();
     let mut fourier = periodic.then(|| Fourier::new(n));
 
-    // 2. Zero-phase low-pass, the same filter on every channel.
-    let filter_summary = match opts.filter {
+    // 2–3. Bandwidth and derivatives.
+    let logged = logged_vel.is_some();
+    let mut harmonics = None;
+    let mut spectrum = None;
+    let mut spec_used = None;
+    let mut derivs: Option<(Pair, Pair, usize)> = None;
+    if logged {
+        // Nothing is filtered; θ̈ from the logged θ̇ when it is not logged.
+        let vel = [data[4].clone(), data[5].clone()];
+        let acc = if logged_acc.is_some() {
+            [data[6].clone(), data[7].clone()]
+        } else {
+            let a0 = uniform_derivatives(&vel[0], dt).0;
+            let a1 = uniform_derivatives(&vel[1], dt).0;
+            [a0, a1]
+        };
+        derivs = Some((vel, acc, 0));
+    } else {
+        match (opts.filter, &mut fourier) {
+            (Bandwidth::Auto, Some(f)) => {
+                let kp = period_summary.as_ref().map_or(1, |p| p.periods_per_block);
+                let mut sel = Vec::new();
+                let mut vel = [vec![0.0; n], vec![0.0; n]];
+                let mut acc = [vec![0.0; n], vec![0.0; n]];
+                for j in 0..2 {
+                    sel.push(harmonic_fit(
+                        f,
+                        &mut data[j],
+                        &mut vel[j],
+                        &mut acc[j],
+                        kp,
+                        dt,
+                    ));
+                }
+                harmonics = Some([sel[0], sel[1]]);
+                if opts.derivative == DerivativeMethod::Auto
+                    || opts.derivative == DerivativeMethod::Spectral
+                {
+                    derivs = Some((vel, acc, 0));
+                }
+            }
+            (Bandwidth::Auto, None) => {
+                let c = spectrum_cutoff([&data[0], &data[1]], dt);
+                spectrum = Some(c);
+                spec_used = Some(FilterSpec {
+                    order: FilterSpec::default().order,
+                    cutoff_hz: c.cutoff_hz,
+                });
+            }
+            (Bandwidth::Fixed(spec), _) => spec_used = Some(spec),
+            (Bandwidth::Off, _) => {}
+        }
+    }
+    let filter_summary = match spec_used {
         None => None,
         Some(spec) => {
             let sos = Butterworth::lowpass(spec.order, spec.cutoff_hz, fs).map_err(|source| {
@@ -309,7 +636,7 @@ pub fn process(
                     source,
                 }
             })?;
-            filter_all(&sos, spec, fs, &mut data, fourier.as_mut(), &log.name)?;
+            filter_all(&sos, spec, fs, &mut data[..2], fourier.as_mut(), &log.name)?;
             Some(FilterSummary {
                 order: spec.order,
                 cutoff_hz: spec.cutoff_hz,
@@ -324,68 +651,199 @@ pub fn process(
             })
         }
     };
-
-    // 3. Derivatives.
-    let method = resolve(opts.derivative, periodic);
-    let (theta_dot, theta_ddot, edge, source) = match logged_vel {
-        Some(_) => {
-            let vel = [data[4].clone(), data[5].clone()];
-            let acc = if logged_acc.is_some() {
-                (data[6].clone(), data[7].clone(), 0)
-            } else {
-                let d0 = derivatives(&vel[0], dt, method, periodic)?;
-                let d1 = derivatives(&vel[1], dt, method, periodic)?;
-                (d0.first, d1.first, d0.edge)
-            };
-            let e = acc.2;
-            let vel = vel.map(|v| v[e..n - e].to_vec());
-            (vel, [acc.0, acc.1], e, "logged dtheta/ddtheta columns")
+    let method = match (&derivs, opts.derivative) {
+        (Some(_), _) => opts.derivative,
+        (None, DerivativeMethod::Auto) if !periodic => DerivativeMethod::Auto,
+        (None, m) => resolve(m, periodic),
+    };
+    let (theta_dot, theta_ddot, edge) = match derivs {
+        Some(d) => d,
+        None if method == DerivativeMethod::Auto => {
+            // Non-periodic, automatic: central differences, one-sided at
+            // the ends, so no row is lost.
+            let (v0, a0) = uniform_derivatives(&data[0], dt);
+            let (v1, a1) = uniform_derivatives(&data[1], dt);
+            ([v0, v1], [a0, a1], 0)
         }
         None => {
-            let d = match (&mut fourier, method) {
-                (Some(f), DerivativeMethod::Spectral) => {
-                    let mut out = Vec::new();
-                    for ch in &data[..2] {
+            let mut out = Vec::new();
+            for ch in &data[..2] {
+                match (&mut fourier, method) {
+                    (Some(f), DerivativeMethod::Spectral) => {
                         let (mut a, mut b) = (ch.clone(), ch.clone());
                         spectral_with(f, &mut a, &mut b, dt);
                         out.push((a, b, 0));
                     }
-                    out
-                }
-                _ => {
-                    let mut out = Vec::new();
-                    for ch in &data[..2] {
+                    _ => {
                         let d = derivatives(ch, dt, method, periodic)?;
                         out.push((d.first, d.second, d.edge));
                     }
-                    out
                 }
-            };
-            let e = d[0].2;
-            let mut it = d.into_iter();
+            }
+            let e = out[0].2;
+            let mut it = out.into_iter();
             let (a0, b0, _) = it.next().expect("two channels");
             let (a1, b1, _) = it.next().expect("two channels");
-            ([a0, a1], [b0, b1], e, "differentiated θ")
+            ([a0, a1], [b0, b1], e)
         }
     };
-    dropped += 2 * edge;
+    let source = if logged {
+        "logged dtheta/ddtheta columns"
+    } else {
+        "differentiated θ"
+    };
+    let bandwidth = describe(
+        logged,
+        harmonics,
+        spec_used,
+        spectrum,
+        period_used,
+        origin.filter(|_| period_used.is_some()),
+        detection,
+        resampling,
+        opts.filter,
+    );
+
+    // Output rows.
+    let mut aperiodic = None;
     let keep = edge..n - edge;
+    let theta: [Vec<f64>; 2] = [
+        data[0][keep.clone()].to_vec(),
+        data[1][keep.clone()].to_vec(),
+    ];
+    let mut s;
+    let map = if every_row && (irregular || periodic) {
+        // Evaluate at the logged times: exact indices on a uniform grid,
+        // cubic Hermite (with the derivatives as slopes) between grid points.
+        let rows = log.len();
+        let mut out: [[Vec<f64>; 2]; 3] = Default::default();
+        for j in 0..2 {
+            let (x, v, a) = (&theta[j], &theta_dot[j], &theta_ddot[j]);
+            let jerk = periodic_slopes(a, dt, periodic);
+            out[0][j] = Vec::with_capacity(rows);
+            out[1][j] = Vec::with_capacity(rows);
+            out[2][j] = Vec::with_capacity(rows);
+            let m = x.len();
+            let t0 = t[edge];
+            for &ti in &log.t {
+                let pos = (ti - t0) / dt;
+                let (k, u) = if irregular {
+                    let k = pos.floor();
+                    (k as i64, pos - k)
+                } else {
+                    (pos.round() as i64, 0.0)
+                };
+                let idx = |k: i64| -> usize {
+                    if periodic {
+                        k.rem_euclid(m as i64) as usize
+                    } else {
+                        k.clamp(0, m as i64 - 1) as usize
+                    }
+                };
+                let (i0, i1) = (idx(k), idx(k + 1));
+                let h = |y: &[f64], dy: &[f64], sc: f64| -> f64 {
+                    if u == 0.0 {
+                        return y[i0];
+                    }
+                    let (u2, u3) = (u * u, u * u * u);
+                    y[i0] * (2.0 * u3 - 3.0 * u2 + 1.0)
+                        + dy[i0] * sc * (u3 - 2.0 * u2 + u)
+                        + y[i1] * (-2.0 * u3 + 3.0 * u2)
+                        + dy[i1] * sc * (u3 - u2)
+                };
+                out[0][j].push(h(x, v, dt));
+                out[1][j].push(h(v, a, dt));
+                out[2][j].push(h(a, &jerk, dt));
+            }
+        }
+        let [mut x, mut v, mut a] = out;
+        if let Some(th) = &aperiodic_input {
+            // The aperiodic remainder θ − series, low-passed where its own
+            // spectrum meets the noise, differentiated and added back.
+            let r: Vec<Vec<f64>> = (0..2)
+                .map(|j| th[j].iter().zip(&x[j]).map(|(a, b)| a - b).collect())
+                .collect();
+            let mut c = spectrum_cutoff([&r[0], &r[1]], dt);
+            // Above the series' highest harmonic the angles hold noise only.
+            if let Some(h) = harmonics {
+                let top = h[0].highest_hz.max(h[1].highest_hz);
+                if top > 0.0 {
+                    c.cutoff_hz = c.cutoff_hz.min(top);
+                }
+            }
+            let spec = FilterSpec {
+                cutoff_hz: c.cutoff_hz,
+                ..FilterSpec::default()
+            };
+            let sos = Butterworth::lowpass(spec.order, spec.cutoff_hz, fs).map_err(|source| {
+                ProcessError::Filter {
+                    context: format!("designing the remainder's low-pass for {}", log.name),
+                    source,
+                }
+            })?;
+            let mut r = r;
+            filter_all(&sos, spec, fs, &mut r, None, &log.name)?;
+            for j in 0..2 {
+                let (dv, da) = uniform_derivatives(&r[j], dt);
+                for i in 0..x[j].len() {
+                    x[j][i] += r[j][i];
+                    v[j][i] += dv[i];
+                    a[j][i] += da[i];
+                }
+            }
+            aperiodic = Some(c);
+        }
+        s = samples_from(log.t.clone(), x, v, a, log.tau.clone());
+        dropped = 0;
+        RowMap::Direct { edge: 0 }
+    } else {
+        let tau = if irregular && !periodic {
+            // Every row of the log again, with its raw torque.
+            log.tau.clone()
+        } else {
+            [
+                data[2][keep.clone()].to_vec(),
+                data[3][keep.clone()].to_vec(),
+            ]
+        };
+        if irregular && !periodic {
+            let mut out: [[Vec<f64>; 2]; 3] = Default::default();
+            for j in 0..2 {
+                let jerk = periodic_slopes(&theta_ddot[j], dt, false);
+                out[0][j] = hermite_at(&t[keep.clone()], &theta[j], &theta_dot[j], &log.t);
+                out[1][j] = hermite_at(&t[keep.clone()], &theta_dot[j], &theta_ddot[j], &log.t);
+                out[2][j] = hermite_at(&t[keep.clone()], &theta_ddot[j], &jerk, &log.t);
+            }
+            let [x, v, a] = out;
+            s = samples_from(log.t.clone(), x, v, a, tau);
+            RowMap::Direct { edge: 0 }
+        } else {
+            dropped += 2 * edge;
+            s = samples_from(t[keep.clone()].to_vec(), theta, theta_dot, theta_ddot, tau);
+            match map {
+                RowMap::Direct { .. } => RowMap::Direct { edge },
+                p => p,
+            }
+        }
+    };
+
+    let mut bandwidth = bandwidth;
+    if rejected > 0 {
+        bandwidth.reason += &format!(
+            "; {rejected} period block(s) left out of the average as outliers (θ deviating more \
+             than {OUTLIER_BLOCK}× the median block)"
+        );
+    }
+    if let Some(c) = aperiodic {
+        bandwidth.reason += &format!(
+            "; the aperiodic remainder (θ − series, e.g. a start-up transient) low-passed at \
+             {:.1} Hz (where its spectrum meets the noise, at most the highest harmonic)",
+            c.cutoff_hz
+        );
+        bandwidth.aperiodic = Some(c);
+    }
 
     // 4. Kinematics.
-    let m = keep.len();
-    let mut s = Samples {
-        t: t[keep.clone()].to_vec(),
-        theta: [
-            data[0][keep.clone()].to_vec(),
-            data[1][keep.clone()].to_vec(),
-        ],
-        theta_dot,
-        theta_ddot,
-        x: [vec![0.0; m], vec![0.0; m]],
-        x_dot: [vec![0.0; m], vec![0.0; m]],
-        x_ddot: [vec![0.0; m], vec![0.0; m]],
-        tau: [data[2][keep.clone()].to_vec(), data[3][keep].to_vec()],
-    };
     task_space(&mut s, geometry)?;
 
     Ok(Processed {
@@ -395,6 +853,7 @@ pub fn process(
             sample_rate_hz: fs,
             filter: filter_summary,
             periods: period_summary,
+            bandwidth,
             samples_dropped: dropped,
             derivative: method,
             derivative_source: source.into(),
@@ -404,7 +863,169 @@ pub fn process(
         samples: s,
         notes,
         warnings,
+        log_tau: log.tau.clone(),
+        map,
     })
+}
+
+fn samples_from(
+    t: Vec<f64>,
+    theta: [Vec<f64>; 2],
+    theta_dot: [Vec<f64>; 2],
+    theta_ddot: [Vec<f64>; 2],
+    tau: [Vec<f64>; 2],
+) -> Samples {
+    let m = t.len();
+    Samples {
+        t,
+        theta,
+        theta_dot,
+        theta_ddot,
+        x: [vec![0.0; m], vec![0.0; m]],
+        x_dot: [vec![0.0; m], vec![0.0; m]],
+        x_ddot: [vec![0.0; m], vec![0.0; m]],
+        tau,
+    }
+}
+
+/// Slopes of a uniformly sampled series (central differences; wrapping
+/// for a periodic record, one-sided at the ends otherwise).
+fn periodic_slopes(y: &[f64], dt: f64, periodic: bool) -> Vec<f64> {
+    let n = y.len();
+    if n < 4 {
+        return vec![0.0; n];
+    }
+    if !periodic {
+        return uniform_derivatives(y, dt).0;
+    }
+    (0..n)
+        .map(|i| (y[(i + 1) % n] - y[(i + n - 1) % n]) / (2.0 * dt))
+        .collect()
+}
+
+#[allow(clippy::too_many_arguments)]
+fn describe(
+    logged: bool,
+    harmonics: Option<[HarmonicSelection; 2]>,
+    spec: Option<FilterSpec>,
+    spectrum: Option<SpectrumCutoff>,
+    period_s: Option<f64>,
+    period_origin: Option<PeriodOrigin>,
+    detection: Option<PeriodDetection>,
+    resampling: Option<String>,
+    asked: Bandwidth,
+) -> BandwidthChoice {
+    let declined = detection
+        .as_ref()
+        .and_then(|d| d.declined.clone())
+        .map(|r| format!(" (no period: {r})"))
+        .unwrap_or_default();
+    let (method, reason) = if logged {
+        (
+            BandwidthMethod::LoggedDerivatives,
+            "the log's derivative columns are used as given; nothing is filtered".to_string(),
+        )
+    } else if let Some(h) = harmonics {
+        (
+            BandwidthMethod::HarmonicSeries,
+            format!(
+                "periodic record ({} period {:.6} s): Fourier series with {} / {} harmonics \
+                 (up to {:.1} / {:.1} Hz), the highest whose power exceeds {:.1}× the noise floor \
+                 (≈ {:.2e} / {:.2e} rad RMS per sample); θ̇, θ̈ are the series' derivatives",
+                match period_origin {
+                    Some(PeriodOrigin::Detected) => "detected",
+                    Some(PeriodOrigin::Sidecar) => "sidecar",
+                    _ => "given",
+                },
+                period_s.unwrap_or(0.0),
+                h[0].harmonics,
+                h[1].harmonics,
+                h[0].highest_hz,
+                h[1].highest_hz,
+                h[0].threshold,
+                h[0].noise_rms,
+                h[1].noise_rms
+            ),
+        )
+    } else if let Some(s) = spec {
+        let why = match (asked, spectrum) {
+            (Bandwidth::Fixed(_), _) => "fixed by the user".to_string(),
+            (_, Some(c)) => format!(
+                "the angles' motion reaches {:.2} / {:.2} Hz above the noise floor \
+                 (≈ {:.2e} / {:.2e} rad RMS per sample); cut-off {CUTOFF_MARGIN}× that{declined}",
+                c.motion_top_hz[0], c.motion_top_hz[1], c.noise_rms[0], c.noise_rms[1]
+            ),
+            _ => String::new(),
+        };
+        (
+            BandwidthMethod::Butterworth,
+            format!(
+                "zero-phase Butterworth order {} at {:.3} Hz: {why}",
+                s.order, s.cutoff_hz
+            ),
+        )
+    } else {
+        (
+            BandwidthMethod::None,
+            "no filter (switched off)".to_string(),
+        )
+    };
+    BandwidthChoice {
+        method,
+        period_s,
+        period_origin,
+        detection,
+        harmonics,
+        filter: spec,
+        spectrum,
+        aperiodic: None,
+        resampling,
+        reason,
+    }
+}
+
+/// A period block whose θ deviates from the average by more than this
+/// many times the median block's deviation is an outlier.
+const OUTLIER_BLOCK: f64 = 3.0;
+
+/// Re-averages `avg` without the blocks whose θ deviates by more than
+/// [`OUTLIER_BLOCK`] times the median block (the median block always
+/// stays, so at least half remain). Returns the number left out.
+fn reject_outlier_blocks(avg: &mut crate::PeriodAverage, raw: &[Vec<f64>]) -> usize {
+    let (per, blocks, start) = (avg.samples_per_block, avg.blocks, avg.start);
+    let dev: Vec<f64> = (0..blocks)
+        .map(|b| {
+            (0..2)
+                .map(|c| {
+                    let x = &raw[c][start + b * per..start + (b + 1) * per];
+                    x.iter()
+                        .zip(&avg.channels[c])
+                        .map(|(v, m)| (v - m).powi(2))
+                        .sum::<f64>()
+                })
+                .sum::<f64>()
+        })
+        .collect();
+    let mut sorted = dev.clone();
+    sorted.sort_by(f64::total_cmp);
+    let med = sorted[blocks / 2];
+    let keep: Vec<usize> = (0..blocks)
+        .filter(|&b| dev[b] <= OUTLIER_BLOCK * OUTLIER_BLOCK * med)
+        .collect();
+    if keep.len() == blocks {
+        return 0;
+    }
+    let inv = 1.0 / keep.len() as f64;
+    for (c, ch) in avg.channels.iter_mut().enumerate() {
+        for (i, m) in ch.iter_mut().enumerate() {
+            *m = keep
+                .iter()
+                .map(|&b| raw[c][start + b * per + i])
+                .sum::<f64>()
+                * inv;
+        }
+    }
+    blocks - keep.len()
 }
 
 /// Pad length for a non-periodic record: ten time constants of the

@@ -5,8 +5,8 @@ use std::f64::consts::TAU;
 
 use aras_kin::{Geometry, evaluate, inverse};
 use aras_signal::{
-    DerivativeMethod, FilterSpec, PeriodSource, ProcessError, ProcessOptions, ReadOptions, process,
-    read_log_from,
+    Bandwidth, BandwidthMethod, DerivativeMethod, FilterSpec, PeriodSource, ProcessError,
+    ProcessOptions, ReadOptions, process, read_log_from,
 };
 use nalgebra::Vector2;
 
@@ -72,7 +72,7 @@ fn periodic_record_without_filter_is_exact() {
     )
     .unwrap();
     let opts = ProcessOptions {
-        filter: None,
+        filter: Bandwidth::Off,
         period: PeriodSource::Seconds(PERIOD),
         ..ProcessOptions::default()
     };
@@ -108,7 +108,7 @@ fn periodic_record_without_filter_is_exact() {
 }
 
 #[test]
-fn default_filter_barely_touches_the_dynamics() {
+fn ten_hz_filter_barely_touches_the_dynamics() {
     let log = read_log_from(
         log_text(2, false).as_bytes(),
         "f.csv",
@@ -116,6 +116,7 @@ fn default_filter_barely_touches_the_dynamics() {
     )
     .unwrap();
     let opts = ProcessOptions {
+        filter: Bandwidth::Fixed(FilterSpec::default()),
         period: PeriodSource::Seconds(PERIOD),
         ..ProcessOptions::default()
     };
@@ -142,7 +143,9 @@ fn non_periodic_record_uses_central_differences_and_drops_edges() {
     )
     .unwrap();
     let opts = ProcessOptions {
+        filter: Bandwidth::Fixed(FilterSpec::default()),
         period: PeriodSource::Off,
+        derivative: DerivativeMethod::CentralDifference,
         ..ProcessOptions::default()
     };
     let out = process(&log, &opts, &Geometry::aras_diamond()).unwrap();
@@ -174,7 +177,7 @@ fn logged_derivatives_are_used_when_asked() {
     )
     .unwrap();
     let opts = ProcessOptions {
-        filter: None,
+        filter: Bandwidth::Off,
         period: PeriodSource::Off,
         use_logged_derivatives: true,
         ..ProcessOptions::default()
@@ -221,7 +224,7 @@ fn wrong_period_is_a_clear_error() {
     assert!(m.contains("differs from the average period by"), "{m}");
     assert!(m.contains("not periodic with period 1.5 s"), "{m}");
     let opts = ProcessOptions {
-        filter: Some(FilterSpec {
+        filter: Bandwidth::Fixed(FilterSpec {
             order: 4,
             cutoff_hz: 800.0,
         }),
@@ -232,4 +235,31 @@ fn wrong_period_is_a_clear_error() {
         .unwrap_err()
         .to_string();
     assert!(m.contains("cut-off 800 Hz is invalid"), "{m}");
+}
+
+#[test]
+fn automatic_bandwidth_on_a_periodic_record_is_the_exact_series() {
+    let log = read_log_from(
+        log_text(2, false).as_bytes(),
+        "a.csv",
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    let opts = ProcessOptions {
+        period: PeriodSource::Seconds(PERIOD),
+        ..ProcessOptions::default()
+    };
+    let out = process(&log, &opts, &Geometry::aras_diamond()).unwrap();
+    let bw = &out.summary.bandwidth;
+    assert_eq!(bw.method, BandwidthMethod::HarmonicSeries, "{bw:?}");
+    assert!(out.summary.filter.is_none());
+    // Noise-free: the series keeps every harmonic above rounding, so Ẍ is
+    // as exact as with no filter at all (the unfiltered test's 1e-7).
+    let s = &out.samples;
+    for c in 0..2 {
+        let e = max_err(&s.x_ddot[c], &s.t, |t| trajectory(t)[2][c]);
+        assert!(e < 1e-7, "{e}");
+    }
+    let json = serde_json::to_string(&out.summary).unwrap();
+    assert!(json.contains("\"method\":\"harmonic_series\""), "{json}");
 }

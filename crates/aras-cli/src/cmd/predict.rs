@@ -4,17 +4,18 @@ use std::fmt::Write as _;
 
 use anyhow::{Context, Result};
 use aras_dyn::Params;
-use aras_signal::read_log;
+use aras_signal::{OutputRows, read_log};
 
 use crate::cli::PredictArgs;
 use crate::cmd::identify::read_options;
-use crate::identify::{fitness_per_joint, prepare, process_options};
+use crate::identify::{fitness_per_joint, process_options};
 use crate::output::{FileKind, check_new_file, write_atomic};
-use crate::validate::predict_standard;
 
-/// Runs `predict`: writes `t,tau1,tau2` (the model torque `Y(X, Ẋ, Ẍ) β`
-/// at the processed samples) and prints the per-joint fitness (78) against
-/// the log's processed torques, filtered like `identify` does.
+/// Runs `predict`: writes `t,tau1,tau2`, the model torque `Y(θ, θ̇, θ̈) β`
+/// on every row of the log (θ̇, θ̈ from the log's derivative columns as
+/// given, else from the angles with the data-chosen bandwidth), and prints
+/// the per-joint fitness (78) of exactly that file against the log's raw
+/// torques on the same rows.
 pub fn run(args: &PredictArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config.clone();
@@ -39,32 +40,35 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     super::print_warnings(&args.data, &log.warnings);
     let logged = log.theta_dot.is_some() && log.theta_ddot.is_some();
     let mut opts = process_options(&cfg, args.period, logged);
-    if args.period.is_none() {
-        opts.period = aras_signal::PeriodSource::Off;
-    }
-    let prep = prepare(&log, &opts, cfg.identification.filtering, &model, &geometry)?;
-    let fit = fitness_per_joint(prep.t(), &predict_standard(&prep, &beta)?)?;
-    // The model torque itself: the regressor of the processed samples,
-    // unfiltered.
-    let raw = aras_pipeline::robot::stack(&model, &geometry, &prep.processed.samples)?;
-    let tau = aras_ident::validate::predict(raw.w.as_ref(), &beta)?;
-    let n = prep.n();
+    opts.rows = OutputRows::EveryRow;
+    let processed = aras_signal::process(&log, &opts, &geometry)
+        .with_context(|| format!("processing {}", args.data.display()))?;
+    let samples = &processed.samples;
+    let w = aras_pipeline::robot::stack(&model, &geometry, samples)?;
+    let tau = aras_ident::validate::predict(w.w.as_ref(), &beta)?;
+    let n = samples.len();
+    let mut measured = samples.tau[0].clone();
+    measured.extend_from_slice(&samples.tau[1]);
+    let fit = fitness_per_joint(&measured, &tau)?;
     let mut csv = String::with_capacity(n * 48);
     csv.push_str("t,tau1,tau2\n");
     for i in 0..n {
-        let _ = writeln!(
-            csv,
-            "{},{},{}",
-            prep.processed.samples.t[i],
-            tau[i],
-            tau[n + i]
-        );
+        let _ = writeln!(csv, "{},{},{}", samples.t[i], tau[i], tau[n + i]);
     }
     write_atomic(&args.out, csv.as_bytes())?;
+    let rows = if n == log.len() {
+        format!("all {n} rows")
+    } else {
+        format!(
+            "{n} of {} rows (the derivative's edges have none)",
+            log.len()
+        )
+    };
     println!(
-        "{}: {n} rows ({}); fitness (78) vs the log's torques: τ1 {:.2} %, τ2 {:.2} %",
+        "{}: {n} rows; θ̇, θ̈: {}; fitness (78) of this file vs the log's raw torques on {rows}: \
+         τ1 {:.3} %, τ2 {:.3} %",
         args.out.display(),
-        prep.processed.summary.derivative_source,
+        processed.summary.bandwidth.reason,
         fit[0],
         fit[1]
     );

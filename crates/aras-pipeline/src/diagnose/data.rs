@@ -19,7 +19,8 @@ pub struct Dataset {
     pub name: String,
     /// Processed samples.
     pub samples: Samples,
-    /// The low-pass that was applied to θ and τ (`None`: unfiltered).
+    /// The low-pass that was applied to θ (`None`: unfiltered); the blocks
+    /// apply it to the torques and every regressor column alike.
     pub filter: Option<Sos>,
     /// True if the samples are one period-averaged period (the periodic
     /// filter and circular shifts then apply).

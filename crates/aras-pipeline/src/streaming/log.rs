@@ -5,8 +5,8 @@ use std::path::Path;
 use aras_dyn::Model;
 use aras_kin::{AssemblyMode, Geometry};
 use aras_signal::{
-    Butterworth, Columns, Log, LogReader, LogReport, LogSummary, PeriodSource, ProcessOptions,
-    ReadOptions, Sidecar, Sos, process,
+    Bandwidth, Butterworth, Columns, FilterSpec, Log, LogReader, LogReport, LogSummary,
+    PeriodSource, ProcessOptions, ReadOptions, Sidecar, Sos, process,
 };
 use nalgebra::Vector2;
 use serde::Serialize;
@@ -26,7 +26,9 @@ pub struct StreamingOptions {
     /// (filter, period, settling, derivative method, logged derivatives).
     pub process: ProcessOptions,
     /// What the zero-phase filter is applied to after stacking (as
-    /// [`crate::robot::filter`]); ignored when `process.filter` is `None`.
+    /// [`crate::robot::filter`]), with the Butterworth the processing
+    /// applied to θ; nothing is filtered when it applied none (a harmonic
+    /// series, logged derivatives, [`Bandwidth::Off`]).
     pub filter_mode: FilterMode,
     /// Kinematic geometry (default: ARAS-Diamond).
     pub geometry: Geometry,
@@ -156,7 +158,7 @@ fn sig(context: &str, e: impl std::fmt::Display) -> IdentError {
 ///
 /// The route depends on the log and the options ([`StreamingRoute`]):
 /// * **logged derivatives, no filter** (`process.use_logged_derivatives`,
-///   the log has `dtheta*` and `ddtheta*`, `process.filter = None`): per
+///   the log has `dtheta*` and `ddtheta*`, used as given): per
 ///   sample `X, Ẋ, Ẍ` by `aras_kin::forward_motion`, then the
 ///   [`RegressorStage`]; memory: one chunk.
 /// * **period averaging** (a period from the options or the sidecar): the
@@ -168,7 +170,9 @@ fn sig(context: &str, e: impl std::fmt::Display) -> IdentError {
 /// * **overlapping blocks** (everything else): blocks of `chunk_samples`
 ///   plus an overlap each side long enough for the filters' edge
 ///   transients to decay below `overlap_tolerance` (the slowest pole's time
-///   constant `τ = fs/(2π f_c sin(π/2N))` samples, `τ ln(1/tol)` per
+///   constant `τ = fs/(2π f_c sin(π/2N))` samples (an automatic
+///   bandwidth takes its cut-off from the first block's angle spectrum,
+///   `aras_signal::spectrum_cutoff`, so every block uses the same filter), `τ ln(1/tol)` per
 ///   filter, for the signal filter and the regressor filter in series) plus
 ///   the derivative stencil; each block is processed, stacked and filtered
 ///   as in memory and only its interior samples are accumulated. Block by
@@ -255,7 +259,7 @@ pub fn identify_log_with_progress(
     };
     let mut out = Progress::default();
     let route;
-    if period.is_none() && logged && options.process.filter.is_none() {
+    if period.is_none() && logged {
         route = StreamingRoute::LoggedDerivatives;
         let mut x = [vec![], vec![]];
         let mut xd = [vec![], vec![]];
@@ -364,6 +368,14 @@ pub fn identify_log_with_progress(
                     return Err(sig(&name, "the log has no data rows"));
                 }
                 dt = nominal_step(&buf, dt)?;
+                if popts.filter == Bandwidth::Auto && !logged {
+                    // One cut-off for every block: the first block's spectrum.
+                    let c = aras_signal::spectrum_cutoff([&buf.theta[0], &buf.theta[1]], dt);
+                    popts.filter = Bandwidth::Fixed(FilterSpec {
+                        cutoff_hz: c.cutoff_hz,
+                        ..FilterSpec::default()
+                    });
+                }
                 margin = overlap(&popts, dt, options.overlap_tolerance)?
                     + reach_of(&popts, dt, options.reversal_reach)?;
                 first = false;
@@ -480,7 +492,7 @@ fn nominal_step(c: &Columns, given: f64) -> Result<f64, IdentError> {
 /// `tol` and the derivative stencil (at most 64 samples) fits.
 fn overlap(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> {
     const STENCIL: usize = 64;
-    let Some(spec) = p.filter else {
+    let Bandwidth::Fixed(spec) = p.filter else {
         return Ok(STENCIL);
     };
     let fs = 1.0 / dt;
@@ -579,7 +591,7 @@ fn accumulate_processed(
     let n = processed.samples.len();
     let mut st = stack(model, &options.geometry, &processed.samples)?;
     let mut guard = 0;
-    if let Some(spec) = popts.filter {
+    if let Some(spec) = &processed.summary.filter {
         let sos: Sos =
             Butterworth::lowpass(spec.order, spec.cutoff_hz, 1.0 / log.summary.nominal_step_s)
                 .map_err(|e| sig("designing the regressor filter", e))?;
@@ -632,7 +644,7 @@ fn accumulate_processed(
 /// filter at `dt`; 0 unfiltered): added to the overlap of blocks so that
 /// every kept sample's mask sees all the rates it depends on.
 fn reach_of(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> {
-    let Some(spec) = p.filter else {
+    let Bandwidth::Fixed(spec) = p.filter else {
         return Ok(0);
     };
     let sos = Butterworth::lowpass(spec.order, spec.cutoff_hz, 1.0 / dt)
