@@ -42,9 +42,10 @@
 //!   thousands of rows).
 //! * `clarabel` (feature `sdp`, default): interior-point conic solver with
 //!   PSD cones for the SDP; its PSD cones call LAPACK through `openblas-src`,
-//!   whose flavour (`system` or `static`) the final binary chooses, as with
-//!   clarabel itself (see `docs/blas.md`). Without `sdp` the crate needs no
-//!   system library.
+//!   the system OpenBLAS with the default feature `system-openblas`; a
+//!   binary wanting another flavour turns that off and chooses it, as with
+//!   clarabel itself (see `docs/blas.md`). Without default features the
+//!   crate needs no system library.
 //! * `rayon`: parallel tall-skinny QR, streaming regressor blocks and
 //!   workspace scans.
 //! * `serde`: results serialise for reports; `thiserror`: the error type.
