@@ -122,9 +122,8 @@ pub fn cross_validate(
             .take_while(|t| **t - t0 <= 2.0 / f)
             .count();
         let n = prep.n();
-        let pick = |v: &[f64]| -> Vec<f64> {
-            v[..rows].iter().chain(&v[n..n + rows]).copied().collect()
-        };
+        let pick =
+            |v: &[f64]| -> Vec<f64> { v[..rows].iter().chain(&v[n..n + rows]).copied().collect() };
         for beta in candidates {
             let p = predict_standard(&prep, beta)?;
             fitness.push(fitness_per_joint(prep.t(), &p)?);
