@@ -40,7 +40,7 @@ pub enum Command {
     ExportMjcf(ExportMjcfArgs),
     /// Friction of one joint of any robot from its log: classical and
     /// dynamic models, then the diagnosis of what they miss →
-    /// friction.json, report.html, pred_<log>.csv (docs/friction.md).
+    /// `friction.json`, `report.html`, `pred_<log>.csv` (docs/friction.md).
     Friction(FrictionArgs),
 }
 
