@@ -30,7 +30,12 @@ fn bench(c: &mut Criterion) {
     };
     let train = run(1.0, 1, "train");
     let vals = vec![run(0.6, 2, "slow"), run(1.5, 3, "fast")];
-    eprintln!("rows: {} / {} / {}", train.len(), vals[0].len(), vals[1].len());
+    eprintln!(
+        "rows: {} / {} / {}",
+        train.len(),
+        vals[0].len(),
+        vals[1].len()
+    );
     let settings = FrictionSettings::default();
     let mut g = c.benchmark_group("friction");
     g.sample_size(10);

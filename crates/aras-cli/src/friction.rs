@@ -369,6 +369,10 @@ pub fn report_diagnosis(run: &FrictionRun, r: &mut crate::report::Report) {
     }
 }
 
+/// The refined final model: its result, base model and effects with
+/// coefficients.
+type Refined = (ModelResult, AnyModel, Vec<(Effect, Vec<f64>)>);
+
 /// Columns of a separable model at its fitted structure, on one log.
 fn base_columns<M: Separable>(m: &M, log: &JointLog) -> Result<Vec<Vec<f64>>> {
     let motion = Motion::new(&log.t, &log.q, &log.dq)?;
@@ -418,10 +422,7 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     train: &JointLog,
     vals: &[JointLog],
     settings: &FrictionSettings,
-) -> Result<(
-    DiagnosisResult,
-    Option<(ModelResult, AnyModel, Vec<(Effect, Vec<f64>)>)>,
-)> {
+) -> Result<(DiagnosisResult, Option<Refined>)> {
     let effects = library(train, &settings.library);
     let logs: Vec<&JointLog> = std::iter::once(train).chain(vals).collect();
     let motions: Vec<Motion> = logs
@@ -635,10 +636,10 @@ fn column<'a>(
     if c < nb {
         return &base[c];
     }
-    for k in 0..layout.candidates().len() {
+    for (k, block) in cands.iter().enumerate() {
         let r = layout.candidate_columns(k);
         if r.contains(&c) {
-            return &cands[k][c - r.start];
+            return &block[c - r.start];
         }
     }
     &base[0]

@@ -228,48 +228,6 @@ pub fn bars(
     Ok(svg)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn plots_render_svg() {
-        let x: Vec<f64> = (0..100).map(|i| i as f64 * 0.1).collect();
-        let y: Vec<f64> = x.iter().map(|v| v.sin()).collect();
-        let s = lines(
-            "t",
-            "x",
-            "y",
-            &[Series {
-                name: "sin".into(),
-                x: &x,
-                y: &y,
-            }],
-            50,
-        )
-        .unwrap();
-        assert!(s.contains("<svg") && s.contains("</svg>"));
-        let h = heatmap(
-            "h",
-            "x",
-            "y",
-            &[0.0, 1.0],
-            &[0.0, 1.0],
-            &[vec![1.0, 2.0], vec![3.0, 4.0]],
-        )
-        .unwrap();
-        assert!(h.contains("<rect"));
-        let b = bars(
-            "b",
-            "%",
-            &["j1".into(), "j2".into()],
-            &[("s0".into(), vec![80.0, 90.0])],
-        )
-        .unwrap();
-        assert!(b.contains("<rect"));
-    }
-}
-
 /// Points (e.g. measurements) under lines (e.g. model curves) on shared axes.
 /// Point sets are thinned to at most `max_points` points each (evenly over
 /// the samples) to keep SVGs small; lines are drawn in full order.
@@ -342,4 +300,46 @@ pub fn scatter(
         root.present().map_err(err)?;
     }
     Ok(svg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plots_render_svg() {
+        let x: Vec<f64> = (0..100).map(|i| i as f64 * 0.1).collect();
+        let y: Vec<f64> = x.iter().map(|v| v.sin()).collect();
+        let s = lines(
+            "t",
+            "x",
+            "y",
+            &[Series {
+                name: "sin".into(),
+                x: &x,
+                y: &y,
+            }],
+            50,
+        )
+        .unwrap();
+        assert!(s.contains("<svg") && s.contains("</svg>"));
+        let h = heatmap(
+            "h",
+            "x",
+            "y",
+            &[0.0, 1.0],
+            &[0.0, 1.0],
+            &[vec![1.0, 2.0], vec![3.0, 4.0]],
+        )
+        .unwrap();
+        assert!(h.contains("<rect"));
+        let b = bars(
+            "b",
+            "%",
+            &["j1".into(), "j2".into()],
+            &[("s0".into(), vec![80.0, 90.0])],
+        )
+        .unwrap();
+        assert!(b.contains("<rect"));
+    }
 }
