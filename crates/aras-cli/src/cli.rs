@@ -33,7 +33,7 @@ pub enum Command {
     /// Predict torques of a log with a parameter file → PRED.csv (t,tau1,tau2).
     Predict(PredictArgs),
     /// Find where model and measurement disagree, name the missing effect,
-    /// add it and show the gap shrink → diagnosis.{md,html,json} (issue 8).
+    /// add it and show the gap shrink → diagnosis.{md,html,json}.
     Diagnose(DiagnoseArgs),
     /// Write the robot of a parameter file as a MuJoCo model (MJCF):
     /// bodies, joints, the loop constraint, friction and actuators (docs/mjcf.md).
