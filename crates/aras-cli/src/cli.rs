@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::{Args, Parser, Subcommand};
 
 /// ARAS-Diamond dynamics toolkit: excitation design, simulation,
-/// identification, validation and prediction (spec/ARAS-DIAMOND.md).
+/// identification, validation and prediction (docs/model.md).
 #[derive(Debug, Parser)]
 #[command(name = "aras", version, about, long_about = None)]
 pub struct Cli {
@@ -33,7 +33,7 @@ pub enum Command {
     /// Predict torques of a log with a parameter file → PRED.csv (t,tau1,tau2).
     Predict(PredictArgs),
     /// Find where model and measurement disagree, name the missing effect,
-    /// add it and show the gap shrink → diagnosis.{md,html,json} (issue 8).
+    /// add it and show the gap shrink → diagnosis.{md,html,json}.
     Diagnose(DiagnoseArgs),
 }
 

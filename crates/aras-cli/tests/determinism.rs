@@ -1,4 +1,4 @@
-//! The same seed and inputs give byte-identical outputs (issue 9,
+//! The same seed and inputs give byte-identical outputs (
 //! "Determinism"): a short pipeline runs twice with `--reproducible`.
 
 use std::path::PathBuf;

@@ -1,4 +1,4 @@
-//! `aras identify --streaming on` gives the in-memory estimates (issue 9,
+//! `aras identify --streaming on` gives the in-memory estimates (
 //! "Scale"): the same rows (reversal exclusion), the same OLS, σ and SDP.
 
 use std::path::{Path, PathBuf};

@@ -1,4 +1,4 @@
-//! Speed targets of issue 3: regressor per sample ≤ 300 ns, direct inverse
+//! Speed targets: regressor per sample ≤ 300 ns, direct inverse
 //! dynamics per sample ≤ 200 ns, stacked regressor for 160 000 samples
 //! ≤ 50 ms, simulating 160 s at 1 kHz output ≤ 1 s.
 

@@ -1,7 +1,7 @@
 //! Dynamics of the ARAS-Diamond spherical parallel robot in linear-regressor
 //! form, an independent Lagrange check, and a simulated robot that writes
 //! measurement logs (spec §3 and §6; equation numbers refer to
-//! `spec/ARAS-DIAMOND.md`).
+//! `docs/model.md`).
 //!
 //! # Model
 //!

@@ -1,4 +1,4 @@
-//! How strong the "random feasible" baseline of the κ comparison is (issue 5):
+//! How strong the "random feasible" baseline of the κ comparison is:
 //! the median condition number of 100 random trajectories of the design's
 //! form when each is scaled to touch a limit (the baseline the tests use),
 //! and when the same trajectories keep only a fraction of that motion —

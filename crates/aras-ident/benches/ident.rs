@@ -1,4 +1,4 @@
-//! Benchmarks against the targets of issue 6: OLS on 320 000 × 23 ≤ 50 ms,
+//! Benchmarks against the targets: OLS on 320 000 × 23 ≤ 50 ms,
 //! the SDP ≤ 200 ms, the workspace PD scan on 1e5 points ≤ 100 ms.
 #![allow(clippy::needless_range_loop)]
 

@@ -1,4 +1,4 @@
-//! Throughput of the streaming regressor + accumulation stage (issue 9:
+//! Throughput of the streaming regressor + accumulation stage (
 //! target ≥ 5 M samples/s on this machine), and its parts.
 #![allow(clippy::needless_range_loop)]
 

@@ -1,4 +1,4 @@
-//! Scale study (issue 9): time and peak memory of streaming identification
+//! Scale study: time and peak memory of streaming identification
 //! against log length. See `docs/scale.md`.
 //!
 //! ```text

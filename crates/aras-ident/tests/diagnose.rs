@@ -1,5 +1,5 @@
 //! The diagnosis on simulated data with hidden effects (ground truth from
-//! the simulator), issue 8.
+//! the simulator).
 //!
 //! TRAIN: the designed excitation `fixtures/trajectories/default-excitation.json`
 //! (10 s period, [`TRAIN_PERIODS`] periods, period-averaged). VALIDATION:
@@ -432,7 +432,7 @@ fn added_effect_sigma_is_honest_over_noise_seeds() {
     assert!((0.5..=2.0).contains(&honest), "{honest}");
 }
 
-/// Timing (issue 8): a 160 s TRAIN log (16 periods of the excitation) and
+/// Timing: a 160 s TRAIN log (16 periods of the excitation) and
 /// two validation logs, all 7 candidates, with one hidden effect so that
 /// two rounds run. Ignored: the simulation itself takes a few seconds.
 #[test]
@@ -521,7 +521,7 @@ fn hidden_scaled(id: &str, scale: f64) -> (Params, usize) {
     (p, delay)
 }
 
-/// Robustness (issue 8): every effect at a grid of magnitudes around its
+/// Robustness: every effect at a grid of magnitudes around its
 /// detection limit, 5 noise seeds each, plus the control per seed; the
 /// paper's model as start, the acceptance setup otherwise (no SDP re-fit:
 /// it does not change what is named). Prints one `ROBUST {json}` line per

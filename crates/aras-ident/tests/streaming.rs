@@ -1,4 +1,4 @@
-//! Streaming least squares against the in-memory path (issue 9, "Scale").
+//! Streaming least squares against the in-memory path ("Scale").
 #![allow(clippy::needless_range_loop)]
 
 mod common;

@@ -5,7 +5,7 @@
 //! proximal links; distal links hinged at the elbows `b`, `c` meet at the
 //! end-effector axis `d`. Every link turns about the remote centre of motion
 //! (RCM), the origin of every frame here. Equation numbers refer to
-//! `spec/ARAS-DIAMOND.md` (the source paper's numbering).
+//! `docs/model.md` (the source paper's numbering).
 //!
 //! # Conventions
 //!

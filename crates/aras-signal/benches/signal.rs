@@ -1,4 +1,4 @@
-//! Performance targets of issue 4:
+//! Performance targets:
 //! * filtering 4 channels × 160 000 samples ≤ 10 ms;
 //! * full `process` of a 160 s, 1 kHz log ≤ 50 ms;
 //! * reading an hour at 1 kHz (3.6 M rows) well under a second.

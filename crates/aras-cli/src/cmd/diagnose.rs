@@ -1,4 +1,4 @@
-//! `aras diagnose` (issue 8): where the model and the measurement disagree,
+//! `aras diagnose`: where the model and the measurement disagree,
 //! which missing effect explains it, and how much the gap shrinks once it
 //! is added. The statistics live in `aras_ident::diagnose`; this command
 //! reads and processes the logs, runs it, and writes

@@ -1,5 +1,5 @@
 //! Diagnosis: where model and measurement disagree, which missing effect
-//! explains it, and how much the gap shrinks once it is added (issue 8).
+//! explains it, and how much the gap shrinks once it is added.
 //!
 //! 1. **Residual analysis** ([`residual`]): the current model identified on
 //!    TRAIN predicts the validation data; each joint's residual is binned

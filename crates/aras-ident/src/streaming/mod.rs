@@ -1,4 +1,4 @@
-//! Identification from logs of any length in bounded memory (issue 9,
+//! Identification from logs of any length in bounded memory (
 //! "Scale").
 //!
 //! The least-squares problem `min ‖W_b β_b − T‖` (62)–(66) never needs the
