@@ -1,6 +1,6 @@
 //! The ARAS-Diamond toolkit's command-line tools and reports.
 //!
-//! This crate is the orchestrator of the model of `docs/model.md`: it parses the
+//! This crate orchestrates the workflow of `docs/model.md`: it parses the
 //! command line and the config file, calls the library crates in the order of
 //! the data flow (excitation → simulation → signal processing →
 //! identification → validation → diagnosis) and writes reports. It holds no

@@ -2,53 +2,12 @@
 //! intact and leaves no staging or temporary files behind, and inputs are
 //! never modified. (What `--force` may replace: `tests/force.rs`.)
 
-use std::collections::hash_map::DefaultHasher;
-use std::hash::{Hash, Hasher};
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::Path;
 use std::process::Command;
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-atomic-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../fixtures")
-        .join(rel)
-}
-
-/// (relative path, content hash) of every file under `dir`, sorted.
-fn snapshot(dir: &Path) -> Vec<(String, u64)> {
-    let mut v = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let mut h = DefaultHasher::new();
-                std::fs::read(&p).unwrap().hash(&mut h);
-                v.push((
-                    p.strip_prefix(dir).unwrap().display().to_string(),
-                    h.finish(),
-                ));
-            }
-        }
-    }
-    v.sort();
-    v
-}
-
-fn aras(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_aras"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+use common::{aras, fixture, own_run, scratch, snapshot};
 
 /// Names in `dir` that look like leftovers of a write (staging dirs, temp files).
 fn leftovers(dir: &Path) -> Vec<String> {
@@ -59,21 +18,12 @@ fn leftovers(dir: &Path) -> Vec<String> {
         .collect()
 }
 
-/// A directory as a previous run of the tool leaves it (with its manifest).
-fn previous_run(out: &Path, files: &[(&str, &str)]) {
-    let o = aras_cli::output::OutDir::create(out, false, &[]).unwrap();
-    for (name, text) in files {
-        o.write(name, text).unwrap();
-    }
-    o.commit().unwrap();
-}
-
 #[test]
 fn a_run_that_fails_late_keeps_the_previous_outputs() {
-    let dir = scratch("late");
+    let dir = scratch("atomic", "late");
     // The previous results, e.g. from a successful run.
     let out = dir.join("out");
-    previous_run(
+    own_run(
         &out,
         &[
             ("params.json", "{\"previous\": true}\n"),
@@ -109,9 +59,9 @@ fn a_run_that_fails_late_keeps_the_previous_outputs() {
 
 #[test]
 fn a_killed_run_keeps_the_previous_outputs() {
-    let dir = scratch("kill");
+    let dir = scratch("atomic", "kill");
     let out = dir.join("out");
-    previous_run(&out, &[("params.json", "{\"previous\": true}\n")]);
+    own_run(&out, &[("params.json", "{\"previous\": true}\n")]);
     let before = snapshot(&out);
     // The default pipeline takes tens of seconds: killed after 1.5 s, in the middle.
     let mut child = Command::new(env!("CARGO_BIN_EXE_aras"))
@@ -131,7 +81,7 @@ fn a_killed_run_keeps_the_previous_outputs() {
 
 #[test]
 fn single_file_outputs_are_replaced_whole_or_not_at_all() {
-    let dir = scratch("file");
+    let dir = scratch("atomic", "file");
     let out = dir.join("p.csv");
     // A previous prediction (the only kind of file `predict --force` replaces).
     let previous = "t,tau1,tau2\n0,0.1,0.2\n";
@@ -154,7 +104,7 @@ fn single_file_outputs_are_replaced_whole_or_not_at_all() {
 
 #[test]
 fn inputs_are_never_modified() {
-    let dir = scratch("inputs");
+    let dir = scratch("atomic", "inputs");
     let inputs = dir.join("in");
     std::fs::create_dir_all(&inputs).unwrap();
     for f in [

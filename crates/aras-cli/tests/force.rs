@@ -4,67 +4,16 @@
 //! offending file's name; single files are replaced only when they are an
 //! output of the same kind and not an input.
 
-use std::collections::hash_map::DefaultHasher;
-use std::hash::{Hash, Hasher};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
+
+use std::process::Output;
+
+use common::{aras, fixture, own_run, scratch, snapshot};
 
 use aras_cli::output::{FileKind, MANIFEST, Manifest, OutDir, check_new_file};
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-force-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../fixtures")
-        .join(rel)
-}
-
-fn aras(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_aras"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
 fn stderr(r: &Output) -> String {
     String::from_utf8_lossy(&r.stderr).into_owned()
-}
-
-/// (relative path, content hash) of every file under `dir`, sorted.
-fn snapshot(dir: &Path) -> Vec<(String, u64)> {
-    let mut v = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let mut h = DefaultHasher::new();
-                std::fs::read(&p).unwrap().hash(&mut h);
-                v.push((
-                    p.strip_prefix(dir).unwrap().display().to_string(),
-                    h.finish(),
-                ));
-            }
-        }
-    }
-    v.sort();
-    v
-}
-
-/// A run directory written through `OutDir` (so with its manifest).
-fn own_run(out: &Path, files: &[(&str, &str)]) {
-    let o = OutDir::create(out, true, &[]).unwrap();
-    for (name, text) in files {
-        o.write(name, text).unwrap();
-    }
-    o.commit().unwrap();
 }
 
 fn err_of(r: anyhow::Result<OutDir>) -> String {
@@ -76,7 +25,7 @@ fn err_of(r: anyhow::Result<OutDir>) -> String {
 /// written, naming the log, and both files survive byte for byte.
 #[test]
 fn identify_force_refuses_an_out_dir_holding_its_input_log() {
-    let lab = scratch("lab");
+    let lab = scratch("force", "lab");
     let log = lab.join("run.csv");
     std::fs::copy(fixture("logs/good/counts_currents.csv"), &log).unwrap();
     std::fs::write(lab.join("notes.txt"), "calibration notes\n").unwrap();
@@ -108,7 +57,7 @@ fn identify_force_refuses_an_out_dir_holding_its_input_log() {
 /// manifest) is refused as an input inside the output.
 #[test]
 fn an_input_listed_in_the_manifest_is_still_refused() {
-    let dir = scratch("listed-input");
+    let dir = scratch("force", "listed-input");
     let out = dir.join("out");
     own_run(&out, &[("log.csv", "t\n"), ("params.json", "{}\n")]);
     let before = snapshot(&out);
@@ -124,7 +73,7 @@ fn an_input_listed_in_the_manifest_is_still_refused() {
 /// A file the manifest does not list is named, and nothing is removed.
 #[test]
 fn force_refuses_a_directory_with_an_unlisted_file() {
-    let dir = scratch("unlisted");
+    let dir = scratch("force", "unlisted");
     let out = dir.join("out");
     own_run(
         &out,
@@ -150,7 +99,7 @@ fn force_refuses_a_directory_with_an_unlisted_file() {
 /// `--force`, and without `--force` any non-empty directory is.
 #[test]
 fn force_refuses_a_directory_without_a_manifest() {
-    let dir = scratch("no-manifest");
+    let dir = scratch("force", "no-manifest");
     let out = dir.join("out");
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("params.json"), "{}\n").unwrap();
@@ -170,7 +119,7 @@ fn force_refuses_a_directory_without_a_manifest() {
 /// not followed: the run is refused and the outside file stays.
 #[test]
 fn a_manifest_pointing_outside_the_directory_is_not_followed() {
-    let dir = scratch("escape");
+    let dir = scratch("force", "escape");
     let out = dir.join("out");
     let victim = dir.join("victim.txt");
     std::fs::write(&victim, "precious").unwrap();
@@ -201,7 +150,7 @@ fn a_manifest_pointing_outside_the_directory_is_not_followed() {
 /// lists exactly the new files, the old run's files are gone.
 #[test]
 fn force_replaces_the_tools_own_previous_output() {
-    let dir = scratch("rerun");
+    let dir = scratch("force", "rerun");
     let out = dir.join("out");
     own_run(&out, &[("old.json", "{}\n"), ("figures/a.svg", "<svg/>")]);
     own_run(&out, &[("new.json", "{}\n"), ("validation/b.csv", "t\n")]);
@@ -223,7 +172,7 @@ fn force_replaces_the_tools_own_previous_output() {
 /// `--force` succeeds and writes its manifest; without it, it is refused.
 #[test]
 fn validate_twice_with_force_replaces_its_own_output() {
-    let dir = scratch("validate");
+    let dir = scratch("force", "validate");
     let cfg = dir.join("short.toml");
     std::fs::write(
         &cfg,
@@ -278,7 +227,7 @@ fn validate_twice_with_force_replaces_its_own_output() {
 /// results are kept in the staging directory the message names.
 #[test]
 fn a_file_added_during_the_run_blocks_the_swap() {
-    let dir = scratch("during");
+    let dir = scratch("force", "during");
     let out = dir.join("out");
     own_run(&out, &[("params.json", "{}\n")]);
     let o = OutDir::create(&out, true, &[]).unwrap();
@@ -295,7 +244,7 @@ fn a_file_added_during_the_run_blocks_the_swap() {
 /// same kind is replaced.
 #[test]
 fn single_file_force_replaces_only_its_own_kind() {
-    let dir = scratch("single");
+    let dir = scratch("force", "single");
     let pred = dir.join("p.csv");
     std::fs::write(&pred, "t,tau1,tau2\n0,0,0\n").unwrap();
     check_new_file(&pred, true, FileKind::Prediction, &[]).unwrap();

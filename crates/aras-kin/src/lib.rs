@@ -4,8 +4,8 @@
 //! A 2-DOF spherical five-bar: two coaxial motors on axis `a` drive the
 //! proximal links; distal links hinged at the elbows `b`, `c` meet at the
 //! end-effector axis `d`. Every link turns about the remote centre of motion
-//! (RCM), the origin of every frame here. Equation numbers are the source
-//! paper's (`docs/model.md`).
+//! (RCM), the origin of every frame here. Equation numbers refer to
+//! `docs/model.md` (the source paper's numbering).
 //!
 //! # Conventions
 //!

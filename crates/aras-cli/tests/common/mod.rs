@@ -1,0 +1,65 @@
+//! Helpers shared by the output-safety tests (`atomic.rs`, `force.rs`).
+#![allow(dead_code)]
+
+use std::collections::hash_map::DefaultHasher;
+use std::hash::{Hash, Hasher};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use aras_cli::output::OutDir;
+
+/// A fresh, empty scratch directory `aras-{suite}-{name}-{pid}`.
+pub fn scratch(suite: &str, name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("aras-{suite}-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A file under the repository's `fixtures/`.
+pub fn fixture(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fixtures")
+        .join(rel)
+}
+
+/// Runs the `aras` binary with `args`.
+pub fn aras(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_aras"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// (relative path, content hash) of every file under `dir`, sorted.
+pub fn snapshot(dir: &Path) -> Vec<(String, u64)> {
+    let mut v = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let mut h = DefaultHasher::new();
+                std::fs::read(&p).unwrap().hash(&mut h);
+                v.push((
+                    p.strip_prefix(dir).unwrap().display().to_string(),
+                    h.finish(),
+                ));
+            }
+        }
+    }
+    v.sort();
+    v
+}
+
+/// A run directory as the tool leaves it: written through `OutDir`, so
+/// with its manifest.
+pub fn own_run(out: &Path, files: &[(&str, &str)]) {
+    let o = OutDir::create(out, true, &[]).unwrap();
+    for (name, text) in files {
+        o.write(name, text).unwrap();
+    }
+    o.commit().unwrap();
+}
