@@ -1,11 +1,11 @@
-//! Forward kinematics, spec (6)–(7).
+//! Forward kinematics, (6)–(7) (`docs/kinematics.md`).
 
 use nalgebra::Vector2;
 
 use crate::pose::{Pose, check_finite};
 use crate::{Geometry, KinError};
 
-/// Assembly mode of the distal links: the sign in spec (6).
+/// Assembly mode of the distal links: the sign in (6).
 ///
 /// The two modes are the two positions of `d` on the circle of points at arc
 /// β from both elbows. With α = β the `Minus` branch is the degenerate
@@ -19,7 +19,7 @@ pub enum AssemblyMode {
     Minus,
 }
 
-/// Forward kinematics `θ → X = [φ, γ]`, spec (6)–(7):
+/// Forward kinematics `θ → X = [φ, γ]`, (6)–(7):
 /// `φ = (θ1 + θ2)/2`, `A = (θ1 − θ2)/2`,
 /// `γ = 2 atan2(sin α cos A ± √(sin²β − sin²α sin²A), cos α + cos β)`.
 ///

@@ -1,4 +1,4 @@
-//! Motor Jacobian `θ̇ = J Ẋ`, spec (8)–(11) with the sign NOTE.
+//! Motor Jacobian `θ̇ = J Ẋ`, (8)–(11), with the sign explained in `docs/kinematics.md`.
 
 use nalgebra::{Matrix2, Vector2};
 
@@ -8,7 +8,7 @@ use crate::{Geometry, KinError, Scalar};
 /// The motor Jacobian `J = [[1, K], [1, −K]]` with `K = dA/dγ`.
 ///
 /// Sign: differentiating `θ1 = φ + A(γ)`, `θ2 = φ − A(γ)` gives `+K` in the
-/// first row. The paper prints `R = −K` there (spec NOTE); we follow the
+/// first row. The paper prints `R = −K` there (`docs/kinematics.md`, "Jacobian"); we follow the
 /// derivative of our own IK, which the tests check by finite differences.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Jacobian<T: Scalar = f64> {

@@ -4,8 +4,8 @@
 //! A 2-DOF spherical five-bar: two coaxial motors on axis `a` drive the
 //! proximal links; distal links hinged at the elbows `b`, `c` meet at the
 //! end-effector axis `d`. Every link turns about the remote centre of motion
-//! (RCM), the origin of every frame here. Equation numbers refer to
-//! `docs/model.md` (the source paper's numbering).
+//! (RCM), the origin of every frame here. Equation numbers are the source
+//! paper's (see `docs/model.md`); `docs/kinematics.md` restates them.
 //!
 //! # Conventions
 //!
@@ -19,7 +19,7 @@
 //!   the distal link on `c`. Arrays are indexed 0–3. See [`links`] for the
 //!   frames.
 //! * Jacobian sign: `θ̇ = J Ẋ` with `J = [[1, K], [1, −K]]`, `K = dA/dγ`. The
-//!   paper's (8)–(11) print the opposite sign (see the spec NOTE); ours is
+//!   paper's (8)–(11) print the opposite sign (see `docs/kinematics.md`); ours is
 //!   the derivative of our own IK and is tested against finite differences.
 //!
 //! # Errors

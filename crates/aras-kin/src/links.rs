@@ -1,4 +1,4 @@
-//! Link frames and link angular-velocity Jacobians, spec §1 and (12)–(21).
+//! Link frames and link angular-velocity Jacobians, (12)–(21) (`docs/kinematics.md`).
 //!
 //! Numbering (paper eqs. 12–15 and the robot authors' model):
 //!
@@ -19,9 +19,9 @@
 //! μ = (−sin α sin A + K (cos α − cos β cos γ)) / sin²β
 //! ```
 //!
-//! `μ` is the spec's convention-free `λ = (e×d)·(ḋ − θ̇_e a×d)/sin²β` per
+//! `μ` is the convention-free `λ = (e×d)·(ḋ − θ̇_e a×d)/sin²β` per
 //! unit γ̇; it equals `−G` of (17). The authors' MATLAB `Q` does not match it
-//! (spec NOTE) and is not used.
+//! (`docs/kinematics.md`) and is not used.
 
 use nalgebra::{Matrix3, Matrix3x2, Vector2, Vector3};
 

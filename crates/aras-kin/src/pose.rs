@@ -15,12 +15,12 @@ use crate::{Geometry, KinError, Scalar, SingularityDistance};
 pub(crate) struct Pose<T: Scalar = f64> {
     pub sin_gamma: T,
     pub cos_gamma: T,
-    /// Angle A at `a` (rad), spec (1).
+    /// Angle A at `a` (rad), (1).
     pub a: T,
     pub sin_a: T,
     pub sin_b: T,
     pub cos_b: T,
-    /// K = dA/dγ, spec (8)–(11) with the sign NOTE.
+    /// K = dA/dγ, (8)–(11), with the sign of `docs/kinematics.md`.
     pub k: T,
     /// dK/dγ.
     pub k_prime: T,
@@ -84,7 +84,7 @@ impl<T: Scalar> Pose<T> {
         let (sg, cg) = gamma.sin_cos();
         let (sphi, cphi) = phi.sin_cos();
 
-        // Spherical cosine rule, spec (1) and (4). Rounding can push the
+        // Spherical cosine rule, (1) and (4). Rounding can push the
         // cosines a hair past ±1 at the reach limits; the sines are then 0
         // and the singularity check rejects the pose.
         let cos_a = ((cb - cg * ca) / (sg * sa)).clamp(-one, one);
@@ -93,7 +93,7 @@ impl<T: Scalar> Pose<T> {
         let sin_b = (one - cos_b * cos_b).max(zero).sqrt();
         let a = sin_a.atan2(cos_a);
 
-        // K = dA/dγ = −P/(sα s²γ sA), P = cα − cβ cγ (equal to the spec's
+        // K = dA/dγ = −P/(sα s²γ sA), P = cα − cβ cγ (equal to
         // −(cot α − cos A cot γ)/sin A).
         let p = ca - cb * cg;
         let dp = cb * sg;
@@ -105,7 +105,7 @@ impl<T: Scalar> Pose<T> {
         let mu = (-sa * sin_a + k * p) / s2b;
         let mu_prime = (-sa * cos_a * k + k_prime * p + k * dp) / s2b;
 
-        // θ1 = φ + A, θ2 = φ − A, spec (1)–(2); sines by angle addition.
+        // θ1 = φ + A, θ2 = φ − A, (1)–(2); sines by angle addition.
         let (st1, ct1) = (sphi * cos_a + cphi * sin_a, cphi * cos_a - sphi * sin_a);
         let (st2, ct2) = (sphi * cos_a - cphi * sin_a, cphi * cos_a + sphi * sin_a);
         Ok(Self {
@@ -130,7 +130,7 @@ impl<T: Scalar> Pose<T> {
     }
 }
 
-/// Which singularity a pose is near (spec §2, "Singularities").
+/// Which singularity a pose is near (`docs/kinematics.md`, "Singularities").
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Singularity {
     /// `sin A = 0`: the proximal links are aligned.

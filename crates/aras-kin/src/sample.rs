@@ -20,13 +20,13 @@ pub struct KinematicSample<T: Scalar = f64> {
     pub x_dot: Vector2<T>,
     /// Task acceleration `Ẍ`.
     pub x_ddot: Vector2<T>,
-    /// Motor angles `θ`, spec (1)–(2).
+    /// Motor angles `θ`, (1)–(2).
     pub theta: Vector2<T>,
     /// Motor rates `θ̇ = J Ẋ`.
     pub theta_dot: Vector2<T>,
     /// Motor accelerations `θ̈ = J Ẍ + J̇ Ẋ`.
     pub theta_ddot: Vector2<T>,
-    /// Motor Jacobian `J`, spec (8)–(11).
+    /// Motor Jacobian `J`, (8)–(11).
     pub jacobian: Jacobian<T>,
     /// `J̇` along the sample's motion.
     pub jacobian_dot: Matrix2<T>,
@@ -36,9 +36,9 @@ pub struct KinematicSample<T: Scalar = f64> {
     pub link_jacobians: [Matrix3x2<T>; LINKS],
     /// Their time derivatives `J̇_ωk` along the sample's motion.
     pub link_jacobian_dots: [Matrix3x2<T>; LINKS],
-    /// Link angular velocities `Ω_k = J_ωk Ẋ`, spec (12)–(21).
+    /// Link angular velocities `Ω_k = J_ωk Ẋ`, (12)–(21).
     pub omega: [Vector3<T>; LINKS],
-    /// Link angular accelerations `Ω̇_k = J_ωk Ẍ + J̇_ωk Ẋ`, spec (22)–(25).
+    /// Link angular accelerations `Ω̇_k = J_ωk Ẍ + J̇_ωk Ẋ`, (22)–(25).
     pub omega_dot: [Vector3<T>; LINKS],
     /// Distance to each singularity.
     pub singularity: SingularityDistance,

@@ -62,7 +62,7 @@ pub fn singularity_distance(
     Ok(Pose::unchecked(g, x)?.distance())
 }
 
-/// Task-space box and rate limits, spec (77). Radians and rad/s.
+/// Task-space box and rate limits, (77). Radians and rad/s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Workspace {
     min: Vector2<f64>,

@@ -204,20 +204,20 @@ proptest! {
 
 #[test]
 fn spec_numeric_check() {
-    // Spec §2: at φ = 85°, γ = 60°, α = β = 45°: A = 54.7356°, |dA/dγ| = 0.816497.
+    // docs/kinematics.md, "Jacobian": at φ = 85°, γ = 60°, α = β = 45°: A = 54.7356°, |dA/dγ| = 0.816497.
     let g = Geometry::aras_diamond();
     let x = Vector2::new(deg(85.0), deg(60.0));
     let ik = inverse(&g, &x).unwrap();
     assert!((ik.passive.a.to_degrees() - 54.7356).abs() < 5e-5);
     let k = jacobian(&g, &x).unwrap().k();
     assert!((k.abs() - 0.816497).abs() < 5e-7);
-    // Sign NOTE: our K is dA/dγ, which is negative here.
+    // Sign (docs/kinematics.md): our K is dA/dγ, which is negative here.
     assert!(k < 0.0);
     assert_eq!(
         ik.theta,
         Vector2::new(x[0] + ik.passive.a, x[0] - ik.passive.a)
     );
-    // B = C, and Ω3 from the spec NOTE.
+    // B = C, and Ω3 from docs/kinematics.md (link angular velocities).
     assert_eq!(ik.passive.b, ik.passive.c);
     let s = evaluate(&g, &x, &Vector2::new(0.3, -0.7), &Vector2::zeros()).unwrap();
     assert!((s.omega[2] - Vector3::new(0.74048, 0.43208, 0.58577)).norm() < 1e-5);
