@@ -2,7 +2,7 @@
 //! the mass matrix (80), Coriolis/centrifugal and gravity terms, energies,
 //! and forward dynamics.
 //!
-//! Everything here is in the base frame {0} as written in the spec
+//! Everything here is in the base frame {0} as written in (33) and (80)
 //! (`I_k⁰ = R_k I_k R_kᵀ`, `h_k⁰ = R_k h_k`), on purpose a different
 //! computation from the link-frame regressor, so that `Y β` against
 //! [`Dynamics::inverse`] is a real check.

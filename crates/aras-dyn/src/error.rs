@@ -65,7 +65,7 @@ pub enum ParamError {
         /// The rule it broke and how to fix it.
         reason: &'static str,
     },
-    /// A link's inertial parameters are not physically consistent, spec
+    /// A link's inertial parameters are not physically consistent,
     /// (67)–(69): acceptable for an OLS estimate, not where a real body is
     /// required (the SDP's reference, a simulated robot, `validate`).
     #[error(

@@ -2,7 +2,7 @@
 //! equations with every derivative taken exactly by dual numbers.
 //!
 //! Nothing here uses `aras-kin`'s Jacobians or the virtual-work code. The
-//! link rotations are rebuilt from spec §1 (unit vectors `b`, `c`, `d` from
+//! link rotations are rebuilt from `docs/kinematics.md` (unit vectors `b`, `c`, `d` from
 //! the inverse kinematics (1)–(2), frames `y = z×n/|z×n|`, `x = y×z`); the
 //! body angular velocity is `vee(Rᵀ Ṙ)` with `Ṙ` from a first-order dual
 //! number along `Ẋ`; the kinetic energy `T = ½ Σ ωᵀ I ω` and the potential
@@ -59,7 +59,7 @@ fn frame<D: DualNum<Primitive = f64> + Copy>(z: &V3<D>, n: &V3<D>) -> M3<D> {
     r
 }
 
-/// Link rotations 1–4 from spec §1 at `X = [φ, γ]`.
+/// Link rotations 1–4 from `docs/kinematics.md` at `X = [φ, γ]`.
 fn rotations<D: DualNum<Primitive = f64> + Copy>(
     alpha: f64,
     beta: f64,

@@ -38,7 +38,7 @@
 //! # Conventions
 //!
 //! * SI units, radians: rad, rad/s, rad/s², N·m, kg, m, kg·m², kg·m.
-//! * Frames and link numbering as in spec §1 and `aras_kin::links`: link 1
+//! * Frames and link numbering as in `docs/kinematics.md` and `aras_kin::links`: link 1
 //!   proximal on θ2 (elbow `b`), link 2 proximal on θ1 (elbow `c`), link 3
 //!   distal on `b`, link 4 distal on `c`; arrays are indexed 0–3. Each link's
 //!   inertial parameters are in its own frame about the RCM.

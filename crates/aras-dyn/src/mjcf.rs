@@ -22,7 +22,7 @@
 //! `qpos = [θ1, q_c, θ2, q_b]`. The passive angles `q_b`, `q_c` are zero
 //! with the elbow stretched (distal arc continuing the proximal one); on the
 //! working assembly `q_b = π − B` and `q_c = C − π` with the elbow angles
-//! `B = C` of spec (4) ([`passive_hinge_angles`]).
+//! `B = C` of (4) ([`passive_hinge_angles`]).
 //!
 //! The loop is closed by `<connect>` between `link3` and `link4` at the
 //! point `r·d` (`r` = [`MjcfOptions::anchor_radius`]), which both distal
@@ -38,7 +38,7 @@
 //!
 //! * link `k`: `<inertial mass="m" pos="h/m" fullinertia="…"/>` with the
 //!   inertia about the centre of mass `I_G = I_O − m(|ρ|²1 − ρρᵀ)` (inverse of
-//!   spec (28)), written `Ixx Iyy Izz Ixy Ixz Iyz` (MuJoCo's order, tensor
+//!   (28)), written `Ixx Iyy Izz Ixy Ixz Iyz` (MuJoCo's order, tensor
 //!   entries as in the parameter file);
 //! * motors: `damping` = `Fv`, `stiffness` = `Ke` with `springref` 0,
 //!   `frictionloss` = `Fc` on `theta1`/`theta2`; torque actuators `motor1`,
@@ -53,7 +53,7 @@
 //!
 //! Only physically consistent links can be exported: MuJoCo needs a positive
 //! mass and a positive-definite inertia about the centre of mass that obeys
-//! the triangle inequality (the strict form of spec (67)–(69)).
+//! the triangle inequality (the strict form of (67)–(69)).
 
 use std::fmt::Write as _;
 
@@ -172,7 +172,7 @@ pub struct Inertial {
 }
 
 impl Inertial {
-    /// The inertial of a physically consistent link (the inverse of spec
+    /// The inertial of a physically consistent link (the inverse of
     /// (28)); `link` (1–4) names it in errors.
     pub fn from_link(link: usize, l: &LinkParams) -> Result<Self, MjcfError> {
         let bad = |reason: String| MjcfError::NotPhysical { link, reason };

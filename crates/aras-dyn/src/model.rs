@@ -1,5 +1,5 @@
 //! A model is an ordered list of effects; each contributes named regressor
-//! columns and the matching standard parameters, spec (51)–(53).
+//! columns and the matching standard parameters, (51)–(53).
 //!
 //! The paper's model is [`Model::paper`]: rigid links (36 columns,
 //! (38)–(46)), viscous + Coulomb friction (49) and elasticity (50), 42 in

@@ -2,7 +2,7 @@
 //! (`docs/parameter-format.md`).
 //!
 //! Per link (1–4, paper numbering): the inertia tensor about the RCM in the
-//! link frame and the first moment of mass `h = m ρ`, spec (28)–(30), (46),
+//! link frame and the first moment of mass `h = m ρ`, (28)–(30), (46),
 //! plus the mass for consistency checks only (the links only rotate about the
 //! RCM, so `m` never enters the dynamics); friction (49), elasticity (50),
 //! gravity, geometry, and optional parameters of the extra effects.
@@ -82,7 +82,7 @@ impl LinkParams {
     /// Pseudo-inertia `𝒥 = [[½tr(I)·1 − I, h], [hᵀ, m]]` (Wensing et al.
     /// 2017): `𝒥 ≻ 0` exactly when the link is physically consistent
     /// (positive mass, positive-definite COM inertia, triangle inequality),
-    /// spec (67)–(69) and the convexity NOTE.
+    /// (67)–(69); see `docs/model.md`, "Physical consistency".
     pub fn pseudo_inertia(&self) -> Matrix4<f64> {
         let i = self.inertia();
         let s = Matrix3::identity() * (0.5 * i.trace()) - i;
@@ -109,7 +109,7 @@ impl LinkParams {
     }
 }
 
-/// Viscous and Coulomb friction per actuator, spec (49).
+/// Viscous and Coulomb friction per actuator, (49).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Friction {
     /// Viscous coefficients `[Fv1, Fv2]` (N·m·s/rad).
@@ -249,7 +249,7 @@ impl Params {
         }
     }
 
-    /// Physical consistency of every link, spec (67)–(69): a positive mass
+    /// Physical consistency of every link, (67)–(69): a positive mass
     /// and a positive-definite pseudo-inertia (positive-definite inertia
     /// about the COM satisfying the triangle inequality). [`Params::validate`]
     /// does not ask this, because an OLS estimate may legitimately violate

@@ -1,4 +1,4 @@
-//! The regressor `Y(X, Ẋ, Ẍ)` with `τ = Y β`, spec (38)–(57): per sample
+//! The regressor `Y(X, Ẋ, Ẍ)` with `τ = Y β`, (38)–(57): per sample
 //! into a caller's buffer (no allocation, generic over the scalar so dual
 //! numbers give exact derivatives), and stacked over many samples.
 //!

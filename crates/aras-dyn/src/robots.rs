@@ -1,5 +1,5 @@
 //! Ready-made parameter sets: the real ARAS-Diamond from its CAD data
-//! (spec §9), and a builder for other spherical robots from simple geometry.
+//! (`docs/model.md`, "Default robot"), and a builder for other spherical robots from simple geometry.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -26,7 +26,7 @@ impl LinkParams {
     }
 }
 
-/// One row of the CAD table of spec §9.
+/// One row of the CAD table (`docs/model.md`, "Default robot").
 struct CadRow {
     mass: f64,
     /// Principal inertia about the COM (the CAD's products are zero).
@@ -36,7 +36,7 @@ struct CadRow {
     r: f64,
 }
 
-/// Spec §9, from the robot authors' `Inertial_Parameters_Full.m`.
+/// The CAD table, from the robot authors' `Inertial_Parameters_Full.m`.
 const CAD: [CadRow; 4] = [
     CadRow {
         mass: 0.1170118419,
@@ -68,7 +68,7 @@ impl Params {
     /// The real ARAS-Diamond (the simulator's default truth): α = β = 45°,
     /// `g = [0, −9.81, 0]`, CAD inertia converted to the RCM by (28), and
     /// the friction and elasticity identified by the robot's authors
-    /// (spec §9). The same values as `fixtures/robots/aras-diamond.json`.
+    /// (`docs/model.md`, "Default robot"). The same values as `fixtures/robots/aras-diamond.json`.
     pub fn aras_diamond() -> Self {
         let links = std::array::from_fn(|k| {
             let c = &CAD[k];

@@ -14,7 +14,7 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
 
     /// Lagrange (Hessian of T, Christoffel terms by exact differentiation,
-    /// rotations rebuilt from spec §1) against virtual work (33)/(80).
+    /// rotations rebuilt from `docs/kinematics.md`) against virtual work (33)/(80).
     /// Both are exact formulas evaluated in double precision, so they agree
     /// to rounding (~1e-14); 1e-10 relative is the bound.
     #[test]

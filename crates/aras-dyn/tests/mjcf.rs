@@ -192,7 +192,7 @@ fn body_frames_are_the_link_frames_and_the_loop_closes() {
             );
             let ik = aras_kin::inverse(&g, &x).unwrap();
             let [qb, qc] = passive_hinge_angles(&p, &x).unwrap();
-            // The passive angles against spec (4): q_b = π − B, q_c = C − π.
+            // The passive angles against (4): q_b = π − B, q_c = C − π.
             let pi = std::f64::consts::PI;
             assert!((qb - (pi - ik.passive.b)).abs() < 1e-12);
             assert!((qc - (ik.passive.c - pi)).abs() < 1e-12);

@@ -1,5 +1,5 @@
 //! Parameter files: strict reading, round trips, the default robot from the
-//! CAD table (spec §9), and the thin-arc helper.
+//! CAD table (`docs/model.md`, "Default robot"), and the thin-arc helper.
 
 use std::path::PathBuf;
 
@@ -24,7 +24,7 @@ fn fixture_equals_constructor() {
     assert_eq!(Params::load(fixture()).unwrap(), Params::aras_diamond());
 }
 
-/// Reproduces spec §9's conversion independently: the COM by explicit
+/// Reproduces the CAD table's conversion independently: the COM by explicit
 /// rotation matrices, `I_O = I_G + m [ρ]×ᵀ [ρ]×` with the skew matrices
 /// written out. Same arithmetic up to ordering, so 1e-15 relative.
 #[test]

@@ -1,4 +1,4 @@
-//! The simulated robot: the stand-in for hardware (spec §6, §8).
+//! The simulated robot: the stand-in for hardware (`docs/simulator.md`).
 //!
 //! * **Plant state** `(X, Ẋ)` in task space (rad, rad/s), integrated by
 //!   classical RK4 at `output_rate_hz × substeps` (default 1 kHz × 2 =
