@@ -6,7 +6,7 @@
 //! 1. [`robot`]: the ARAS-Diamond's regressor (`aras-dyn`'s model seen
 //!    through `aras-kin`'s kinematics) as an [`aras_ident::LinearModel`]
 //!    ([`TaskRegressor`]), stacked regressors from `aras-signal`'s
-//!    samples, parallel filtering (spec §6 NOTE), the velocity-reversal
+//!    samples, parallel filtering (`docs/processing.md`), the velocity-reversal
 //!    mask, the SDP layout of the four links and the way back into
 //!    `aras_dyn::Params`.
 //! 2. [`streaming`]: identification from a CSV log of any length in bounded

@@ -1,5 +1,5 @@
 //! Adapter to the ARAS-Diamond crates: stacked regressors from `aras-dyn`'s
-//! model and `aras-signal`'s samples, parallel filtering (spec §6 NOTE), the
+//! model and `aras-signal`'s samples, parallel filtering (`docs/processing.md`), the
 //! SDP layout of the four links, and the way back into `aras-dyn`'s
 //! parameter type.
 
@@ -150,7 +150,7 @@ pub fn base_projection(base: &BaseParameters) -> nalgebra::DMatrix<f64> {
 /// What the zero-phase filter is applied to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FilterMode {
-    /// The torques and every regressor column (spec §6 NOTE): the fit
+    /// The torques and every regressor column (`docs/processing.md`): the fit
     /// compares like with like, so Coulomb jumps do not bias it.
     Parallel,
     /// Only the torques, as the paper did (kept for comparison).

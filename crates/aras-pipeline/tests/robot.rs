@@ -54,7 +54,7 @@ fn count(effects: Vec<Effect>, gravity: [f64; 3]) -> (usize, BaseParameters) {
 fn base_counts_match_the_independent_count() {
     let full = vec![Effect::RigidLinks, Effect::Friction, Effect::Elasticity];
     let links = vec![Effect::RigidLinks];
-    // Spec §4 NOTE: g ⊥ a: 17 link / 23 full; g along a: 13 / 19.
+    // docs/model.md, "Base parameters": g ⊥ a: 17 link / 23 full; g along a: 13 / 19.
     let (b, base) = count(full.clone(), [0.0, -9.81, 0.0]);
     assert_eq!(b, 23, "{base}");
     let m = base.rank_margin();

@@ -1,4 +1,4 @@
-//! The processing's bandwidth, chosen from the data (spec §6).
+//! The processing's bandwidth, chosen from the data (`docs/processing.md`).
 //!
 //! A fixed low-pass cuts a fast motion's harmonics (and the torque's
 //! friction steps that follow them) or lets a slow motion's noise through.

@@ -1,5 +1,5 @@
-//! Butterworth low-pass design in second-order sections (spec §6: the paper's
-//! zero-phase Butterworth filter).
+//! Butterworth low-pass design in second-order sections (the paper's
+//! zero-phase Butterworth filter, `docs/processing.md`).
 //!
 //! The design reproduces `scipy.signal.butter(N, fc, fs=fs, output='sos')`
 //! step by step, so the coefficients can be checked against scipy directly:

@@ -1,4 +1,4 @@
-//! Numerical derivatives θ̇, θ̈ of uniformly sampled signals (spec §6).
+//! Numerical derivatives θ̇, θ̈ of uniformly sampled signals (`docs/processing.md`).
 //!
 //! Which to use:
 //! * [`DerivativeMethod::CentralDifference`]: what the paper does. Second-order

@@ -1,5 +1,5 @@
 //! Measured robot logs → clean, aligned samples `θ, θ̇, θ̈, X, Ẋ, Ẍ, τ` for
-//! identification (spec §6, "Experiment and signal processing").
+//! identification (`docs/processing.md`).
 //!
 //! # Pipeline
 //!
@@ -14,7 +14,7 @@
 //! 3. The same [`Sos`] filters any other column (`filtfilt`,
 //!    `filtfilt_into`, `filtfilt_in_place`, `filtfilt_periodic`): the
 //!    identification must filter every regressor column exactly as the
-//!    torques (spec §6 NOTE on parallel filtering).
+//!    torques (`docs/processing.md`, "Parallel filtering").
 //!
 //! # Conventions
 //!

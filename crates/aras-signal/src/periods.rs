@@ -1,4 +1,4 @@
-//! Period averaging (spec §6: 160 s = 16 periods of the excitation are
+//! Period averaging (`docs/processing.md`: 160 s = 16 periods of the excitation are
 //! averaged to cut noise). For white noise of standard deviation σ the
 //! average of N blocks has σ/√N.
 //!

@@ -1,4 +1,4 @@
-//! Raw log → clean, aligned samples θ, θ̇, θ̈, X, Ẋ, Ẍ, τ (spec §6).
+//! Raw log → clean, aligned samples θ, θ̇, θ̈, X, Ẋ, Ẍ, τ (`docs/processing.md`).
 //!
 //! Order of operations, and why:
 //! 1. **Period averaging** (if a period is known) on the raw data: averaging
@@ -8,8 +8,8 @@
 //!    Butterworth filter: circular (`|H|²` in the frequency domain) for a
 //!    periodic record, scipy-style `filtfilt` otherwise.
 //! 3. **Derivatives** of the filtered θ ([`DerivativeMethod`]).
-//! 4. **Kinematics**: `X = forward(θ)` (assembly mode `+`, spec (6)–(7)),
-//!    `Ẋ = J⁻¹θ̇`, `Ẍ = J⁻¹(θ̈ − J̇Ẋ)` (spec (8)–(11)). Going through the
+//! 4. **Kinematics**: `X = forward(θ)` (assembly mode `+`, (6)–(7)),
+//!    `Ẋ = J⁻¹θ̇`, `Ẍ = J⁻¹(θ̈ − J̇Ẋ)` ((8)–(11)). Going through the
 //!    Jacobian rather than differentiating X keeps `θ̇ = J Ẋ` exact sample by
 //!    sample, so joint-space terms (friction on θ̇) and task-space terms agree,
 //!    and logged θ̇ columns are used as they are.
@@ -39,7 +39,7 @@ pub struct FilterSpec {
 
 impl Default for FilterSpec {
     /// Order 4 at 10 Hz: 20× the highest excitation harmonic (5 × 0.1 Hz,
-    /// spec (74)) and 4× the fastest validation trajectory (2.5 Hz, Table 2),
+    /// (74)) and 4× the fastest validation trajectory (2.5 Hz, Table 2),
     /// so the dynamics pass untouched while sensor noise is cut.
     fn default() -> Self {
         Self {
@@ -1073,7 +1073,7 @@ fn filter_all(
 }
 
 /// Fills X, Ẋ, Ẍ from θ, θ̇, θ̈ through `aras_kin::forward_motion`,
-/// spec (6)–(11): `X = forward(θ)` (which rejects unreachable and
+/// (6)–(11): `X = forward(θ)` (which rejects unreachable and
 /// near-singular poses), `Ẋ = J⁻¹θ̇`, `Ẍ = J⁻¹(θ̈ − J̇Ẋ)`, so θ̇ = JẊ holds
 /// exactly at every sample.
 fn task_space(s: &mut Samples, g: &aras_kin::Geometry) -> Result<(), ProcessError> {

@@ -1,6 +1,6 @@
-//! Zero-phase forward–backward filtering (spec §6, MATLAB/scipy `filtfilt`),
+//! Zero-phase forward–backward filtering (as in the paper, `docs/processing.md`; MATLAB/scipy `filtfilt`),
 //! usable on any column: the identification filters every regressor column
-//! with the same [`Sos`] as the torques (spec §6 NOTE on parallel filtering).
+//! with the same [`Sos`] as the torques (`docs/processing.md`, "Parallel filtering").
 //!
 //! Edge handling is scipy's default, reproduced exactly so results match
 //! `scipy.signal.sosfiltfilt(sos, x)` and `filtfilt(b, a, x)`:

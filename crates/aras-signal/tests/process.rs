@@ -1,5 +1,5 @@
 //! End-to-end `process` on synthetic logs generated from a known task-space
-//! trajectory (finite Fourier series, spec (74)–(76)) through `aras-kin`.
+//! trajectory (finite Fourier series, (74)–(76)) through `aras-kin`.
 
 use std::f64::consts::TAU;
 

@@ -9,7 +9,7 @@ use aras_ident::IdentError;
 
 /// A processed data set: the samples as `aras_signal::process` produced
 /// them, and the zero-phase filter it applied (so every regressor column is
-/// filtered the same way, spec §6 NOTE).
+/// filtered the same way, `docs/processing.md`).
 #[derive(Debug, Clone)]
 pub struct Dataset {
     /// Name used in findings and reports (e.g. the file name).

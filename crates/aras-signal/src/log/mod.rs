@@ -1,5 +1,6 @@
 //! Measured logs: the CSV format of `docs/log-format.md`, its JSON sidecar,
-//! and validation (spec §6: angles from encoders, torques from currents).
+//! and validation (angles from encoders, torques from currents, as in the paper's
+//! experiment: `docs/processing.md`).
 
 mod checks;
 mod header;
