@@ -31,7 +31,7 @@ pub const DEFAULT_MAX_ACCEL_DEG: f64 = 800.0;
 /// The limits an excitation trajectory must respect at every instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Limits {
-    /// Task-space box and rate limits, spec (77).
+    /// Task-space box and rate limits, (77).
     pub workspace: Workspace,
     /// Acceleration limit `|Ẍ_i| ≤ max_accel_i` (rad/s²).
     pub max_accel: Vector2<f64>,

@@ -3,10 +3,10 @@
 //! Along a trajectory sampled at `t_1 … t_N` the regressor rows stack into
 //! `W` (`2N × n`, actuator-major: rows `0..N` actuator 1, `N..2N` actuator 2),
 //! and the base regressor is `W_b = W E` for a base projection `E` (`n × b`,
-//! spec (59)–(61)).
+//! (59)–(61), `docs/model.md`).
 //!
 //! * [`Criterion::Condition`]: the condition number `κ = σ_max/σ_min` of the
-//!   column-scaled `W_s = W_b D`, `D = diag(1/‖W_b e_j‖)` (spec §5). Scaling
+//!   column-scaled `W_s = W_b D`, `D = diag(1/‖W_b e_j‖)` (`docs/excitation.md`). Scaling
 //!   makes `κ` independent of parameter units. The optimiser minimises
 //!   `ln κ` (same minimiser, better scaled); its gradient follows from
 //!   `dσ_i = u_iᵀ dW_s v_i`, including the derivative of the scaling:
@@ -32,7 +32,7 @@ use crate::regressor::Regressor;
 /// What the design minimises.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Criterion {
-    /// Condition number of the column-scaled base regressor (spec §5).
+    /// Condition number of the column-scaled base regressor (`docs/excitation.md`).
     #[default]
     Condition,
     /// D-optimality: `−ln det` of the (per-sample) information matrix

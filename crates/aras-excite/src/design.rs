@@ -336,7 +336,7 @@ pub(crate) fn random_point(cons: &GridConstraints, rng: &mut Xoshiro256PlusPlus)
     p
 }
 
-/// Designs an optimal excitation trajectory (spec §5): minimises the
+/// Designs an optimal excitation trajectory ((74)–(77), `docs/excitation.md`): minimises the
 /// criterion of the stacked base regressor `W_b = W E` over the Fourier
 /// coefficients, subject to the limits at every instant and `Ẋ(0) = 0`.
 ///

@@ -25,7 +25,7 @@ impl DynRegressor {
     }
 
     /// The paper's model (rigid links, friction, elasticity) for the
-    /// ARAS-Diamond with gravity `[0, −9.81, 0]` m/s² (spec §9).
+    /// ARAS-Diamond with gravity `[0, −9.81, 0]` m/s² (`docs/model.md`, "Default robot").
     pub fn aras_diamond() -> Result<Self, DynError> {
         Ok(Self::new(
             Model::paper(nalgebra::Vector3::new(0.0, -9.81, 0.0))?,

@@ -1,4 +1,4 @@
-//! Finite Fourier-series trajectories in task space, spec (74)–(76).
+//! Finite Fourier-series trajectories in task space, (74)–(76).
 
 use std::path::Path;
 
@@ -11,10 +11,10 @@ use crate::error::{ExciteError, check_finite};
 /// Format tag written into (and required in) every trajectory JSON document.
 pub const FORMAT: &str = "aras-fourier/1";
 
-/// Default number of harmonics L (spec §5).
+/// Default number of harmonics L (`docs/excitation.md`).
 pub const DEFAULT_HARMONICS: usize = 5;
 
-/// Default base frequency ω_f = 2π/10 rad/s, a 10 s period (spec §5).
+/// Default base frequency ω_f = 2π/10 rad/s, a 10 s period (`docs/excitation.md`).
 pub const DEFAULT_OMEGA_F: f64 = std::f64::consts::TAU / 10.0;
 
 /// Names of the task coordinates, for messages and key paths.
@@ -63,7 +63,7 @@ impl TaskRow {
 pub struct MotorRow {
     /// Time (s).
     pub t: f64,
-    /// Motor angles `θ` (rad), spec (1)–(2).
+    /// Motor angles `θ` (rad), (1)–(2).
     pub theta: Vector2<f64>,
     /// Motor rates `θ̇ = J Ẋ` (rad/s).
     pub theta_dot: Vector2<f64>,
@@ -87,7 +87,7 @@ impl MotorRow {
 }
 
 /// A periodic task-space trajectory, one finite Fourier series per coordinate
-/// `i ∈ {φ, γ}`, spec (74)–(76):
+/// `i ∈ {φ, γ}`, (74)–(76):
 ///
 /// ```text
 /// X_i(t) = X_i0 + Σ_l  a_l^i/(ω_f l) sin(ω_f l t) − b_l^i/(ω_f l) cos(ω_f l t)
@@ -242,7 +242,7 @@ impl FourierTrajectory {
         &self.b[i]
     }
 
-    /// Exact position, velocity and acceleration at time `t` (s), spec
+    /// Exact position, velocity and acceleration at time `t` (s),
     /// (74)–(76). No allocation.
     pub fn eval(&self, t: f64) -> TaskState {
         let mut x = self.offset();
@@ -478,7 +478,7 @@ mod tests {
             let s = f.eval(r.t);
             let ik = aras_kin::inverse(&g, &s.x).unwrap();
             assert!((ik.theta - r.theta).norm() < 1e-14);
-            // θ1 + θ2 = 2φ, spec (7), so the rates add up the same way.
+            // θ1 + θ2 = 2φ, (7), so the rates add up the same way.
             assert!((r.theta_dot.sum() - 2.0 * s.x_dot[0]).abs() < 1e-12);
             assert!((r.theta_ddot.sum() - 2.0 * s.x_ddot[0]).abs() < 1e-12);
         }

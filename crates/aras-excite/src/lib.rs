@@ -1,6 +1,6 @@
 //! Optimal excitation trajectories for identifying the dynamics of the
 //! ARAS-Diamond (or any 2-DOF robot with task coordinates `X = [φ, γ]`),
-//! spec §5, equations (74)–(77).
+//! equations (74)–(77) (`docs/excitation.md`).
 //!
 //! * [`FourierTrajectory`]: finite Fourier series (74)–(76) per coordinate,
 //!   exact `X`, `Ẋ`, `Ẍ`, JSON I/O (`docs/excitation.md`), sampling in task

@@ -5,7 +5,7 @@ use aras_kin::Scalar;
 use nalgebra::Vector2;
 
 /// A linear-in-parameters model `τ = Y(X, Ẋ, Ẍ) β` of a 2-DOF robot in
-/// task coordinates, spec (42)/(51): two rows (one per actuator), `n`
+/// task coordinates, (42)/(51): two rows (one per actuator), `n`
 /// columns (standard parameters).
 ///
 /// The design evaluates it in `f64` for values and in forward-mode dual

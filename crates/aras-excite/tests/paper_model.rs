@@ -42,7 +42,7 @@ fn case() -> &'static Case {
     })
 }
 
-/// 23 base parameters with g ⟂ a (model NOTE in docs/model.md); the
+/// 23 base parameters with g ⟂ a (`docs/model.md`, "Base parameters"); the
 /// default design is feasible on a grid 23× finer (off the optimisation
 /// grid) and on the 10× grid of its own margins.
 #[test]

@@ -1,7 +1,7 @@
 //! # aras-ident: base parameters, least squares and physically consistent identification
 //!
 //! Robot-agnostic identification of a dynamic model that is linear in its
-//! parameters, `T = W β` (spec §4, §7). The crate works on plain stacked
+//! parameters, `T = W β` ((58)–(73), (78); `docs/model.md`). The crate works on plain stacked
 //! matrices, so any robot project can use it:
 //!
 //! 1. [`BaseParameters`] (58)–(61): from a stacked regressor on rich data,

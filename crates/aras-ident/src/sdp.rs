@@ -1,6 +1,6 @@
 //! Physically consistent least squares (67)–(73) as one convex SDP (clarabel).
 //!
-//! Each link's pseudo-inertia (spec §4 NOTE)
+//! Each link's pseudo-inertia (`docs/model.md`, "Physical consistency")
 //! `𝒥_k = [[½tr(I_k)·1 − I_k, h_k], [h_kᵀ, m_k]]` is linear in
 //! `(I_k, h_k, m_k)`, and `𝒥_k ⪰ 0` is exactly (67)–(69). With the mass an
 //! extra decision variable per link (it does not enter the dynamics), mass
@@ -160,7 +160,7 @@ pub struct LinkReport {
     pub name: String,
     /// Identified mass, kg.
     pub mass: f64,
-    /// Smallest eigenvalue of the pseudo-inertia `𝒥` as in the spec (mixed units).
+    /// Smallest eigenvalue of the pseudo-inertia `𝒥` as defined (mixed units, kg·m² and kg).
     pub min_eigenvalue: f64,
     /// Smallest eigenvalue of `T𝒥T`, kg·m².
     pub min_eigenvalue_scaled: f64,
@@ -742,7 +742,7 @@ fn pseudo_inertia(
     (j, js)
 }
 
-/// Smallest eigenvalue of a link's pseudo-inertia `𝒥` (spec §4 NOTE) for a
+/// Smallest eigenvalue of a link's pseudo-inertia `𝒥` (`docs/model.md`) for a
 /// standard parameter vector and mass: ≥ 0 iff (67)–(69) hold.
 pub fn pseudo_inertia_min_eigenvalue(
     beta: &[f64],

@@ -1,4 +1,4 @@
-//! Validation (spec §7): fitness (78), mass-matrix positive definiteness over
+//! Validation (`docs/validation.md`): fitness (78), mass-matrix positive definiteness over
 //! the workspace, and parameter errors against a known truth.
 
 use std::fmt::Display;

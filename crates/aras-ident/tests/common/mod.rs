@@ -56,7 +56,7 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 }
 
 /// The 3 × 9 regressor rows of a body turning about a fixed point (the
-/// spec's (45) without the Jacobians): `[L(Ω̇) + [Ω]× L(Ω), [g]×]`.
+/// (45) without the Jacobians): `[L(Ω̇) + [Ω]× L(Ω), [g]×]`.
 pub fn body_rows(omega: [f64; 3], omega_dot: [f64; 3], g: [f64; 3]) -> [[f64; 9]; 3] {
     let l = |w: [f64; 3]| -> [[f64; 6]; 3] {
         [
