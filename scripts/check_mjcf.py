@@ -25,7 +25,7 @@ residual, q̇_p = −J_p⁺ J_θ θ̇, q̈_p = −J_p⁺ (J_θ θ̈ + J̇ q̇) (
 the open-tree forces f = M q̈ + c − f_passive (damping, stiffness). The
 motor torques are τ = Sᵀ f with S = ∂q̇/∂θ̇ = [I; −J_p⁺ J_θ], which removes
 the loop's constraint forces (J S = 0, so Sᵀ Jᵀ λ = 0): virtual work, as in
-spec (33). MuJoCo's `frictionloss` is a soft constraint (a regularised
+(33), docs/model.md. MuJoCo's `frictionloss` is a soft constraint (a regularised
 Coulomb force, not an explicit function of θ̇), so it is compared as
 dof_frictionloss · sign(θ̇), read from the compiled model.
 """
@@ -121,7 +121,7 @@ def read_csv(path):
 
 
 class Reference:
-    """Desired task motion X(t), Ẋ(t) and motor motion by spec (1)–(11)."""
+    """Desired task motion X(t), Ẋ(t) and motor motion by (1)–(11) (docs/kinematics.md)."""
 
     def __init__(self, alpha, beta, kind, arg):
         self.sa, self.ca = math.sin(alpha), math.cos(alpha)

@@ -22,7 +22,7 @@ pub enum Command {
     /// The whole mission on the (simulated) robot: design → simulate →
     /// process → identify (OLS + SDP) → validate → report.
     Pipeline(PipelineArgs),
-    /// Design an optimal excitation trajectory (spec §5) → trajectory.json.
+    /// Design an optimal excitation trajectory ((74)–(77), `docs/excitation.md`) → trajectory.json.
     Excite(ExciteArgs),
     /// Simulate the robot tracking a trajectory → LOG.csv + LOG.json.
     Simulate(SimulateArgs),

@@ -20,15 +20,15 @@ use serde::{Deserialize, Serialize};
 pub struct Config {
     /// The robot (nominal / CAD parameters).
     pub robot: RobotConfig,
-    /// The excitation trajectory design (spec §5).
+    /// The excitation trajectory design ((74)–(77), `docs/excitation.md`).
     pub trajectory: TrajectoryConfig,
-    /// The simulated robot (spec §6, `docs/simulator.md`).
+    /// The simulated robot (`docs/simulator.md`).
     pub simulation: SimulationConfig,
-    /// Signal processing (spec §6).
+    /// Signal processing (`docs/processing.md`).
     pub signal: SignalConfig,
-    /// Identification (spec §4).
+    /// Identification ((58)–(73), `docs/model.md`).
     pub identification: IdentificationConfig,
-    /// Validation (spec §7).
+    /// Validation ((78)–(80), `docs/validation.md`).
     pub validation: ValidationConfig,
 }
 
@@ -36,7 +36,7 @@ pub struct Config {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RobotConfig {
-    /// `"default"` (the embedded ARAS-Diamond, spec §9) or the path of a
+    /// `"default"` (the embedded ARAS-Diamond, `docs/model.md`) or the path of a
     /// parameter file (`docs/parameter-format.md`), relative to the config
     /// file's directory.
     pub params: String,
@@ -205,7 +205,7 @@ pub enum DerivativeChoice {
     Spectral,
 }
 
-/// `[signal]`: processing of the logs (spec §6).
+/// `[signal]`: processing of the logs (`docs/processing.md`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SignalConfig {
@@ -247,7 +247,7 @@ impl Default for SignalConfig {
 #[serde(rename_all = "snake_case")]
 pub enum FilteringMode {
     /// The same zero-phase filter on the torques and on every regressor
-    /// column (spec §6 NOTE).
+    /// column (`docs/processing.md`, "Parallel filtering").
     Parallel,
     /// Torques only (the paper as written; biased with Coulomb friction).
     TorqueOnly,

@@ -1,4 +1,4 @@
-//! The excitation design stage (spec §5): `aras-excite`'s optimiser on the
+//! The excitation design stage ((74)–(77), `docs/excitation.md`): `aras-excite`'s optimiser on the
 //! base regressor of the paper's model, configured from `[trajectory]`.
 
 use anyhow::{Context, Result};

@@ -1,11 +1,11 @@
-//! Identification (spec §4, §6): a processed log → stacked regressor →
+//! Identification (`docs/model.md`, `docs/processing.md`): a processed log → stacked regressor →
 //! base parameters → OLS (62)–(66) → physically consistent SDP (67)–(73).
 //!
 //! The mathematics lives in `aras-signal` (processing), `aras-dyn`
 //! (regressor) and `aras-ident` (base parameters, least squares, SDP); this
 //! module wires them with the configured settings, the way
 //! `crates/aras-pipeline/tests/acceptance.rs` does (`docs/validation.md`):
-//! **parallel filtering** (spec §6 NOTE: the same zero-phase low-pass on the
+//! **parallel filtering** (`docs/processing.md`: the same zero-phase low-pass on the
 //! torques and every regressor column, so a Coulomb jump is smeared
 //! identically on both sides of `T = W β`), **reversal exclusion** (rows of
 //! a joint near its velocity reversals, where (49)'s `sign(θ̇)` is wrong,

@@ -34,7 +34,7 @@ pub fn nominal(cfg: &RobotConfig, dir: &Path) -> Result<Params> {
     Ok(p)
 }
 
-/// `"default"` → the embedded ARAS-Diamond (spec §9); anything else is a
+/// `"default"` → the embedded ARAS-Diamond (`docs/model.md`); anything else is a
 /// parameter-file path, relative to `dir`.
 pub fn load_params(spec: &str, dir: &Path) -> Result<Params> {
     if spec == "default" {

@@ -1,5 +1,5 @@
 //! The simulated robot (`aras_dyn::sim`) configured from `[simulation]`:
-//! the stand-in for the hardware (spec §6, §8, `docs/simulator.md`).
+//! the stand-in for the hardware (`docs/simulator.md`).
 
 use std::path::Path;
 

@@ -1,4 +1,4 @@
-//! Validation (spec §7): cross-validation on the trajectories (79),
+//! Validation (`docs/validation.md`): cross-validation on the trajectories (79),
 //! positive definiteness of the mass matrix (80) over the workspace, the
 //! links' pseudo-inertia eigenvalues, and parameter errors against a known
 //! truth.
@@ -248,8 +248,8 @@ pub fn min_eigen_grid(params: &Params, cfg: &Config) -> Result<EigenGrid> {
     Ok((deg(xs), deg(ys), values))
 }
 
-/// The smallest eigenvalue of each link's pseudo-inertia `𝒥_k` (spec §4
-/// NOTE; positive ⇔ physically consistent), in kg·m².
+/// The smallest eigenvalue of each link's pseudo-inertia `𝒥_k` (`docs/model.md`,
+/// "Physical consistency"; positive ⇔ physically consistent), in kg·m².
 pub fn pseudo_inertia_min(params: &Params) -> [f64; 4] {
     std::array::from_fn(|k| {
         let j = params.links[k].pseudo_inertia();

@@ -67,7 +67,7 @@ fn pipeline_identify_predict_end_to_end() {
         s.get("timings_s").is_none(),
         "--reproducible leaves timings out"
     );
-    // With g ⟂ a the paper model has 23 base parameters (spec §4 NOTE).
+    // With g ⟂ a the paper model has 23 base parameters (`docs/model.md`, "Base parameters").
     assert_eq!(s["base_parameters"], 23);
     // Our fitness is read against the noise ceiling (the true robot's
     // noise-free torques on the same log), never against the paper's
