@@ -205,17 +205,29 @@ pub enum DerivativeChoice {
     Spectral,
 }
 
+/// How `[signal]` chooses the processing's bandwidth.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BandwidthMode {
+    /// A zero-phase Butterworth at `cutoff_hz` (`aras_signal::Bandwidth::Fixed`).
+    Fixed,
+    /// Chosen from the data (`aras_signal::Bandwidth::Auto`: a harmonic
+    /// series up to the noise floor for a periodic log, else a cut-off
+    /// that follows the angle spectrum; `docs/processing.md`).
+    Auto,
+}
+
 /// `[signal]`: processing of the logs (`docs/processing.md`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SignalConfig {
     /// Butterworth order of one pass.
     pub filter_order: usize,
-    /// Cut-off (Hz) of a fixed low-pass; 0 disables filtering; absent
-    /// (the default): chosen from the data (`aras_signal::Bandwidth::Auto`:
-    /// a harmonic series up to the noise floor for a periodic log, else a
-    /// cut-off that follows the angle spectrum).
-    pub cutoff_hz: Option<f64>,
+    /// How the processing's bandwidth is chosen.
+    pub bandwidth: BandwidthMode,
+    /// Cut-off (Hz) of the zero-phase low-pass when `bandwidth` is
+    /// `fixed`; 0 disables filtering.
+    pub cutoff_hz: f64,
     /// Seconds dropped at the start before period averaging.
     pub settling_s: f64,
     /// Largest accepted relative RMS spread of θ between periods.
@@ -232,7 +244,8 @@ impl Default for SignalConfig {
     fn default() -> Self {
         Self {
             filter_order: 4,
-            cutoff_hz: None,
+            bandwidth: BandwidthMode::Fixed,
+            cutoff_hz: 10.0,
             settling_s: 0.0,
             max_period_spread: 0.1,
             derivative: DerivativeChoice::Auto,
@@ -636,8 +649,11 @@ impl Config {
                 ),
             );
         }
-        let cutoff = g.cutoff_hz.unwrap_or(0.0);
-        nonneg("signal.cutoff_hz", cutoff)?;
+        let cutoff = match g.bandwidth {
+            BandwidthMode::Fixed => g.cutoff_hz,
+            BandwidthMode::Auto => 0.0,
+        };
+        nonneg("signal.cutoff_hz", g.cutoff_hz)?;
         if cutoff > 0.0 && cutoff >= 0.5 * s.rate_hz {
             return bad(
                 "signal.cutoff_hz",
@@ -704,7 +720,7 @@ impl Config {
                 return bad(
                     "validation.frequencies_hz",
                     format!(
-                        "{f} Hz is too close to the low-pass cut-off signal.cutoff_hz = {cutoff} Hz (keep f ≤ cut-off/2, or leave signal.cutoff_hz out to let the data choose)"
+                        "{f} Hz is too close to the low-pass cut-off signal.cutoff_hz = {cutoff} Hz (keep f ≤ cut-off/2, or set signal.bandwidth = \"auto\" to let the data choose)"
                     ),
                 );
             }

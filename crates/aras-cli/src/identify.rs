@@ -30,7 +30,7 @@ use aras_signal::{
 use faer::MatRef;
 use nalgebra::Vector2;
 
-use crate::config::{Config, DerivativeChoice, FilteringMode, Weighting};
+use crate::config::{BandwidthMode, Config, DerivativeChoice, FilteringMode, Weighting};
 
 /// Processing options from the configuration (`period` overrides the sidecar).
 pub fn process_options(
@@ -40,13 +40,13 @@ pub fn process_options(
 ) -> ProcessOptions {
     let s = &cfg.signal;
     ProcessOptions {
-        filter: match s.cutoff_hz {
-            None => Bandwidth::Auto,
-            Some(c) if c > 0.0 => Bandwidth::Fixed(FilterSpec {
+        filter: match s.bandwidth {
+            BandwidthMode::Auto => Bandwidth::Auto,
+            BandwidthMode::Fixed if s.cutoff_hz > 0.0 => Bandwidth::Fixed(FilterSpec {
                 order: s.filter_order,
-                cutoff_hz: c,
+                cutoff_hz: s.cutoff_hz,
             }),
-            Some(_) => Bandwidth::Off,
+            BandwidthMode::Fixed => Bandwidth::Off,
         },
         period: period.map_or(PeriodSource::FromSidecar, PeriodSource::Seconds),
         settling_s: s.settling_s,
@@ -197,6 +197,10 @@ pub struct Identification {
     /// OLS (or WLS) estimate of the base parameters, σ from the HAC
     /// sandwich covariance (`OlsEstimate::with_hac`).
     pub ols: OlsEstimate,
+    /// σ of the OLS (or WLS) estimate assuming white noise before the
+    /// filter (`OlsEstimate::with_filtered_noise`), for comparison with the
+    /// streaming route.
+    pub sigma_white: Vec<f64>,
     /// The SDP solution.
     pub sdp: SdpSolution,
     /// OLS completed to standard parameters closest to the nominal robot.
@@ -334,13 +338,14 @@ pub fn identify(
     // σ, σ% and the covariance: the HAC sandwich (`aras_ident::covariance`)
     // on the rows as fitted (scaled by 1/σ_joint for WLS).
     let periodic = prepared.periodic();
-    let (ols, reduced) = match ic.weighting {
+    let gain = prepared.noise_gain()?;
+    let (ols, reduced, sigma_white) = match ic.weighting {
         Weighting::Ols => {
             let r = ReducedLs::new(w_fit.as_ref(), &fit.t, &bnames)?;
-            let (e, _) = r
-                .ols()?
-                .with_hac(w_fit.as_ref(), &fit.t, &fit.groups, periodic)?;
-            (e, r)
+            let plain = r.ols()?;
+            let white = plain.clone().with_filtered_noise(gain)?.std_dev;
+            let (e, _) = plain.with_hac(w_fit.as_ref(), &fit.t, &fit.groups, periodic)?;
+            (e, r, white)
         }
         Weighting::Wls => {
             let e = aras_ident::wls(
@@ -360,10 +365,11 @@ pub fn identify(
                 w_fit[(i, j)] * scale[i]
             });
             let tw: Vec<f64> = fit.t.iter().zip(&scale).map(|(t, s)| t * s).collect();
+            let white = e.estimate.clone().with_filtered_noise(gain)?.std_dev;
             let (est, _) = e
                 .estimate
                 .with_hac(ww.as_ref(), &tw, &fit.groups, periodic)?;
-            (est, e.reduced)
+            (est, e.reduced, white)
         }
     };
     let sdp = consistent_fit(&reduced, base, model, nominal, cfg)?;
@@ -389,6 +395,7 @@ pub fn identify(
         names,
         base: base.clone(),
         ols,
+        sigma_white,
         sdp,
         ols_params,
         sdp_params,

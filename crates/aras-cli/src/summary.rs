@@ -197,10 +197,14 @@ pub struct BaseEntry {
     pub definition: String,
     /// OLS value.
     pub ols: f64,
-    /// OLS standard deviation (64).
+    /// OLS standard deviation (64), by the file's `sigma_method`.
     pub sigma: f64,
     /// σ% (65).
     pub sigma_percent: f64,
+    /// The standard deviation assuming white noise before the filter
+    /// (`OlsEstimate::with_filtered_noise`): the same on every route, so
+    /// routes can be compared; optimistic when the residual is correlated.
+    pub sigma_white: f64,
     /// SDP value.
     pub sdp: f64,
     /// The truth, when known.
@@ -221,8 +225,22 @@ pub struct BaseFile {
     pub residual_variance: f64,
     /// Condition number of the fit's base regressor.
     pub condition_number: f64,
+    /// Where `sigma` comes from.
+    pub sigma_method: SigmaMethod,
     /// The base parameters.
     pub parameters: Vec<BaseEntry>,
+}
+
+/// How the σ of `base.json` was computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SigmaMethod {
+    /// The HAC sandwich covariance (`aras_ident::covariance`): counts the
+    /// residual's correlation (in-memory identification).
+    Hac,
+    /// White noise before the filter, corrected by its noise gain (the
+    /// streaming route, which keeps no residuals): `sigma` = `sigma_white`.
+    WhiteFiltered,
 }
 
 /// Builds `base.json`'s content.
@@ -239,6 +257,7 @@ pub fn base_file(id: &Identification, truth_base: Option<&[f64]>) -> BaseFile {
             .collect(),
         residual_variance: o.residual_variance,
         condition_number: o.condition_number,
+        sigma_method: SigmaMethod::Hac,
         parameters: (0..id.base.n_base())
             .map(|i| BaseEntry {
                 name: format!("b{}", i + 1),
@@ -246,6 +265,7 @@ pub fn base_file(id: &Identification, truth_base: Option<&[f64]>) -> BaseFile {
                 ols: o.estimate[i],
                 sigma: o.std_dev[i],
                 sigma_percent: o.rel_std_percent[i],
+                sigma_white: id.sigma_white[i],
                 sdp: id.sdp.base[i],
                 truth: truth_base.map(|t| t[i]),
             })

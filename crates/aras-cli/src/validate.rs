@@ -130,13 +130,8 @@ pub fn cross_validate(
             fitness_kept.push(fitness_standard(&kept, beta)?);
             predicted.push(pick(&p));
         }
-        let ceiling = crate::ceiling::noise_ceiling(
-            &prep,
-            truth,
-            cfg.simulation.friction_smoothing,
-            cfg.identification.filtering,
-            &keep,
-        )?;
+        let ceiling =
+            crate::ceiling::noise_ceiling(&read, &log.tau_clean, &prep, &opts, &geometry, &keep)?;
         out.push(CrossValidation {
             frequency_hz: f,
             fitness,

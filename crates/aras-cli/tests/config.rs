@@ -53,7 +53,7 @@ fn json_errors_name_the_key() {
     let e = err("{\"trajectory\": {\"harmonics\": 0}}", Format::Json);
     assert!(e.contains("`trajectory.harmonics`"), "{e}");
     let ok = Config::parse("{\"signal\": {\"cutoff_hz\": 5}}", Format::Json, "cfg").unwrap();
-    assert_eq!(ok.signal.cutoff_hz, Some(5.0));
+    assert_eq!(ok.signal.cutoff_hz, 5.0);
 }
 
 #[test]

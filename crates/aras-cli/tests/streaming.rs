@@ -83,7 +83,12 @@ fn streaming_on_and_off_give_the_same_estimates() {
         "Gram streaming vs in memory: {:e}",
         rel(&g, &m)
     );
-    let (ms, qs) = (column(&mem, "sigma"), column(&qr, "sigma"));
+    // σ: the streaming route keeps no residuals, so it reports the
+    // white-noise σ corrected for the filter; in memory the same figure is
+    // `sigma_white` beside the HAC `sigma`.
+    assert_eq!(mem["sigma_method"], "hac");
+    assert_eq!(qr["sigma_method"], "white_filtered");
+    let (ms, qs) = (column(&mem, "sigma_white"), column(&qr, "sigma"));
     assert!(rel(&qs, &ms) < 1e-9, "σ: {:e}", rel(&qs, &ms));
     let rv = |v: &serde_json::Value| v["residual_variance"].as_f64().unwrap();
     assert!((rv(&qr) / rv(&mem) - 1.0).abs() < 1e-9);

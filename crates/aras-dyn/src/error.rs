@@ -70,7 +70,7 @@ pub enum ParamError {
     /// required (the SDP's reference, a simulated robot, `validate`).
     #[error(
         "link {link} is not physically consistent: {reason}; the links' pseudo-inertias must be \
-         positive definite (spec (67)–(69)): check the sign and units (kg, kg·m, kg·m²) of \
+         positive definite (the paper's (67)–(69)): check the sign and units (kg, kg·m, kg·m²) of \
          `links.{link}`, or use the physically consistent estimate (params.json of `identify`)"
     )]
     NotPhysical {

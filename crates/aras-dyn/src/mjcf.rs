@@ -115,7 +115,7 @@ pub enum MjcfError {
     #[error(
         "link {link} cannot be a MuJoCo body: {reason}. MuJoCo needs a positive mass and a \
          positive-definite inertia about the centre of mass satisfying the triangle inequality \
-         (spec (67)–(69)); export the physically consistent estimate (params.json of \
+         (the paper's (67)–(69)); export the physically consistent estimate (params.json of \
          `aras identify`, the SDP solution), not params_ols.json"
     )]
     NotPhysical {
@@ -128,7 +128,7 @@ pub enum MjcfError {
     #[error(
         "`{key}` = {value} is negative, but MuJoCo's `{attribute}` must be ≥ 0 (a negative \
          value would feed energy into the robot); use the physically consistent estimate, \
-         which constrains it to be ≥ 0 (spec (70))"
+         which constrains it to be ≥ 0 (the paper's (70))"
     )]
     Negative {
         /// Parameter-file key.

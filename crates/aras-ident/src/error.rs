@@ -65,7 +65,7 @@ pub enum IdentError {
     /// arbitrary. Lists them by name.
     #[error(
         "the data do not excite {count} of {total} parameters (rank {rank}, relative tolerance \
-         {tolerance:e}): {names}; use a richer excitation trajectory (spec §5) or remove these \
+         {tolerance:e}): {names}; use a richer excitation trajectory (see docs/excitation.md) or remove these \
          parameters from the model",
         count = lost.len(),
         names = lost_names.join(", ")

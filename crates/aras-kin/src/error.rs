@@ -76,7 +76,7 @@ pub enum KinError {
     },
     /// The pose or velocity lies outside the configured workspace box (77).
     #[error(
-        "{name} = {v:.6}{unit} is outside the workspace [{lo:.6}{unit}, {hi:.6}{unit}] (spec (77))",
+        "{name} = {v:.6}{unit} is outside the workspace [{lo:.6}{unit}, {hi:.6}{unit}] (the paper's (77))",
         v = value.to_degrees(), lo = min.to_degrees(), hi = max.to_degrees()
     )]
     OutsideWorkspace {

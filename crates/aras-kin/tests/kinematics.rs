@@ -370,7 +370,7 @@ fn workspace_box_and_rates() {
         .unwrap_err();
     assert_eq!(
         err.to_string(),
-        "gamma = 85.000000° is outside the workspace [40.000000°, 80.000000°] (spec (77))"
+        "gamma = 85.000000° is outside the workspace [40.000000°, 80.000000°] (the paper's (77))"
     );
     let err = w.check_rate(&Vector2::new(deg(250.0), 0.0)).unwrap_err();
     assert!(

@@ -42,7 +42,7 @@
 //! }
 //! let log = read_log_from(csv.as_bytes(), "demo.csv", &ReadOptions::default())?;
 //! let out = process(&log, &ProcessOptions::default(), &aras_kin::Geometry::aras_diamond())?;
-//! assert_eq!(out.samples.len(), 1998); // central differences lose one sample per end
+//! assert_eq!(out.samples.len(), 2000); // one-sided differences at the ends keep every row
 //!
 //! // The same filter on any other column:
 //! let sos = Butterworth::lowpass(4, 10.0, 1000.0)?;

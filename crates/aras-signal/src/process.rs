@@ -63,18 +63,26 @@ pub enum PeriodSource {
 }
 
 /// The processing's bandwidth.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Bandwidth {
     /// Chosen from the data ([`crate::bandwidth`](crate::detect_period)'s
     /// rules): a harmonic series up to the noise floor for a periodic
     /// record, else a Butterworth whose cut-off follows the angle spectrum.
-    #[default]
     Auto,
     /// This zero-phase Butterworth, whatever the data.
     Fixed(FilterSpec),
     /// No filtering.
     Off,
+}
+
+impl Default for Bandwidth {
+    /// The fixed 10 Hz Butterworth ([`FilterSpec::default`]): on closed-loop
+    /// logs of this robot it still predicts better than [`Bandwidth::Auto`]
+    /// (`docs/processing.md`).
+    fn default() -> Self {
+        Self::Fixed(FilterSpec::default())
+    }
 }
 
 /// Which samples [`process`] returns.
@@ -93,7 +101,8 @@ pub enum OutputRows {
 /// Options of [`process`]. `Default` gives the documented defaults.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ProcessOptions {
-    /// Bandwidth (default [`Bandwidth::Auto`]).
+    /// Bandwidth (default: the fixed 10 Hz Butterworth of
+    /// [`FilterSpec::default`]).
     pub filter: Bandwidth,
     /// Period for averaging and the harmonic fit (default: from the
     /// sidecar, else detected).
@@ -119,7 +128,7 @@ pub struct ProcessOptions {
 impl Default for ProcessOptions {
     fn default() -> Self {
         Self {
-            filter: Bandwidth::Auto,
+            filter: Bandwidth::default(),
             period: PeriodSource::FromSidecar,
             settling_s: 0.0,
             max_period_spread: 0.1,
@@ -148,7 +157,11 @@ pub struct Samples {
     pub x_dot: [Vec<f64>; 2],
     /// Task accelerations Ẍ.
     pub x_ddot: [Vec<f64>; 2],
-    /// Joint torques τ1, τ2 (never filtered: raw, or averaged over periods).
+    /// Joint torques τ1, τ2: raw or averaged over periods, and low-passed
+    /// by the same Butterworth as θ when one is applied (a fit then filters
+    /// torques and regressor alike once more, so both sides of `T = W β`
+    /// pass the same filters). The log's raw torques stay available for the
+    /// fitness on every row ([`Processed::on_log_rows`]).
     pub tau: [Vec<f64>; 2],
 }
 
@@ -345,8 +358,8 @@ const UNIFORM_TOLERANCE: f64 = 1e-6;
 /// Steps: (0) irregular time steps are resampled onto the nominal grid by
 /// cubic Hermite interpolation (stated in the summary); (1) period
 /// averaging when a period is known or detected; (2) the bandwidth
-/// ([`Bandwidth`]): harmonic series, Butterworth or none, θ only (torques
-/// are never filtered here; a fit filters torques and regressor alike);
+/// ([`Bandwidth`]): harmonic series (θ only), Butterworth (θ and τ alike)
+/// or none;
 /// (3) derivatives; (4) kinematics. Logged derivative columns, when used,
 /// are taken as given and nothing is filtered.
 pub fn process(
@@ -636,7 +649,7 @@ pub fn process(
                     source,
                 }
             })?;
-            filter_all(&sos, spec, fs, &mut data[..2], fourier.as_mut(), &log.name)?;
+            filter_all(&sos, spec, fs, &mut data[..4], fourier.as_mut(), &log.name)?;
             Some(FilterSummary {
                 order: spec.order,
                 cutoff_hz: spec.cutoff_hz,

@@ -68,6 +68,7 @@ fn predict(truth: &Params, p: &Processed) -> [Vec<f64>; 2] {
 
 fn every_row() -> ProcessOptions {
     ProcessOptions {
+        filter: Bandwidth::Auto,
         rows: OutputRows::EveryRow,
         ..ProcessOptions::default()
     }

@@ -246,6 +246,7 @@ fn automatic_bandwidth_on_a_periodic_record_is_the_exact_series() {
     )
     .unwrap();
     let opts = ProcessOptions {
+        filter: Bandwidth::Auto,
         period: PeriodSource::Seconds(PERIOD),
         ..ProcessOptions::default()
     };

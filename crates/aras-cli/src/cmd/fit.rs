@@ -28,9 +28,9 @@ pub struct FitInput<'a> {
     pub nominal: &'a Params,
     /// The truth, when known (simulated logs).
     pub truth: Option<&'a Params>,
-    /// The simulator's friction smoothing width (rad/s) that made the log,
-    /// for the noise ceiling (`crate::ceiling`) when `truth` is known.
-    pub friction_smoothing: f64,
+    /// The log's noise-free torques, one per row, when this run simulated
+    /// it: the noise ceiling (`crate::ceiling`) is reported only then.
+    pub clean_torque: Option<&'a [[f64; 2]]>,
     /// Simulate and score the cross-validation trajectories (79) with the truth.
     pub cross_validate: bool,
     /// The log.
@@ -61,10 +61,11 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
     let cfg = input.cfg;
     let model = input.model;
     let geometry = input.nominal.geometry()?;
+    let options = process_options(cfg, input.period, false);
     let prepared = stages.run("process log + regressor", |_| {
         prepare(
             input.log,
-            &process_options(cfg, input.period, false),
+            &options,
             cfg.identification.filtering,
             model,
             &geometry,
@@ -135,12 +136,13 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         }
         None => None,
     };
-    let ceiling = match input.truth {
-        Some(truth) => Some(crate::ceiling::noise_ceiling(
+    let ceiling = match input.clean_torque {
+        Some(clean) => Some(crate::ceiling::noise_ceiling(
+            input.log,
+            clean,
             &prepared,
-            truth,
-            input.friction_smoothing,
-            cfg.identification.filtering,
+            &options,
+            &geometry,
             &prepared.keep_mask(
                 cfg.identification.min_speed,
                 cfg.identification.reversal_reach,

@@ -20,17 +20,6 @@ pub fn sidecar_truth(path: &std::path::Path) -> Option<aras_dyn::Params> {
     aras_dyn::Params::from_value(v.get("truth")?.get("params")?).ok()
 }
 
-/// The simulator's friction smoothing width recorded in a sidecar
-/// (`truth.simulator.friction_smoothing`), if any.
-pub fn sidecar_smoothing(path: &std::path::Path) -> Option<f64> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    v.get("truth")?
-        .get("simulator")?
-        .get("friction_smoothing")?
-        .as_f64()
-}
-
 /// Read options with the sidecar choice of the command line.
 pub fn read_options(sidecar: Option<&std::path::Path>) -> ReadOptions {
     ReadOptions {
@@ -147,8 +136,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
             cfg: &cfg,
             nominal: &nominal,
             truth: truth.as_ref(),
-            friction_smoothing: sidecar_smoothing(&sidecar)
-                .unwrap_or(cfg.simulation.friction_smoothing),
+            clean_torque: None,
             cross_validate: false,
             log: &log,
             period: args.period,

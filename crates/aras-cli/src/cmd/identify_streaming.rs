@@ -24,7 +24,8 @@ use crate::identify::{consistent_fit, process_options, with_standard};
 use crate::output::OutDir;
 use crate::stages::Stages;
 use crate::summary::{
-    BASE_FORMAT, BaseEntry, BaseFile, DataKind, Fitness, PseudoInertia, SdpReport, Summary,
+    BASE_FORMAT, BaseEntry, BaseFile, DataKind, Fitness, PseudoInertia, SdpReport, SigmaMethod,
+    Summary,
 };
 use crate::validate::{parameter_errors, pd_check, pseudo_inertia_min};
 
@@ -192,8 +193,11 @@ pub fn fit_and_write(
                 .iter()
                 .map(|s| s.to_string())
                 .collect(),
-            residual_variance: ols.residual_variance,
+            // (66) of the residual as fitted (filtered), as in memory: the
+            // estimate's own figure is the pre-filter variance σ²_ρ / g.
+            residual_variance: ols.residual_variance * r.noise_gain,
             condition_number: ols.condition_number,
+            sigma_method: SigmaMethod::WhiteFiltered,
             parameters: (0..base.n_base())
                 .map(|i| BaseEntry {
                     name: format!("b{}", i + 1),
@@ -201,6 +205,7 @@ pub fn fit_and_write(
                     ols: ols.estimate[i],
                     sigma: ols.std_dev[i],
                     sigma_percent: ols.rel_std_percent[i],
+                    sigma_white: ols.std_dev[i],
                     sdp: sdp.base[i],
                     truth: truth_base.as_ref().map(|t| t[i]),
                 })

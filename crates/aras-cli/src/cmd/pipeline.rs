@@ -52,7 +52,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
     );
     let noise = sim.sensors.torque_noise_std();
     let csv = out.path("log.csv");
-    stages.run("simulate robot", |_| {
+    let simulated = stages.run("simulate robot", |_| {
         run_and_write(&truth, &design.trajectory, &sim, &csv)
     })?;
     let log = stages
@@ -90,7 +90,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
             cfg: &cfg,
             nominal: &nominal,
             truth: Some(&truth),
-            friction_smoothing: cfg.simulation.friction_smoothing,
+            clean_torque: Some(&simulated.tau_clean),
             cross_validate: true,
             log: &log,
             period: None,

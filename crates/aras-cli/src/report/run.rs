@@ -363,7 +363,7 @@ fn base_table(r: &mut Report, d: &RunData) {
     r.heading(1, "Base parameters (58)–(66), Table 1 style");
     r.paragraph(format!(
         "{} standard parameters → **{} base parameters** (numerical rank; rank margin: smallest kept {:.2e}, largest dropped {:.2e}, tolerance {:.0e}). \
-         The paper reports 21 for its model; the count depends on gravity and the model (spec §4 NOTE), and its \
+         The paper reports 21 for its model; the count depends on gravity and the model (docs/model.md, section Base parameters), and its \
          21 combinations are not published, so its values are listed by index only as a Table 1 style reference, \
          **not comparable one-to-one** with ours.",
         id.base.n_standard(),
@@ -594,7 +594,7 @@ fn pseudo_inertia(r: &mut Report, d: &RunData) {
         rows,
     );
     r.paragraph(
-        "Smallest eigenvalue of `𝒥_k = [[½tr(I)·1 − I, h], [hᵀ, m]]` (kg·m² and kg mixed, as in the spec's NOTE); \
+        "Smallest eigenvalue of `𝒥_k = [[½tr(I)·1 − I, h], [hᵀ, m]]` (kg·m² and kg mixed, as in docs/model.md, section Physical consistency); \
          positive ⇔ (67)–(69) hold. OLS only fixes the base combinations; its standard set is the one closest to \
          the nominal robot, with the nominal masses.",
     );

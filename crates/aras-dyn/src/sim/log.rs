@@ -113,6 +113,10 @@ pub struct SimLog {
     pub theta: Vec<[f64; 2]>,
     /// Measured motor torques (N·m).
     pub tau: Vec<[f64; 2]>,
+    /// The same torques without sensor noise (N·m): what a perfect model
+    /// predicts, so the fitness (78) of `tau_clean` against `tau` is the
+    /// noise ceiling of the log (not written to the CSV).
+    pub tau_clean: Vec<[f64; 2]>,
     /// Exact motor rates (rad/s).
     pub theta_dot: Vec<[f64; 2]>,
     /// Exact motor accelerations (rad/s²).
@@ -127,6 +131,7 @@ impl SimLog {
             t: Vec::with_capacity(n),
             theta: Vec::with_capacity(n),
             tau: Vec::with_capacity(n),
+            tau_clean: Vec::with_capacity(n),
             theta_dot: Vec::with_capacity(n),
             theta_ddot: Vec::with_capacity(n),
             sidecar: Sidecar {
@@ -158,12 +163,14 @@ impl SimLog {
         t: f64,
         th: [f64; 2],
         tau: [f64; 2],
+        tau_clean: [f64; 2],
         td: [f64; 2],
         tdd: [f64; 2],
     ) {
         self.t.push(t);
         self.theta.push(th);
         self.tau.push(tau);
+        self.tau_clean.push(tau_clean);
         self.theta_dot.push(td);
         self.theta_ddot.push(tdd);
     }

@@ -310,7 +310,8 @@ pub fn simulate(
     let mut vel_est = d0.theta_dot;
 
     let mut log = SimLog::with_capacity(n);
-    let mut tau_hist: Vec<[f64; 2]> = Vec::with_capacity(n);
+    // (measured, noise-free) torque of every step, for the delayed rows.
+    let mut tau_hist: Vec<([f64; 2], [f64; 2])> = Vec::with_capacity(n);
     for k in 0..n {
         let t = k as f64 * dt;
         let at = |source| SimError::Dynamics { t, source };
@@ -338,12 +339,14 @@ pub fn simulate(
             let z: f64 = StandardNormal.sample(&mut rng);
             measured[j] = tau[j] + noise[j] * z;
         }
-        tau_hist.push(measured);
+        tau_hist.push((measured, [tau[0], tau[1]]));
         if k >= cfg.torque_delay_samples {
+            let (measured, clean) = tau_hist[k - cfg.torque_delay_samples];
             log.push(
                 t,
                 [theta_meas[0], theta_meas[1]],
-                tau_hist[k - cfg.torque_delay_samples],
+                measured,
+                clean,
                 [s.theta_dot[0], s.theta_dot[1]],
                 [theta_ddot[0], theta_ddot[1]],
             );
