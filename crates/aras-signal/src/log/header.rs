@@ -52,7 +52,7 @@ impl ColumnNames {
                     NAMES.join(", ")
                 )));
             };
-            out.rename(role, name).map_err(|reason| bad(reason))?;
+            out.rename(role, name).map_err(&bad)?;
         }
         Ok(out)
     }
