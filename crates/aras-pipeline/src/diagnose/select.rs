@@ -206,7 +206,7 @@ pub struct FitnessRow {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ConsistentFit {
     /// Solver status.
-    pub status: String,
+    pub status: aras_ident::SolverStatus,
     /// Validation fitness per set per joint (%).
     pub fitness: Vec<[f64; 2]>,
     /// Standard parameters of the final model.
@@ -477,6 +477,13 @@ impl Context<'_> {
     }
 }
 
+/// Stands in for an error taken out of a lane's state (never reported).
+const LANE_STOPPED: IdentError = IdentError::InvalidSetting {
+    name: "accumulation lanes",
+    value: 0.0,
+    reason: "internal: the lane stopped at an earlier error",
+};
+
 fn fitness_pair(v: &[f64]) -> [f64; 2] {
     [
         v.first().copied().unwrap_or(0.0),
@@ -567,10 +574,7 @@ pub fn diagnose(
         .map(|c| match c {
             Candidate::Effect { effect } => Model::new(vec![*effect], start.gravity())
                 .map(Some)
-                .map_err(|e| IdentError::Adapter {
-                    context: format!("candidate {}", effect.id()),
-                    message: e.to_string(),
-                }),
+                .map_err(|e| IdentError::external(format!("candidate {}", effect.id()), e)),
             Candidate::TimeDelay { .. } => Ok(None),
         })
         .collect::<Result<Vec<_>, _>>()?;
@@ -817,10 +821,7 @@ pub fn diagnose(
         if let Candidate::Effect { effect } = s.candidate {
             final_model = final_model
                 .with_effect(effect)
-                .map_err(|e| IdentError::Adapter {
-                    context: "extending the model".into(),
-                    message: e.to_string(),
-                })?;
+                .map_err(|e| IdentError::external("extending the model", e))?;
         }
     }
     let mut estimate: Vec<NamedValue> = Vec::new();
@@ -899,10 +900,7 @@ fn refine_stribeck(
             .map(|c| match c {
                 Candidate::Effect { effect } => Model::new(vec![*effect], ctx.start.gravity())
                     .map(Some)
-                    .map_err(|e| IdentError::Adapter {
-                        context: format!("candidate {}", effect.id()),
-                        message: e.to_string(),
-                    }),
+                    .map_err(|e| IdentError::external(format!("candidate {}", effect.id()), e)),
                 Candidate::TimeDelay { .. } => Ok(None),
             })
             .collect::<Result<Vec<_>, _>>()?;
@@ -1038,7 +1036,11 @@ fn consistent_fit(
         &base,
         delay,
         || QrAccumulator::new(&bn, 2),
-        |acc, g, w, t| acc.as_mut().map_err(|e| e.clone())?.push_rows(g, w, t),
+        |acc, g, w, t| match acc {
+            Ok(a) => a.push_rows(g, w, t),
+            // The lane stops at this error; its state is not used again.
+            Err(_) => Err(std::mem::replace(acc, Err(LANE_STOPPED)).unwrap_err()),
+        },
     )?;
     let mut it = lanes.into_iter();
     let mut acc = it.next().ok_or(IdentError::InvalidSetting {
@@ -1097,7 +1099,7 @@ fn consistent_fit(
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(ConsistentFit {
-        status: sol.status.clone(),
+        status: sol.status,
         fitness,
         parameters: names
             .iter()

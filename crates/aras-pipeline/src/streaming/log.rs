@@ -144,10 +144,14 @@ pub struct StreamingResult {
     pub log: LogReport,
 }
 
-fn sig(context: &str, e: impl std::fmt::Display) -> IdentError {
-    IdentError::Adapter {
+fn sig(context: &str, e: impl std::error::Error + Send + Sync + 'static) -> IdentError {
+    IdentError::external(context, e)
+}
+
+fn invalid(context: &str, reason: &str) -> IdentError {
+    IdentError::InvalidData {
         context: context.to_owned(),
-        message: e.to_string(),
+        reason: reason.to_owned(),
     }
 }
 
@@ -334,7 +338,7 @@ pub fn identify_log_with_progress(
             out.read += n;
             out.blocks += 1;
         }
-        let sums = avg.ok_or_else(|| sig(&name, "the log has no data rows"))?;
+        let sums = avg.ok_or_else(|| invalid(&name, "the log has no data rows"))?;
         let (log, periods) = sums.finish(&name, out.read, reader.sidecar().clone())?;
         out.periods = periods;
         let mut popts = options.process.clone();
@@ -365,7 +369,7 @@ pub fn identify_log_with_progress(
             out.read += n;
             if first {
                 if buf.is_empty() {
-                    return Err(sig(&name, "the log has no data rows"));
+                    return Err(invalid(&name, "the log has no data rows"));
                 }
                 dt = nominal_step(&buf, dt)?;
                 if popts.filter == Bandwidth::Auto && !logged {
@@ -422,9 +426,9 @@ pub fn identify_log_with_progress(
     let [n1, n2] = [acc.group_rows()[0], acc.group_rows()[1]];
     let b = acc.names().len();
     if n1 < b || n2 < b {
-        return Err(IdentError::Adapter {
+        return Err(IdentError::InvalidData {
             context: format!("streaming identification of {name}"),
-            message: format!(
+            reason: format!(
                 "only {n1} (joint 1) and {n2} (joint 2) samples are away from velocity \
                  reversals (min_speed = {} rad/s, widened by the filter's reach at {}); \
                  lower them or excite the joints more",
@@ -473,7 +477,7 @@ fn nominal_step(c: &Columns, given: f64) -> Result<f64, IdentError> {
     }
     let k = (c.len().saturating_sub(1)).min(aras_signal::NOMINAL_WINDOW);
     if k == 0 {
-        return Err(sig(
+        return Err(invalid(
             "estimating the sample step",
             "the log has fewer than 2 rows; record at least 16 samples",
         ));
@@ -763,9 +767,9 @@ impl PeriodSums {
     fn finish(self, name: &str, rows: usize, sidecar: Sidecar) -> Result<(Log, usize), IdentError> {
         let periods = self.periods;
         if periods == 0 {
-            return Err(IdentError::Adapter {
+            return Err(IdentError::InvalidData {
                 context: format!("period averaging of {name}"),
-                message: format!(
+                reason: format!(
                     "{rows} rows hold no whole period of {} s ({} samples) after {} settling samples; \
                      record at least one whole period",
                     self.period_s, self.per, self.settling
@@ -774,9 +778,9 @@ impl PeriodSums {
         }
         let drift = (self.exact - self.per as f64).abs() * periods as f64;
         if drift > 0.5 {
-            return Err(IdentError::Adapter {
+            return Err(IdentError::InvalidData {
                 context: format!("period averaging of {name}"),
-                message: format!(
+                reason: format!(
                     "the period {} s is {:.4} samples at step {} s, not a whole number: it drifts \
                      {drift:.2} samples over {periods} periods; give the exact period or resample",
                     self.period_s, self.exact, self.dt
