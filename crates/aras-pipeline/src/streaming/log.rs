@@ -220,7 +220,8 @@ pub fn identify_log_with_progress(
         });
     }
     let name = path.display().to_string();
-    let mut reader = LogReader::open(path, &options.read).map_err(|e| sig("opening the log", e))?;
+    let mut reader = LogReader::open(path, &options.read)
+        .map_err(|e| sig(&format!("opening the log {name}"), e))?;
     if !(options.min_speed.is_finite() && options.min_speed >= 0.0) {
         return Err(IdentError::InvalidSetting {
             name: "min_speed",
@@ -256,7 +257,7 @@ pub fn identify_log_with_progress(
     let mut read = |reader: &mut LogReader<std::fs::File>, chunk: &mut Columns, n: usize| {
         let k = reader
             .read_rows(chunk, n)
-            .map_err(|e| sig("reading the log", e))?;
+            .map_err(|e| sig(&format!("reading the log {name}"), e))?;
         rows_read += k as u64;
         progress(rows_read);
         Ok::<usize, IdentError>(k)
@@ -422,7 +423,9 @@ pub fn identify_log_with_progress(
     if route == StreamingRoute::LoggedDerivatives {
         acc = stage.accumulator();
     }
-    let report = reader.finish().map_err(|e| sig("checking the log", e))?;
+    let report = reader
+        .finish()
+        .map_err(|e| sig(&format!("checking the log {name}"), e))?;
     let [n1, n2] = [acc.group_rows()[0], acc.group_rows()[1]];
     let b = acc.names().len();
     if n1 < b || n2 < b {
