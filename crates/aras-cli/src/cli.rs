@@ -94,15 +94,42 @@ pub struct DiagnoseArgs {
     /// The training log (docs/log-format.md), e.g. the designed excitation.
     #[arg(long, value_name = "TRAIN.csv")]
     pub data: PathBuf,
-    /// A validation log (repeat for several; at least one).
+    /// A validation log (repeat for several; at least one). Each is read
+    /// with its own sidecar (VAL.json), if present.
     #[arg(long, value_name = "VAL.csv", required = true)]
     pub validate: Vec<PathBuf>,
+    /// The training log's period and sidecar.
+    #[command(flatten)]
+    pub log: LogArgs,
     /// Output directory.
     #[arg(long, default_value = "out-diagnose", value_name = "DIR")]
     pub out: PathBuf,
     /// Shared options.
     #[command(flatten)]
     pub common: Common,
+}
+
+/// Where a log's period and metadata come from: the same flags for
+/// `identify`, `predict` and `diagnose`, so they process a log alike.
+#[derive(Debug, Clone, Default, Args)]
+pub struct LogArgs {
+    /// Period (s) of the motion, for period averaging or the harmonic fit
+    /// (default: the sidecar's `excitation.period_s`, else detected from the
+    /// angles).
+    #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true)]
+    pub period: Option<f64>,
+    /// Sidecar file (default: LOG.json next to the log, if present).
+    #[arg(long, value_name = "JSON")]
+    pub sidecar: Option<PathBuf>,
+}
+
+impl LogArgs {
+    /// The sidecar of `log`: `--sidecar`, else LOG.json beside it.
+    pub fn sidecar_of(&self, log: &std::path::Path) -> PathBuf {
+        self.sidecar
+            .clone()
+            .unwrap_or_else(|| aras_dyn::sim::sidecar_path(log))
+    }
 }
 
 /// Options every command shares.
@@ -184,12 +211,9 @@ pub struct IdentifyArgs {
     /// The log (docs/log-format.md).
     #[arg(long, value_name = "LOG.csv")]
     pub data: PathBuf,
-    /// Excitation period (s) for period averaging (overrides the sidecar).
-    #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true)]
-    pub period: Option<f64>,
-    /// Sidecar file (default: LOG.json next to the log, if present).
-    #[arg(long, value_name = "JSON")]
-    pub sidecar: Option<PathBuf>,
+    /// The log's period and sidecar.
+    #[command(flatten)]
+    pub log: LogArgs,
     /// Extra effects to identify with the paper's model, comma-separated, as
     /// `diagnose` names them: torque_offset, coulomb_asymmetry,
     /// `stribeck_friction[:V_S]`, passive_joint_viscous, `cogging:CYCLES[:ORDER]`,
@@ -262,12 +286,10 @@ pub struct PredictArgs {
     /// Output CSV with columns t,tau1,tau2.
     #[arg(long, value_name = "PRED.csv")]
     pub out: PathBuf,
-    /// Period (s) of the motion for the harmonic fit (default: the sidecar's, else detected from the angles; every row of the log is predicted either way).
-    #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true)]
-    pub period: Option<f64>,
-    /// Sidecar file (default: LOG.json next to the log, if present).
-    #[arg(long, value_name = "JSON")]
-    pub sidecar: Option<PathBuf>,
+    /// The log's period and sidecar (every row of the log is predicted
+    /// either way).
+    #[command(flatten)]
+    pub log: LogArgs,
     /// Shared options.
     #[command(flatten)]
     pub common: Common,

@@ -178,12 +178,18 @@ pub fn prepare(
 /// on `identification.base_samples` quasi-random states filling the
 /// workspace box and rate limits of `[trajectory]`.
 pub fn base_parameters(model: &Model, geometry: &Geometry, cfg: &Config) -> Result<BaseParameters> {
-    let t = &cfg.trajectory;
-    let d = |v: [f64; 2]| Vector2::new(v[0].to_radians(), v[1].to_radians());
-    let workspace = Workspace::new(d(t.min_deg), d(t.max_deg), d(t.max_rate_deg_s))
-        .context("keys `trajectory.min_deg`, `max_deg`, `max_rate_deg_s`")?;
+    let workspace = workspace(cfg)?;
     robot::base_parameters(model, geometry, &workspace, cfg.identification.base_samples)
         .context("base parameters on workspace samples (is the box in trajectory.min_deg/max_deg reachable?)")
+}
+
+/// The box and rate limits of `[trajectory]`, where identification (and
+/// the diagnosis) sample the states for the structural base parameters.
+pub fn workspace(cfg: &Config) -> Result<Workspace> {
+    let t = &cfg.trajectory;
+    let d = |v: [f64; 2]| Vector2::new(v[0].to_radians(), v[1].to_radians());
+    Workspace::new(d(t.min_deg), d(t.max_deg), d(t.max_rate_deg_s))
+        .context("keys `trajectory.min_deg`, `max_deg`, `max_rate_deg_s`")
 }
 
 /// Everything identification produced.

@@ -227,6 +227,8 @@ pub struct BaseFile {
     pub condition_number: f64,
     /// Where `sigma` comes from.
     pub sigma_method: SigmaMethod,
+    /// Rows per joint the fit used (away from velocity reversals).
+    pub rows_fitted: [usize; 2],
     /// The base parameters.
     pub parameters: Vec<BaseEntry>,
 }
@@ -258,6 +260,7 @@ pub fn base_file(id: &Identification, truth_base: Option<&[f64]>) -> BaseFile {
         residual_variance: o.residual_variance,
         condition_number: o.condition_number,
         sigma_method: SigmaMethod::Hac,
+        rows_fitted: id.rows_fitted,
         parameters: (0..id.base.n_base())
             .map(|i| BaseEntry {
                 name: format!("b{}", i + 1),

@@ -151,3 +151,79 @@ fn identify_with_extra_effects() {
         "{msg}"
     );
 }
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn rows(v: &serde_json::Value) -> [u64; 2] {
+    let r = v["rows_fitted"].as_array().unwrap();
+    [r[0].as_u64().unwrap(), r[1].as_u64().unwrap()]
+}
+
+/// `identify` and `diagnose` read the same `[identification]` settings,
+/// `--period` and `--sidecar`: with a raised `min_speed` and a wider reach
+/// both fit exactly the same TRAIN rows, fewer than with the defaults; the
+/// log is read with its sidecar moved elsewhere and its period given on the
+/// command line.
+#[test]
+fn diagnose_fits_the_rows_identify_fits() {
+    let dir = std::env::temp_dir().join(format!("aras-cli-test-rows-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let truth = Params::aras_diamond();
+    let exc = FourierTrajectory::load(
+        &PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../fixtures/trajectories/default-excitation.json"),
+    )
+    .unwrap();
+    let (train, val) = (dir.join("train.csv"), dir.join("val.csv"));
+    log(&truth, &exc, 2.0 * exc.period(), &train);
+    log(&truth, &Sinusoid::paper_79(0.5).unwrap(), 10.0, &val);
+    // The sidecar away from the log: only `--sidecar` finds it.
+    let moved = dir.join("meta.json");
+    std::fs::rename(dir.join("train.json"), &moved).unwrap();
+    let cfg = dir.join("cfg.toml");
+    std::fs::write(
+        &cfg,
+        "[identification]\nmin_speed = 0.35\nreversal_reach = 0.01\nbase_samples = 300\n",
+    )
+    .unwrap();
+    let period = format!("{}", exc.period());
+    let run = |cmd: &str, out: &str, config: bool| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_aras"));
+        c.args([cmd, "--quiet", "--period", &period, "--sidecar"])
+            .arg(&moved)
+            .arg("--data")
+            .arg(&train)
+            .arg("--out")
+            .arg(dir.join(out));
+        if cmd == "diagnose" {
+            c.arg("--validate").arg(&val);
+        }
+        if config {
+            c.arg("--config").arg(&cfg);
+        }
+        let r = c.output().unwrap();
+        assert!(
+            r.status.success(),
+            "{cmd}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+    };
+    run("identify", "id", true);
+    run("diagnose", "dg", true);
+    run("identify", "id0", false);
+    let id = rows(&json(&dir.join("id/base.json")));
+    let dg = rows(&json(&dir.join("dg/diagnosis.json")));
+    let id0 = rows(&json(&dir.join("id0/base.json")));
+    assert_eq!(id, dg, "identify and diagnose fit different rows");
+    assert!(
+        id[0] < id0[0] && id[1] < id0[1],
+        "{id:?} vs defaults {id0:?}"
+    );
+    // The sidecar was found: identify reports the truth's parameter errors.
+    let s = json(&dir.join("id/summary.json"));
+    assert!(s["parameter_errors"].is_object(), "{s}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -343,29 +343,35 @@ impl<'a, M: Separable + Sync> Problem<'a, M> {
         tol: f64,
     ) -> Result<SeparableFit, FrictionError> {
         let d = self.box_lo.len();
-        let mut evaluations = 0;
-        let mut scored: Vec<(f64, Vec<f64>)> = Vec::new();
         let grid: Vec<Vec<f64>> = if d == 0 {
             vec![Vec::new()]
         } else {
             starts.to_vec()
         };
-        for s in &grid {
-            let u: Vec<f64> = s
-                .iter()
-                .enumerate()
-                .map(|(j, t)| t.ln().clamp(self.box_lo[j], self.box_hi[j]))
-                .collect();
-            evaluations += 1;
-            if let Some((_, _, rss)) = self.eval(&u) {
-                scored.push((rss, u));
-            }
-        }
+        // The starts are independent: scored and refined in parallel, then
+        // reduced in their original order, so the result does not depend on
+        // the thread count.
+        let mut evaluations = grid.len();
+        let mut scored: Vec<(f64, Vec<f64>)> = grid
+            .par_iter()
+            .filter_map(|s| {
+                let u: Vec<f64> = s
+                    .iter()
+                    .enumerate()
+                    .map(|(j, t)| t.ln().clamp(self.box_lo[j], self.box_hi[j]))
+                    .collect();
+                self.eval(&u).map(|(_, _, rss)| (rss, u))
+            })
+            .collect();
         scored.sort_by(|a, b| a.0.total_cmp(&b.0));
         scored.dedup_by(|a, b| a.1 == b.1);
+        scored.truncate(settings.starts.max(1));
+        let runs: Vec<SeparableFit> = scored
+            .into_par_iter()
+            .map(|(_, u0)| self.levenberg_marquardt(u0, settings.max_iterations, tol))
+            .collect();
         let mut best: Option<SeparableFit> = None;
-        for (_, u0) in scored.iter().take(settings.starts.max(1)) {
-            let r = self.levenberg_marquardt(u0.clone(), settings.max_iterations, tol);
+        for r in runs {
             evaluations += r.evaluations;
             if best.as_ref().is_none_or(|b| r.rss < b.rss) {
                 best = Some(r);

@@ -9,7 +9,7 @@ use aras_pipeline::diagnose::residual::Profile;
 use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, diagnose};
 use aras_signal::read_log;
 
-use crate::cli::DiagnoseArgs;
+use crate::cli::{DiagnoseArgs, LogArgs};
 use crate::cmd::identify::read_options;
 use crate::identify::process_options;
 use crate::output::OutDir;
@@ -27,9 +27,8 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         .chain(&args.validate)
         .map(|p| p.as_path())
         .collect();
-    let sidecars: Vec<std::path::PathBuf> = logs
-        .iter()
-        .map(|p| aras_dyn::sim::sidecar_path(p))
+    let sidecars: Vec<std::path::PathBuf> = std::iter::once(args.log.sidecar_of(&args.data))
+        .chain(args.validate.iter().map(|p| aras_dyn::sim::sidecar_path(p)))
         .collect();
     let mut read = logs.clone();
     read.extend(sidecars.iter().map(|p| p.as_path()));
@@ -42,26 +41,41 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let model = paper_model(&nominal)?;
     let geometry = nominal.geometry()?;
-    let load = |path: &std::path::Path| -> Result<Dataset> {
-        let log = read_log(path, &read_options(None))
+    // TRAIN with the command line's period and sidecar, each validation log
+    // with its own sidecar: the processing of `identify`.
+    let load = |path: &std::path::Path, log_args: &LogArgs| -> Result<Dataset> {
+        let log = read_log(path, &read_options(log_args.sidecar.as_deref()))
             .with_context(|| format!("reading {}", path.display()))?;
-        let p = aras_signal::process(&log, &process_options(&cfg, None, false), &geometry)
-            .with_context(|| format!("processing {}", path.display()))?;
+        let p = aras_signal::process(
+            &log,
+            &process_options(&cfg, log_args.period, false),
+            &geometry,
+        )
+        .with_context(|| format!("processing {}", path.display()))?;
         let name = path.file_name().map_or_else(
             || path.display().to_string(),
             |f| f.to_string_lossy().into(),
         );
         Ok(Dataset::from_processed_owned(name, p)?)
     };
-    let train = stages.run("read + process TRAIN", |_| load(&args.data))?;
+    let train = stages.run("read + process TRAIN", |_| load(&args.data, &args.log))?;
     let vals = stages.run("read + process validation logs", |_| {
         args.validate
             .iter()
-            .map(|p| load(p))
+            .map(|p| load(p, &LogArgs::default()))
             .collect::<Result<Vec<_>>>()
     })?;
+    // The rows identification fits: the same reversal exclusion and base
+    // parameter sampling (`[identification]`), and cross-validation's
+    // exclusion for the validation logs (`validation.reversal_reach`).
+    let ic = &cfg.identification;
     let opts = DiagnoseOptions {
         reference: Some(nominal.clone()),
+        base_samples: ic.base_samples,
+        workspace: crate::identify::workspace(&cfg)?,
+        min_speed: ic.min_speed,
+        reach_tol: ic.reversal_reach,
+        validation_reach_tol: cfg.validation.reversal_reach,
         ..DiagnoseOptions::default()
     };
     let d = stages.run("diagnose (candidates × rounds)", |_| {

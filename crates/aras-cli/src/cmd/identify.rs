@@ -64,10 +64,7 @@ struct Setup {
 fn setup(args: &IdentifyArgs) -> Result<Setup> {
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config.clone();
-    let sidecar = args
-        .sidecar
-        .clone()
-        .unwrap_or_else(|| aras_dyn::sim::sidecar_path(&args.data));
+    let sidecar = args.log.sidecar_of(&args.data);
     let out = OutDir::create(
         &args.out,
         args.common.force,
@@ -107,14 +104,11 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
     } = setup(args)?;
     let log = stages
         .run("read log", |_| {
-            read_log(&args.data, &read_options(args.sidecar.as_deref()))
+            read_log(&args.data, &read_options(args.log.sidecar.as_deref()))
         })
         .with_context(|| format!("reading {}", args.data.display()))?;
     super::print_warnings(&args.data, &log.warnings);
-    let sidecar = args
-        .sidecar
-        .clone()
-        .unwrap_or_else(|| aras_dyn::sim::sidecar_path(&args.data));
+    let sidecar = args.log.sidecar_of(&args.data);
     let truth = sidecar_truth(&sidecar);
     let base = stages.run("base parameters (58)", |_| {
         base_parameters(&model, &geometry, &cfg)
@@ -139,7 +133,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
             clean_torque: None,
             cross_validate: false,
             log: &log,
-            period: args.period,
+            period: args.log.period,
             design: None,
             base: &base,
             model: &model,
@@ -169,10 +163,7 @@ fn run_streaming(args: &IdentifyArgs) -> Result<()> {
         model,
         geometry,
     } = setup(args)?;
-    let sidecar = args
-        .sidecar
-        .clone()
-        .unwrap_or_else(|| aras_dyn::sim::sidecar_path(&args.data));
+    let sidecar = args.log.sidecar_of(&args.data);
     let truth = sidecar_truth(&sidecar);
     let base = stages.run("base parameters (58)", |_| {
         base_parameters(&model, &geometry, &cfg)

@@ -34,8 +34,8 @@ use crate::validate::{parameter_errors, pd_check, pseudo_inertia_min};
 /// exclusion.
 pub fn options(args: &IdentifyArgs, cfg: &Config, nominal: &Params) -> Result<StreamingOptions> {
     Ok(StreamingOptions {
-        read: super::identify::read_options(args.sidecar.as_deref()),
-        process: process_options(cfg, args.period, false),
+        read: super::identify::read_options(args.log.sidecar.as_deref()),
+        process: process_options(cfg, args.log.period, false),
         filter_mode: match cfg.identification.filtering {
             FilteringMode::Parallel => FilterMode::Parallel,
             FilteringMode::TorqueOnly => FilterMode::TorqueOnly,
@@ -198,6 +198,7 @@ pub fn fit_and_write(
             residual_variance: ols.residual_variance * r.noise_gain,
             condition_number: ols.condition_number,
             sigma_method: SigmaMethod::WhiteFiltered,
+            rows_fitted: r.rows_fitted,
             parameters: (0..base.n_base())
                 .map(|i| BaseEntry {
                     name: format!("b{}", i + 1),

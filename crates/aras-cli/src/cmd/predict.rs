@@ -19,10 +19,7 @@ use crate::output::{FileKind, check_new_file, write_atomic};
 pub fn run(args: &PredictArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config.clone();
-    let sidecar = args
-        .sidecar
-        .clone()
-        .unwrap_or_else(|| aras_dyn::sim::sidecar_path(&args.data));
+    let sidecar = args.log.sidecar_of(&args.data);
     check_new_file(
         &args.out,
         args.common.force,
@@ -35,11 +32,11 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let model = params.model()?;
     let beta = params.standard_vector(&model)?.as_slice().to_vec();
     let geometry = params.geometry()?;
-    let log = read_log(&args.data, &read_options(args.sidecar.as_deref()))
+    let log = read_log(&args.data, &read_options(args.log.sidecar.as_deref()))
         .with_context(|| format!("reading {}", args.data.display()))?;
     super::print_warnings(&args.data, &log.warnings);
     let logged = log.theta_dot.is_some() && log.theta_ddot.is_some();
-    let mut opts = process_options(&cfg, args.period, logged);
+    let mut opts = process_options(&cfg, args.log.period, logged);
     opts.rows = OutputRows::EveryRow;
     let processed = aras_signal::process(&log, &opts, &geometry)
         .with_context(|| format!("processing {}", args.data.display()))?;

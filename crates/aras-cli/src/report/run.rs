@@ -129,14 +129,14 @@ pub fn build(d: &RunData) -> Result<Report> {
          zero-phase filtered) torques: OLS and SDP columns on **every** sample; the \"kept\" \
          columns only on the rows away from velocity reversals (the rows the fit uses; \
          `identification.min_speed`, widened by the filter's reach), where (49)'s Coulomb \
-         model holds. **Ceiling**: the fitness of a perfect prediction, the true robot's \
-         noise-free torques (all its effects, the simulator's smooth friction) at the same \
-         processed samples, against the same noisy log: the best attainable; what separates \
-         it from 100 % is sensor noise and processing, what separates ours from it is the \
-         identification (in-sample, ours may exceed it by fitting noise); on every row that \
-         includes the paper's sign-Coulomb friction (49) missing the simulated robot's \
-         smooth friction at velocity reversals, on the kept rows it does not. It is known \
-         only for simulated logs. **Paper**: the published values measured on the *real* robot \
+         model holds. **Ceiling**: the fitness of a perfect prediction against the same noisy \
+         log: the torque the simulated motors really produced, before the sensor noise (no \
+         model, no parameters, no processing; on the kept rows it is processed exactly like \
+         the measured torques). What separates it from 100 % is the sensor noise alone; what \
+         separates ours from it is everything else: the identification, the processing \
+         (derivatives from quantised angles) and, on every row, the paper's sign-Coulomb \
+         friction (49) against the simulated robot's smooth friction at velocity reversals. \
+         It is known only for logs simulated in the same run. **Paper**: the published values measured on the *real* robot \
          (§7: about 75 % OLS / 78 % constrained on the excitation; Table 2 on (79)), a \
          different experiment with the real robot's unmodelled effects and sensors: shown \
          for orientation, not comparable with a simulation.",

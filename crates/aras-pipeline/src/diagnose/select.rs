@@ -40,6 +40,10 @@ pub struct DiagnoseOptions {
     pub max_steps: usize,
     /// Quasi-random states for the structural base parameters (default 600).
     pub base_samples: usize,
+    /// The box those states fill (default the paper's workspace (77));
+    /// identification samples its configured excitation box.
+    #[serde(skip)]
+    pub workspace: Workspace,
     /// Joint `j`'s rows where `|θ̇_j|` is below this (rad/s), widened by the
     /// filter's reach, are left out of fits and scores (default 0.2, the
     /// identification's threshold, `robot::reversal_mask`): at velocity
@@ -70,6 +74,7 @@ impl Default for DiagnoseOptions {
             min_gain: 0.1,
             max_steps: 7,
             base_samples: 600,
+            workspace: Workspace::paper(),
             min_speed: 0.2,
             reach_tol: 1e-3,
             validation_reach_tol: 0.5,
@@ -222,6 +227,9 @@ pub struct Diagnosis {
     pub final_model: Vec<Effect>,
     /// Torque-against-angle shift found (samples; 0 if none).
     pub delay_samples: i64,
+    /// TRAIN's rows per joint that fits and scores use (away from velocity
+    /// reversals, [`DiagnoseOptions::min_speed`]).
+    pub rows_fitted: [usize; 2],
     /// Effects added, in order.
     pub steps: Vec<Step>,
     /// Every candidate's score in every round.
@@ -578,12 +586,8 @@ pub fn diagnose(
             Candidate::TimeDelay { .. } => Ok(None),
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let base = crate::robot::base_parameters(
-        start,
-        geometry,
-        &Workspace::paper(),
-        opts.base_samples.max(50),
-    )?;
+    let base =
+        crate::robot::base_parameters(start, geometry, &opts.workspace, opts.base_samples.max(50))?;
     let specs: Vec<CandidateSpec> = cands
         .iter()
         .zip(&effect_models)
@@ -859,6 +863,7 @@ pub fn diagnose(
                 delay_samples,
                 reference,
                 opts.base_samples.max(50),
+                &opts.workspace,
             )?)
         }
         _ => None,
@@ -867,6 +872,7 @@ pub fn diagnose(
         initial_model: start.effects().to_vec(),
         final_model: final_model.effects().to_vec(),
         delay_samples,
+        rows_fitted: std::array::from_fn(|j| train_p.mask[j].iter().filter(|k| **k).count()),
         steps,
         rounds,
         fitness: fitness_rows,
@@ -1017,9 +1023,9 @@ fn consistent_fit(
     delay: i64,
     reference: &Params,
     base_samples: usize,
+    workspace: &Workspace,
 ) -> Result<ConsistentFit, IdentError> {
-    let base =
-        crate::robot::base_parameters(model, ctx.geometry, &Workspace::paper(), base_samples)?;
+    let base = crate::robot::base_parameters(model, ctx.geometry, workspace, base_samples)?;
     let mut problem = consistent_problem(model, reference)?;
     let names = model.names();
     let extra: Vec<&str> = NONNEGATIVE
