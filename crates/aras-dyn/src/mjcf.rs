@@ -149,7 +149,7 @@ pub enum MjcfError {
         reason: &'static str,
     },
     /// The home pose is not an assembled, non-singular pose.
-    #[error("MJCF option `home` = [{phi}, {gamma}] rad is not a usable pose: {source}")]
+    #[error("MJCF option `home` = [{phi}, {gamma}] rad is not a usable pose")]
     Home {
         /// φ (rad).
         phi: f64,
