@@ -121,6 +121,12 @@ pub struct LogArgs {
     /// Sidecar file (default: LOG.json next to the log, if present).
     #[arg(long, value_name = "JSON")]
     pub sidecar: Option<PathBuf>,
+    /// Your column names, e.g. `t=time,theta1=q1,theta2=q2,tau1=torque_a,tau2=torque_b`
+    /// (roles: t, theta1, theta2, tau1, tau2, i1, i2, enc1, enc2, dtheta1,
+    /// dtheta2, ddtheta1, ddtheta2; roles not given keep their standard
+    /// names; docs/log-format.md).
+    #[arg(long, value_name = "ROLE=NAME,…")]
+    pub columns: Option<String>,
 }
 
 impl LogArgs {

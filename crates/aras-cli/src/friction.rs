@@ -18,6 +18,7 @@ use aras_ident::selection::{
     Accumulator, CandidateEvaluation, CandidateSpec, Layout, SelectionOptions, SelectionStatus,
     select,
 };
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Format tag of `friction.json`.
@@ -429,9 +430,12 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
         .iter()
         .map(|l| Motion::new(&l.t, &l.q, &l.dq))
         .collect::<Result<_, _>>()?;
-    let preds: Vec<Vec<f64>> = motions.iter().map(|mo| m.predict(mo)).collect();
+    // Every log's prediction, base columns and candidate columns are
+    // independent: computed in parallel (the state models integrate a
+    // whole log per column), collected in order.
+    let preds: Vec<Vec<f64>> = motions.par_iter().map(|mo| m.predict(mo)).collect();
     let bases: Vec<Vec<Vec<f64>>> = logs
-        .iter()
+        .par_iter()
         .map(|l| base_columns(m, l))
         .collect::<Result<_>>()?;
     let cand_cols: Vec<Vec<Vec<Vec<f64>>>> = logs
@@ -439,7 +443,7 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
         .zip(&preds)
         .map(|(l, p)| {
             effects
-                .iter()
+                .par_iter()
                 .map(|e| e.columns(l, p))
                 .collect::<Result<Vec<_>, _>>()
         })
@@ -555,10 +559,13 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
             .collect()
     };
     let prob = Problem::<M>::new(motions[0], &train.tau, &extra, &bounds)?;
+    // One start, the base model's own fitted structure, already near the
+    // optimum: a local search on every row, no coarse search first.
     let fit = prob.solve(
         &[theta0],
         &FitSettings {
             starts: 1,
+            coarse_rows: 0,
             ..settings.fit.clone()
         },
     )?;

@@ -227,3 +227,55 @@ fn diagnose_fits_the_rows_identify_fits() {
     assert!(s["parameter_errors"].is_object(), "{s}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A lab's own column names (`--columns`): the same log with its header
+/// renamed (and reordered) is identified to the same parameters as with the
+/// standard names; a wrong role is refused with a message naming it.
+#[test]
+fn identify_reads_a_labs_own_column_names() {
+    let dir = std::env::temp_dir().join(format!("aras-cli-test-columns-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let exc = FourierTrajectory::load(
+        &PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../fixtures/trajectories/default-excitation.json"),
+    )
+    .unwrap();
+    let std_csv = dir.join("std.csv");
+    log(&Params::aras_diamond(), &exc, 2.0 * exc.period(), &std_csv);
+    // Renamed and reordered: time first, torques before angles, no
+    // derivative columns.
+    let text = std::fs::read_to_string(&std_csv).unwrap();
+    let mut lab = String::from("Time [s],torque_a,torque_b,q1,q2\n");
+    for line in text.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        lab += &format!("{},{},{},{},{}\n", f[0], f[3], f[4], f[1], f[2]);
+    }
+    let lab_csv = dir.join("lab.csv");
+    std::fs::write(&lab_csv, lab).unwrap();
+    let period = format!("{}", exc.period());
+    let run = |data: &Path, out: &str, columns: Option<&str>| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_aras"));
+        c.args(["identify", "--quiet", "--reproducible", "--period", &period])
+            .arg("--data")
+            .arg(data)
+            .arg("--out")
+            .arg(dir.join(out));
+        if let Some(spec) = columns {
+            c.args(["--columns", spec]);
+        }
+        c.output().unwrap()
+    };
+    let a = run(&std_csv, "a", None);
+    assert!(a.status.success(), "{}", String::from_utf8_lossy(&a.stderr));
+    let spec = "t=time [s],theta1=q1,theta2=q2,tau1=torque_a,tau2=torque_b";
+    let b = run(&lab_csv, "b", Some(spec));
+    assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
+    let params = |d: &str| std::fs::read_to_string(dir.join(d).join("params.json")).unwrap();
+    assert_eq!(params("a"), params("b"));
+    let bad = run(&lab_csv, "c", Some("time=Time [s]"));
+    assert!(!bad.status.success());
+    let msg = String::from_utf8_lossy(&bad.stderr);
+    assert!(msg.contains("unknown role `time`"), "{msg}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -87,9 +87,9 @@ pub use butterworth::{Butterworth, MAX_ORDER};
 pub use derivative::{DerivativeMethod, Derivatives, derivatives, resolve};
 pub use error::{FilterError, LogError, ProcessError};
 pub use log::{
-    Columns, Excitation, Extreme, FORMAT, Log, LogReader, LogReport, LogSummary, NOMINAL_WINDOW,
-    ReadOptions, Sensors, Sidecar, SidecarSource, Span, StepDeviation, Warning, read_log,
-    read_log_from,
+    ColumnNames, Columns, Excitation, Extreme, FORMAT, Log, LogReader, LogReport, LogSummary,
+    NOMINAL_WINDOW, ReadOptions, Sensors, Sidecar, SidecarSource, Span, StepDeviation, Warning,
+    read_log, read_log_from,
 };
 pub use periods::{MAX_BLOCK_MISMATCH, MAX_DRIFT, PeriodAverage, average_periods};
 pub use process::{

@@ -44,7 +44,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     // TRAIN with the command line's period and sidecar, each validation log
     // with its own sidecar: the processing of `identify`.
     let load = |path: &std::path::Path, log_args: &LogArgs| -> Result<Dataset> {
-        let log = read_log(path, &read_options(log_args.sidecar.as_deref()))
+        let log = read_log(path, &read_options(log_args)?)
             .with_context(|| format!("reading {}", path.display()))?;
         let p = aras_signal::process(
             &log,
@@ -62,7 +62,15 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     let vals = stages.run("read + process validation logs", |_| {
         args.validate
             .iter()
-            .map(|p| load(p, &LogArgs::default()))
+            .map(|p| {
+                // The lab's column names hold for every log; period and
+                // sidecar are TRAIN's.
+                let own = LogArgs {
+                    columns: args.log.columns.clone(),
+                    ..LogArgs::default()
+                };
+                load(p, &own)
+            })
             .collect::<Result<Vec<_>>>()
     })?;
     // The rows identification fits: the same reversal exclusion and base

@@ -3,9 +3,9 @@
 use anyhow::{Context, Result};
 use aras_dyn::{Model, Params};
 use aras_kin::Geometry;
-use aras_signal::{ReadOptions, SidecarSource, read_log};
+use aras_signal::{ColumnNames, ReadOptions, SidecarSource, read_log};
 
-use crate::cli::{IdentifyArgs, StreamingMode};
+use crate::cli::{IdentifyArgs, LogArgs, StreamingMode};
 use crate::cmd::fit::{self, FitInput};
 use crate::config::Config;
 use crate::identify::base_parameters;
@@ -20,14 +20,19 @@ pub fn sidecar_truth(path: &std::path::Path) -> Option<aras_dyn::Params> {
     aras_dyn::Params::from_value(v.get("truth")?.get("params")?).ok()
 }
 
-/// Read options with the sidecar choice of the command line.
-pub fn read_options(sidecar: Option<&std::path::Path>) -> ReadOptions {
-    ReadOptions {
-        sidecar: sidecar.map_or(SidecarSource::Auto, |p| {
-            SidecarSource::Path(p.to_path_buf())
-        }),
+/// Read options with the command line's sidecar and column names.
+pub fn read_options(log: &LogArgs) -> Result<ReadOptions> {
+    Ok(ReadOptions {
+        sidecar: log
+            .sidecar
+            .as_ref()
+            .map_or(SidecarSource::Auto, |p| SidecarSource::Path(p.clone())),
+        columns: match &log.columns {
+            Some(spec) => ColumnNames::parse(spec).context("option --columns")?,
+            None => ColumnNames::default(),
+        },
         ..ReadOptions::default()
-    }
+    })
 }
 
 /// Log size above which `--streaming auto` streams: 256 MB, about 2 M rows
@@ -102,10 +107,9 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         model,
         geometry,
     } = setup(args)?;
+    let read = read_options(&args.log)?;
     let log = stages
-        .run("read log", |_| {
-            read_log(&args.data, &read_options(args.log.sidecar.as_deref()))
-        })
+        .run("read log", |_| read_log(&args.data, &read))
         .with_context(|| format!("reading {}", args.data.display()))?;
     super::print_warnings(&args.data, &log.warnings);
     let sidecar = args.log.sidecar_of(&args.data);

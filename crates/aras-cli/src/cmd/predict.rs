@@ -32,7 +32,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let model = params.model()?;
     let beta = params.standard_vector(&model)?.as_slice().to_vec();
     let geometry = params.geometry()?;
-    let log = read_log(&args.data, &read_options(args.log.sidecar.as_deref()))
+    let log = read_log(&args.data, &read_options(&args.log)?)
         .with_context(|| format!("reading {}", args.data.display()))?;
     super::print_warnings(&args.data, &log.warnings);
     let logged = log.theta_dot.is_some() && log.theta_ddot.is_some();

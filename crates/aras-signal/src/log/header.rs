@@ -24,6 +24,90 @@ pub(crate) const NAMES: [&str; SLOTS] = [
     "ddtheta1", "ddtheta2",
 ];
 
+/// A lab's own column names: which header name holds which column of the
+/// format (`t`, `theta1`, `theta2`, `tau1`, `tau2`, `i1`, `i2`, `enc1`,
+/// `enc2`, `dtheta1`, `dtheta2`, `ddtheta1`, `ddtheta2`). Roles not renamed
+/// keep their standard name; a standard name whose role was given another
+/// column is an ordinary, ignored column. Matching ignores case and
+/// surrounding quotes, like the header itself.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct ColumnNames {
+    /// `(slot, header name)`, cleaned like header names.
+    renamed: Vec<(usize, String)>,
+}
+
+impl ColumnNames {
+    /// Parses `role=name,role=name,…` (e.g. `t=time,theta1=q1,tau1=torque_a`).
+    pub fn parse(spec: &str) -> Result<Self, LogError> {
+        let bad = |reason: String| LogError::InvalidOption {
+            name: "columns",
+            value: spec.into(),
+            reason,
+        };
+        let mut out = Self::default();
+        for item in spec.split(',').map(str::trim).filter(|i| !i.is_empty()) {
+            let Some((role, name)) = item.split_once('=') else {
+                return Err(bad(format!(
+                    "`{item}` is not ROLE=NAME: write e.g. theta1=q1 (roles: {})",
+                    NAMES.join(", ")
+                )));
+            };
+            out.rename(role, name).map_err(&bad)?;
+        }
+        Ok(out)
+    }
+
+    /// Gives role `role` (a standard column name) the header name `name`.
+    fn rename(&mut self, role: &str, name: &str) -> Result<(), String> {
+        let role = clean(role);
+        let name = clean(name);
+        let Some(slot) = NAMES.iter().position(|n| *n == role) else {
+            return Err(format!(
+                "unknown role `{role}`: the roles are {}",
+                NAMES.join(", ")
+            ));
+        };
+        if name.is_empty() {
+            return Err(format!("role `{role}` has an empty column name"));
+        }
+        if self.renamed.iter().any(|(s, _)| *s == slot) {
+            return Err(format!("role `{role}` is named twice"));
+        }
+        if let Some((s, _)) = self.renamed.iter().find(|(_, n)| *n == name) {
+            return Err(format!(
+                "column `{name}` is given to both `{}` and `{role}`",
+                NAMES[*s]
+            ));
+        }
+        self.renamed.push((slot, name));
+        Ok(())
+    }
+
+    /// True when no role is renamed.
+    pub fn is_empty(&self) -> bool {
+        self.renamed.is_empty()
+    }
+
+    /// The slot a (cleaned) header name holds, if any.
+    fn slot_of(&self, name: &str) -> Option<usize> {
+        if let Some((s, _)) = self.renamed.iter().find(|(_, n)| n == name) {
+            return Some(*s);
+        }
+        NAMES
+            .iter()
+            .position(|n| *n == name)
+            .filter(|s| !self.renamed.iter().any(|(r, _)| r == s))
+    }
+
+    /// How messages name a slot: `theta1`, or `q1 (theta1)` when renamed.
+    fn label(&self, slot: usize) -> String {
+        match self.renamed.iter().find(|(s, _)| *s == slot) {
+            Some((_, n)) => format!("{n} ({})", NAMES[slot]),
+            None => NAMES[slot].to_string(),
+        }
+    }
+}
+
 /// Where the joint angles come from.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum AngleSource {
@@ -80,6 +164,7 @@ impl Layout {
         line: u64,
         sensors: &Sensors,
         sidecar_name: &str,
+        columns: &ColumnNames,
     ) -> Result<Self, LogError> {
         if header.contains(';') {
             return Err(LogError::Semicolon {
@@ -107,7 +192,7 @@ impl Layout {
                     name: name.clone(),
                 });
             }
-            match NAMES.iter().position(|n| n == name) {
+            match columns.slot_of(name) {
                 Some(slot) => column_of[slot] = j + 1,
                 None => extra.push(name.clone()),
             }
@@ -130,14 +215,17 @@ impl Layout {
                     Err(LogError::UnpairedColumn {
                         file: file.into(),
                         line,
-                        present: NAMES[slots[p]].into(),
-                        missing: NAMES[slots[m]].into(),
+                        present: columns.label(slots[p]),
+                        missing: columns.label(slots[m]),
                     })
                 }
             }
         };
         if !has(T) {
-            return Err(missing("t", "name the time column `t` (seconds)"));
+            return Err(missing(
+                &columns.label(T),
+                "name the time column `t` (seconds), or map yours with columns t=NAME",
+            ));
         }
         let mut notes = Vec::new();
         let mut used = [false; SLOTS];
@@ -149,7 +237,7 @@ impl Layout {
             for s in THETA {
                 if !has(s) {
                     return Err(missing(
-                        NAMES[s],
+                        &columns.label(s),
                         "give both joint angles theta1, theta2 (rad)",
                     ));
                 }
@@ -198,7 +286,7 @@ impl Layout {
             for s in TAU_ {
                 if !has(s) {
                     return Err(missing(
-                        NAMES[s],
+                        &columns.label(s),
                         "give both joint torques tau1, tau2 (N·m)",
                     ));
                 }
@@ -263,7 +351,7 @@ impl Layout {
         }
         let slot_of = names
             .iter()
-            .map(|n| NAMES.iter().position(|s| s == n).filter(|&slot| used[slot]))
+            .map(|n| columns.slot_of(n).filter(|&slot| used[slot]))
             .collect();
         Ok(Self {
             fields: names.len(),

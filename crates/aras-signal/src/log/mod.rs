@@ -12,6 +12,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 pub use checks::{Extreme, NOMINAL_WINDOW, Span, StepDeviation, Warning};
+pub use header::ColumnNames;
 pub use reader::{Columns, LogReader, LogReport, LogSummary};
 pub use sidecar::{Excitation, FORMAT, Sensors, Sidecar};
 
@@ -59,6 +60,8 @@ pub struct ReadOptions {
     pub saturation_samples: usize,
     /// Reject angle columns that look like degrees (default true).
     pub check_degrees: bool,
+    /// The lab's own column names (default: the standard names).
+    pub columns: ColumnNames,
 }
 
 impl Default for ReadOptions {
@@ -71,6 +74,7 @@ impl Default for ReadOptions {
             nominal_step: None,
             saturation_samples: 50,
             check_degrees: true,
+            columns: ColumnNames::default(),
         }
     }
 }

@@ -281,7 +281,14 @@ impl<R: Read> LogReader<R> {
             if trimmed.is_empty() || trimmed.starts_with('#') {
                 continue;
             }
-            break Layout::parse(trimmed, &name, lines.line, &sensors, &where_sidecar)?;
+            break Layout::parse(
+                trimmed,
+                &name,
+                lines.line,
+                &sensors,
+                &where_sidecar,
+                &opts.columns,
+            )?;
         };
         let mut notes = layout.notes.clone();
         if opts.sensors != Default::default() {
