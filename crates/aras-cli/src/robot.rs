@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use aras_dyn::{Effect, Model, Params};
+use aras_dyn::{Effect, EffectId, Model, Params};
 use nalgebra::Vector3;
 
 use crate::config::RobotConfig;
@@ -53,12 +53,12 @@ pub fn paper_model(p: &Params) -> Result<Model> {
 /// Identifiers accepted by `identify --effects` (the extra effects of
 /// `aras_dyn::Effect`, as named by `diagnose`).
 pub const EFFECT_IDS: [&str; 6] = [
-    "torque_offset",
-    "coulomb_asymmetry",
-    "stribeck_friction",
-    "passive_joint_viscous",
-    "cogging",
-    "quadratic_damping",
+    EffectId::EXTRA[0].as_str(),
+    EffectId::EXTRA[1].as_str(),
+    EffectId::EXTRA[2].as_str(),
+    EffectId::EXTRA[3].as_str(),
+    EffectId::EXTRA[4].as_str(),
+    EffectId::EXTRA[5].as_str(),
 ];
 
 /// Parses one `--effects` entry: `ID` or `ID:ARG[:ARG]`, where
@@ -78,22 +78,26 @@ pub fn parse_effect(spec: &str) -> Result<Effect> {
             },
         }
     };
-    let max_args = match id {
-        "stribeck_friction" => 1,
-        "cogging" => 2,
+    let kind = id
+        .parse::<EffectId>()
+        .ok()
+        .filter(|k| EffectId::EXTRA.contains(k));
+    let max_args = match kind {
+        Some(EffectId::StribeckFriction) => 1,
+        Some(EffectId::Cogging) => 2,
         _ => 0,
     };
     if args.len() > max_args {
         anyhow::bail!("effect `{spec}`: `{id}` takes at most {max_args} `:` argument(s)");
     }
-    Ok(match id {
-        "torque_offset" => Effect::TorqueOffset,
-        "coulomb_asymmetry" => Effect::CoulombAsymmetry,
-        "stribeck_friction" => Effect::StribeckFriction {
+    Ok(match kind {
+        Some(EffectId::TorqueOffset) => Effect::TorqueOffset,
+        Some(EffectId::CoulombAsymmetry) => Effect::CoulombAsymmetry,
+        Some(EffectId::StribeckFriction) => Effect::StribeckFriction {
             v_s: num(0, "the Stribeck velocity (rad/s)")?.unwrap_or(0.2),
         },
-        "passive_joint_viscous" => Effect::PassiveJointViscous,
-        "cogging" => Effect::Cogging {
+        Some(EffectId::PassiveJointViscous) => Effect::PassiveJointViscous,
+        Some(EffectId::Cogging) => Effect::Cogging {
             cycles_per_rev: num(0, "the cycles per revolution")?.ok_or_else(|| {
                 anyhow::anyhow!(
                     "effect `{spec}`: cogging needs its cycles per joint revolution, \
@@ -102,7 +106,7 @@ pub fn parse_effect(spec: &str) -> Result<Effect> {
             })?,
             order: num(1, "the number of harmonics")?.map_or(2, |v| v.round() as usize),
         },
-        "quadratic_damping" => Effect::QuadraticDamping,
+        Some(EffectId::QuadraticDamping) => Effect::QuadraticDamping,
         _ => anyhow::bail!(
             "unknown effect `{id}` in `--effects`; known: {}",
             EFFECT_IDS.join(", ")

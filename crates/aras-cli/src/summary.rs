@@ -65,7 +65,7 @@ pub enum DataKind {
 #[derive(Debug, Clone, Serialize)]
 pub struct SdpReport {
     /// Solver status.
-    pub status: String,
+    pub status: aras_ident::SolverStatus,
     /// Interior-point iterations.
     pub iterations: u32,
     /// Residual norm `‖W_b β_b − T‖` of the SDP estimate (N·m).
@@ -82,7 +82,7 @@ impl SdpReport {
     /// From a solution.
     pub fn new(s: &SdpSolution) -> Self {
         Self {
-            status: s.status.clone(),
+            status: s.status,
             iterations: s.iterations,
             residual_norm: s.residual_norm,
             ols_residual_norm: s.ols_residual_norm,

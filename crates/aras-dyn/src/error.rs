@@ -1,5 +1,10 @@
 //! Typed errors: parameter files ([`ParamError`]), dynamics ([`DynError`])
 //! and the simulator ([`SimError`]).
+//!
+//! A variant with an underlying error either returns it from
+//! [`source`](std::error::Error::source) without repeating it in its own
+//! message, or is transparent (shows and returns the underlying error's
+//! message and source), so printing the chain shows each cause once.
 
 use std::path::PathBuf;
 
@@ -80,7 +85,7 @@ pub enum ParamError {
         reason: String,
     },
     /// The file could not be read or written.
-    #[error("cannot access parameter file {}: {source}", path.display())]
+    #[error("cannot access parameter file {}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
@@ -88,7 +93,7 @@ pub enum ParamError {
         source: std::io::Error,
     },
     /// An error inside a named file.
-    #[error("in parameter file {}: {source}", path.display())]
+    #[error("in parameter file {}", path.display())]
     InFile {
         /// The file.
         path: PathBuf,
@@ -101,10 +106,10 @@ pub enum ParamError {
 #[derive(Debug, thiserror::Error)]
 pub enum DynError {
     /// The kinematics rejected the pose or its rates.
-    #[error("kinematics: {0}")]
+    #[error(transparent)]
     Kin(#[from] KinError),
     /// The parameters are not acceptable.
-    #[error("parameters: {0}")]
+    #[error(transparent)]
     Param(#[from] ParamError),
     /// A buffer or vector has the wrong length for the model.
     #[error(
@@ -191,7 +196,7 @@ pub enum SimError {
     },
     /// The dynamics failed during the run (e.g. the robot left the reachable
     /// workspace or hit a singularity).
-    #[error("simulation failed at t = {t:.6} s: {source}")]
+    #[error("simulation failed at t = {t:.6} s")]
     Dynamics {
         /// Simulated time of the failure (s).
         t: f64,
@@ -199,7 +204,7 @@ pub enum SimError {
         source: DynError,
     },
     /// The desired trajectory is not evaluable.
-    #[error("desired trajectory at t = {t:.6} s: {source}")]
+    #[error("the desired trajectory cannot be evaluated at t = {t:.6} s")]
     Trajectory {
         /// Time of the failure (s).
         t: f64,
@@ -207,7 +212,7 @@ pub enum SimError {
         source: DynError,
     },
     /// Writing the log failed.
-    #[error("cannot write log {}: {source}", path.display())]
+    #[error("cannot write log {}", path.display())]
     Io {
         /// The file.
         path: PathBuf,

@@ -79,7 +79,7 @@ mod trajectory;
 pub use dynamics::Dynamics;
 pub use error::{DynError, ParamError, SimError};
 pub use lagrange::{LagrangeTerms, lagrange_terms};
-pub use model::{Effect, Model};
+pub use model::{Effect, EffectId, Model, UnknownEffect};
 pub use params::{
     Cogging, DEFAULT_GRAVITY, Extras, Friction, LinkParams, MAX_COGGING_ORDER, Params, Stribeck,
 };

@@ -60,7 +60,7 @@ use std::fmt::Write as _;
 use nalgebra::{Matrix3, SymmetricEigen, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::{LinkParams, ParamError, Params};
+use crate::{EffectId, LinkParams, ParamError, Params};
 
 /// Words in the opening comment of every exported file: how a tool tells
 /// a file it wrote (and may replace) from someone else's MJCF.
@@ -149,7 +149,7 @@ pub enum MjcfError {
         reason: &'static str,
     },
     /// The home pose is not an assembled, non-singular pose.
-    #[error("MJCF option `home` = [{phi}, {gamma}] rad is not a usable pose: {source}")]
+    #[error("MJCF option `home` = [{phi}, {gamma}] rad is not a usable pose")]
     Home {
         /// φ (rad).
         phi: f64,
@@ -242,8 +242,8 @@ fn ry(a: f64) -> Matrix3<f64> {
 /// values (named as in the parameter file).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Unrepresented {
-    /// Effect id (as in `extra`).
-    pub effect: &'static str,
+    /// The effect (its id names the parameter file's `extra` section).
+    pub effect: EffectId,
     /// `(name, value)` pairs.
     pub values: Vec<(String, f64)>,
     /// Why MuJoCo has no element for it.
@@ -266,21 +266,21 @@ pub fn unrepresented(params: &Params) -> Vec<Unrepresented> {
         && fpd != 0.0
     {
         out.push(Unrepresented {
-            effect: "passive_joint_viscous",
+            effect: EffectId::PassiveJointViscous,
             values: named(&["Fpd"], &[fpd]),
             why: "the hinge about d is the connect equality, not a joint, so it has no damping",
         });
     }
     if let Some(v) = e.torque_offset.filter(|v| v.iter().any(|x| *x != 0.0)) {
         out.push(Unrepresented {
-            effect: "torque_offset",
+            effect: EffectId::TorqueOffset,
             values: named(&["tau0_1", "tau0_2"], &v),
             why: "a constant joint torque is no passive element of MJCF",
         });
     }
     if let Some(v) = e.coulomb_asymmetry.filter(|v| v.iter().any(|x| *x != 0.0)) {
         out.push(Unrepresented {
-            effect: "coulomb_asymmetry",
+            effect: EffectId::CoulombAsymmetry,
             values: named(&["Fca1", "Fca2"], &v),
             why: "frictionloss is symmetric",
         });
@@ -290,7 +290,7 @@ pub fn unrepresented(params: &Params) -> Vec<Unrepresented> {
         .filter(|s| s.level.iter().any(|x| *x != 0.0))
     {
         out.push(Unrepresented {
-            effect: "stribeck_friction",
+            effect: EffectId::StribeckFriction,
             values: named(&["v_s", "Fs1", "Fs2"], &[s.v_s, s.level[0], s.level[1]]),
             why: "frictionloss has one level, no velocity dependence",
         });
@@ -305,7 +305,7 @@ pub fn unrepresented(params: &Params) -> Vec<Unrepresented> {
         }
         if values.iter().skip(1).any(|(_, v)| *v != 0.0) {
             out.push(Unrepresented {
-                effect: "cogging",
+                effect: EffectId::Cogging,
                 values,
                 why: "a position-periodic joint torque is no passive element of MJCF",
             });
@@ -313,7 +313,7 @@ pub fn unrepresented(params: &Params) -> Vec<Unrepresented> {
     }
     if let Some(v) = e.quadratic_damping.filter(|v| v.iter().any(|x| *x != 0.0)) {
         out.push(Unrepresented {
-            effect: "quadratic_damping",
+            effect: EffectId::QuadraticDamping,
             values: named(&["Fq1", "Fq2"], &v),
             why: "joint damping is linear in the velocity",
         });

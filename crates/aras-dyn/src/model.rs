@@ -7,7 +7,9 @@
 //! are used by the simulator; their identifiers ([`Effect::id`]) and
 //! parameter names are stable.
 
+use std::fmt;
 use std::ops::Range;
+use std::str::FromStr;
 
 use nalgebra::{DVector, Vector3};
 use serde::{Deserialize, Serialize};
@@ -56,20 +58,124 @@ pub enum Effect {
     QuadraticDamping,
 }
 
-impl Effect {
-    /// Stable identifier (the serde tag).
-    pub fn id(&self) -> &'static str {
+/// Which effect, without its settings: the one spelling of the effect
+/// identifiers, shared by [`Effect`]'s serde tag, the parameter file's
+/// `extra.<id>` sections, the `aras` CLI's `--effects` and the diagnosis
+/// candidates. Parses from and prints as the identifier (`FromStr`,
+/// `Display`, serde: `"stribeck_friction"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EffectId {
+    /// [`Effect::RigidLinks`].
+    RigidLinks,
+    /// [`Effect::Friction`].
+    Friction,
+    /// [`Effect::Elasticity`].
+    Elasticity,
+    /// [`Effect::TorqueOffset`].
+    TorqueOffset,
+    /// [`Effect::CoulombAsymmetry`].
+    CoulombAsymmetry,
+    /// [`Effect::StribeckFriction`].
+    StribeckFriction,
+    /// [`Effect::PassiveJointViscous`].
+    PassiveJointViscous,
+    /// [`Effect::Cogging`].
+    Cogging,
+    /// [`Effect::QuadraticDamping`].
+    QuadraticDamping,
+}
+
+impl EffectId {
+    /// Every effect, in the order of [`Effect`].
+    pub const ALL: [EffectId; 9] = [
+        EffectId::RigidLinks,
+        EffectId::Friction,
+        EffectId::Elasticity,
+        EffectId::TorqueOffset,
+        EffectId::CoulombAsymmetry,
+        EffectId::StribeckFriction,
+        EffectId::PassiveJointViscous,
+        EffectId::Cogging,
+        EffectId::QuadraticDamping,
+    ];
+
+    /// The effects beyond the paper's model (the parameter file's `extra`
+    /// section, the candidates of the diagnosis), in that order.
+    pub const EXTRA: [EffectId; 6] = [
+        EffectId::TorqueOffset,
+        EffectId::CoulombAsymmetry,
+        EffectId::StribeckFriction,
+        EffectId::PassiveJointViscous,
+        EffectId::Cogging,
+        EffectId::QuadraticDamping,
+    ];
+
+    /// The stable identifier, e.g. `"stribeck_friction"`.
+    pub const fn as_str(self) -> &'static str {
         match self {
-            Effect::RigidLinks => "rigid_links",
-            Effect::Friction => "friction",
-            Effect::Elasticity => "elasticity",
-            Effect::TorqueOffset => "torque_offset",
-            Effect::CoulombAsymmetry => "coulomb_asymmetry",
-            Effect::StribeckFriction { .. } => "stribeck_friction",
-            Effect::PassiveJointViscous => "passive_joint_viscous",
-            Effect::Cogging { .. } => "cogging",
-            Effect::QuadraticDamping => "quadratic_damping",
+            EffectId::RigidLinks => "rigid_links",
+            EffectId::Friction => "friction",
+            EffectId::Elasticity => "elasticity",
+            EffectId::TorqueOffset => "torque_offset",
+            EffectId::CoulombAsymmetry => "coulomb_asymmetry",
+            EffectId::StribeckFriction => "stribeck_friction",
+            EffectId::PassiveJointViscous => "passive_joint_viscous",
+            EffectId::Cogging => "cogging",
+            EffectId::QuadraticDamping => "quadratic_damping",
         }
+    }
+}
+
+impl fmt::Display for EffectId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl FromStr for EffectId {
+    type Err = UnknownEffect;
+
+    fn from_str(s: &str) -> Result<Self, UnknownEffect> {
+        EffectId::ALL
+            .into_iter()
+            .find(|e| e.as_str() == s)
+            .ok_or_else(|| UnknownEffect { id: s.to_owned() })
+    }
+}
+
+/// A name that is not an effect identifier.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown effect `{id}`; known effects: {}", known_effects())]
+pub struct UnknownEffect {
+    /// The name given.
+    pub id: String,
+}
+
+fn known_effects() -> String {
+    EffectId::ALL.map(EffectId::as_str).join(", ")
+}
+
+impl Effect {
+    /// Which effect this is, without its settings.
+    pub fn kind(&self) -> EffectId {
+        match self {
+            Effect::RigidLinks => EffectId::RigidLinks,
+            Effect::Friction => EffectId::Friction,
+            Effect::Elasticity => EffectId::Elasticity,
+            Effect::TorqueOffset => EffectId::TorqueOffset,
+            Effect::CoulombAsymmetry => EffectId::CoulombAsymmetry,
+            Effect::StribeckFriction { .. } => EffectId::StribeckFriction,
+            Effect::PassiveJointViscous => EffectId::PassiveJointViscous,
+            Effect::Cogging { .. } => EffectId::Cogging,
+            Effect::QuadraticDamping => EffectId::QuadraticDamping,
+        }
+    }
+
+    /// Stable identifier (the serde tag): [`EffectId::as_str`] of
+    /// [`kind`](Self::kind).
+    pub fn id(&self) -> &'static str {
+        self.kind().as_str()
     }
 
     /// Number of regressor columns (= parameters).

@@ -17,6 +17,7 @@ use serde_json::Value;
 
 use crate::ParamError;
 use crate::json::{Obj, finite, parse};
+use crate::model::EffectId;
 
 /// Inertial parameters of one link, in its frame, about the RCM.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -312,14 +313,14 @@ impl Params {
             Ok(())
         };
         if let Some(v) = &e.torque_offset {
-            check("torque_offset", &["tau0_1", "tau0_2"], v)?;
+            check(EffectId::TorqueOffset.as_str(), &["tau0_1", "tau0_2"], v)?;
         }
         if let Some(v) = &e.coulomb_asymmetry {
-            check("coulomb_asymmetry", &["Fca1", "Fca2"], v)?;
+            check(EffectId::CoulombAsymmetry.as_str(), &["Fca1", "Fca2"], v)?;
         }
         if let Some(s) = &e.stribeck_friction {
             check(
-                "stribeck_friction",
+                EffectId::StribeckFriction.as_str(),
                 &["v_s", "Fs1", "Fs2"],
                 &[s.v_s, s.level[0], s.level[1]],
             )?;
@@ -332,7 +333,11 @@ impl Params {
             }
         }
         if let Some(v) = &e.passive_joint_viscous {
-            check("passive_joint_viscous", &["Fpb", "Fpc", "Fpd"], v)?;
+            check(
+                EffectId::PassiveJointViscous.as_str(),
+                &["Fpb", "Fpc", "Fpd"],
+                v,
+            )?;
         }
         if let Some(c) = &e.cogging {
             let key = "extra.cogging.cycles_per_rev";
@@ -368,7 +373,7 @@ impl Params {
             }
         }
         if let Some(v) = &e.quadratic_damping {
-            check("quadratic_damping", &["Fq1", "Fq2"], v)?;
+            check(EffectId::QuadraticDamping.as_str(), &["Fq1", "Fq2"], v)?;
         }
         Ok(())
     }
@@ -468,37 +473,38 @@ fn pair(o: &Obj, a: &str, b: &str) -> Result<[f64; 2], ParamError> {
 }
 
 fn read_extras(x: &Obj) -> Result<Extras, ParamError> {
-    x.only(&[
-        "torque_offset",
-        "coulomb_asymmetry",
-        "stribeck_friction",
-        "passive_joint_viscous",
-        "cogging",
-        "quadratic_damping",
-    ])?;
+    x.only(&EffectId::EXTRA.map(EffectId::as_str))?;
     let mut e = Extras::default();
     let has = |k: &str| x.opt(k).is_some();
-    if has("torque_offset") {
-        e.torque_offset = Some(pair(&x.obj("torque_offset")?, "tau0_1", "tau0_2")?);
+    if has(EffectId::TorqueOffset.as_str()) {
+        e.torque_offset = Some(pair(
+            &x.obj(EffectId::TorqueOffset.as_str())?,
+            "tau0_1",
+            "tau0_2",
+        )?);
     }
-    if has("coulomb_asymmetry") {
-        e.coulomb_asymmetry = Some(pair(&x.obj("coulomb_asymmetry")?, "Fca1", "Fca2")?);
+    if has(EffectId::CoulombAsymmetry.as_str()) {
+        e.coulomb_asymmetry = Some(pair(
+            &x.obj(EffectId::CoulombAsymmetry.as_str())?,
+            "Fca1",
+            "Fca2",
+        )?);
     }
-    if has("stribeck_friction") {
-        let o = x.obj("stribeck_friction")?;
+    if has(EffectId::StribeckFriction.as_str()) {
+        let o = x.obj(EffectId::StribeckFriction.as_str())?;
         o.only(&["v_s", "Fs1", "Fs2"])?;
         e.stribeck_friction = Some(Stribeck {
             v_s: o.num("v_s")?,
             level: [o.num("Fs1")?, o.num("Fs2")?],
         });
     }
-    if has("passive_joint_viscous") {
-        let o = x.obj("passive_joint_viscous")?;
+    if has(EffectId::PassiveJointViscous.as_str()) {
+        let o = x.obj(EffectId::PassiveJointViscous.as_str())?;
         o.only(&["Fpb", "Fpc", "Fpd"])?;
         e.passive_joint_viscous = Some([o.num("Fpb")?, o.num("Fpc")?, o.num("Fpd")?]);
     }
-    if has("cogging") {
-        let o = x.obj("cogging")?;
+    if has(EffectId::Cogging.as_str()) {
+        let o = x.obj(EffectId::Cogging.as_str())?;
         let order_v = o.num("order")?;
         if order_v.fract() != 0.0 || order_v < 1.0 || order_v > MAX_COGGING_ORDER as f64 {
             return Err(ParamError::Invalid {
@@ -524,8 +530,12 @@ fn read_extras(x: &Obj) -> Result<Extras, ParamError> {
         }
         e.cogging = Some(c);
     }
-    if has("quadratic_damping") {
-        e.quadratic_damping = Some(pair(&x.obj("quadratic_damping")?, "Fq1", "Fq2")?);
+    if has(EffectId::QuadraticDamping.as_str()) {
+        e.quadratic_damping = Some(pair(
+            &x.obj(EffectId::QuadraticDamping.as_str())?,
+            "Fq1",
+            "Fq2",
+        )?);
     }
     Ok(e)
 }
@@ -578,18 +588,24 @@ impl Serialize for ExtrasSer<'_> {
         let e = self.0;
         let mut m = s.serialize_map(None)?;
         if let Some([a, b]) = e.torque_offset {
-            m.serialize_entry("torque_offset", &Flat(&[("tau0_1", a), ("tau0_2", b)]))?;
+            m.serialize_entry(
+                EffectId::TorqueOffset.as_str(),
+                &Flat(&[("tau0_1", a), ("tau0_2", b)]),
+            )?;
         }
         if let Some([a, b]) = e.coulomb_asymmetry {
-            m.serialize_entry("coulomb_asymmetry", &Flat(&[("Fca1", a), ("Fca2", b)]))?;
+            m.serialize_entry(
+                EffectId::CoulombAsymmetry.as_str(),
+                &Flat(&[("Fca1", a), ("Fca2", b)]),
+            )?;
         }
         if let Some(st) = &e.stribeck_friction {
             let kv = [("v_s", st.v_s), ("Fs1", st.level[0]), ("Fs2", st.level[1])];
-            m.serialize_entry("stribeck_friction", &Flat(&kv))?;
+            m.serialize_entry(EffectId::StribeckFriction.as_str(), &Flat(&kv))?;
         }
         if let Some([a, b, c]) = e.passive_joint_viscous {
             let kv = [("Fpb", a), ("Fpc", b), ("Fpd", c)];
-            m.serialize_entry("passive_joint_viscous", &Flat(&kv))?;
+            m.serialize_entry(EffectId::PassiveJointViscous.as_str(), &Flat(&kv))?;
         }
         if let Some(c) = &e.cogging {
             let names = cogging_names(c.order());
@@ -605,10 +621,13 @@ impl Serialize for ExtrasSer<'_> {
                 }
             }
             kv.extend(names.iter().map(String::as_str).zip(vals));
-            m.serialize_entry("cogging", &Flat(&kv))?;
+            m.serialize_entry(EffectId::Cogging.as_str(), &Flat(&kv))?;
         }
         if let Some([a, b]) = e.quadratic_damping {
-            m.serialize_entry("quadratic_damping", &Flat(&[("Fq1", a), ("Fq2", b)]))?;
+            m.serialize_entry(
+                EffectId::QuadraticDamping.as_str(),
+                &Flat(&[("Fq1", a), ("Fq2", b)]),
+            )?;
         }
         m.end()
     }

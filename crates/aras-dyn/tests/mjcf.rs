@@ -376,3 +376,20 @@ proptest! {
         assert_round_trip(&p);
     }
 }
+
+#[test]
+fn an_unusable_home_pose_keeps_the_kinematic_reason_as_source() {
+    let opts = MjcfOptions {
+        home: [0.5, 0.0], // γ = 0: outside the reachable polar angles
+        ..MjcfOptions::default()
+    };
+    let e = to_mjcf(&Params::aras_diamond(), &opts).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "MJCF option `home` = [0.5, 0] rad is not a usable pose"
+    );
+    let kin = std::error::Error::source(&e)
+        .and_then(|s| s.downcast_ref::<aras_kin::KinError>())
+        .expect("the kinematic reason is the source");
+    assert!(!e.to_string().contains(&kin.to_string()));
+}

@@ -210,7 +210,7 @@ fn load_and_save_report_the_file() {
     with_extras().save(&path).unwrap();
     assert_eq!(Params::load(&path).unwrap(), with_extras());
     std::fs::write(&path, "{\"geometry\": 3}").unwrap();
-    let e = Params::load(&path).unwrap_err().to_string();
+    let e = chain(&Params::load(&path).unwrap_err());
     assert!(
         e.contains("robot.json") && e.contains("`geometry` must be a JSON object"),
         "{e}"
@@ -294,4 +294,62 @@ fn pseudo_inertia_rejects_link_numbers_outside_1_to_4() {
         assert!(e.contains("1 to 4"), "{e}");
     }
     assert!(p.pseudo_inertia(4).is_ok());
+}
+
+/// The error's message and each of its causes, `": "`-separated, as the
+/// `aras` binary prints them (one per line there).
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text = format!("{text}: {c}");
+        cause = c.source();
+    }
+    text
+}
+
+/// Each cause is shown once: by `source()`, not again in the message.
+fn assert_source_not_repeated(e: &dyn std::error::Error) {
+    let mut current = e;
+    while let Some(c) = current.source() {
+        assert!(
+            !current.to_string().contains(&c.to_string()),
+            "`{current}` repeats its source `{c}`"
+        );
+        current = c;
+    }
+}
+
+#[test]
+fn file_errors_name_the_file_and_keep_the_cause_as_source() {
+    let dir = std::env::temp_dir().join(format!("aras-dyn-chain-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("robot.json");
+    std::fs::write(&path, "{\"geometry\": 3}").unwrap();
+    let e = Params::load(&path).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!("in parameter file {}", path.display())
+    );
+    let inner = std::error::Error::source(&e).expect("the defect is the source");
+    assert!(
+        inner
+            .to_string()
+            .contains("`geometry` must be a JSON object"),
+        "{inner}"
+    );
+    assert_source_not_repeated(&e);
+
+    let absent = dir.join("absent.json");
+    let e = Params::load(&absent).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!("cannot access parameter file {}", absent.display())
+    );
+    let io = std::error::Error::source(&e)
+        .and_then(|s| s.downcast_ref::<std::io::Error>())
+        .expect("the I/O error is the source");
+    assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
+    assert_source_not_repeated(&e);
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -289,3 +289,70 @@ fn smooth_sign_converges() {
     let d = DVector::from_vec(a) - DVector::from_vec(b);
     assert!(d.norm() < 1e-12);
 }
+
+/// One spelling of every effect identifier: `EffectId` parses what it
+/// prints, serialises to the same string, and is the serde tag of the
+/// matching `Effect`; the parameter file's `extra` sections use it too.
+#[test]
+fn effect_ids_are_spelled_once() {
+    use aras_dyn::EffectId;
+    let examples = [
+        Effect::RigidLinks,
+        Effect::Friction,
+        Effect::Elasticity,
+        Effect::TorqueOffset,
+        Effect::CoulombAsymmetry,
+        Effect::StribeckFriction { v_s: 0.1 },
+        Effect::PassiveJointViscous,
+        Effect::Cogging {
+            cycles_per_rev: 12.0,
+            order: 2,
+        },
+        Effect::QuadraticDamping,
+    ];
+    assert_eq!(examples.map(|e| e.kind()), EffectId::ALL);
+    for (e, id) in examples.iter().zip(EffectId::ALL) {
+        assert_eq!(id.to_string(), id.as_str());
+        assert_eq!(id.as_str().parse::<EffectId>().unwrap(), id);
+        assert_eq!(
+            serde_json::to_value(id).unwrap(),
+            serde_json::json!(id.as_str())
+        );
+        assert_eq!(serde_json::to_value(e).unwrap()["id"], id.as_str());
+        assert_eq!(e.id(), id.as_str());
+    }
+    assert_eq!(
+        EffectId::StribeckFriction.as_str(),
+        "stribeck_friction",
+        "identifiers are stable: parameter files and reports use them"
+    );
+    let e = "stribeck".parse::<EffectId>().unwrap_err();
+    assert!(
+        e.to_string().contains("unknown effect `stribeck`")
+            && e.to_string().contains("stribeck_friction"),
+        "{e}"
+    );
+    // Every extra effect has its section in the parameter file, by its id.
+    let mut p = Params::aras_diamond();
+    p.extra.torque_offset = Some([0.1, -0.1]);
+    p.extra.coulomb_asymmetry = Some([0.01, 0.02]);
+    p.extra.stribeck_friction = Some(Stribeck {
+        v_s: 0.1,
+        level: [0.03, 0.04],
+    });
+    p.extra.passive_joint_viscous = Some([1e-3, 2e-3, 3e-3]);
+    p.extra.cogging = Some(Cogging {
+        cycles_per_rev: 12.0,
+        sin: [vec![0.01], vec![0.0]],
+        cos: [vec![0.0], vec![0.02]],
+    });
+    p.extra.quadratic_damping = Some([1e-4, 2e-4]);
+    let v = serde_json::to_value(&p).unwrap();
+    let extra = v["extra"].as_object().unwrap();
+    let keys: Vec<&str> = extra.keys().map(String::as_str).collect();
+    let mut want = EffectId::EXTRA.map(EffectId::as_str).to_vec();
+    let mut got = keys.clone();
+    want.sort_unstable();
+    got.sort_unstable();
+    assert_eq!(got, want);
+}

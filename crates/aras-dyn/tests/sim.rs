@@ -350,8 +350,24 @@ fn bad_settings_are_named() {
         3.0,
     )
     .unwrap();
-    let e = simulate(&p, &bad, &short(1.0)).unwrap_err().to_string();
+    let e = chain(&simulate(&p, &bad, &short(1.0)).unwrap_err());
     assert!(e.contains("t = ") && e.contains("gamma"), "{e}");
+}
+
+/// The error's message and each of its causes, `": "`-separated, as the
+/// `aras` binary prints them (one per line there); no cause is repeated.
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut current = e;
+    while let Some(c) = current.source() {
+        assert!(
+            !current.to_string().contains(&c.to_string()),
+            "`{current}` repeats its source `{c}`"
+        );
+        text = format!("{text}: {c}");
+        current = c;
+    }
+    text
 }
 
 /// Trajectory (79): derivatives against central differences (step 1e-5:

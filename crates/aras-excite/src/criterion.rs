@@ -140,10 +140,10 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         }
     }
 
-    fn fail(x: &Vector2<f64>, e: impl std::fmt::Display) -> ExciteError {
+    fn fail(x: &Vector2<f64>, e: impl std::error::Error + Send + Sync + 'static) -> ExciteError {
         ExciteError::Regressor {
             at: [x[0], x[1]],
-            message: e.to_string(),
+            source: Box::new(e),
         }
     }
 

@@ -36,7 +36,7 @@ use rayon::prelude::*;
 
 use crate::constraints::{GridConstraints, Limits, Margins, grid_factor};
 use crate::criterion::{Assessment, Criterion, Evaluator, check_projection};
-use crate::error::{ExciteError, check_finite};
+use crate::error::{ExciteError, check_finite, with_causes};
 use crate::fourier::{COORDS, DEFAULT_HARMONICS, DEFAULT_OMEGA_F, check_omega};
 use crate::param::{Grid, Layout};
 use crate::{FourierTrajectory, Regressor};
@@ -496,7 +496,7 @@ fn run_start<R: Regressor>(
     match value_at(&p) {
         Ok(a) => report.initial_value = a.value(settings.criterion),
         Err(e) => {
-            report.outcome = Err(e.to_string());
+            report.outcome = Err(with_causes(&e));
             report.time = t0.elapsed();
             return (p, report);
         }
@@ -593,7 +593,7 @@ fn run_start<R: Regressor>(
             let why = failure
                 .borrow_mut()
                 .take()
-                .map(|e| e.to_string())
+                .map(|e| with_causes(&e))
                 .unwrap_or_else(|| e.to_string());
             report.outcome = Err(format!("optimiser stopped: {why}"));
             report.time = t0.elapsed();
@@ -608,7 +608,7 @@ fn run_start<R: Regressor>(
     report.repair_scale = cons.scale_to_fit(&mut p, false, false);
     report.outcome = value_at(&p)
         .map(|a| a.value(settings.criterion))
-        .map_err(|e| e.to_string());
+        .map_err(|e| with_causes(&e));
     report.time = t0.elapsed();
     (p, report)
 }

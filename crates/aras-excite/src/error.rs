@@ -8,7 +8,9 @@ use aras_kin::KinError;
 /// an excitation trajectory.
 ///
 /// Messages name the offending setting or key, its value, the limit it broke
-/// and how to fix it. Angles are shown in degrees in messages; fields are SI
+/// and how to fix it. A variant with an underlying error returns it from
+/// [`source`](std::error::Error::source) and does not repeat it in its own
+/// message, so printing the chain shows each cause once. Angles are shown in degrees in messages; fields are SI
 /// (rad, rad/s, rad/s²).
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -48,7 +50,7 @@ pub enum ExciteError {
     /// (numerically) singular, so no trajectory inside it can be evaluated.
     #[error(
         "the workspace box φ ∈ [{phi_lo:.3}°, {phi_hi:.3}°], γ ∈ [{gamma_lo:.3}°, {gamma_hi:.3}°] is \
-         infeasible: at φ = {phi:.3}°, γ = {gamma:.3}° the kinematics fail ({source}); shrink the \
+         infeasible: at φ = {phi:.3}°, γ = {gamma:.3}° the kinematics fail; shrink the \
          box so it stays inside the reachable, non-singular region",
         phi_lo = lo[0].to_degrees(), phi_hi = hi[0].to_degrees(),
         gamma_lo = lo[1].to_degrees(), gamma_hi = hi[1].to_degrees(),
@@ -104,7 +106,7 @@ pub enum ExciteError {
         columns: usize,
     },
     /// The kinematics failed while sampling a trajectory.
-    #[error("kinematics failed at t = {t:.6} s: {source}")]
+    #[error("kinematics failed at t = {t:.6} s")]
     Kinematics {
         /// Sample time (s).
         t: f64,
@@ -112,13 +114,13 @@ pub enum ExciteError {
         source: KinError,
     },
     /// The user's regressor failed at a sample.
-    #[error("the regressor failed at φ = {phi:.4}°, γ = {gamma:.4}°: {message}",
+    #[error("the regressor failed at φ = {phi:.4}°, γ = {gamma:.4}°",
         phi = at[0].to_degrees(), gamma = at[1].to_degrees())]
     Regressor {
         /// Pose of the failing sample (rad).
         at: [f64; 2],
-        /// The regressor's own message.
-        message: String,
+        /// The regressor's own error.
+        source: Box<dyn std::error::Error + Send + Sync + 'static>,
     },
     /// The stacked base regressor along a trajectory is degenerate
     /// (a zero column or numerically rank-deficient).
@@ -152,7 +154,7 @@ pub enum ExciteError {
         message: String,
     },
     /// Reading or writing a file failed.
-    #[error("{path}: {source}")]
+    #[error("cannot read or write {path}")]
     Io {
         /// The file.
         path: PathBuf,
@@ -171,6 +173,19 @@ pub(crate) fn check_finite(name: impl FnOnce() -> String, value: f64) -> Result<
             value,
         })
     }
+}
+
+/// The error's message followed by each of its causes, `": "`-separated:
+/// the one-line form kept in a start's report.
+pub(crate) fn with_causes(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text.push_str(": ");
+        text.push_str(&c.to_string());
+        cause = c.source();
+    }
+    text
 }
 
 /// `line L, column C: `, or nothing when the position is unknown (0).

@@ -18,7 +18,7 @@ use nalgebra::Vector2;
 /// is reachable and non-singular first.
 pub trait Regressor: Sync {
     /// Why an evaluation failed (shown in [`ExciteError::Regressor`](crate::ExciteError)).
-    type Error: std::fmt::Display;
+    type Error: std::error::Error + Send + Sync + 'static;
 
     /// Number of columns `n`.
     fn columns(&self) -> usize;

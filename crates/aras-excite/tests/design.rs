@@ -106,10 +106,19 @@ fn d_optimal_design() {
     assert!(d.value < best.initial_value - 1.0, "{best:?}");
 }
 
+/// The design's error with its causes, as the `aras` binary prints them.
 fn err(s: DesignSettings) -> String {
     let reg = StandIn::default();
     let e = base_projection(&reg, 50, 7);
-    design(&reg, &e, &s).unwrap_err().to_string()
+    let e = design(&reg, &e, &s).unwrap_err();
+    assert_source_not_repeated(&e);
+    let mut text = e.to_string();
+    let mut cause = std::error::Error::source(&e);
+    while let Some(c) = cause {
+        text = format!("{text}: {c}");
+        cause = c.source();
+    }
+    text
 }
 
 #[test]
@@ -190,4 +199,31 @@ fn bad_settings_are_clear_errors() {
         matches!(e, ExciteError::ProjectionShape { rows: 3, .. }),
         "{e}"
     );
+}
+
+/// Each cause is shown once: by `source()`, not again in the message.
+fn assert_source_not_repeated(e: &dyn std::error::Error) {
+    let mut current = e;
+    while let Some(c) = current.source() {
+        assert!(
+            !current.to_string().contains(&c.to_string()),
+            "`{current}` repeats its source `{c}`"
+        );
+        current = c;
+    }
+}
+
+#[test]
+fn a_missing_trajectory_file_keeps_the_io_error_as_source() {
+    let path = std::env::temp_dir().join(format!("aras-absent-{}.csv", std::process::id()));
+    let e = aras_excite::FourierTrajectory::load(&path).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!("cannot read or write {}", path.display())
+    );
+    let io = std::error::Error::source(&e)
+        .and_then(|s| s.downcast_ref::<std::io::Error>())
+        .expect("the I/O error is the source");
+    assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
+    assert_source_not_repeated(&e);
 }

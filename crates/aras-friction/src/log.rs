@@ -17,16 +17,17 @@ use thiserror::Error;
 use crate::{FrictionError, Motion};
 
 /// Errors reading a joint log. `line` and `column` are 1-based.
-#[derive(Debug, Clone, PartialEq, Error)]
+#[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum LogError {
     /// The file could not be opened or read.
-    #[error("{file}: cannot read the log: {message}")]
+    #[error("{file}: cannot read the log")]
     Io {
         /// File name.
         file: String,
-        /// The operating system's message.
-        message: String,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
     },
     /// No header line.
     #[error(
@@ -290,7 +291,7 @@ pub fn read_joint_log(path: &Path, columns: &ColumnMap) -> Result<JointLog, LogE
     let file = path.display().to_string();
     let f = std::fs::File::open(path).map_err(|e| LogError::Io {
         file: file.clone(),
-        message: e.to_string(),
+        source: e,
     })?;
     let name = path
         .file_stem()
@@ -309,7 +310,7 @@ pub fn read_joint_log_from(
 ) -> Result<JointLog, LogError> {
     let io = |e: std::io::Error| LogError::Io {
         file: file.to_string(),
-        message: e.to_string(),
+        source: e,
     };
     let mut lines = reader.lines().enumerate();
     let mut header: Option<(u64, Vec<String>)> = None;

@@ -116,3 +116,30 @@ fn lugre_recovers_its_parameters() {
         &[1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 0.05, 0.05, 1e-3],
     );
 }
+
+/// Each cause is shown once: by `source()`, not again in the message.
+fn assert_source_not_repeated(e: &dyn std::error::Error) {
+    let mut current = e;
+    while let Some(c) = current.source() {
+        assert!(
+            !current.to_string().contains(&c.to_string()),
+            "`{current}` repeats its source `{c}`"
+        );
+        current = c;
+    }
+}
+
+#[test]
+fn a_missing_joint_log_keeps_the_io_error_as_source() {
+    let path = std::env::temp_dir().join(format!("aras-absent-{}.csv", std::process::id()));
+    let e = aras_friction::read_joint_log(&path, &aras_friction::ColumnMap::default()).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!("{}: cannot read the log", path.display())
+    );
+    let io = std::error::Error::source(&e)
+        .and_then(|s| s.downcast_ref::<std::io::Error>())
+        .expect("the I/O error is the source");
+    assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
+    assert_source_not_repeated(&e);
+}

@@ -250,7 +250,7 @@ pub struct Outcome {
     /// The physically consistent estimate's base parameters.
     pub sdp: Vec<f64>,
     /// The SDP's solver status.
-    pub sdp_status: String,
+    pub sdp_status: aras_ident::SolverStatus,
     /// Smallest pseudo-inertia eigenvalue per link of the SDP estimate.
     pub min_eigenvalues: Vec<f64>,
 }
@@ -331,7 +331,7 @@ pub fn run(samples: usize) -> Result<Outcome, Box<dyn std::error::Error>> {
         ols,
         streaming,
         sdp: sol.base.clone(),
-        sdp_status: sol.status.to_string(),
+        sdp_status: sol.status,
         min_eigenvalues: sol.links.iter().map(|l| l.min_eigenvalue).collect(),
     })
 }

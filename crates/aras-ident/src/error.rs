@@ -1,10 +1,20 @@
-//! The crate's error type.
+//! The crate's error type and the SDP solver's status.
 
+use std::fmt;
+
+use serde::Serialize;
 use thiserror::Error;
+
+use crate::linalg::NoConvergence;
 
 /// Everything that can go wrong in identification. Every message says what
 /// was wrong, where, and how to fix it.
-#[derive(Debug, Clone, PartialEq, Error)]
+///
+/// A variant with an underlying error returns it from
+/// [`source`](std::error::Error::source) and does not repeat it in its own
+/// message, so printing the chain (`error: …`, `caused by: …`) shows each
+/// cause once.
+#[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum IdentError {
     /// Two inputs that must agree in size do not.
@@ -142,8 +152,8 @@ pub enum IdentError {
          margin, or check that the reference/CAD values are physically consistent"
     )]
     Infeasible {
-        /// Solver status as text.
-        status: String,
+        /// What the solver reported.
+        status: SolverStatus,
     },
     /// The SDP solver stopped without a usable solution.
     #[error(
@@ -151,18 +161,46 @@ pub enum IdentError {
          tolerance, more iterations, or check the regressor's scaling"
     )]
     SolverFailed {
-        /// Solver status as text.
-        status: String,
+        /// What the solver reported.
+        status: SolverStatus,
         /// Iterations done.
         iterations: u32,
     },
-    /// An error from the robot crates (kinematics, dynamics, signal processing).
-    #[error("{context}: {message}")]
-    Adapter {
-        /// What was being done.
+    /// The SDP solver rejected its settings or the problem's data before
+    /// iterating.
+    #[error(
+        "the SDP solver could not be set up ({stage}); check the SDP settings (tolerance, \
+         iteration and time limits) for non-finite or non-positive values"
+    )]
+    SolverSetup {
+        /// `"settings"` or `"problem data"`.
+        stage: &'static str,
+        /// The solver's error.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync + 'static>,
+    },
+    /// A matrix factorisation did not converge.
+    #[error(transparent)]
+    NoConvergence(#[from] NoConvergence),
+    /// An error from outside identification, kept as the source: the
+    /// model's evaluation (a [`LinearModel`](crate::LinearModel)'s error), or
+    /// the code that feeds it (reading, filtering, the kinematics).
+    #[error("{context}")]
+    External {
+        /// What was being done, e.g. the sample's index.
         context: String,
-        /// The underlying error's message.
-        message: String,
+        /// The underlying error.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync + 'static>,
+    },
+    /// Input data that cannot be used (e.g. a non-finite torque), named with
+    /// where they were found.
+    #[error("{context}: {reason}")]
+    InvalidData {
+        /// Where, e.g. the sample's index.
+        context: String,
+        /// What is wrong and how to fix it.
+        reason: String,
     },
     /// The measured signal is constant, so the fitness (78) is undefined.
     #[error(
@@ -175,6 +213,82 @@ pub enum IdentError {
         /// Number of samples.
         len: usize,
     },
+}
+
+impl IdentError {
+    /// [`IdentError::External`] with `context` (what was being done) and the
+    /// underlying error.
+    pub fn external(
+        context: impl Into<String>,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Self::External {
+            context: context.into(),
+            source: Box::new(source),
+        }
+    }
+}
+
+/// How the SDP solver (clarabel) ended; the names are the solver's own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[non_exhaustive]
+pub enum SolverStatus {
+    /// The solver has not run.
+    Unsolved,
+    /// Solved to the requested tolerance.
+    Solved,
+    /// Solved to a reduced accuracy.
+    AlmostSolved,
+    /// The constraints admit no solution (certificate found).
+    PrimalInfeasible,
+    /// The objective is unbounded below (certificate found).
+    DualInfeasible,
+    /// Primal infeasible, to a reduced accuracy.
+    AlmostPrimalInfeasible,
+    /// Dual infeasible, to a reduced accuracy.
+    AlmostDualInfeasible,
+    /// The iteration limit was reached.
+    MaxIterations,
+    /// The time limit was reached.
+    MaxTime,
+    /// A numerical error stopped the solver.
+    NumericalError,
+    /// The solver stopped making progress.
+    InsufficientProgress,
+    /// A user callback stopped the solver.
+    CallbackTerminated,
+}
+
+impl SolverStatus {
+    /// The status's name as the solver spells it (e.g. `"AlmostSolved"`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Unsolved => "Unsolved",
+            Self::Solved => "Solved",
+            Self::AlmostSolved => "AlmostSolved",
+            Self::PrimalInfeasible => "PrimalInfeasible",
+            Self::DualInfeasible => "DualInfeasible",
+            Self::AlmostPrimalInfeasible => "AlmostPrimalInfeasible",
+            Self::AlmostDualInfeasible => "AlmostDualInfeasible",
+            Self::MaxIterations => "MaxIterations",
+            Self::MaxTime => "MaxTime",
+            Self::NumericalError => "NumericalError",
+            Self::InsufficientProgress => "InsufficientProgress",
+            Self::CallbackTerminated => "CallbackTerminated",
+        }
+    }
+
+    /// True for a usable solution ([`Solved`](Self::Solved) or
+    /// [`AlmostSolved`](Self::AlmostSolved)).
+    pub fn is_solved(self) -> bool {
+        matches!(self, Self::Solved | Self::AlmostSolved)
+    }
+}
+
+impl fmt::Display for SolverStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
 }
 
 /// Checks that every entry of a column-major view is finite.

@@ -73,7 +73,7 @@ pub mod validate;
 pub use base::{BaseParameters, COEFFICIENT_CLEAN, DEFAULT_RANK_TOLERANCE, RankMargin};
 pub use covariance::{HacCovariance, hac_covariance};
 pub use dense::symmetric_eigenvalues;
-pub use error::IdentError;
+pub use error::{IdentError, SolverStatus};
 pub use groups::RowGroups;
 pub use ls::{NoiseVariances, OlsEstimate, ReducedLs, WlsEstimate, ols, wls};
 pub use model::LinearModel;

@@ -224,13 +224,7 @@ impl ReducedLs {
             .zip(&std_dev)
             .map(|(x, s)| 100.0 * s / x.abs())
             .collect();
-        let mut singular_values =
-            crate::linalg::singular_values(self.r.as_ref()).map_err(|_| {
-                IdentError::SolverFailed {
-                    status: "SVD did not converge".into(),
-                    iterations: 0,
-                }
-            })?;
+        let mut singular_values = crate::linalg::singular_values(self.r.as_ref())?;
         singular_values.sort_by(|x, y| y.total_cmp(x));
         let condition_number = singular_values[0] / singular_values[b - 1];
         Ok(OlsEstimate {

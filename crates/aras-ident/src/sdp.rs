@@ -183,8 +183,9 @@ pub struct SdpSolution {
     pub masses: Vec<f64>,
     /// Base parameters `K β`.
     pub base: Vec<f64>,
-    /// Solver status (`Solved` or `AlmostSolved`).
-    pub status: String,
+    /// Solver status ([`Solved`](crate::SolverStatus::Solved) or
+    /// [`AlmostSolved`](crate::SolverStatus::AlmostSolved)).
+    pub status: crate::SolverStatus,
     /// True for `AlmostSolved` (reduced accuracy).
     pub reduced_accuracy: bool,
     /// Interior-point iterations.
@@ -632,20 +633,20 @@ impl ConsistentLs {
             .tol_gap_rel(s.tolerance)
             .tol_feas(s.tolerance)
             .build()
-            .map_err(|e| IdentError::SolverFailed {
-                status: format!("settings: {e}"),
-                iterations: 0,
+            .map_err(|e| IdentError::SolverSetup {
+                stage: "settings",
+                source: Box::new(e),
             })?;
         let mut solver =
             DefaultSolver::new(&p, &q, &amat, &rhs, &cones, settings).map_err(|e| {
-                IdentError::SolverFailed {
-                    status: format!("set-up: {e}"),
-                    iterations: 0,
+                IdentError::SolverSetup {
+                    stage: "problem data",
+                    source: Box::new(e),
                 }
             })?;
         solver.solve();
         let sol = &solver.solution;
-        let status = format!("{:?}", sol.status);
+        let status = solver_status(sol.status);
         match sol.status {
             SolverStatus::Solved | SolverStatus::AlmostSolved => {}
             SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
@@ -714,6 +715,25 @@ impl ConsistentLs {
             links,
             active,
         })
+    }
+}
+
+/// clarabel's status as this crate's (which exists without the `sdp` feature).
+fn solver_status(s: SolverStatus) -> crate::SolverStatus {
+    use crate::SolverStatus as S;
+    match s {
+        SolverStatus::Unsolved => S::Unsolved,
+        SolverStatus::Solved => S::Solved,
+        SolverStatus::AlmostSolved => S::AlmostSolved,
+        SolverStatus::PrimalInfeasible => S::PrimalInfeasible,
+        SolverStatus::DualInfeasible => S::DualInfeasible,
+        SolverStatus::AlmostPrimalInfeasible => S::AlmostPrimalInfeasible,
+        SolverStatus::AlmostDualInfeasible => S::AlmostDualInfeasible,
+        SolverStatus::MaxIterations => S::MaxIterations,
+        SolverStatus::MaxTime => S::MaxTime,
+        SolverStatus::NumericalError => S::NumericalError,
+        SolverStatus::InsufficientProgress => S::InsufficientProgress,
+        SolverStatus::CallbackTerminated => S::CallbackTerminated,
     }
 }
 

@@ -65,7 +65,7 @@ fn planar_arm_base_parameters_are_recovered_noise_free() {
     // The truth is physical and inside every bound, so the SDP reproduces it
     // up to its regulariser (λ = 1e-6 relative, pulling towards a reference
     // 10 % off) and the solver tolerance: 1e-3 relative.
-    assert_eq!(o.sdp_status, "Solved");
+    assert_eq!(o.sdp_status, aras_ident::SolverStatus::Solved);
     assert!(
         worst(&o.sdp, &o.truth) < 1e-3,
         "SDP {:?} vs {:?}",

@@ -69,7 +69,7 @@ fn feasible_ols_is_reproduced() {
     let sol = one_body_problem(&p, reference, 0.55)
         .solve(&p.base, &p.red)
         .unwrap();
-    assert_eq!(sol.status, "Solved");
+    assert_eq!(sol.status, aras_ident::SolverStatus::Solved);
     assert!(sol.active.is_empty(), "{sol}");
     for i in 0..p.base.n_base() {
         // λ = 1e-6 on a column-scaled problem of condition ~10: bias ~1e-4
@@ -101,7 +101,7 @@ fn pseudo_inertia_violation_is_repaired_at_the_boundary() {
     let sol = one_body_problem(&p, reference.clone(), 0.5)
         .solve(&p.base, &p.red)
         .unwrap();
-    assert_eq!(sol.status, "Solved");
+    assert_eq!(sol.status, aras_ident::SolverStatus::Solved);
     let link = &sol.links[0];
     assert!(link.psd_near_singular, "{sol}");
     assert!(
@@ -301,4 +301,46 @@ fn layout_mistakes_are_named() {
         .unwrap_err();
     assert!(matches!(e, IdentError::InvalidLayout { .. }), "{e}");
     assert!(c.bound(2, 1.0, 0.0).is_err());
+}
+
+/// Each cause is shown once: by `source()`, not again in the message.
+fn assert_source_not_repeated(e: &dyn std::error::Error) {
+    let mut current = e;
+    while let Some(c) = current.source() {
+        assert!(
+            !current.to_string().contains(&c.to_string()),
+            "`{current}` repeats its source `{c}`"
+        );
+        current = c;
+    }
+}
+
+#[test]
+fn external_errors_keep_their_source_and_statuses_are_typed() {
+    let cause = std::io::Error::other("pose is singular");
+    let e = aras_ident::IdentError::external("streaming regressor, sample 3", cause);
+    assert_eq!(e.to_string(), "streaming regressor, sample 3");
+    let src = std::error::Error::source(&e).expect("the model's error is the source");
+    assert_eq!(src.to_string(), "pose is singular");
+    assert!(src.downcast_ref::<std::io::Error>().is_some());
+    assert_source_not_repeated(&e);
+
+    use aras_ident::SolverStatus;
+    // The names are the solver's, in messages and in JSON reports alike.
+    assert_eq!(SolverStatus::AlmostSolved.to_string(), "AlmostSolved");
+    assert_eq!(
+        serde_json::to_string(&SolverStatus::AlmostSolved).unwrap(),
+        "\"AlmostSolved\""
+    );
+    assert!(SolverStatus::Solved.is_solved() && SolverStatus::AlmostSolved.is_solved());
+    assert!(!SolverStatus::MaxIterations.is_solved());
+    let e = aras_ident::IdentError::SolverFailed {
+        status: SolverStatus::MaxIterations,
+        iterations: 7,
+    };
+    assert!(
+        e.to_string()
+            .contains("status MaxIterations after 7 iterations"),
+        "{e}"
+    );
 }

@@ -28,10 +28,14 @@ pub struct Stacked {
     pub groups: RowGroups,
 }
 
-fn dyn_err(context: &str, e: impl std::fmt::Display) -> IdentError {
-    IdentError::Adapter {
+fn dyn_err(context: &str, e: impl std::error::Error + Send + Sync + 'static) -> IdentError {
+    IdentError::external(context, e)
+}
+
+fn invalid(context: &str, reason: impl Into<String>) -> IdentError {
+    IdentError::InvalidData {
         context: context.to_owned(),
-        message: e.to_string(),
+        reason: reason.into(),
     }
 }
 
@@ -50,7 +54,7 @@ pub fn stack(model: &Model, geometry: &Geometry, samples: &Samples) -> Result<St
         ("tau", &samples.tau),
     ] {
         if a[0].len() != n || a[1].len() != n {
-            return Err(dyn_err(
+            return Err(invalid(
                 "samples",
                 format!(
                     "`{what}` has {}/{} entries for {n} samples",
@@ -367,7 +371,7 @@ pub fn consistent_problem(model: &Model, reference: &Params) -> Result<Consisten
         .map_err(|e| dyn_err("reference parameters", e))?;
     let mut p = ConsistentLs::new(&names, beta.as_slice().to_vec())?;
     if !model.effects().contains(&Effect::RigidLinks) {
-        return Err(dyn_err(
+        return Err(invalid(
             "consistent problem",
             "the model has no rigid links, so there is nothing to keep physical",
         ));

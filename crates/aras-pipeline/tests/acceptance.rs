@@ -301,7 +301,8 @@ fn sdp_is_physical_positive_definite_and_fits_like_ols() {
         .solve(&s.base, &red)
         .unwrap();
     assert!(
-        sol.status == "Solved" || sol.status == "AlmostSolved",
+        sol.status == aras_ident::SolverStatus::Solved
+            || sol.status == aras_ident::SolverStatus::AlmostSolved,
         "{sol}"
     );
     let identified = params_from_solution(&s.truth, &s.model, &sol).unwrap();

@@ -108,7 +108,8 @@ fn default_robot_ols_and_sdp_round_trip() {
     let sol = problem.solve(&base, &red).unwrap();
     eprintln!("{base}\n{sol}");
     assert!(
-        sol.status == "Solved" || sol.status == "AlmostSolved",
+        sol.status == aras_ident::SolverStatus::Solved
+            || sol.status == aras_ident::SolverStatus::AlmostSolved,
         "{sol}"
     );
     for i in 0..base.n_base() {

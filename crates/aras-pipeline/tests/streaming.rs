@@ -601,3 +601,41 @@ proptest! {
         prop_assert!(e < check.error_bound + 1e-12, "{} vs {:?}", e, check);
     }
 }
+
+/// Each cause is shown once: by `source()`, not again in the message.
+fn assert_source_not_repeated(e: &dyn std::error::Error) {
+    let mut current = e;
+    while let Some(c) = current.source() {
+        assert!(
+            !current.to_string().contains(&c.to_string()),
+            "`{current}` repeats its source `{c}`"
+        );
+        current = c;
+    }
+}
+
+#[test]
+fn a_failing_sample_keeps_the_kinematics_error_as_source() {
+    let r = robot();
+    let mut stage = RegressorStage::new(r.regressor(), &r.base).unwrap();
+    let s = synthetic::states(&r.model, &r.geo, &r.beta, 100, 1000.0, 0.0).unwrap();
+    let mut gamma = s[0][1].clone();
+    gamma[40] = 0.0; // γ = 0 is a singularity
+    let states = States {
+        x: [&s[0][0], &gamma],
+        x_dot: [&s[1][0], &s[1][1]],
+        x_ddot: [&s[2][0], &s[2][1]],
+        tau: [&s[3][0], &s[3][1]],
+    };
+    let e = stage.push(&states).unwrap_err();
+    assert_eq!(e.to_string(), "streaming regressor, sample 40");
+    let cause = std::error::Error::source(&e).expect("the model's error is the source");
+    let kin = cause
+        .downcast_ref::<aras_pipeline::RegressorError>()
+        .expect("the source is the regressor's own error");
+    assert!(
+        matches!(kin, aras_pipeline::RegressorError::Kinematics(_)),
+        "{kin:?}"
+    );
+    assert_source_not_repeated(&e);
+}

@@ -1,5 +1,7 @@
 //! Typed errors. Every message says what was wrong, where (file, line,
-//! column, key, value) and how to fix it, so callers can print them as-is.
+//! column, key, value) and how to fix it. A variant with an underlying error
+//! returns it from [`source`](std::error::Error::source) and does not repeat
+//! it in its own message, so printing the chain shows each cause once.
 
 use std::path::PathBuf;
 
@@ -85,7 +87,7 @@ pub enum FilterError {
 #[derive(Debug, thiserror::Error)]
 pub enum LogError {
     /// The file could not be opened or read.
-    #[error("{file}: cannot read: {source}")]
+    #[error("{file}: cannot read the file")]
     Io {
         /// File name.
         file: String,
@@ -356,7 +358,7 @@ pub enum LogError {
         reason: String,
     },
     /// A sidecar file given explicitly does not exist.
-    #[error("sidecar {path} cannot be read: {source}")]
+    #[error("sidecar {path} cannot be read")]
     SidecarIo {
         /// The path.
         path: PathBuf,
@@ -370,7 +372,7 @@ pub enum LogError {
 #[derive(Debug, thiserror::Error)]
 pub enum ProcessError {
     /// Filter design or filtering failed.
-    #[error("{context}: {source}")]
+    #[error("{context}: the filter failed")]
     Filter {
         /// What was being filtered.
         context: String,
@@ -440,7 +442,7 @@ pub enum ProcessError {
         period_s: f64,
     },
     /// Kinematics failed at a sample.
-    #[error("kinematics at t = {t} s (sample {index}): {source}")]
+    #[error("kinematics failed at t = {t} s (sample {index})")]
     Kinematics {
         /// Sample index in the output.
         index: usize,

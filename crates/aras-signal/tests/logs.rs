@@ -370,3 +370,30 @@ fn invalid_options_are_reported() {
         .to_string();
     assert!(e.contains("invalid read option step_tolerance = -1"), "{e}");
 }
+
+/// Each cause is shown once: by `source()`, not again in the message.
+fn assert_source_not_repeated(e: &dyn std::error::Error) {
+    let mut current = e;
+    while let Some(c) = current.source() {
+        assert!(
+            !current.to_string().contains(&c.to_string()),
+            "`{current}` repeats its source `{c}`"
+        );
+        current = c;
+    }
+}
+
+#[test]
+fn a_missing_log_names_the_file_and_keeps_the_io_error_as_source() {
+    let path = std::env::temp_dir().join(format!("aras-absent-{}.csv", std::process::id()));
+    let e = read_log(&path, &ReadOptions::default()).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!("{}: cannot read the file", path.display())
+    );
+    let io = std::error::Error::source(&e)
+        .and_then(|s| s.downcast_ref::<std::io::Error>())
+        .expect("the I/O error is the source");
+    assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
+    assert_source_not_repeated(&e);
+}

@@ -231,10 +231,24 @@ fn wrong_period_is_a_clear_error() {
         period: PeriodSource::Off,
         ..ProcessOptions::default()
     };
-    let m = process(&log, &opts, &Geometry::aras_diamond())
-        .unwrap_err()
-        .to_string();
+    let m = chain(&process(&log, &opts, &Geometry::aras_diamond()).unwrap_err());
     assert!(m.contains("cut-off 800 Hz is invalid"), "{m}");
+}
+
+/// The error's message and each of its causes, `": "`-separated, as the
+/// `aras` binary prints them (one per line there); no cause is repeated.
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut current = e;
+    while let Some(c) = current.source() {
+        assert!(
+            !current.to_string().contains(&c.to_string()),
+            "`{current}` repeats its source `{c}`"
+        );
+        text = format!("{text}: {c}");
+        current = c;
+    }
+    text
 }
 
 #[test]

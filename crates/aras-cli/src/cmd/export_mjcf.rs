@@ -47,7 +47,10 @@ pub fn write_beside(out: &crate::output::OutDir, params: &Params) -> Result<()> 
         Ok(xml) => {
             out.write("robot.xml", xml)?;
         }
-        Err(e) => eprintln!("warning: robot.xml not written: {e}"),
+        Err(e) => eprintln!(
+            "warning: robot.xml not written: {:#}",
+            anyhow::Error::from(e)
+        ),
     }
     Ok(())
 }

@@ -482,13 +482,13 @@ fn run_block<M: LinearModel>(
     w.rows[0] += kept[0];
     w.rows[1] += kept[1];
     if !w.sums.is_finite() {
-        return Err(IdentError::Adapter {
+        return Err(IdentError::InvalidData {
             context: format!(
                 "streaming regressor, block of samples {}..{}",
                 bl.offset + bl.start,
                 bl.offset + bl.start + rows
             ),
-            message: "the regressor or a torque overflowed to a non-finite value; \
+            reason: "the regressor or a torque overflowed to a non-finite value; \
                       check the states for extreme rates or accelerations"
                 .into(),
         });
@@ -507,9 +507,9 @@ fn fill_sample<M: LinearModel>(
 ) -> Result<(), IdentError> {
     for (j, tau) in st.tau.iter().enumerate() {
         if !tau[k].is_finite() {
-            return Err(IdentError::Adapter {
+            return Err(IdentError::InvalidData {
                 context: format!("streaming regressor, sample {}", offset + k),
-                message: format!(
+                reason: format!(
                     "torque tau{} = {} is not finite; repair or drop the sample",
                     j + 1,
                     tau[k]
@@ -524,8 +524,5 @@ fn fill_sample<M: LinearModel>(
             &[st.x_ddot[0][k], st.x_ddot[1][k]],
             y,
         )
-        .map_err(|e| IdentError::Adapter {
-            context: format!("streaming regressor, sample {}", offset + k),
-            message: e.to_string(),
-        })
+        .map_err(|e| IdentError::external(format!("streaming regressor, sample {}", offset + k), e))
 }

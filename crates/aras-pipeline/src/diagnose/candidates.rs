@@ -4,18 +4,22 @@
 //! is an [`aras_dyn::Effect`], so the extended model is an ordinary
 //! [`aras_dyn::Model`] that identification and prediction use unchanged.
 
-use aras_dyn::Effect;
+use aras_dyn::{Effect, EffectId};
 use serde::Serialize;
 
-/// Stable identifiers of the candidates, in the order they are tried.
+/// Identifier of the one candidate that is not a model effect.
+pub const TIME_DELAY: &str = "time_delay";
+
+/// Stable identifiers of the candidates, in the order they are tried: the
+/// extra effects ([`EffectId::EXTRA`]), then [`TIME_DELAY`].
 pub const CANDIDATE_IDS: [&str; 7] = [
-    "torque_offset",
-    "coulomb_asymmetry",
-    "stribeck_friction",
-    "passive_joint_viscous",
-    "cogging",
-    "quadratic_damping",
-    "time_delay",
+    EffectId::EXTRA[0].as_str(),
+    EffectId::EXTRA[1].as_str(),
+    EffectId::EXTRA[2].as_str(),
+    EffectId::EXTRA[3].as_str(),
+    EffectId::EXTRA[4].as_str(),
+    EffectId::EXTRA[5].as_str(),
+    TIME_DELAY,
 ];
 
 /// One candidate with one value of its non-linear setting.
@@ -41,7 +45,7 @@ impl Candidate {
     pub fn id(&self) -> &'static str {
         match self {
             Candidate::Effect { effect } => effect.id(),
-            Candidate::TimeDelay { .. } => "time_delay",
+            Candidate::TimeDelay { .. } => TIME_DELAY,
         }
     }
 
@@ -73,43 +77,46 @@ impl Candidate {
 /// The physical explanation of a candidate identifier (empty for an unknown
 /// identifier).
 pub fn explanation(id: &str) -> &'static str {
-    match id {
-        "torque_offset" => {
+    if id == TIME_DELAY {
+        return "torque and angle samples are not simultaneous (current-loop or communication \
+                latency, filter group delay in the drive); the residual is proportional to the \
+                torque's rate of change";
+    }
+    let Ok(effect) = id.parse::<EffectId>() else {
+        return "";
+    };
+    match effect {
+        EffectId::TorqueOffset => {
             "a constant torque bias per motor: current-sensor or amplifier offset, or a cable \
              or counterweight load that does not depend on the pose; the residual is shifted by \
              the same amount everywhere"
         }
-        "coulomb_asymmetry" => {
+        EffectId::CoulombAsymmetry => {
             "the Coulomb friction level differs between the two directions of motion (capstan \
              cable pre-tension, seal or bearing asymmetry); while the joint moves it acts like \
              an offset, at rest it vanishes"
         }
-        "stribeck_friction" => {
+        EffectId::StribeckFriction => {
             "friction rises above the Coulomb level at low speed and decays with the Stribeck \
              velocity v_s (boundary lubrication); the residual peaks, with the sign of the \
              velocity, just after each velocity reversal"
         }
-        "passive_joint_viscous" => {
+        EffectId::PassiveJointViscous => {
             "viscous friction in the passive hinges about b, c and d (bearings of the distal \
              links), proportional to their relative angular rates and mapped to the motors by \
              virtual work; the residual depends on velocity and pose together"
         }
-        "cogging" => {
+        EffectId::Cogging => {
             "torque periodic in the motor angle (permanent-magnet detent torque, gear or \
              capstan-groove ripple), with a fixed number of cycles per joint revolution; the \
              residual oscillates with the joint angle"
         }
-        "quadratic_damping" => {
+        EffectId::QuadraticDamping => {
             "damping growing with the square of the speed (fluid or air drag, windage, \
              velocity-dependent seal friction); the residual grows faster than linearly with \
              |θ̇| and keeps its sign"
         }
-        "time_delay" => {
-            "torque and angle samples are not simultaneous (current-loop or communication \
-             latency, filter group delay in the drive); the residual is proportional to the \
-             torque's rate of change"
-        }
-        _ => "",
+        EffectId::RigidLinks | EffectId::Friction | EffectId::Elasticity => "",
     }
 }
 
@@ -161,23 +168,24 @@ impl CandidateGrid {
             if !self.ids.iter().any(|s| s == id) {
                 continue;
             }
-            match id {
-                "torque_offset" => out.push(eff(Effect::TorqueOffset)),
-                "coulomb_asymmetry" => out.push(eff(Effect::CoulombAsymmetry)),
-                "stribeck_friction" => out.extend(
+            match id.parse::<EffectId>() {
+                Ok(EffectId::TorqueOffset) => out.push(eff(Effect::TorqueOffset)),
+                Ok(EffectId::CoulombAsymmetry) => out.push(eff(Effect::CoulombAsymmetry)),
+                Ok(EffectId::StribeckFriction) => out.extend(
                     self.stribeck_v_s
                         .iter()
                         .map(|&v_s| eff(Effect::StribeckFriction { v_s })),
                 ),
-                "passive_joint_viscous" => out.push(eff(Effect::PassiveJointViscous)),
-                "cogging" => out.extend(self.cogging_cycles.iter().map(|&c| {
+                Ok(EffectId::PassiveJointViscous) => out.push(eff(Effect::PassiveJointViscous)),
+                Ok(EffectId::Cogging) => out.extend(self.cogging_cycles.iter().map(|&c| {
                     eff(Effect::Cogging {
                         cycles_per_rev: c,
                         order: self.cogging_order,
                     })
                 })),
-                "quadratic_damping" => out.push(eff(Effect::QuadraticDamping)),
-                _ => out.extend(
+                Ok(EffectId::QuadraticDamping) => out.push(eff(Effect::QuadraticDamping)),
+                Ok(EffectId::RigidLinks | EffectId::Friction | EffectId::Elasticity) => {}
+                Err(_) => out.extend(
                     self.delays
                         .iter()
                         .map(|&samples| Candidate::TimeDelay { samples }),

@@ -146,10 +146,7 @@ pub(crate) fn filtered_torques(data: &Dataset) -> Result<[Vec<f64>; 2], IdentErr
             } else {
                 sos.filtfilt(x)
             }
-            .map_err(|e| IdentError::Adapter {
-                context: "filtering the torques".into(),
-                message: e.to_string(),
-            }),
+            .map_err(|e| IdentError::external("filtering the torques", e)),
         }
     };
     Ok([run(&data.samples.tau[0])?, run(&data.samples.tau[1])?])

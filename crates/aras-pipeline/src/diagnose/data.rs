@@ -37,12 +37,8 @@ impl Dataset {
         let s = &processed.summary;
         let filter = match &s.filter {
             Some(f) => Some(
-                aras_signal::Butterworth::lowpass(f.order, f.cutoff_hz, s.sample_rate_hz).map_err(
-                    |e| IdentError::Adapter {
-                        context: "re-designing the processing low-pass".into(),
-                        message: e.to_string(),
-                    },
-                )?,
+                aras_signal::Butterworth::lowpass(f.order, f.cutoff_hz, s.sample_rate_hz)
+                    .map_err(|e| IdentError::external("re-designing the processing low-pass", e))?,
             ),
             None => None,
         };

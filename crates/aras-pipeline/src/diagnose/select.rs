@@ -211,7 +211,7 @@ pub struct FitnessRow {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ConsistentFit {
     /// Solver status.
-    pub status: String,
+    pub status: aras_ident::SolverStatus,
     /// Validation fitness per set per joint (%).
     pub fitness: Vec<[f64; 2]>,
     /// Standard parameters of the final model.
@@ -485,6 +485,13 @@ impl Context<'_> {
     }
 }
 
+/// Stands in for an error taken out of a lane's state (never reported).
+const LANE_STOPPED: IdentError = IdentError::InvalidSetting {
+    name: "accumulation lanes",
+    value: 0.0,
+    reason: "internal: the lane stopped at an earlier error",
+};
+
 fn fitness_pair(v: &[f64]) -> [f64; 2] {
     [
         v.first().copied().unwrap_or(0.0),
@@ -575,10 +582,7 @@ pub fn diagnose(
         .map(|c| match c {
             Candidate::Effect { effect } => Model::new(vec![*effect], start.gravity())
                 .map(Some)
-                .map_err(|e| IdentError::Adapter {
-                    context: format!("candidate {}", effect.id()),
-                    message: e.to_string(),
-                }),
+                .map_err(|e| IdentError::external(format!("candidate {}", effect.id()), e)),
             Candidate::TimeDelay { .. } => Ok(None),
         })
         .collect::<Result<Vec<_>, _>>()?;
@@ -821,10 +825,7 @@ pub fn diagnose(
         if let Candidate::Effect { effect } = s.candidate {
             final_model = final_model
                 .with_effect(effect)
-                .map_err(|e| IdentError::Adapter {
-                    context: "extending the model".into(),
-                    message: e.to_string(),
-                })?;
+                .map_err(|e| IdentError::external("extending the model", e))?;
         }
     }
     let mut estimate: Vec<NamedValue> = Vec::new();
@@ -905,10 +906,7 @@ fn refine_stribeck(
             .map(|c| match c {
                 Candidate::Effect { effect } => Model::new(vec![*effect], ctx.start.gravity())
                     .map(Some)
-                    .map_err(|e| IdentError::Adapter {
-                        context: format!("candidate {}", effect.id()),
-                        message: e.to_string(),
-                    }),
+                    .map_err(|e| IdentError::external(format!("candidate {}", effect.id()), e)),
                 Candidate::TimeDelay { .. } => Ok(None),
             })
             .collect::<Result<Vec<_>, _>>()?;
@@ -1044,7 +1042,11 @@ fn consistent_fit(
         &base,
         delay,
         || QrAccumulator::new(&bn, 2),
-        |acc, g, w, t| acc.as_mut().map_err(|e| e.clone())?.push_rows(g, w, t),
+        |acc, g, w, t| match acc {
+            Ok(a) => a.push_rows(g, w, t),
+            // The lane stops at this error; its state is not used again.
+            Err(_) => Err(std::mem::replace(acc, Err(LANE_STOPPED)).unwrap_err()),
+        },
     )?;
     let mut it = lanes.into_iter();
     let mut acc = it.next().ok_or(IdentError::InvalidSetting {
@@ -1103,7 +1105,7 @@ fn consistent_fit(
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(ConsistentFit {
-        status: sol.status.clone(),
+        status: sol.status,
         fitness,
         parameters: names
             .iter()

@@ -144,10 +144,14 @@ pub struct StreamingResult {
     pub log: LogReport,
 }
 
-fn sig(context: &str, e: impl std::fmt::Display) -> IdentError {
-    IdentError::Adapter {
+fn sig(context: &str, e: impl std::error::Error + Send + Sync + 'static) -> IdentError {
+    IdentError::external(context, e)
+}
+
+fn invalid(context: &str, reason: &str) -> IdentError {
+    IdentError::InvalidData {
         context: context.to_owned(),
-        message: e.to_string(),
+        reason: reason.to_owned(),
     }
 }
 
@@ -216,7 +220,8 @@ pub fn identify_log_with_progress(
         });
     }
     let name = path.display().to_string();
-    let mut reader = LogReader::open(path, &options.read).map_err(|e| sig("opening the log", e))?;
+    let mut reader = LogReader::open(path, &options.read)
+        .map_err(|e| sig(&format!("opening the log {name}"), e))?;
     if !(options.min_speed.is_finite() && options.min_speed >= 0.0) {
         return Err(IdentError::InvalidSetting {
             name: "min_speed",
@@ -252,7 +257,7 @@ pub fn identify_log_with_progress(
     let mut read = |reader: &mut LogReader<std::fs::File>, chunk: &mut Columns, n: usize| {
         let k = reader
             .read_rows(chunk, n)
-            .map_err(|e| sig("reading the log", e))?;
+            .map_err(|e| sig(&format!("reading the log {name}"), e))?;
         rows_read += k as u64;
         progress(rows_read);
         Ok::<usize, IdentError>(k)
@@ -334,7 +339,7 @@ pub fn identify_log_with_progress(
             out.read += n;
             out.blocks += 1;
         }
-        let sums = avg.ok_or_else(|| sig(&name, "the log has no data rows"))?;
+        let sums = avg.ok_or_else(|| invalid(&name, "the log has no data rows"))?;
         let (log, periods) = sums.finish(&name, out.read, reader.sidecar().clone())?;
         out.periods = periods;
         let mut popts = options.process.clone();
@@ -365,7 +370,7 @@ pub fn identify_log_with_progress(
             out.read += n;
             if first {
                 if buf.is_empty() {
-                    return Err(sig(&name, "the log has no data rows"));
+                    return Err(invalid(&name, "the log has no data rows"));
                 }
                 dt = nominal_step(&buf, dt)?;
                 if popts.filter == Bandwidth::Auto && !logged {
@@ -418,13 +423,15 @@ pub fn identify_log_with_progress(
     if route == StreamingRoute::LoggedDerivatives {
         acc = stage.accumulator();
     }
-    let report = reader.finish().map_err(|e| sig("checking the log", e))?;
+    let report = reader
+        .finish()
+        .map_err(|e| sig(&format!("checking the log {name}"), e))?;
     let [n1, n2] = [acc.group_rows()[0], acc.group_rows()[1]];
     let b = acc.names().len();
     if n1 < b || n2 < b {
-        return Err(IdentError::Adapter {
+        return Err(IdentError::InvalidData {
             context: format!("streaming identification of {name}"),
-            message: format!(
+            reason: format!(
                 "only {n1} (joint 1) and {n2} (joint 2) samples are away from velocity \
                  reversals (min_speed = {} rad/s, widened by the filter's reach at {}); \
                  lower them or excite the joints more",
@@ -473,7 +480,7 @@ fn nominal_step(c: &Columns, given: f64) -> Result<f64, IdentError> {
     }
     let k = (c.len().saturating_sub(1)).min(aras_signal::NOMINAL_WINDOW);
     if k == 0 {
-        return Err(sig(
+        return Err(invalid(
             "estimating the sample step",
             "the log has fewer than 2 rows; record at least 16 samples",
         ));
@@ -763,9 +770,9 @@ impl PeriodSums {
     fn finish(self, name: &str, rows: usize, sidecar: Sidecar) -> Result<(Log, usize), IdentError> {
         let periods = self.periods;
         if periods == 0 {
-            return Err(IdentError::Adapter {
+            return Err(IdentError::InvalidData {
                 context: format!("period averaging of {name}"),
-                message: format!(
+                reason: format!(
                     "{rows} rows hold no whole period of {} s ({} samples) after {} settling samples; \
                      record at least one whole period",
                     self.period_s, self.per, self.settling
@@ -774,9 +781,9 @@ impl PeriodSums {
         }
         let drift = (self.exact - self.per as f64).abs() * periods as f64;
         if drift > 0.5 {
-            return Err(IdentError::Adapter {
+            return Err(IdentError::InvalidData {
                 context: format!("period averaging of {name}"),
-                message: format!(
+                reason: format!(
                     "the period {} s is {:.4} samples at step {} s, not a whole number: it drifts \
                      {drift:.2} samples over {periods} periods; give the exact period or resample",
                     self.period_s, self.exact, self.dt

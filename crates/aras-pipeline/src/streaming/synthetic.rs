@@ -120,14 +120,11 @@ fn sample(
     noise_std: f64,
 ) -> Result<(aras_kin::KinematicSample, [f64; 2]), IdentError> {
     let [x, xd, xdd] = state(i as f64 / fs);
-    let s = aras_kin::evaluate(geometry, &x, &xd, &xdd).map_err(|e| IdentError::Adapter {
-        context: "synthetic trajectory".into(),
-        message: e.to_string(),
-    })?;
-    let tau = model.torque(&s, beta).map_err(|e| IdentError::Adapter {
-        context: "synthetic torques".into(),
-        message: e.to_string(),
-    })?;
+    let s = aras_kin::evaluate(geometry, &x, &xd, &xdd)
+        .map_err(|e| IdentError::external("synthetic trajectory", e))?;
+    let tau = model
+        .torque(&s, beta)
+        .map_err(|e| IdentError::external("synthetic torques", e))?;
     let i = i as u64;
     Ok((
         s,
@@ -150,10 +147,7 @@ pub fn write_log(
     fs: f64,
     noise_std: f64,
 ) -> Result<(), IdentError> {
-    let io = |e: std::io::Error| IdentError::Adapter {
-        context: format!("writing {}", path.display()),
-        message: e.to_string(),
-    };
+    let io = |e: std::io::Error| IdentError::external(format!("writing {}", path.display()), e);
     let mut f = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
     writeln!(
         f,
