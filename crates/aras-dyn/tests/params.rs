@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use aras_dyn::{ArcLink, Cogging, Params, PointMass, Stribeck, arc_robot};
+use aras_testkit::{assert_source_not_repeated, error_chain as chain};
 use nalgebra::{Matrix3, Vector3};
 
 fn fixture() -> PathBuf {
@@ -294,30 +295,6 @@ fn pseudo_inertia_rejects_link_numbers_outside_1_to_4() {
         assert!(e.contains("1 to 4"), "{e}");
     }
     assert!(p.pseudo_inertia(4).is_ok());
-}
-
-/// The error's message and each of its causes, `": "`-separated, as the
-/// `aras` binary prints them (one per line there).
-fn chain(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut cause = e.source();
-    while let Some(c) = cause {
-        text = format!("{text}: {c}");
-        cause = c.source();
-    }
-    text
-}
-
-/// Each cause is shown once: by `source()`, not again in the message.
-fn assert_source_not_repeated(e: &dyn std::error::Error) {
-    let mut current = e;
-    while let Some(c) = current.source() {
-        assert!(
-            !current.to_string().contains(&c.to_string()),
-            "`{current}` repeats its source `{c}`"
-        );
-        current = c;
-    }
 }
 
 #[test]

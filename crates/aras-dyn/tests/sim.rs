@@ -4,6 +4,7 @@
 use aras_dyn::sim::{SimConfig, sidecar_path, simulate, write_log};
 use aras_dyn::{Cogging, Params, Sinusoid, Stribeck, Trajectory};
 use aras_kin::{AssemblyMode, evaluate, forward};
+use aras_testkit::error_chain as chain;
 use nalgebra::Vector2;
 
 fn short(duration_s: f64) -> SimConfig {
@@ -352,22 +353,6 @@ fn bad_settings_are_named() {
     .unwrap();
     let e = chain(&simulate(&p, &bad, &short(1.0)).unwrap_err());
     assert!(e.contains("t = ") && e.contains("gamma"), "{e}");
-}
-
-/// The error's message and each of its causes, `": "`-separated, as the
-/// `aras` binary prints them (one per line there); no cause is repeated.
-fn chain(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut current = e;
-    while let Some(c) = current.source() {
-        assert!(
-            !current.to_string().contains(&c.to_string()),
-            "`{current}` repeats its source `{c}`"
-        );
-        text = format!("{text}: {c}");
-        current = c;
-    }
-    text
 }
 
 /// Trajectory (79): derivatives against central differences (step 1e-5:

@@ -8,6 +8,7 @@ use aras_excite::{
     Criterion, DesignSettings, ExciteError, Limits, Margins, assess, design, random_feasible,
 };
 use aras_kin::Workspace;
+use aras_testkit::assert_source_not_repeated;
 use nalgebra::Vector2;
 use test_support::{StandIn, base_projection};
 
@@ -199,18 +200,6 @@ fn bad_settings_are_clear_errors() {
         matches!(e, ExciteError::ProjectionShape { rows: 3, .. }),
         "{e}"
     );
-}
-
-/// Each cause is shown once: by `source()`, not again in the message.
-fn assert_source_not_repeated(e: &dyn std::error::Error) {
-    let mut current = e;
-    while let Some(c) = current.source() {
-        assert!(
-            !current.to_string().contains(&c.to_string()),
-            "`{current}` repeats its source `{c}`"
-        );
-        current = c;
-    }
 }
 
 #[test]

@@ -8,6 +8,7 @@ use aras_friction::{
     fit::{FitSettings, fit_coulomb_viscous, fit_dahl, fit_lugre, fit_stribeck},
     sim::{JointSimulation, SensorNoise, TrueFriction, typical_lugre},
 };
+use aras_testkit::assert_source_not_repeated;
 
 fn quiet(duration: f64, lugre: LuGre) -> JointSimulation {
     JointSimulation {
@@ -115,18 +116,6 @@ fn lugre_recovers_its_parameters() {
         &truth.parameters(),
         &[1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 0.05, 0.05, 1e-3],
     );
-}
-
-/// Each cause is shown once: by `source()`, not again in the message.
-fn assert_source_not_repeated(e: &dyn std::error::Error) {
-    let mut current = e;
-    while let Some(c) = current.source() {
-        assert!(
-            !current.to_string().contains(&c.to_string()),
-            "`{current}` repeats its source `{c}`"
-        );
-        current = c;
-    }
 }
 
 #[test]

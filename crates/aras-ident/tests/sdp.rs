@@ -8,6 +8,7 @@ use aras_ident::{
     BaseParameters, ConsistentLs, ConstraintKind, IdentError, LinkLayout, ReducedLs, SdpSolution,
     pseudo_inertia_min_eigenvalue,
 };
+use aras_testkit::assert_source_not_repeated;
 use faer::Mat;
 
 const FRICTION: [&str; 6] = ["Fv1", "Fc1", "Fv2", "Fc2", "Fv3", "Fc3"];
@@ -301,18 +302,6 @@ fn layout_mistakes_are_named() {
         .unwrap_err();
     assert!(matches!(e, IdentError::InvalidLayout { .. }), "{e}");
     assert!(c.bound(2, 1.0, 0.0).is_err());
-}
-
-/// Each cause is shown once: by `source()`, not again in the message.
-fn assert_source_not_repeated(e: &dyn std::error::Error) {
-    let mut current = e;
-    while let Some(c) = current.source() {
-        assert!(
-            !current.to_string().contains(&c.to_string()),
-            "`{current}` repeats its source `{c}`"
-        );
-        current = c;
-    }
 }
 
 #[test]

@@ -13,6 +13,7 @@ use aras_pipeline::streaming::{StreamingOptions, StreamingRoute, identify_log, s
 use aras_signal::{
     Bandwidth, Butterworth, FilterSpec, PeriodSource, ReadOptions, process, read_log,
 };
+use aras_testkit::assert_source_not_repeated;
 use faer::Mat;
 use proptest::prelude::*;
 
@@ -599,18 +600,6 @@ proptest! {
         let e = rel(&acc.ols().unwrap().estimate, &mem.estimate);
         // + 1e-12: the rounding of sums over thousands of rows (κ ≈ 1).
         prop_assert!(e < check.error_bound + 1e-12, "{} vs {:?}", e, check);
-    }
-}
-
-/// Each cause is shown once: by `source()`, not again in the message.
-fn assert_source_not_repeated(e: &dyn std::error::Error) {
-    let mut current = e;
-    while let Some(c) = current.source() {
-        assert!(
-            !current.to_string().contains(&c.to_string()),
-            "`{current}` repeats its source `{c}`"
-        );
-        current = c;
     }
 }
 

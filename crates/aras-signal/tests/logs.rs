@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use aras_signal::{
     Columns, LogReader, ReadOptions, Sensors, SidecarSource, Warning, read_log, read_log_from,
 };
+use aras_testkit::assert_source_not_repeated;
 
 fn fixture(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -369,18 +370,6 @@ fn invalid_options_are_reported() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("invalid read option step_tolerance = -1"), "{e}");
-}
-
-/// Each cause is shown once: by `source()`, not again in the message.
-fn assert_source_not_repeated(e: &dyn std::error::Error) {
-    let mut current = e;
-    while let Some(c) = current.source() {
-        assert!(
-            !current.to_string().contains(&c.to_string()),
-            "`{current}` repeats its source `{c}`"
-        );
-        current = c;
-    }
 }
 
 #[test]

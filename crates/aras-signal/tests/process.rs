@@ -8,6 +8,7 @@ use aras_signal::{
     Bandwidth, BandwidthMethod, DerivativeMethod, FilterSpec, PeriodSource, ProcessError,
     ProcessOptions, ReadOptions, process, read_log_from,
 };
+use aras_testkit::error_chain as chain;
 use nalgebra::Vector2;
 
 const PERIOD: f64 = 2.0;
@@ -233,22 +234,6 @@ fn wrong_period_is_a_clear_error() {
     };
     let m = chain(&process(&log, &opts, &Geometry::aras_diamond()).unwrap_err());
     assert!(m.contains("cut-off 800 Hz is invalid"), "{m}");
-}
-
-/// The error's message and each of its causes, `": "`-separated, as the
-/// `aras` binary prints them (one per line there); no cause is repeated.
-fn chain(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut current = e;
-    while let Some(c) = current.source() {
-        assert!(
-            !current.to_string().contains(&c.to_string()),
-            "`{current}` repeats its source `{c}`"
-        );
-        text = format!("{text}: {c}");
-        current = c;
-    }
-    text
 }
 
 #[test]

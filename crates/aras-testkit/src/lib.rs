@@ -1,0 +1,69 @@
+//! Test helpers shared by the workspace's test suites, so that every crate
+//! checks its error messages the same way. A development dependency only:
+//! no library depends on it.
+
+#![warn(missing_docs)]
+
+use std::error::Error;
+
+/// Each cause of `e` is shown once: by `source()`, not again in the message
+/// of the error above it (the `aras` binary prints the whole chain, so a
+/// repeated cause would be printed twice).
+///
+/// # Panics
+/// When an error's message contains its source's message.
+pub fn assert_source_not_repeated(e: &dyn Error) {
+    let mut current = e;
+    while let Some(c) = current.source() {
+        assert!(
+            !current.to_string().contains(&c.to_string()),
+            "`{current}` repeats its source `{c}`"
+        );
+        current = c;
+    }
+}
+
+/// The error's message and each of its causes, `": "`-separated, as the
+/// `aras` binary prints them (one per line there), after checking that no
+/// cause is repeated ([`assert_source_not_repeated`]).
+pub fn error_chain(e: &dyn Error) -> String {
+    assert_source_not_repeated(e);
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text = format!("{text}: {c}");
+        cause = c.source();
+    }
+    text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug)]
+    struct Outer(&'static str, std::io::Error);
+    impl std::fmt::Display for Outer {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str(self.0)
+        }
+    }
+    impl Error for Outer {
+        fn source(&self) -> Option<&(dyn Error + 'static)> {
+            Some(&self.1)
+        }
+    }
+
+    #[test]
+    fn chain_joins_causes_and_refuses_repeats() {
+        let io = || std::io::Error::other("disk full");
+        assert_eq!(
+            error_chain(&Outer("writing x.csv", io())),
+            "writing x.csv: disk full"
+        );
+        let repeated = std::panic::catch_unwind(|| {
+            assert_source_not_repeated(&Outer("writing x.csv: disk full", io()))
+        });
+        assert!(repeated.is_err());
+    }
+}
