@@ -136,6 +136,23 @@ impl LogArgs {
             .clone()
             .unwrap_or_else(|| aras_dyn::sim::sidecar_path(log))
     }
+
+    /// The log reader's options: `--sidecar` and `--columns`.
+    pub fn read_options(&self) -> anyhow::Result<aras_signal::ReadOptions> {
+        use anyhow::Context;
+        use aras_signal::{ColumnNames, ReadOptions, SidecarSource};
+        Ok(ReadOptions {
+            sidecar: self
+                .sidecar
+                .as_ref()
+                .map_or(SidecarSource::Auto, |p| SidecarSource::Path(p.clone())),
+            columns: match &self.columns {
+                Some(spec) => ColumnNames::parse(spec).context("option --columns")?,
+                None => ColumnNames::default(),
+            },
+            ..ReadOptions::default()
+        })
+    }
 }
 
 /// Options every command shares.

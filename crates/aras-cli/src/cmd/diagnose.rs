@@ -10,7 +10,6 @@ use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, diagnose};
 use aras_signal::read_log;
 
 use crate::cli::{DiagnoseArgs, LogArgs};
-use crate::cmd::identify::read_options;
 use crate::identify::process_options;
 use crate::output::OutDir;
 use crate::report::Report;
@@ -44,7 +43,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     // TRAIN with the command line's period and sidecar, each validation log
     // with its own sidecar: the processing of `identify`.
     let load = |path: &std::path::Path, log_args: &LogArgs| -> Result<Dataset> {
-        let log = read_log(path, &read_options(log_args)?)
+        let log = read_log(path, &log_args.read_options()?)
             .with_context(|| format!("reading {}", path.display()))?;
         let p = aras_signal::process(
             &log,

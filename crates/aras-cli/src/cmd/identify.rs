@@ -3,9 +3,9 @@
 use anyhow::{Context, Result};
 use aras_dyn::{Model, Params};
 use aras_kin::Geometry;
-use aras_signal::{ColumnNames, ReadOptions, SidecarSource, read_log};
+use aras_signal::read_log;
 
-use crate::cli::{IdentifyArgs, LogArgs, StreamingMode};
+use crate::cli::{IdentifyArgs, StreamingMode};
 use crate::cmd::fit::{self, FitInput};
 use crate::config::Config;
 use crate::identify::base_parameters;
@@ -18,21 +18,6 @@ pub fn sidecar_truth(path: &std::path::Path) -> Option<aras_dyn::Params> {
     let text = std::fs::read_to_string(path).ok()?;
     let v: serde_json::Value = serde_json::from_str(&text).ok()?;
     aras_dyn::Params::from_value(v.get("truth")?.get("params")?).ok()
-}
-
-/// Read options with the command line's sidecar and column names.
-pub fn read_options(log: &LogArgs) -> Result<ReadOptions> {
-    Ok(ReadOptions {
-        sidecar: log
-            .sidecar
-            .as_ref()
-            .map_or(SidecarSource::Auto, |p| SidecarSource::Path(p.clone())),
-        columns: match &log.columns {
-            Some(spec) => ColumnNames::parse(spec).context("option --columns")?,
-            None => ColumnNames::default(),
-        },
-        ..ReadOptions::default()
-    })
 }
 
 /// Log size above which `--streaming auto` streams: 256 MB, about 2 M rows
@@ -107,7 +92,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         model,
         geometry,
     } = setup(args)?;
-    let read = read_options(&args.log)?;
+    let read = args.log.read_options()?;
     let log = stages
         .run("read log", |_| read_log(&args.data, &read))
         .with_context(|| format!("reading {}", args.data.display()))?;

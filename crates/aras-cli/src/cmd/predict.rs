@@ -7,7 +7,6 @@ use aras_dyn::Params;
 use aras_signal::{OutputRows, read_log};
 
 use crate::cli::PredictArgs;
-use crate::cmd::identify::read_options;
 use crate::identify::{fitness_per_joint, process_options};
 use crate::output::{FileKind, check_new_file, write_atomic};
 
@@ -32,7 +31,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let model = params.model()?;
     let beta = params.standard_vector(&model)?.as_slice().to_vec();
     let geometry = params.geometry()?;
-    let log = read_log(&args.data, &read_options(&args.log)?)
+    let log = read_log(&args.data, &args.log.read_options()?)
         .with_context(|| format!("reading {}", args.data.display()))?;
     super::print_warnings(&args.data, &log.warnings);
     let logged = log.theta_dot.is_some() && log.theta_ddot.is_some();
