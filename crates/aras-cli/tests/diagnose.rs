@@ -9,11 +9,17 @@ use aras_dyn::sim::{SimConfig, simulate, write_log};
 use aras_dyn::{Params, Sinusoid, Trajectory};
 use aras_excite::FourierTrajectory;
 
-fn scratch() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-cli-test-diagnose-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+mod common;
+
+use common::scratch;
+
+/// The committed default excitation (`fixtures/trajectories/`).
+fn default_excitation() -> FourierTrajectory {
+    FourierTrajectory::load(&common::fixture("trajectories/default-excitation.json")).unwrap()
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 fn log(truth: &Params, traj: &dyn Trajectory, secs: f64, path: &Path) {
@@ -26,14 +32,10 @@ fn log(truth: &Params, traj: &dyn Trajectory, secs: f64, path: &Path) {
 
 #[test]
 fn diagnose_names_the_hidden_effect() {
-    let dir = scratch();
+    let dir = scratch("diagnose", "names");
     let mut truth = Params::aras_diamond();
     truth.extra.passive_joint_viscous = Some([0.005; 3]);
-    let exc = FourierTrajectory::load(
-        &PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../fixtures/trajectories/default-excitation.json"),
-    )
-    .unwrap();
+    let exc = default_excitation();
     let (train, val) = (dir.join("train.csv"), dir.join("val.csv"));
     log(&truth, &exc, 2.0 * exc.period(), &train);
     log(&truth, &Sinusoid::paper_79(0.5).unwrap(), 10.0, &val);
@@ -52,9 +54,7 @@ fn diagnose_names_the_hidden_effect() {
     };
     let r = diagnose();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let j: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("diagnosis.json")).unwrap())
-            .unwrap();
+    let j = json(&out.join("diagnosis.json"));
     let steps = j["steps"].as_array().unwrap();
     assert_eq!(
         steps[0]["id"], "passive_joint_viscous",
@@ -80,16 +80,10 @@ fn diagnose_names_the_hidden_effect() {
 /// `params.json` (parameter-file key `extra.torque_offset`).
 #[test]
 fn identify_with_extra_effects() {
-    let dir = std::env::temp_dir().join(format!("aras-cli-test-effects-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("diagnose", "effects");
     let mut truth = Params::aras_diamond();
     truth.extra.torque_offset = Some([0.02, -0.03]);
-    let exc = FourierTrajectory::load(
-        &PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../fixtures/trajectories/default-excitation.json"),
-    )
-    .unwrap();
+    let exc = default_excitation();
     let train = dir.join("train.csv");
     log(&truth, &exc, 4.0 * exc.period(), &train);
     let out = dir.join("out");
@@ -115,8 +109,7 @@ fn identify_with_extra_effects() {
     // carries the HAC σ: the OLS and SDP values lie within 3 σ of the truth
     // and the offset is told from none (|OLS| ≥ 3 σ). Measured: OLS
     // 20.8 ± 2.5 and −32.8 ± 3.1 mN·m (0.3 σ and 0.9 σ from the truth).
-    let base: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("base.json")).unwrap()).unwrap();
+    let base = json(&out.join("base.json"));
     for (j, t) in [0.02, -0.03].into_iter().enumerate() {
         let def = format!("= tau0_{}", j + 1);
         let b = base["parameters"]
@@ -152,10 +145,6 @@ fn identify_with_extra_effects() {
     );
 }
 
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
-
 fn rows(v: &serde_json::Value) -> [u64; 2] {
     let r = v["rows_fitted"].as_array().unwrap();
     [r[0].as_u64().unwrap(), r[1].as_u64().unwrap()]
@@ -168,15 +157,9 @@ fn rows(v: &serde_json::Value) -> [u64; 2] {
 /// command line.
 #[test]
 fn diagnose_fits_the_rows_identify_fits() {
-    let dir = std::env::temp_dir().join(format!("aras-cli-test-rows-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("diagnose", "rows");
     let truth = Params::aras_diamond();
-    let exc = FourierTrajectory::load(
-        &PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../fixtures/trajectories/default-excitation.json"),
-    )
-    .unwrap();
+    let exc = default_excitation();
     let (train, val) = (dir.join("train.csv"), dir.join("val.csv"));
     log(&truth, &exc, 2.0 * exc.period(), &train);
     log(&truth, &Sinusoid::paper_79(0.5).unwrap(), 10.0, &val);
@@ -233,14 +216,8 @@ fn diagnose_fits_the_rows_identify_fits() {
 /// standard names; a wrong role is refused with a message naming it.
 #[test]
 fn identify_reads_a_labs_own_column_names() {
-    let dir = std::env::temp_dir().join(format!("aras-cli-test-columns-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let exc = FourierTrajectory::load(
-        &PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../fixtures/trajectories/default-excitation.json"),
-    )
-    .unwrap();
+    let dir = scratch("diagnose", "columns");
+    let exc = default_excitation();
     let std_csv = dir.join("std.csv");
     log(&Params::aras_diamond(), &exc, 2.0 * exc.period(), &std_csv);
     // Renamed and reordered: time first, torques before angles, no
