@@ -298,8 +298,20 @@ fn regressor_stage_names_the_failing_sample() {
         x_ddot: [&s[2][0], &s[2][1]],
         tau: [&s[3][0], &s[3][1]],
     };
-    let e = stage.push(&states).unwrap_err().to_string();
+    let err = stage.push(&states).unwrap_err();
+    let e = err.to_string();
     assert!(e.contains("sample 2500"), "{e}");
+    // The model's error is the source, kept as itself and not repeated.
+    assert_eq!(e, "streaming regressor, sample 2500");
+    let cause = std::error::Error::source(&err).expect("the model's error is the source");
+    let kin = cause
+        .downcast_ref::<aras_pipeline::RegressorError>()
+        .expect("the source is the regressor's own error");
+    assert!(
+        matches!(kin, aras_pipeline::RegressorError::Kinematics(_)),
+        "{kin:?}"
+    );
+    assert_source_not_repeated(&err);
     assert_eq!(
         stage.accumulator().rows(),
         0,
@@ -601,30 +613,4 @@ proptest! {
         // + 1e-12: the rounding of sums over thousands of rows (κ ≈ 1).
         prop_assert!(e < check.error_bound + 1e-12, "{} vs {:?}", e, check);
     }
-}
-
-#[test]
-fn a_failing_sample_keeps_the_kinematics_error_as_source() {
-    let r = robot();
-    let mut stage = RegressorStage::new(r.regressor(), &r.base).unwrap();
-    let s = synthetic::states(&r.model, &r.geo, &r.beta, 100, 1000.0, 0.0).unwrap();
-    let mut gamma = s[0][1].clone();
-    gamma[40] = 0.0; // γ = 0 is a singularity
-    let states = States {
-        x: [&s[0][0], &gamma],
-        x_dot: [&s[1][0], &s[1][1]],
-        x_ddot: [&s[2][0], &s[2][1]],
-        tau: [&s[3][0], &s[3][1]],
-    };
-    let e = stage.push(&states).unwrap_err();
-    assert_eq!(e.to_string(), "streaming regressor, sample 40");
-    let cause = std::error::Error::source(&e).expect("the model's error is the source");
-    let kin = cause
-        .downcast_ref::<aras_pipeline::RegressorError>()
-        .expect("the source is the regressor's own error");
-    assert!(
-        matches!(kin, aras_pipeline::RegressorError::Kinematics(_)),
-        "{kin:?}"
-    );
-    assert_source_not_repeated(&e);
 }
