@@ -2,7 +2,7 @@
 //! (viscous friction in the passive hinges, 0.005 N·m·s/rad each): the
 //! command must name it in `diagnosis.json` and write the report.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use aras_dyn::sim::{SimConfig, simulate, write_log};
