@@ -274,6 +274,22 @@ const CHECK_MJCF_PACKAGES: [&str; 2] = ["mujoco==4.0.0", "numpy==2.4.6"];
 /// so it may remove it again.
 const VENV_MARKER: &str = ".made-by-cargo-xtask-check-mjcf";
 
+/// Removes `dir` if it exists and holds [`VENV_MARKER`] (this command made
+/// it); a directory without the marker is never touched.
+fn remove_own_dir(dir: &Path) -> Result<(), String> {
+    if !dir.exists() {
+        return Ok(());
+    }
+    if !dir.join(VENV_MARKER).exists() {
+        return Err(format!(
+            "{} exists but was not made by check-mjcf; remove it or move it away",
+            dir.display()
+        ));
+    }
+    std::fs::remove_dir_all(dir)
+        .map_err(|e| format!("cannot remove the old {}: {e}", dir.display()))
+}
+
 /// `cargo xtask check-mjcf`: build `aras`, make the throwaway venv, run the script.
 fn check_mjcf(args: &[String]) -> ExitCode {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -319,18 +335,9 @@ fn check_mjcf(args: &[String]) -> ExitCode {
     }
     let python = venv.join("bin").join("python");
     if !(reuse && python.exists()) {
-        if venv.exists() {
-            if !venv.join(VENV_MARKER).exists() {
-                eprintln!(
-                    "xtask: {} exists but was not made by check-mjcf; remove it or move it away",
-                    venv.display()
-                );
-                return ExitCode::FAILURE;
-            }
-            if let Err(e) = std::fs::remove_dir_all(&venv) {
-                eprintln!("xtask: cannot remove the old {}: {e}", venv.display());
-                return ExitCode::FAILURE;
-            }
+        if let Err(msg) = remove_own_dir(&venv) {
+            eprintln!("xtask: {msg}");
+            return ExitCode::FAILURE;
         }
         eprintln!(
             "xtask: creating {} with {}…",
@@ -366,18 +373,9 @@ fn check_mjcf(args: &[String]) -> ExitCode {
     }
     // A fresh scratch directory each run (only one this command made is removed).
     let work = base.join("work");
-    if work.exists() {
-        if !work.join(VENV_MARKER).exists() {
-            eprintln!(
-                "xtask: {} exists but was not made by check-mjcf; remove it or move it away",
-                work.display()
-            );
-            return ExitCode::FAILURE;
-        }
-        if let Err(e) = std::fs::remove_dir_all(&work) {
-            eprintln!("xtask: cannot remove the old {}: {e}", work.display());
-            return ExitCode::FAILURE;
-        }
+    if let Err(msg) = remove_own_dir(&work) {
+        eprintln!("xtask: {msg}");
+        return ExitCode::FAILURE;
     }
     if let Err(e) =
         std::fs::create_dir_all(&work).and_then(|()| std::fs::write(work.join(VENV_MARKER), b""))
