@@ -433,11 +433,25 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     // Every log's prediction, base columns and candidate columns are
     // independent: computed in parallel (the state models integrate a
     // whole log per column), collected in order.
-    let preds: Vec<Vec<f64>> = motions.par_iter().map(|mo| m.predict(mo)).collect();
     let bases: Vec<Vec<Vec<f64>>> = logs
         .par_iter()
         .map(|l| base_columns(m, l))
         .collect::<Result<_>>()?;
+    // The base model's prediction is its columns times its coefficients:
+    // no second integration of the state.
+    let coefficients = m.coefficients();
+    let preds: Vec<Vec<f64>> = bases
+        .iter()
+        .map(|cols| {
+            let mut p = vec![0.0; cols.first().map_or(0, Vec::len)];
+            for (c, &b) in cols.iter().zip(&coefficients) {
+                for (o, x) in p.iter_mut().zip(c) {
+                    *o += b * x;
+                }
+            }
+            p
+        })
+        .collect();
     let cand_cols: Vec<Vec<Vec<Vec<f64>>>> = logs
         .iter()
         .zip(&preds)
@@ -611,11 +625,13 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
         }
         Ok(out)
     };
-    let train_m = metrics(&train.tau, &run_pred(train)?);
-    let validation = vals
-        .iter()
-        .map(|v| Ok(metrics(&v.tau, &run_pred(v)?)))
+    // Every log's prediction integrates the refined state: in parallel.
+    let mut scored = logs
+        .par_iter()
+        .map(|l| Ok(metrics(&l.tau, &run_pred(l)?)))
         .collect::<Result<Vec<_>>>()?;
+    let validation = scored.split_off(1);
+    let train_m = scored[0];
     let name = std::iter::once(m.name().to_string())
         .chain(added.iter().map(Effect::id))
         .collect::<Vec<_>>()
@@ -673,9 +689,9 @@ impl From<LuGre> for AnyModel {
     }
 }
 
-fn result<M: Separable>(f: &Fitted<M>, vals: &[JointLog]) -> Result<ModelResult> {
+fn result<M: Separable + Sync>(f: &Fitted<M>, vals: &[JointLog]) -> Result<ModelResult> {
     let validation = vals
-        .iter()
+        .par_iter()
         .map(|v| {
             let m = Motion::new(&v.t, &v.q, &v.dq)?;
             Ok(metrics(&v.tau, &f.model.predict(&m)))

@@ -570,8 +570,9 @@ pub(crate) fn scales(motion: &Motion) -> Scales {
 
 /// σ of every physical parameter and of the extra coefficients from the
 /// finite-difference Jacobian of the prediction at the optimum.
-fn estimates<M: Separable>(
+fn estimates<M: Separable + Sync>(
     model: &M,
+    base: &[f64],
     extra: &[Vec<f64>],
     extra_beta: &[f64],
     motion: &Motion,
@@ -580,25 +581,26 @@ fn estimates<M: Separable>(
 ) -> (Vec<Estimate>, Vec<Option<f64>>) {
     let info = model.parameter_info();
     let values = model.parameters();
-    let base = model.predict(motion);
     let n = base.len();
-    let mut jac: Vec<Vec<f64>> = Vec::new();
-    let mut which: Vec<usize> = Vec::new();
-    for (j, inf) in info.iter().enumerate() {
-        if fixed.get(j).copied().unwrap_or(false) {
-            continue;
-        }
-        let x = values[j];
-        let mut h = 1e-6 * x.abs().max(1e-3);
-        if x + h > inf.upper {
-            h = -h;
-        }
-        let mut v = values.clone();
-        v[j] = x + h;
-        let p2 = M::from_vector(&v).predict(motion);
-        jac.push(p2.iter().zip(&base).map(|(a, b)| (a - b) / h).collect());
-        which.push(j);
-    }
+    let which: Vec<usize> = (0..info.len())
+        .filter(|&j| !fixed.get(j).copied().unwrap_or(false))
+        .collect();
+    // One prediction per free parameter, independent of each other: in
+    // parallel (a state model integrates the whole log for each).
+    let mut jac: Vec<Vec<f64>> = which
+        .par_iter()
+        .map(|&j| {
+            let x = values[j];
+            let mut h = 1e-6 * x.abs().max(1e-3);
+            if x + h > info[j].upper {
+                h = -h;
+            }
+            let mut v = values.clone();
+            v[j] = x + h;
+            let p2 = M::from_vector(&v).predict(motion);
+            p2.iter().zip(base).map(|(a, b)| (a - b) / h).collect()
+        })
+        .collect();
     for e in extra {
         jac.push(e.clone());
     }
@@ -626,7 +628,7 @@ fn estimates<M: Separable>(
     (out, extra_sigma)
 }
 
-fn finish<M: Separable>(
+fn finish<M: Separable + Sync>(
     fit: &SeparableFit,
     motion: &Motion,
     y: &[f64],
@@ -634,8 +636,8 @@ fn finish<M: Separable>(
 ) -> Fitted<M> {
     let nb = M::coefficient_info().len();
     let model = M::from_parts(&fit.theta, &fit.beta[..nb]);
-    let (estimates, _) = estimates(&model, &[], &[], motion, fit.rss, fixed);
     let pred = model.predict(motion);
+    let (estimates, _) = estimates(&model, &pred, &[], &[], motion, fit.rss, fixed);
     Fitted {
         model,
         estimates,
@@ -649,7 +651,7 @@ fn finish<M: Separable>(
 /// σ and metrics for a model fitted with extra columns (the diagnosis'
 /// final model): estimates of the model's parameters and of the extra
 /// coefficients.
-pub fn estimates_with_extra<M: Separable>(
+pub fn estimates_with_extra<M: Separable + Sync>(
     model: &M,
     extra: &[Vec<f64>],
     extra_beta: &[f64],
@@ -657,7 +659,8 @@ pub fn estimates_with_extra<M: Separable>(
     rss: f64,
     fixed: &[bool],
 ) -> (Vec<Estimate>, Vec<Option<f64>>) {
-    estimates(model, extra, extra_beta, motion, rss, fixed)
+    let base = model.predict(motion);
+    estimates(model, &base, extra, extra_beta, motion, rss, fixed)
 }
 
 /// Fits offset + Coulomb + viscous friction (linear least squares).
