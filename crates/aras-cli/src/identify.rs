@@ -200,9 +200,12 @@ pub struct Identification {
     pub names: Vec<String>,
     /// Base parameters.
     pub base: BaseParameters,
-    /// OLS (or WLS) estimate of the base parameters, σ from the HAC
-    /// sandwich covariance (`OlsEstimate::with_hac`).
+    /// OLS (or WLS) estimate of the base parameters; σ and covariance the
+    /// HAC sandwich (`OlsEstimate::with_hac`) with every σ raised to at least
+    /// `sigma_white` (`OlsEstimate::with_sigma_floor`).
     pub ols: OlsEstimate,
+    /// σ of the HAC sandwich alone.
+    pub sigma_hac: Vec<f64>,
     /// σ of the OLS (or WLS) estimate assuming white noise before the
     /// filter (`OlsEstimate::with_filtered_noise`), for comparison with the
     /// streaming route.
@@ -378,6 +381,10 @@ pub fn identify(
             (est, e.reduced, white)
         }
     };
+    // σ: the larger of the HAC and the filter model, per parameter
+    // (`OlsEstimate::with_sigma_floor`).
+    let sigma_hac = ols.std_dev.clone();
+    let (ols, _) = ols.with_sigma_floor(&sigma_white)?;
     let sdp = consistent_fit(&reduced, base, model, nominal, cfg)?;
     let reference: Vec<f64> = nominal
         .standard_vector(model)
@@ -402,6 +409,7 @@ pub fn identify(
         base: base.clone(),
         ols,
         sigma_white,
+        sigma_hac,
         sdp,
         ols_params,
         sdp_params,

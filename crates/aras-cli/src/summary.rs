@@ -205,6 +205,9 @@ pub struct BaseEntry {
     /// (`OlsEstimate::with_filtered_noise`): the same on every route, so
     /// routes can be compared; optimistic when the residual is correlated.
     pub sigma_white: f64,
+    /// The HAC sandwich's standard deviation alone (`null` on the streaming
+    /// route, which keeps no residuals).
+    pub sigma_hac: Option<f64>,
     /// SDP value.
     pub sdp: f64,
     /// The truth, when known.
@@ -237,9 +240,11 @@ pub struct BaseFile {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SigmaMethod {
-    /// The HAC sandwich covariance (`aras_ident::covariance`): counts the
-    /// residual's correlation (in-memory identification).
-    Hac,
+    /// The larger of the HAC sandwich (`aras_ident::covariance`, which
+    /// counts the residual's correlation but runs low on filtered data) and
+    /// the filter model (`sigma_white`), per parameter (in-memory
+    /// identification).
+    LargerOfHacAndWhiteFiltered,
     /// White noise before the filter, corrected by its noise gain (the
     /// streaming route, which keeps no residuals): `sigma` = `sigma_white`.
     WhiteFiltered,
@@ -259,7 +264,7 @@ pub fn base_file(id: &Identification, truth_base: Option<&[f64]>) -> BaseFile {
             .collect(),
         residual_variance: o.residual_variance,
         condition_number: o.condition_number,
-        sigma_method: SigmaMethod::Hac,
+        sigma_method: SigmaMethod::LargerOfHacAndWhiteFiltered,
         rows_fitted: id.rows_fitted,
         parameters: (0..id.base.n_base())
             .map(|i| BaseEntry {
@@ -269,6 +274,7 @@ pub fn base_file(id: &Identification, truth_base: Option<&[f64]>) -> BaseFile {
                 sigma: o.std_dev[i],
                 sigma_percent: o.rel_std_percent[i],
                 sigma_white: id.sigma_white[i],
+                sigma_hac: Some(id.sigma_hac[i]),
                 sdp: id.sdp.base[i],
                 truth: truth_base.map(|t| t[i]),
             })

@@ -85,8 +85,8 @@ fn streaming_on_and_off_give_the_same_estimates() {
     );
     // σ: the streaming route keeps no residuals, so it reports the
     // white-noise σ corrected for the filter; in memory the same figure is
-    // `sigma_white` beside the HAC `sigma`.
-    assert_eq!(mem["sigma_method"], "hac");
+    // `sigma_white`, the floor of the in-memory `sigma`.
+    assert_eq!(mem["sigma_method"], "larger_of_hac_and_white_filtered");
     assert_eq!(qr["sigma_method"], "white_filtered");
     let (ms, qs) = (column(&mem, "sigma_white"), column(&qr, "sigma"));
     assert!(rel(&qs, &ms) < 1e-9, "σ: {:e}", rel(&qs, &ms));

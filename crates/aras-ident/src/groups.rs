@@ -3,11 +3,24 @@
 use crate::error::IdentError;
 
 /// A label (joint index `0..n_groups`) for every row of a stacked
-/// regressor, for per-joint weighting (WLS) and per-joint fitness (78).
+/// regressor, for per-joint weighting (WLS) and per-joint fitness (78), and
+/// the time sample of every row.
+///
+/// The sample index tells which rows of different joints were measured at
+/// the same instant: their residuals share the sensor noise, the
+/// closed-loop error and the quantised angles, so the HAC covariance
+/// ([`crate::hac_covariance`]) counts their correlation. By default a row's
+/// sample is its position within its group, which is exact for joint-major
+/// ([`RowGroups::contiguous`] with equal lengths) and sample-major
+/// ([`RowGroups::interleaved`]) stacking of complete records; after rows
+/// are dropped (a reversal mask), give the kept rows' samples with
+/// [`RowGroups::with_samples`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RowGroups {
     labels: Vec<usize>,
     counts: Vec<usize>,
+    samples: Vec<usize>,
+    sample_count: usize,
 }
 
 impl RowGroups {
@@ -57,7 +70,61 @@ impl RowGroups {
                 reason: "no rows were given",
             });
         }
-        Ok(Self { labels, counts })
+        let mut next = vec![0; n];
+        let samples: Vec<usize> = labels
+            .iter()
+            .map(|&l| {
+                next[l] += 1;
+                next[l] - 1
+            })
+            .collect();
+        let sample_count = counts.iter().copied().max().unwrap_or(0);
+        Ok(Self {
+            labels,
+            counts,
+            samples,
+            sample_count,
+        })
+    }
+
+    /// The same groups with the time sample of every row given:
+    /// `samples[row] < sample_count`, where `sample_count` is the length of
+    /// the record the rows were taken from (for periodic data, the samples
+    /// of one period, so that lags wrap around it). Within a group, samples
+    /// must increase with the row (rows in time order).
+    pub fn with_samples(
+        mut self,
+        samples: Vec<usize>,
+        sample_count: usize,
+    ) -> Result<Self, IdentError> {
+        self.check_rows(samples.len())
+            .map_err(|_| IdentError::DimensionMismatch {
+                what: "row samples",
+                expected: self.n_rows(),
+                found: samples.len(),
+                hint: "give the time sample of every row of the stacked regressor",
+            })?;
+        let mut last: Vec<Option<usize>> = vec![None; self.n_groups()];
+        for (row, (&g, &s)) in self.labels.iter().zip(&samples).enumerate() {
+            if s >= sample_count {
+                return Err(IdentError::InvalidSetting {
+                    name: "row samples",
+                    value: s as f64,
+                    reason: "a row's sample is not below the record's sample count",
+                });
+            }
+            if last[g].is_some_and(|p| p >= s) {
+                return Err(IdentError::InvalidSetting {
+                    name: "row samples",
+                    value: row as f64,
+                    reason: "within a group the samples must increase with the row (this row's does not)",
+                });
+            }
+            last[g] = Some(s);
+        }
+        self.samples = samples;
+        self.sample_count = sample_count;
+        Ok(self)
     }
 
     /// Number of groups (joints).
@@ -78,6 +145,16 @@ impl RowGroups {
     /// The group of every row.
     pub fn labels(&self) -> &[usize] {
         &self.labels
+    }
+
+    /// The time sample of every row (see the type's docs).
+    pub fn samples(&self) -> &[usize] {
+        &self.samples
+    }
+
+    /// Length of the record the rows' samples index.
+    pub fn sample_count(&self) -> usize {
+        self.sample_count
     }
 
     pub(crate) fn check_rows(&self, rows: usize) -> Result<(), IdentError> {

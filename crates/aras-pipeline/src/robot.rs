@@ -356,7 +356,10 @@ pub fn keep_rows(stacked: &Stacked, keep: &[bool]) -> Result<Stacked, IdentError
         }),
         t: rows.iter().map(|&i| stacked.t[i]).collect(),
         names: stacked.names.clone(),
-        groups: RowGroups::contiguous(&[n1, rows.len() - n1])?,
+        groups: RowGroups::contiguous(&[n1, rows.len() - n1])?.with_samples(
+            rows.iter().map(|&i| stacked.groups.samples()[i]).collect(),
+            stacked.groups.sample_count(),
+        )?,
     })
 }
 

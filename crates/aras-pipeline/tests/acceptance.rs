@@ -200,12 +200,30 @@ fn noise_free_ols_recovers_the_truth() {
 }
 
 /// The default-noise run along the excitation, processed, and its OLS
-/// estimate with the HAC σ.
+/// estimate with the σ identification reports ([`honest_sigma`]).
 struct Noisy {
     stacked: Stacked,
     ols: OlsEstimate,
     fit: Vec<f64>,
     naive_max_z: f64,
+}
+
+/// The σ of identification: the HAC sandwich with every σ raised to at
+/// least the filter model's (`OlsEstimate::with_sigma_floor`). Returns the
+/// estimate and the HAC σ alone.
+fn honest_sigma(naive: OlsEstimate, st: &Stacked, noise_gain: f64) -> (OlsEstimate, Vec<f64>) {
+    let s = setup();
+    let wb = s.base.base_regressor(st.w.as_ref()).unwrap();
+    let white = naive
+        .clone()
+        .with_filtered_noise(noise_gain)
+        .unwrap()
+        .std_dev;
+    let (hac, _) = naive
+        .with_hac(wb.as_ref(), &st.t, &st.groups, true)
+        .unwrap();
+    let sigma_hac = hac.std_dev.clone();
+    (hac.with_sigma_floor(&white).unwrap().0, sigma_hac)
 }
 
 fn noisy() -> &'static Noisy {
@@ -222,13 +240,7 @@ fn noisy() -> &'static Noisy {
             .zip(&s.truth_b)
             .map(|((e, sd), t)| ((e - t) / sd).abs())
             .fold(0.0, f64::max);
-        // σ from the HAC sandwich (aras_ident::covariance); the filter's
-        // noise gain `g` is no longer needed for it.
-        let _ = g;
-        let wb = s.base.base_regressor(stacked.w.as_ref()).unwrap();
-        let (ols, _) = naive
-            .with_hac(wb.as_ref(), &stacked.t, &stacked.groups, true)
-            .unwrap();
+        let (ols, _) = honest_sigma(naive, &stacked, g);
         Noisy {
             stacked,
             ols,
@@ -239,7 +251,6 @@ fn noisy() -> &'static Noisy {
 }
 
 #[test]
-#[ignore = "not met with the HAC σ: worst |error|/σ 3.23 on seed 1 (2.92 with the filter-corrected σ); see hac_sigma_is_honest_over_50_noise_seeds"]
 fn default_noise_every_base_parameter_within_3_sigma() {
     let s = setup();
     let n = noisy();
@@ -462,21 +473,28 @@ fn fixture_is_what_the_design_produces() {
 
 /// Honest σ: over 50 noise seeds of the default sensors (4 periods of the
 /// excitation each, processed like every other test here), the error of
-/// each base parameter divided by its HAC σ (`OlsEstimate::with_hac`) has
+/// each base parameter divided by the σ identification reports
+/// ([`honest_sigma`]: the HAC σ raised to at least the filter model's) has
 /// an RMS in [0.8, 1.25], for every base parameter whose torque
 /// contribution `‖W_b,i β_i‖` exceeds 1 % of `‖T‖`. For 50 independent
 /// standard normals the RMS lies in [0.80, 1.19] with 99 % probability
 /// (χ²₅₀: 32.4 … 70.0 for 50 RMS²); σ itself is estimated (its own
-/// scatter adds a few percent), hence 1.25 above. The white-noise σ of
-/// (64) would give an RMS ≈ 7 (filtered, correlated residuals).
+/// scatter adds a few percent), hence 1.25 above. The error includes the
+/// deterministic bias of quantised angles (the same motion on every seed),
+/// which no residual-based σ can see; it is printed as the mean.
+///
+/// The HAC σ alone is low on this filtered data (`aras_ident::covariance`,
+/// "Known bias"): its median RMS over the checked parameters is above 1.15,
+/// which is why identification floors it.
 #[test]
-#[ignore = "not met yet: measured RMS(error/σ) 1.15–1.24 for the parameters above 1 % but 1.44 for b18 (Fv1); over seeds the spread alone is 1.10–1.38 σ and the mean error up to 0.57 σ: the HAC σ is too small by the spread's factor, not only biased"]
-fn hac_sigma_is_honest_over_50_noise_seeds() {
+fn hac_alone_is_low_and_the_floored_sigma_is_honest_over_50_noise_seeds() {
     use rayon::prelude::*;
     let s = setup();
     let period = s.excitation.period();
     let names = s.base.base_names();
-    let per_seed: Vec<(Vec<f64>, Vec<f64>)> = (1..=50u64)
+    // Per seed: error/σ (reported σ), error/σ (HAC alone), torque shares.
+    type Seed = (Vec<f64>, Vec<f64>, Vec<f64>);
+    let per_seed: Vec<Seed> = (1..=50u64)
         .into_par_iter()
         .map(|seed| {
             let cfg = SimConfig {
@@ -485,17 +503,16 @@ fn hac_sigma_is_honest_over_50_noise_seeds() {
                 ..SimConfig::default()
             };
             let log = run(&format!("mc-{seed}"), &s.excitation, &cfg);
-            let (_, st, _) = pipeline(&log, Some(period), Some(REACH_TOL));
+            let (_, st, g) = pipeline(&log, Some(period), Some(REACH_TOL));
             let wb = s.base.base_regressor(st.w.as_ref()).unwrap();
-            let (est, _) = ReducedLs::new(wb.as_ref(), &st.t, &names)
+            let naive = ReducedLs::new(wb.as_ref(), &st.t, &names)
                 .unwrap()
                 .ols()
-                .unwrap()
-                .with_hac(wb.as_ref(), &st.t, &st.groups, true)
                 .unwrap();
-            let z: Vec<f64> = (0..names.len())
-                .map(|i| (est.estimate[i] - s.truth_b[i]) / est.std_dev[i])
-                .collect();
+            let (est, sigma_hac) = honest_sigma(naive, &st, g);
+            let err = |i: usize| est.estimate[i] - s.truth_b[i];
+            let z = (0..names.len()).map(|i| err(i) / est.std_dev[i]).collect();
+            let z_hac = (0..names.len()).map(|i| err(i) / sigma_hac[i]).collect();
             // Contribution of each base parameter to the torques, relative.
             let tn = st.t.iter().map(|v| v * v).sum::<f64>().sqrt();
             let share: Vec<f64> = (0..names.len())
@@ -507,26 +524,35 @@ fn hac_sigma_is_honest_over_50_noise_seeds() {
                         / tn
                 })
                 .collect();
-            (z, share)
+            (z, z_hac, share)
         })
         .collect();
+    let m = per_seed.len() as f64;
+    let rms =
+        |f: &dyn Fn(&Seed) -> f64| (per_seed.iter().map(|p| f(p).powi(2)).sum::<f64>() / m).sqrt();
     let mut checked = 0;
+    let mut hac_rms = Vec::new();
     for i in 0..names.len() {
-        let share = per_seed.iter().map(|(_, c)| c[i]).sum::<f64>() / per_seed.len() as f64;
-        let rms =
-            (per_seed.iter().map(|(z, _)| z[i] * z[i]).sum::<f64>() / per_seed.len() as f64).sqrt();
-        let mean = per_seed.iter().map(|(z, _)| z[i]).sum::<f64>() / per_seed.len() as f64;
-        let spread = (rms * rms - mean * mean).max(0.0).sqrt();
+        let share = per_seed.iter().map(|p| p.2[i]).sum::<f64>() / m;
+        let r = rms(&|p| p.0[i]);
+        let r_hac = rms(&|p| p.1[i]);
+        let mean = per_seed.iter().map(|p| p.0[i]).sum::<f64>() / m;
+        let spread = (r * r - mean * mean).max(0.0).sqrt();
         eprintln!(
-            "{:>4} share {:6.2} % RMS(error/σ) {rms:.2} = mean {mean:+.2}, spread {spread:.2}: {}",
+            "{:>4} share {:6.2} % RMS(error/σ) {r:.2} = mean {mean:+.2}, spread {spread:.2} \
+             (HAC alone {r_hac:.2}): {}",
             names[i],
             100.0 * share,
             s.base.expression(i)
         );
         if share > 0.01 {
             checked += 1;
-            assert!((0.8..=1.25).contains(&rms), "{}: RMS {rms}", names[i]);
+            hac_rms.push(r_hac);
+            assert!((0.8..=1.25).contains(&r), "{}: RMS {r}", names[i]);
         }
     }
     assert!(checked >= 5, "only {checked} parameters above 1 %");
+    hac_rms.sort_by(f64::total_cmp);
+    let median = hac_rms[hac_rms.len() / 2];
+    assert!(median > 1.15, "HAC alone: median RMS {median}");
 }

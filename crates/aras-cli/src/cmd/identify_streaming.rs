@@ -207,6 +207,7 @@ pub fn fit_and_write(
                     sigma: ols.std_dev[i],
                     sigma_percent: ols.rel_std_percent[i],
                     sigma_white: ols.std_dev[i],
+                    sigma_hac: None,
                     sdp: sdp.base[i],
                     truth: truth_base.as_ref().map(|t| t[i]),
                 })
