@@ -1,11 +1,11 @@
-//! End-to-end acceptance on simulated data (issues 5 and 6): the simulated
+//! End-to-end acceptance on simulated data: the simulated
 //! robot (`aras_dyn::sim`) tracks the committed default excitation, its log
 //! goes through the file format, `aras-signal::process` and the
 //! identification, and the result is compared with the truth.
 //!
 //! The excitation is the fixture `fixtures/trajectories/default-excitation.json`,
 //! made by `cargo run --release -p aras-pipeline --example default_excitation`
-//! (seed 1; `fixture_is_what_the_design_produces` checks it, ignored: ~10 s).
+//! (seed 1; `fixture_is_what_the_design_produces` checks it, ~10 s of 2 cores).
 //! Simulations are shared between tests through `OnceLock`s.
 #![allow(clippy::needless_range_loop)]
 
@@ -455,7 +455,6 @@ fn designed_excitation_2_5x_below_median_of_100_random_at_the_limits() {
 }
 
 #[test]
-#[ignore = "designs the trajectory (~10 s of 2 cores, minutes on a loaded machine)"]
 fn fixture_is_what_the_design_produces() {
     let s = setup();
     let reg = DynRegressor::new(s.model.clone(), s.geometry);
