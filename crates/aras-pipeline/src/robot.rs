@@ -172,39 +172,59 @@ pub fn filter(
     periodic: bool,
 ) -> Result<(), IdentError> {
     let n = stacked.groups.counts()[0];
-    let run = |x: &[f64]| -> Result<Vec<f64>, IdentError> {
-        if periodic {
-            sos.filtfilt_periodic(x)
-        } else {
-            sos.filtfilt(x)
-        }
-        .map_err(|e| dyn_err("filtering", e))
-    };
-    let cols = if mode == FilterMode::Parallel {
-        stacked.w.ncols()
-    } else {
-        0
-    };
-    let w = &stacked.w;
-    let filtered: Vec<Result<Vec<f64>, IdentError>> = (0..2 * cols)
+    if mode == FilterMode::Parallel {
+        filter_columns(&mut stacked.w, n, sos, periodic)?;
+    }
+    for g in 0..2 {
+        let f = run_filter(sos, &stacked.t[g * n..(g + 1) * n], periodic)?;
+        stacked.t[g * n..(g + 1) * n].copy_from_slice(&f);
+    }
+    Ok(())
+}
+
+/// Applies `sos` forward and backward to each joint's block (rows `0..n`,
+/// `n..2n`) of every column of `w`, in parallel. Filtering acts column by
+/// column, so selecting columns first (e.g. the base columns) and filtering
+/// only those gives the same values as filtering everything.
+pub fn filter_columns(
+    w: &mut Mat<f64>,
+    n: usize,
+    sos: &Sos,
+    periodic: bool,
+) -> Result<(), IdentError> {
+    if w.nrows() != 2 * n {
+        return Err(IdentError::DimensionMismatch {
+            what: "joint-major regressor rows",
+            expected: 2 * n,
+            found: w.nrows(),
+            hint: "give both joints' blocks of n rows",
+        });
+    }
+    let src = &*w;
+    let filtered: Vec<Result<Vec<f64>, IdentError>> = (0..2 * src.ncols())
         .into_par_iter()
         .map(|k| {
             let (j, g) = (k / 2, k % 2);
-            let x: Vec<f64> = (g * n..(g + 1) * n).map(|i| w[(i, j)]).collect();
-            run(&x)
+            let x: Vec<f64> = (g * n..(g + 1) * n).map(|i| src[(i, j)]).collect();
+            run_filter(sos, &x, periodic)
         })
         .collect();
     for (k, f) in filtered.into_iter().enumerate() {
         let (j, g) = (k / 2, k % 2);
         for (i, v) in f?.into_iter().enumerate() {
-            stacked.w[(g * n + i, j)] = v;
+            w[(g * n + i, j)] = v;
         }
     }
-    for g in 0..2 {
-        let f = run(&stacked.t[g * n..(g + 1) * n])?;
-        stacked.t[g * n..(g + 1) * n].copy_from_slice(&f);
-    }
     Ok(())
+}
+
+fn run_filter(sos: &Sos, x: &[f64], periodic: bool) -> Result<Vec<f64>, IdentError> {
+    if periodic {
+        sos.filtfilt_periodic(x)
+    } else {
+        sos.filtfilt(x)
+    }
+    .map_err(|e| dyn_err("filtering", e))
 }
 
 /// Rows to keep away from velocity reversals: joint `j`'s row of sample `i`

@@ -12,13 +12,14 @@
 //! filter, as before.
 
 use aras_dyn::Model;
-use aras_kin::Geometry;
-use aras_signal::Samples;
+use aras_kin::{Geometry, KinematicSample};
+use nalgebra::Vector2;
 use rayon::prelude::*;
 
 use super::data::Dataset;
-use crate::robot::{FilterMode, Stacked, filter, filter_reach, stack};
-use aras_ident::IdentError;
+use crate::robot::{filter_columns, filter_reach};
+use aras_ident::{BaseParameters, IdentError};
+use faer::Mat;
 
 /// Samples per chunk: with ≈ 170 columns the window's columns of both
 /// joints take ≈ 15 MB per lane.
@@ -97,42 +98,48 @@ impl Plan {
     }
 }
 
-fn slice(s: &Samples, lo: usize, hi: usize) -> Samples {
-    let p = |v: &[Vec<f64>; 2]| [v[0][lo..hi].to_vec(), v[1][lo..hi].to_vec()];
-    Samples {
-        t: s.t[lo..hi].to_vec(),
-        theta: p(&s.theta),
-        theta_dot: p(&s.theta_dot),
-        theta_ddot: p(&s.theta_ddot),
-        x: p(&s.x),
-        x_dot: p(&s.x_dot),
-        x_ddot: p(&s.x_ddot),
-        tau: p(&s.tau),
-    }
-}
-
-/// Filtered columns (and torques) of `model` on the window `[lo, hi)` of
-/// `data`.
-pub(crate) fn window_columns(
-    model: &Model,
+/// The kinematics of the window `[lo, hi)` of `data`, evaluated once per
+/// window and shared by every model whose columns are built on it.
+pub(crate) fn window_kinematics(
     geometry: &Geometry,
     data: &Dataset,
     lo: usize,
     hi: usize,
-) -> Result<Stacked, IdentError> {
-    let whole = lo == 0 && hi == data.len();
-    let sub;
-    let samples = if whole {
-        &data.samples
-    } else {
-        sub = slice(&data.samples, lo, hi);
-        &sub
+) -> Result<Vec<KinematicSample>, IdentError> {
+    let s = &data.samples;
+    let v = |a: &[Vec<f64>; 2], i: usize| Vector2::new(a[0][i], a[1][i]);
+    (lo..hi)
+        .map(|i| {
+            aras_kin::evaluate(geometry, &v(&s.x, i), &v(&s.x_dot, i), &v(&s.x_ddot, i))
+                .map_err(|e| IdentError::external(&format!("kinematics of sample {i}"), e))
+        })
+        .collect()
+}
+
+/// Filtered regressor columns of `model` on a window's kinematics `kin`
+/// ([`window_kinematics`]), joint-major; only `base`'s columns when given
+/// (selected before filtering, which filters column by column: the same
+/// values, fewer columns filtered). The torques are not filtered here
+/// ([`filtered_torques`] does it once per record).
+pub(crate) fn window_columns(
+    model: &Model,
+    base: Option<&BaseParameters>,
+    kin: &[KinematicSample],
+    data: &Dataset,
+) -> Result<Mat<f64>, IdentError> {
+    let n = kin.len();
+    let w = model
+        .stacked(kin)
+        .map_err(|e| IdentError::external("stacking the window's regressor", e))?;
+    let w = faer::MatRef::from_column_major_slice(w.as_slice(), 2 * n, model.columns());
+    let mut w = match base {
+        Some(b) => b.base_regressor(w)?,
+        None => w.to_owned(),
     };
-    let mut s = stack(model, geometry, samples)?;
     if let Some(sos) = &data.filter {
-        filter(&mut s, sos, FilterMode::Parallel, data.periodic)?;
+        filter_columns(&mut w, n, sos, data.periodic)?;
     }
-    Ok(s)
+    Ok(w)
 }
 
 /// The whole record's filtered torques per joint (two vectors: the

@@ -9,7 +9,7 @@ use faer::{Mat, MatRef};
 use serde::Serialize;
 
 use super::candidates::{Candidate, CandidateGrid};
-use super::chunks::{Plan, filtered_torques, in_lanes, window_columns};
+use super::chunks::{Plan, filtered_torques, in_lanes, window_columns, window_kinematics};
 use super::data::{Dataset, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse};
 use crate::robot::consistent_problem;
@@ -331,12 +331,12 @@ impl Context<'_> {
             |acc, a, b| {
                 let (wl, wh) = p.plan.window(a, b);
                 let nw = wh - wl;
-                let s = window_columns(self.start, self.geometry, d, wl, wh)?;
-                let wb = self.base.base_regressor(s.w.as_ref())?;
+                let kin = window_kinematics(self.geometry, d, wl, wh)?;
+                let wb = window_columns(self.start, Some(&self.base), &kin, d)?;
                 let blocks = effect_models
                     .iter()
                     .map(|m| match m {
-                        Some(m) => window_columns(m, self.geometry, d, wl, wh).map(|s| Some(s.w)),
+                        Some(m) => window_columns(m, None, &kin, d).map(Some),
                         None => Ok(None),
                     })
                     .collect::<Result<Vec<_>, _>>()?;
@@ -412,12 +412,12 @@ impl Context<'_> {
         let lanes = in_lanes(&p.plan, lo, hi, Vec::<Piece>::new, |out, a, b| {
             let (wl, wh) = p.plan.window(a, b);
             let nw = wh - wl;
-            let s = window_columns(self.start, self.geometry, d, wl, wh)?;
-            let wb = self.base.base_regressor(s.w.as_ref())?;
+            let kin = window_kinematics(self.geometry, d, wl, wh)?;
+            let wb = window_columns(self.start, Some(&self.base), &kin, d)?;
             let blocks = used
                 .iter()
                 .map(|&k| match &self.effect_models[k] {
-                    Some(m) => window_columns(m, self.geometry, d, wl, wh).map(|s| (k, s.w)),
+                    Some(m) => window_columns(m, None, &kin, d).map(|w| (k, w)),
                     None => Ok((k, Mat::zeros(0, 0))),
                 })
                 .collect::<Result<Vec<_>, _>>()?;
@@ -472,8 +472,8 @@ impl Context<'_> {
         in_lanes(&p.plan, lo, hi, init, |st, a, b| {
             let (wl, wh) = p.plan.window(a, b);
             let nw = wh - wl;
-            let s = window_columns(model, self.geometry, d, wl, wh)?;
-            let wb = base.base_regressor(s.w.as_ref())?;
+            let kin = window_kinematics(self.geometry, d, wl, wh)?;
+            let wb = window_columns(model, Some(base), &kin, d)?;
             for g in 0..2 {
                 let idx = Self::rows(p, g, a, b);
                 let m = Mat::from_fn(idx.len(), wb.ncols(), |r, j| wb[(g * nw + idx[r] - wl, j)]);

@@ -15,7 +15,7 @@ use aras_ident::streaming::{Accumulation, GramCheck, QrAccumulator, RegressorSta
 use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 
 use crate::TaskRegressor;
-use crate::robot::{FilterMode, filter, filter_reach, noise_gain, reversal_mask, stack};
+use crate::robot::{FilterMode, Stacked, filter, filter_reach, noise_gain, reversal_mask, stack};
 
 /// Options of [`identify_log`]. `Default` gives the documented defaults.
 #[derive(Debug, Clone)]
@@ -596,7 +596,14 @@ fn accumulate_processed(
     let edge = (log.len() - processed.samples.len()) / 2;
     let periodic = popts.period != PeriodSource::Off;
     let n = processed.samples.len();
-    let mut st = stack(model, &options.geometry, &processed.samples)?;
+    let st = stack(model, &options.geometry, &processed.samples)?;
+    // Only the base columns are filtered (filtering acts column by column:
+    // the same values as filtering every standard column first).
+    let mut st = Stacked {
+        w: base.base_regressor(st.w.as_ref())?,
+        names: base.base_names(),
+        ..st
+    };
     let mut guard = 0;
     if let Some(spec) = &processed.summary.filter {
         let sos: Sos =
@@ -627,7 +634,7 @@ fn accumulate_processed(
         guard,
         periodic,
     )?;
-    let wb = base.base_regressor(st.w.as_ref())?;
+    let wb = &st.w;
     for g in 0..2 {
         let rows: Vec<usize> = (g * n + i0..g * n + i1).filter(|&i| keep[i]).collect();
         if rows.is_empty() {
