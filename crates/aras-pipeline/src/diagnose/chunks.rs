@@ -111,7 +111,7 @@ pub(crate) fn window_kinematics(
     (lo..hi)
         .map(|i| {
             aras_kin::evaluate(geometry, &v(&s.x, i), &v(&s.x_dot, i), &v(&s.x_ddot, i))
-                .map_err(|e| IdentError::external(&format!("kinematics of sample {i}"), e))
+                .map_err(|e| IdentError::external(format!("kinematics of sample {i}"), e))
         })
         .collect()
 }
