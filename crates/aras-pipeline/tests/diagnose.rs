@@ -371,23 +371,17 @@ fn added_effect_sigma_equals_in_memory_corrected_sigma() {
     }
 }
 
-/// Hidden torque offset and quadratic damping, TRAIN only, noise seeds 1–8:
-/// the error of each fitted effect parameter divided by its reported
-/// (filter-corrected) σ. Honest σ: RMS of the 32 ratios near 1. For 32
-/// independent standard normals the RMS lies in [0.72, 1.27] with 99 %
-/// probability (χ²₃₂); the four parameters of one seed share the noise, so
-/// they are not quite independent, and the base model's own misfit near
-/// reversals adds bias: the band asserted is [0.5, 2.0]. The white-noise σ
-/// would give an RMS ≈ 7× larger, far outside it.
-#[test]
-fn added_effect_sigma_is_honest_over_noise_seeds() {
+/// Hidden torque offset and quadratic damping, TRAIN only: per noise seed
+/// and effect parameter (`tau0_1`, `tau0_2`, `Fq1`, `Fq2`), its name, the
+/// error, the reported (filter-corrected) σ and the white-noise σ.
+fn added_effect_errors(seeds: u64) -> Vec<(String, f64, f64, f64)> {
     let mut truth = Params::aras_diamond();
     truth.extra.torque_offset = Some([0.02, -0.03]);
     truth.extra.quadratic_damping = Some([0.005, 0.005]);
     let model = truth.model().unwrap();
     let beta = truth.standard_vector(&model).unwrap();
     let period = excitation().period();
-    let z: Vec<(f64, f64)> = (1..=8u64)
+    (1..=seeds)
         .into_par_iter()
         .flat_map_iter(|seed| {
             let train = dataset(
@@ -408,28 +402,59 @@ fn added_effect_sigma_is_honest_over_noise_seeds() {
                 .filter(|(_, c)| {
                     ["tau0_1", "tau0_2", "Fq1", "Fq2"].contains(&std_names[**c].as_str())
                 })
-                .map(|(k, _)| {
+                .map(|(k, c)| {
                     let e = est.estimate[k] - truth_b[k];
+                    let s = est.std_dev[k];
                     eprintln!(
-                        "seed {seed} {}: error {e:.2e}, σ {:.2e}, z {:.2}",
-                        base.expression(k),
-                        est.std_dev[k],
-                        e / est.std_dev[k]
+                        "seed {seed} {}: error {e:.2e}, σ {s:.2e}, z {:.2}",
+                        std_names[*c],
+                        e / s
                     );
-                    (e / est.std_dev[k], e / (est.std_dev[k] * g.sqrt()))
+                    (std_names[*c].clone(), e, s, s * g.sqrt())
                 })
                 .collect::<Vec<_>>()
         })
-        .collect();
-    assert_eq!(z.len(), 32);
-    let rms = |v: &mut dyn Iterator<Item = f64>| {
-        let x: Vec<f64> = v.collect();
-        (x.iter().map(|a| a * a).sum::<f64>() / x.len() as f64).sqrt()
-    };
-    let honest = rms(&mut z.iter().map(|x| x.0));
-    let white = rms(&mut z.iter().map(|x| x.1));
-    eprintln!("RMS error/σ: corrected {honest:.2}, white-noise σ {white:.2}");
-    assert!((0.5..=2.0).contains(&honest), "{honest}");
+        .collect()
+}
+
+fn rms(v: impl Iterator<Item = f64>) -> f64 {
+    let x: Vec<f64> = v.collect();
+    (x.iter().map(|a| a * a).sum::<f64>() / x.len() as f64).sqrt()
+}
+
+/// Honest σ of the added effects' parameters over 32 noise seeds of
+/// [`added_effect_errors`] (≈ 10 s on 2 cores): per parameter the spread of
+/// the errors over the mean σ and the mean error in σ. Measured: spread
+/// 0.92–1.25 σ, mean error −0.90…+0.49 σ (a deterministic bias: the base
+/// model's misfit near reversals), RMS of all ratios 1.34; the white-noise
+/// σ would give ≈ 12. Asserted: every spread within [0.7, 1.4] (the
+/// standard error of a 32-sample spread is 13 %: three of them), the RMS
+/// below 1.6, the white-noise RMS above four times it.
+#[test]
+fn added_effect_sigma_over_32_noise_seeds() {
+    let z = added_effect_errors(32);
+    for name in ["tau0_1", "tau0_2", "Fq1", "Fq2"] {
+        let v: Vec<&(String, f64, f64, f64)> = z.iter().filter(|x| x.0 == name).collect();
+        let m = v.len() as f64;
+        let mean = v.iter().map(|x| x.1).sum::<f64>() / m;
+        let sd = (v.iter().map(|x| (x.1 - mean).powi(2)).sum::<f64>() / (m - 1.0)).sqrt();
+        let sigma = v.iter().map(|x| x.2).sum::<f64>() / m;
+        eprintln!(
+            "{name}: spread {:.2} σ, mean error {:+.2} σ",
+            sd / sigma,
+            mean / sigma
+        );
+        assert!(
+            (0.7..=1.4).contains(&(sd / sigma)),
+            "{name}: {}",
+            sd / sigma
+        );
+    }
+    let all = rms(z.iter().map(|x| x.1 / x.2));
+    let white = rms(z.iter().map(|x| x.1 / x.3));
+    eprintln!("RMS error/σ over all: {all:.2} (white-noise σ: {white:.2})");
+    assert!(all < 1.6, "{all}");
+    assert!(white > 4.0 * all, "{white}");
 }
 
 /// Timing: a 160 s TRAIN log (16 periods of the excitation) and
