@@ -40,11 +40,11 @@ impl TaskRegressor {
 #[non_exhaustive]
 pub enum RegressorError {
     /// The kinematics (1)–(25) failed: outside the workspace or singular.
-    #[error("kinematics: {0}")]
-    Kinematics(KinError),
+    #[error("the kinematics (1)–(25) failed")]
+    Kinematics(#[source] KinError),
     /// The model rejected the sample or the buffer.
-    #[error("model: {0}")]
-    Model(DynError),
+    #[error("the dynamic model rejected the sample")]
+    Model(#[source] DynError),
 }
 
 impl LinearModel for TaskRegressor {

@@ -311,7 +311,14 @@ fn regressor_stage_names_the_failing_sample() {
         matches!(kin, aras_pipeline::RegressorError::Kinematics(_)),
         "{kin:?}"
     );
+    // The regressor's error keeps the kinematics' error as its own source.
+    let inner = std::error::Error::source(kin).expect("the kinematics' error is the source");
+    assert!(
+        inner.downcast_ref::<aras_kin::KinError>().is_some(),
+        "{inner:?}"
+    );
     assert_source_not_repeated(&err);
+    assert_source_not_repeated(kin);
     assert_eq!(
         stage.accumulator().rows(),
         0,
