@@ -289,12 +289,37 @@ fn finds_time_delay() {
     named_first("time_delay", 1.0);
 }
 
+/// Noise seeds of the multi-seed cases: five, so that a result is not one
+/// noise draw's luck.
+const SEEDS: [u64; 5] = [1, 2, 3, 4, 5];
+
+/// The diagnosis of `truth` on every seed of [`SEEDS`] (in parallel), with
+/// the consistent re-fit.
+fn on_seeds(truth: &Params, tag: &str) -> Vec<Diagnosis> {
+    SEEDS
+        .par_iter()
+        .map(|&seed| {
+            let d = diagnose_on(&scenario(truth, 0, seed, &format!("{tag}-{seed}")), true);
+            show(&format!("{tag}, seed {seed}"), &d);
+            d
+        })
+        .collect()
+}
+
 #[test]
-fn control_adds_nothing_and_says_noise_like() {
-    let d = run(&Params::aras_diamond(), 0, "control");
-    assert!(d.steps.is_empty(), "{}", d.conclusion);
-    assert!(d.noise_like, "{}", d.conclusion);
-    assert!(d.conclusion.contains("noise-like"), "{}", d.conclusion);
+fn control_adds_nothing_and_says_noise_like_on_five_seeds() {
+    for (d, seed) in on_seeds(&Params::aras_diamond(), "control")
+        .iter()
+        .zip(SEEDS)
+    {
+        assert!(d.steps.is_empty(), "seed {seed}: {}", d.conclusion);
+        assert!(d.noise_like, "seed {seed}: {}", d.conclusion);
+        assert!(
+            d.conclusion.contains("noise-like"),
+            "seed {seed}: {}",
+            d.conclusion
+        );
+    }
 }
 
 #[test]
@@ -306,6 +331,32 @@ fn two_hidden_effects_are_both_found_and_nothing_else() {
     ids.sort();
     assert_eq!(ids, ["cogging", "quadratic_damping"], "{}", d.conclusion);
     assert!(d.noise_like, "{}", d.conclusion);
+}
+
+/// Both effects named, nothing else, on every seed. The verdict on the
+/// remaining validation residual is not asserted here: on seeds 2, 3 and 4
+/// Ljung–Box at 1 % calls it not white although nothing is left to find
+/// (`docs/diagnose.md`, "Acceptance"); the test prints it.
+#[test]
+fn two_hidden_effects_are_both_named_and_nothing_else_on_five_seeds() {
+    let (mut p, _) = hidden("cogging");
+    p.extra.quadratic_damping = Some([0.005, 0.005]);
+    let ds = on_seeds(&p, "two");
+    for (d, seed) in ds.iter().zip(SEEDS) {
+        let mut ids: Vec<&str> = d.steps.iter().map(|s| s.id.as_str()).collect();
+        ids.sort();
+        assert_eq!(
+            ids,
+            ["cogging", "quadratic_damping"],
+            "seed {seed}: {}",
+            d.conclusion
+        );
+    }
+    let white = ds.iter().filter(|d| d.noise_like).count();
+    eprintln!(
+        "validation residual noise-like on {white} of {} seeds",
+        ds.len()
+    );
 }
 
 /// The in-memory identification of `model` on TRAIN, as `identify` does
