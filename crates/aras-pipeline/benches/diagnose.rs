@@ -1,0 +1,65 @@
+//! Diagnosis of a long plain log: a 160 s TRAIN log of the designed
+//! excitation at 1 kHz, not period-averaged (the chunked, bounded-memory
+//! route), and one validation log of (79) at 0.7 Hz, default candidate grid
+//! (`docs/scale.md`, "Diagnosis of long plain logs"). Reading and
+//! processing the logs are outside the measured loop.
+
+use std::path::PathBuf;
+
+use aras_dyn::sim::{SimConfig, simulate, write_log};
+use aras_dyn::{Model, Params, Sinusoid, Trajectory};
+use aras_excite::FourierTrajectory;
+use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, diagnose};
+use aras_signal::{PeriodSource, ProcessOptions, ReadOptions, process, read_log};
+use criterion::{Criterion, criterion_group, criterion_main};
+
+/// A simulated plain log (CSV without sidecar, read back) of `traj` over
+/// `secs`, processed without period averaging.
+fn plain(truth: &Params, traj: &dyn Trajectory, secs: f64, name: &str) -> Dataset {
+    let cfg = SimConfig {
+        duration_s: secs,
+        ..SimConfig::default()
+    };
+    let log = simulate(truth, traj, &cfg).unwrap();
+    let dir = std::env::temp_dir().join(format!("aras-bench-diagnose-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.csv"));
+    write_log(&path, &log, false).unwrap();
+    let _ = std::fs::remove_file(path.with_extension("json"));
+    let raw = read_log(&path, &ReadOptions::default()).unwrap();
+    let _ = std::fs::remove_file(&path);
+    let _ = std::fs::remove_dir(&dir);
+    let opts = ProcessOptions {
+        period: PeriodSource::Off,
+        ..ProcessOptions::default()
+    };
+    let p = process(&raw, &opts, &truth.geometry().unwrap()).unwrap();
+    Dataset::from_processed_owned(name, p).unwrap()
+}
+
+fn bench(c: &mut Criterion) {
+    let truth = Params::aras_diamond();
+    let excitation = FourierTrajectory::load(
+        &PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../fixtures/trajectories/default-excitation.json"),
+    )
+    .unwrap();
+    let train = plain(&truth, &excitation, 160.0, "train160");
+    let val = plain(&truth, &Sinusoid::paper_79(0.7).unwrap(), 10.0 / 0.7, "val");
+    assert!(
+        !train.periodic,
+        "the bench is of the chunked, non-periodic route"
+    );
+    let model = Model::paper(truth.gravity).unwrap();
+    let geometry = truth.geometry().unwrap();
+    let opts = DiagnoseOptions::default();
+    let mut g = c.benchmark_group("diagnose");
+    g.sample_size(10);
+    g.bench_function("plain_160s_1khz_one_validation", |b| {
+        b.iter(|| diagnose(&model, &geometry, &train, std::slice::from_ref(&val), &opts).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
