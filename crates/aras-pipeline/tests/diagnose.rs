@@ -359,6 +359,40 @@ fn two_hidden_effects_are_both_named_and_nothing_else_on_five_seeds() {
     );
 }
 
+/// An effect the library cannot describe: quadratic damping hidden, every
+/// other candidate offered. Whatever is added, the verdict on what is left
+/// is "not noise-like" on every seed: the verdict refits the final model on
+/// each validation set, which absorbs the TRAIN estimate's error but not an
+/// effect outside the model's columns.
+#[test]
+fn an_effect_outside_the_library_is_not_called_noise_like_on_five_seeds() {
+    let (p, _) = hidden("quadratic_damping");
+    let cad = Params::aras_diamond();
+    let model = Model::paper(cad.gravity).unwrap();
+    let mut opts = DiagnoseOptions {
+        reference: Some(cad.clone()),
+        ..DiagnoseOptions::default()
+    };
+    opts.grid.ids.retain(|id| id != "quadratic_damping");
+    let ds: Vec<Diagnosis> = SEEDS
+        .par_iter()
+        .map(|&seed| {
+            let s = scenario(&p, 0, seed, &format!("outside-{seed}"));
+            let d = diagnose(&model, &cad.geometry().unwrap(), &s.train, &s.vals, &opts).unwrap();
+            show(&format!("outside, seed {seed}"), &d);
+            d
+        })
+        .collect();
+    for (d, seed) in ds.iter().zip(SEEDS) {
+        assert!(!d.noise_like, "seed {seed}: {}", d.conclusion);
+        assert!(
+            d.conclusion.contains("outside the candidate library"),
+            "seed {seed}: {}",
+            d.conclusion
+        );
+    }
+}
+
 /// The in-memory identification of `model` on TRAIN, as `identify` does
 /// it: stacked regressor, parallel filter, reversal exclusion (0.2 rad/s,
 /// reach 1e-3), base-parameter OLS, σ corrected for the filter's noise gain.
