@@ -50,17 +50,6 @@ pub fn paper_model(p: &Params) -> Result<Model> {
     Model::paper(p.gravity).context("building the paper's model")
 }
 
-/// Identifiers accepted by `identify --effects` (the extra effects of
-/// `aras_dyn::Effect`, as named by `diagnose`).
-pub const EFFECT_IDS: [&str; 6] = [
-    EffectId::EXTRA[0].as_str(),
-    EffectId::EXTRA[1].as_str(),
-    EffectId::EXTRA[2].as_str(),
-    EffectId::EXTRA[3].as_str(),
-    EffectId::EXTRA[4].as_str(),
-    EffectId::EXTRA[5].as_str(),
-];
-
 /// Parses one `--effects` entry: `ID` or `ID:ARG[:ARG]`, where
 /// `stribeck_friction:V_S` takes the Stribeck velocity (rad/s, default 0.2)
 /// and `cogging:CYCLES[:ORDER]` the cycles per joint revolution and the
@@ -109,7 +98,7 @@ pub fn parse_effect(spec: &str) -> Result<Effect> {
         Some(EffectId::QuadraticDamping) => Effect::QuadraticDamping,
         _ => anyhow::bail!(
             "unknown effect `{id}` in `--effects`; known: {}",
-            EFFECT_IDS.join(", ")
+            EffectId::EXTRA.map(EffectId::as_str).join(", ")
         ),
     })
 }

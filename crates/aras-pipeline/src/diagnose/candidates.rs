@@ -12,15 +12,17 @@ pub const TIME_DELAY: &str = "time_delay";
 
 /// Stable identifiers of the candidates, in the order they are tried: the
 /// extra effects ([`EffectId::EXTRA`]), then [`TIME_DELAY`].
-pub const CANDIDATE_IDS: [&str; 7] = [
-    EffectId::EXTRA[0].as_str(),
-    EffectId::EXTRA[1].as_str(),
-    EffectId::EXTRA[2].as_str(),
-    EffectId::EXTRA[3].as_str(),
-    EffectId::EXTRA[4].as_str(),
-    EffectId::EXTRA[5].as_str(),
-    TIME_DELAY,
-];
+pub const CANDIDATE_IDS: [&str; EffectId::EXTRA.len() + 1] = {
+    // Derived from the effect list, so a new extra effect is a candidate
+    // without a second list to update.
+    let mut ids = [TIME_DELAY; EffectId::EXTRA.len() + 1];
+    let mut i = 0;
+    while i < EffectId::EXTRA.len() {
+        ids[i] = EffectId::EXTRA[i].as_str();
+        i += 1;
+    }
+    ids
+};
 
 /// One candidate with one value of its non-linear setting.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
