@@ -13,6 +13,7 @@ use aras_friction::{
         Estimate, FitSettings, FitStatus, Fitted, Metrics, Problem, estimates_with_extra,
         fit_coulomb_viscous, fit_dahl, fit_lugre, fit_stribeck, lugre_starts, metrics,
     },
+    models::combine,
 };
 use aras_ident::selection::{
     Accumulator, CandidateEvaluation, CandidateSpec, Layout, SelectionOptions, SelectionStatus,
@@ -193,16 +194,7 @@ pub struct FrictionRun {
 impl FrictionRun {
     /// The final model's prediction on a log: base model plus effects.
     pub fn final_prediction(&self, log: &JointLog) -> Result<Vec<f64>> {
-        let base = self.final_base.predict(log)?;
-        let mut out = base.clone();
-        for (e, coef) in &self.final_effects {
-            for (c, b) in e.columns(log, &base)?.iter().zip(coef) {
-                for (o, x) in out.iter_mut().zip(c) {
-                    *o += b * x;
-                }
-            }
-        }
-        Ok(out)
+        predict_with_effects(&self.final_base, &self.final_effects, log)
     }
 
     /// One paragraph: the best classical model and what the diagnosis found.
@@ -374,6 +366,25 @@ pub fn report_diagnosis(run: &FrictionRun, r: &mut crate::report::Report) {
 /// coefficients.
 type Refined = (ModelResult, AnyModel, Vec<(Effect, Vec<f64>)>);
 
+/// Prediction of a base model plus effects with their coefficients on one
+/// log (the effects' columns may depend on the base prediction).
+fn predict_with_effects(
+    base: &AnyModel,
+    effects: &[(Effect, Vec<f64>)],
+    log: &JointLog,
+) -> Result<Vec<f64>> {
+    let base = base.predict(log)?;
+    let mut out = base.clone();
+    for (e, coef) in effects {
+        for (c, b) in e.columns(log, &base)?.iter().zip(coef) {
+            for (o, x) in out.iter_mut().zip(c) {
+                *o += b * x;
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// Columns of a separable model at its fitted structure, on one log.
 fn base_columns<M: Separable>(m: &M, log: &JointLog) -> Result<Vec<Vec<f64>>> {
     let motion = Motion::new(&log.t, &log.q, &log.dq)?;
@@ -442,15 +453,7 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     let coefficients = m.coefficients();
     let preds: Vec<Vec<f64>> = bases
         .iter()
-        .map(|cols| {
-            let mut p = vec![0.0; cols.first().map_or(0, Vec::len)];
-            for (c, &b) in cols.iter().zip(&coefficients) {
-                for (o, x) in p.iter_mut().zip(c) {
-                    *o += b * x;
-                }
-            }
-            p
-        })
+        .map(|cols| combine(cols, &coefficients))
         .collect();
     let cand_cols: Vec<Vec<Vec<Vec<f64>>>> = logs
         .iter()
@@ -613,18 +616,7 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
         k += w;
     }
     let base_any: AnyModel = refined.clone().into();
-    let run_pred = |l: &JointLog| -> Result<Vec<f64>> {
-        let base = base_any.predict(l)?;
-        let mut out = base.clone();
-        for (e, coef) in &effects_out {
-            for (c, b) in e.columns(l, &base)?.iter().zip(coef) {
-                for (o, x) in out.iter_mut().zip(c) {
-                    *o += b * x;
-                }
-            }
-        }
-        Ok(out)
-    };
+    let run_pred = |l: &JointLog| predict_with_effects(&base_any, &effects_out, l);
     // Every log's prediction integrates the refined state: in parallel.
     let mut scored = logs
         .par_iter()

@@ -173,7 +173,10 @@ fn check_params(
     Ok(())
 }
 
-fn combine(columns: &[Vec<f64>], beta: &[f64]) -> Vec<f64> {
+/// `Σ_j β_j · column_j`: a separable model's prediction from its columns
+/// ([`Separable::columns`], at any structure) and coefficients, without
+/// computing the columns again.
+pub fn combine(columns: &[Vec<f64>], beta: &[f64]) -> Vec<f64> {
     let n = columns.first().map_or(0, Vec::len);
     let mut out = vec![0.0; n];
     for (c, &b) in columns.iter().zip(beta) {
