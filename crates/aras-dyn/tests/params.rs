@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use aras_dyn::{ArcLink, Cogging, Params, PointMass, Stribeck, arc_robot};
-use aras_testkit::{assert_source_not_repeated, error_chain as chain};
+use aras_testkit::{assert_source_not_repeated, error_chain as chain, io_source_kind};
 use nalgebra::{Matrix3, Vector3};
 
 fn fixture() -> PathBuf {
@@ -323,10 +323,7 @@ fn file_errors_name_the_file_and_keep_the_cause_as_source() {
         e.to_string(),
         format!("cannot access parameter file {}", absent.display())
     );
-    let io = std::error::Error::source(&e)
-        .and_then(|s| s.downcast_ref::<std::io::Error>())
-        .expect("the I/O error is the source");
-    assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
+    assert_eq!(io_source_kind(&e), std::io::ErrorKind::NotFound);
     assert_source_not_repeated(&e);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -8,7 +8,7 @@ use aras_excite::{
     Criterion, DesignSettings, ExciteError, Limits, Margins, assess, design, random_feasible,
 };
 use aras_kin::Workspace;
-use aras_testkit::assert_source_not_repeated;
+use aras_testkit::{assert_source_not_repeated, io_source_kind};
 use nalgebra::Vector2;
 use test_support::{StandIn, base_projection};
 
@@ -210,9 +210,6 @@ fn a_missing_trajectory_file_keeps_the_io_error_as_source() {
         e.to_string(),
         format!("cannot read or write {}", path.display())
     );
-    let io = std::error::Error::source(&e)
-        .and_then(|s| s.downcast_ref::<std::io::Error>())
-        .expect("the I/O error is the source");
-    assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
+    assert_eq!(io_source_kind(&e), std::io::ErrorKind::NotFound);
     assert_source_not_repeated(&e);
 }

@@ -8,7 +8,7 @@ use aras_friction::{
     fit::{FitSettings, fit_coulomb_viscous, fit_dahl, fit_lugre, fit_stribeck},
     sim::{JointSimulation, SensorNoise, TrueFriction, typical_lugre},
 };
-use aras_testkit::assert_source_not_repeated;
+use aras_testkit::{assert_source_not_repeated, io_source_kind};
 
 fn quiet(duration: f64, lugre: LuGre) -> JointSimulation {
     JointSimulation {
@@ -126,9 +126,6 @@ fn a_missing_joint_log_keeps_the_io_error_as_source() {
         e.to_string(),
         format!("{}: cannot read the log", path.display())
     );
-    let io = std::error::Error::source(&e)
-        .and_then(|s| s.downcast_ref::<std::io::Error>())
-        .expect("the I/O error is the source");
-    assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
+    assert_eq!(io_source_kind(&e), std::io::ErrorKind::NotFound);
     assert_source_not_repeated(&e);
 }

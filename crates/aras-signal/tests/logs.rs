@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use aras_signal::{
     Columns, LogReader, ReadOptions, Sensors, SidecarSource, Warning, read_log, read_log_from,
 };
-use aras_testkit::assert_source_not_repeated;
+use aras_testkit::{assert_source_not_repeated, io_source_kind};
 
 fn fixture(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -380,9 +380,6 @@ fn a_missing_log_names_the_file_and_keeps_the_io_error_as_source() {
         e.to_string(),
         format!("{}: cannot read the file", path.display())
     );
-    let io = std::error::Error::source(&e)
-        .and_then(|s| s.downcast_ref::<std::io::Error>())
-        .expect("the I/O error is the source");
-    assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
+    assert_eq!(io_source_kind(&e), std::io::ErrorKind::NotFound);
     assert_source_not_repeated(&e);
 }

@@ -37,6 +37,18 @@ pub fn error_chain(e: &dyn Error) -> String {
     text
 }
 
+/// The kind of the I/O error that is `e`'s direct source: a file error
+/// keeps the operating system's error as its cause, not as text.
+///
+/// # Panics
+/// When `e` has no source or its source is not a [`std::io::Error`].
+pub fn io_source_kind(e: &dyn Error) -> std::io::ErrorKind {
+    e.source()
+        .and_then(|s| s.downcast_ref::<std::io::Error>())
+        .unwrap_or_else(|| panic!("the source of `{e}` is not an I/O error"))
+        .kind()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -65,5 +77,16 @@ mod tests {
             assert_source_not_repeated(&Outer("writing x.csv: disk full", io()))
         });
         assert!(repeated.is_err());
+    }
+
+    #[test]
+    fn io_source_kind_reads_the_direct_source() {
+        let missing = std::io::Error::from(std::io::ErrorKind::NotFound);
+        assert_eq!(
+            io_source_kind(&Outer("reading x.csv", missing)),
+            std::io::ErrorKind::NotFound
+        );
+        let none = std::panic::catch_unwind(|| io_source_kind(&std::io::Error::other("x")));
+        assert!(none.is_err());
     }
 }
