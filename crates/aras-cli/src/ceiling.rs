@@ -83,12 +83,9 @@ pub fn noise_ceiling(
     for (j, k) in kept.iter_mut().enumerate() {
         let mut tau = twin.samples.tau[j].clone();
         if let Some(sos) = &prep.filter {
-            tau = if prep.periodic() {
-                sos.filtfilt_periodic(&tau)
-            } else {
-                sos.filtfilt(&tau)
-            }
-            .context("filtering the noise-free torques")?;
+            tau = sos
+                .filtfilt_record(&tau, prep.periodic())
+                .context("filtering the noise-free torques")?;
         }
         let (m, p): (Vec<f64>, Vec<f64>) = (0..n)
             .filter(|&i| keep.get(j * n + i).copied().unwrap_or(false))

@@ -219,12 +219,8 @@ pub fn filter_columns(
 }
 
 fn run_filter(sos: &Sos, x: &[f64], periodic: bool) -> Result<Vec<f64>, IdentError> {
-    if periodic {
-        sos.filtfilt_periodic(x)
-    } else {
-        sos.filtfilt(x)
-    }
-    .map_err(|e| dyn_err("filtering", e))
+    sos.filtfilt_record(x, periodic)
+        .map_err(|e| dyn_err("filtering", e))
 }
 
 /// Rows to keep away from velocity reversals: joint `j`'s row of sample `i`
@@ -345,12 +341,9 @@ fn impulse_response(sos: &Sos, n: usize, periodic: bool) -> Result<(Vec<f64>, us
         return Ok((x, 0));
     }
     x[centre] = 1.0;
-    let h = if periodic {
-        sos.filtfilt_periodic(&x)
-    } else {
-        sos.filtfilt(&x)
-    }
-    .map_err(|e| dyn_err("impulse response of the filter", e))?;
+    let h = sos
+        .filtfilt_record(&x, periodic)
+        .map_err(|e| dyn_err("impulse response of the filter", e))?;
     Ok((h, centre))
 }
 

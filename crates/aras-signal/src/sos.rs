@@ -327,6 +327,19 @@ impl Sos {
         Ok(())
     }
 
+    /// Zero-phase filtering of a record: one period of a periodic signal
+    /// ([`filtfilt_periodic`](Self::filtfilt_periodic)) when `periodic`,
+    /// otherwise a finite record with odd padding
+    /// ([`filtfilt`](Self::filtfilt)). The one place where a caller that
+    /// handles both kinds of record chooses between them.
+    pub fn filtfilt_record(&self, x: &[f64], periodic: bool) -> Result<Vec<f64>, FilterError> {
+        if periodic {
+            self.filtfilt_periodic(x)
+        } else {
+            self.filtfilt(x)
+        }
+    }
+
     /// Zero-phase filtering of one period of a periodic signal: the
     /// steady-state result of forward–backward filtering the endlessly
     /// repeated record, computed exactly as `DFT⁻¹(|H(ω_k)|² · DFT(x))`. No

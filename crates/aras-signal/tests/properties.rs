@@ -56,3 +56,21 @@ proptest! {
         }
     }
 }
+
+/// `filtfilt_record` is the periodic filter for periodic records and the
+/// padded one otherwise, bit for bit.
+#[test]
+fn filtfilt_record_chooses_by_the_kind_of_record() {
+    let sos = Butterworth::lowpass(4, 10.0, 1000.0).unwrap();
+    let x: Vec<f64> = (0..500)
+        .map(|i| (i as f64 * 0.05).sin() + 0.1 * (i % 7) as f64)
+        .collect();
+    assert_eq!(
+        sos.filtfilt_record(&x, true).unwrap(),
+        sos.filtfilt_periodic(&x).unwrap()
+    );
+    assert_eq!(
+        sos.filtfilt_record(&x, false).unwrap(),
+        sos.filtfilt(&x).unwrap()
+    );
+}

@@ -148,12 +148,9 @@ pub(crate) fn filtered_torques(data: &Dataset) -> Result<[Vec<f64>; 2], IdentErr
     let run = |x: &[f64]| -> Result<Vec<f64>, IdentError> {
         match &data.filter {
             None => Ok(x.to_vec()),
-            Some(sos) => if data.periodic {
-                sos.filtfilt_periodic(x)
-            } else {
-                sos.filtfilt(x)
-            }
-            .map_err(|e| IdentError::external("filtering the torques", e)),
+            Some(sos) => sos
+                .filtfilt_record(x, data.periodic)
+                .map_err(|e| IdentError::external("filtering the torques", e)),
         }
     };
     Ok([run(&data.samples.tau[0])?, run(&data.samples.tau[1])?])
