@@ -69,7 +69,7 @@ pub fn noise_ceiling(
     for j in 0..2 {
         quiet.tau[j] = clean.iter().map(|c| c[j]).collect();
     }
-    let twin = aras_signal::process(&quiet, opts, geometry)
+    let twin = aras_signal::process(&quiet, opts, &aras_kin::task_motion(geometry))
         .context("processing the noise-free torques for the noise ceiling")?;
     let n = prep.n();
     if twin.samples.len() != n {

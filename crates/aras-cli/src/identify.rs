@@ -136,7 +136,7 @@ pub fn prepare(
     model: &Model,
     geometry: &Geometry,
 ) -> Result<Prepared> {
-    let processed = aras_signal::process(log, opts, geometry)
+    let processed = aras_signal::process(log, opts, &aras_kin::task_motion(geometry))
         .with_context(|| format!("processing {}", log.name))?;
     let n = processed.samples.len();
     if n < 2 * model.columns() {

@@ -93,7 +93,7 @@ pub fn cross_validate(
         // unfiltered regressor, compared with the raw torques (78).
         let mut opts = process_options(cfg, None, false);
         opts.rows = OutputRows::EveryRow;
-        let processed = aras_signal::process(&read, &opts, &geometry)
+        let processed = aras_signal::process(&read, &opts, &aras_kin::task_motion(&geometry))
             .with_context(|| format!("processing {}", path.display()))?;
         let stacked = stack(model, &geometry, &processed.samples)?;
         let prep = Prepared {

@@ -33,6 +33,21 @@ pub fn forward(
     Ok(forward_pose(g, theta, mode)?.0)
 }
 
+/// [`forward_motion`] in assembly mode `+` as a function of plain arrays
+/// `[θ, θ̇, θ̈] → [X, Ẋ, Ẍ]` that owns its geometry: the shape a
+/// robot-agnostic consumer takes for "the model's coordinates" (a closure of
+/// this type is an `aras_signal::Coordinates`).
+pub fn task_motion(
+    g: &Geometry,
+) -> impl Fn([[f64; 2]; 3]) -> Result<[[f64; 2]; 3], KinError> + Copy + Send + Sync {
+    let g = *g;
+    move |[theta, rate, accel]| {
+        let v = |a: [f64; 2]| Vector2::new(a[0], a[1]);
+        let [x, xd, xdd] = forward_motion(&g, &v(theta), &v(rate), &v(accel), AssemblyMode::Plus)?;
+        Ok([[x[0], x[1]], [xd[0], xd[1]], [xdd[0], xdd[1]]])
+    }
+}
+
 /// Task-space motion from motor-space motion: forward kinematics (6)–(7)
 /// with `Ẋ = J⁻¹ θ̇` and `Ẍ = J⁻¹ (θ̈ − J̇ Ẋ)`, `J̇ Ẋ = [K′γ̇², −K′γ̇²]`.
 ///

@@ -64,7 +64,7 @@ mod scalar;
 mod workspace;
 
 pub use error::KinError;
-pub use forward::{AssemblyMode, forward, forward_motion};
+pub use forward::{AssemblyMode, forward, forward_motion, task_motion};
 pub use geometry::{DEFAULT_SINGULARITY_TOLERANCE, Geometry};
 pub use inverse::{InverseSolution, PassiveAngles, inverse};
 pub use jacobian::{Jacobian, jacobian};

@@ -33,7 +33,12 @@ fn plain(truth: &Params, traj: &dyn Trajectory, secs: f64, name: &str) -> Datase
         period: PeriodSource::Off,
         ..ProcessOptions::default()
     };
-    let p = process(&raw, &opts, &truth.geometry().unwrap()).unwrap();
+    let p = process(
+        &raw,
+        &opts,
+        &aras_kin::task_motion(&truth.geometry().unwrap()),
+    )
+    .unwrap();
     Dataset::from_processed_owned(name, p).unwrap()
 }
 

@@ -146,7 +146,7 @@ fn pipeline(
         ..ProcessOptions::default()
     };
     let periodic = period.is_some();
-    let p = process(log, &opts, &s.geometry).unwrap();
+    let p = process(log, &opts, &aras_kin::task_motion(&s.geometry)).unwrap();
     let sos = Butterworth::lowpass(4, CUTOFF, p.summary.sample_rate_hz).unwrap();
     let mut st = stack(&s.model, &s.geometry, &p.samples).unwrap();
     filter(&mut st, &sos, FilterMode::Parallel, periodic).unwrap();
@@ -178,7 +178,7 @@ fn noise_free_ols_recovers_the_truth() {
         use_logged_derivatives: true,
         ..ProcessOptions::default()
     };
-    let p = process(&log, &opts, &s.geometry).unwrap();
+    let p = process(&log, &opts, &aras_kin::task_motion(&s.geometry)).unwrap();
     let st = stack(&s.model, &s.geometry, &p.samples).unwrap();
     let keep = reversal_mask(&p.samples.theta_dot, 2.0 * V_MIN, 0, false).unwrap();
     let (ols, fit) = ols_of(&keep_rows(&st, &keep).unwrap());

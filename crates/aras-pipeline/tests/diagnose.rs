@@ -76,7 +76,12 @@ fn dataset(
         period: PeriodSource::Seconds(traj.period().unwrap()),
         ..ProcessOptions::default()
     };
-    let p = process(&raw, &popts, &truth.geometry().unwrap()).unwrap();
+    let p = process(
+        &raw,
+        &popts,
+        &aras_kin::task_motion(&truth.geometry().unwrap()),
+    )
+    .unwrap();
     Dataset::from_processed(tag, &p).unwrap()
 }
 

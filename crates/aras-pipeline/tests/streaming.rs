@@ -357,7 +357,7 @@ struct Reference {
 /// `filter_reach`) → OLS → σ corrected by `noise_gain`.
 fn in_memory(path: &std::path::Path, r: &Robot, o: &StreamingOptions) -> Reference {
     let log = read_log(path, &o.read).unwrap();
-    let pr = process(&log, &o.process, &r.geo).unwrap();
+    let pr = process(&log, &o.process, &aras_kin::task_motion(&r.geo)).unwrap();
     let mut st = stack(&r.model, &r.geo, &pr.samples).unwrap();
     let periodic = pr.summary.periods.is_some();
     let n = pr.samples.len();

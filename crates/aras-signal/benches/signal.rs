@@ -78,19 +78,19 @@ fn processing(c: &mut Criterion) {
         ..ProcessOptions::default()
     };
     c.bench_function("process 160 s @ 1 kHz, 16 periods averaged", |b| {
-        b.iter(|| black_box(process(&log, &periodic, &g).unwrap()))
+        b.iter(|| black_box(process(&log, &periodic, &aras_kin::task_motion(&g)).unwrap()))
     });
     let plain = ProcessOptions {
         period: PeriodSource::Off,
         ..ProcessOptions::default()
     };
     c.bench_function("process 160 s @ 1 kHz, no averaging", |b| {
-        b.iter(|| black_box(process(&log, &plain, &g).unwrap()))
+        b.iter(|| black_box(process(&log, &plain, &aras_kin::task_motion(&g)).unwrap()))
     });
     // No sidecar: the period is detected from the angles.
     let detected = ProcessOptions::default();
     c.bench_function("process 160 s @ 1 kHz, period detected", |b| {
-        b.iter(|| black_box(process(&log, &detected, &g).unwrap()))
+        b.iter(|| black_box(process(&log, &detected, &aras_kin::task_motion(&g)).unwrap()))
     });
     // Prediction: θ, θ̇, θ̈ on every row (series + aperiodic remainder).
     let every = ProcessOptions {
@@ -99,7 +99,7 @@ fn processing(c: &mut Criterion) {
         ..ProcessOptions::default()
     };
     c.bench_function("process 160 s @ 1 kHz, every row (prediction)", |b| {
-        b.iter(|| black_box(process(&log, &every, &g).unwrap()))
+        b.iter(|| black_box(process(&log, &every, &aras_kin::task_motion(&g)).unwrap()))
     });
 }
 

@@ -441,15 +441,16 @@ pub enum ProcessError {
         /// The period (s).
         period_s: f64,
     },
-    /// Kinematics failed at a sample.
-    #[error("kinematics failed at t = {t} s (sample {index})")]
-    Kinematics {
+    /// The model's coordinates could not be computed at a sample
+    /// ([`Coordinates`](crate::Coordinates), e.g. a pose the kinematics reject).
+    #[error("the model's coordinates failed at t = {t} s (sample {index})")]
+    Coordinates {
         /// Sample index in the output.
         index: usize,
         /// Its time.
         t: f64,
-        /// The kinematic error.
+        /// The mapping's error.
         #[source]
-        source: aras_kin::KinError,
+        source: Box<dyn std::error::Error + Send + Sync>,
     },
 }

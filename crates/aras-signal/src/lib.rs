@@ -1,5 +1,6 @@
 //! Measured robot logs → clean, aligned samples `θ, θ̇, θ̈, X, Ẋ, Ẍ, τ` for
-//! identification (`docs/processing.md`).
+//! identification (`docs/processing.md`). No robot: `X` are whatever
+//! coordinates the caller's model is written in ([`Coordinates`]).
 //!
 //! # Pipeline
 //!
@@ -9,8 +10,10 @@
 //!    torques; every defect is a [`LogError`] naming file, line and column.
 //! 2. [`process`]: period averaging ([`average_periods`]), zero-phase
 //!    Butterworth low-pass ([`Butterworth`], [`Sos`]), derivatives
-//!    ([`derivatives`], [`DerivativeMethod`]), forward kinematics via
-//!    `aras-kin`, with a serialisable [`ProcessSummary`] for the report.
+//!    ([`derivatives`], [`DerivativeMethod`]), the model's coordinates from
+//!    the caller's [`Coordinates`] ([`JointCoordinates`] when the model is
+//!    written in joint angles), with a serialisable [`ProcessSummary`] for
+//!    the report.
 //! 3. The same [`Sos`] filters any other column (`filtfilt`,
 //!    `filtfilt_into`, `filtfilt_in_place`, `filtfilt_periodic`): the
 //!    identification must filter every regressor column exactly as the
@@ -32,7 +35,9 @@
 //! # Example
 //!
 //! ```
-//! use aras_signal::{process, read_log_from, Butterworth, ProcessOptions, ReadOptions};
+//! use aras_signal::{
+//!     process, read_log_from, Butterworth, JointCoordinates, ProcessOptions, ReadOptions,
+//! };
 //!
 //! let mut csv = String::from("t,theta1,theta2,tau1,tau2\n");
 //! for i in 0..2000 {
@@ -41,7 +46,7 @@
 //!     csv += &format!("{t},{},{},{},{}\n", 2.0 + 0.1 * s, 0.6 - 0.1 * s, 0.1 * s, -0.2 * s);
 //! }
 //! let log = read_log_from(csv.as_bytes(), "demo.csv", &ReadOptions::default())?;
-//! let out = process(&log, &ProcessOptions::default(), &aras_kin::Geometry::aras_diamond())?;
+//! let out = process(&log, &ProcessOptions::default(), &JointCoordinates)?;
 //! assert_eq!(out.samples.len(), 2000); // one-sided differences at the ends keep every row
 //!
 //! // The same filter on any other column:
@@ -53,8 +58,7 @@
 //!
 //! # Dependencies
 //!
-//! * `aras-kin`, `nalgebra`: forward kinematics and Jacobians; small dense
-//!   least squares for Savitzky–Golay weights.
+//! * `nalgebra`: small dense least squares for Savitzky–Golay weights.
 //! * `rustfft`: O(n log n) transforms of any length for the periodic filter
 //!   and spectral derivative (an averaged period of 10 000 samples is not a
 //!   power of two; a hand-written mixed-radix FFT would be more code to trust).
@@ -70,6 +74,7 @@
 
 mod bandwidth;
 mod butterworth;
+mod coordinates;
 mod derivative;
 mod error;
 mod fourier;
@@ -84,6 +89,7 @@ pub use bandwidth::{
     spectrum_cutoff,
 };
 pub use butterworth::{Butterworth, MAX_ORDER};
+pub use coordinates::{Coordinates, JointCoordinates, Motion};
 pub use derivative::{DerivativeMethod, Derivatives, derivatives, resolve};
 pub use error::{FilterError, LogError, ProcessError};
 pub use log::{

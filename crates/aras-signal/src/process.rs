@@ -14,13 +14,13 @@
 //!    sample, so joint-space terms (friction on θ̇) and task-space terms agree,
 //!    and logged θ̇ columns are used as they are.
 
-use nalgebra::Vector2;
 use serde::Serialize;
 
 use crate::bandwidth::{
     CUTOFF_MARGIN, HarmonicSelection, PeriodDetection, PeriodOrigin, SpectrumCutoff, detect_period,
     harmonic_fit, hermite_at, resample, spectrum_cutoff, uniform_derivatives,
 };
+use crate::coordinates::Coordinates;
 use crate::derivative::{DerivativeMethod, derivatives, resolve, spectral_with};
 use crate::error::ProcessError;
 use crate::fourier::Fourier;
@@ -365,7 +365,7 @@ const UNIFORM_TOLERANCE: f64 = 1e-6;
 pub fn process(
     log: &Log,
     opts: &ProcessOptions,
-    geometry: &aras_kin::Geometry,
+    coordinates: &impl Coordinates,
 ) -> Result<Processed, ProcessError> {
     let dt = log.summary.nominal_step_s;
     let fs = 1.0 / dt;
@@ -401,7 +401,7 @@ pub fn process(
             a.clone(),
             log.tau.clone(),
         );
-        task_space(&mut s, geometry)?;
+        model_coordinates(&mut s, coordinates)?;
         return Ok(Processed {
             summary: ProcessSummary {
                 input_samples: log.len(),
@@ -857,7 +857,7 @@ pub fn process(
     }
 
     // 4. Kinematics.
-    task_space(&mut s, geometry)?;
+    model_coordinates(&mut s, coordinates)?;
 
     Ok(Processed {
         summary: ProcessSummary {
@@ -1085,25 +1085,17 @@ fn filter_all(
     Ok(())
 }
 
-/// Fills X, Ẋ, Ẍ from θ, θ̇, θ̈ through `aras_kin::forward_motion`,
-/// (6)–(11): `X = forward(θ)` (which rejects unreachable and
-/// near-singular poses), `Ẋ = J⁻¹θ̇`, `Ẍ = J⁻¹(θ̈ − J̇Ẋ)`, so θ̇ = JẊ holds
-/// exactly at every sample.
-fn task_space(s: &mut Samples, g: &aras_kin::Geometry) -> Result<(), ProcessError> {
+/// Fills the model's coordinates X, Ẋ, Ẍ from θ, θ̇, θ̈ at every sample.
+fn model_coordinates(s: &mut Samples, c: &impl Coordinates) -> Result<(), ProcessError> {
     for i in 0..s.len() {
-        let col = |c: &[Vec<f64>; 2]| Vector2::new(c[0][i], c[1][i]);
-        let [x, xd, xdd] = aras_kin::forward_motion(
-            g,
-            &col(&s.theta),
-            &col(&s.theta_dot),
-            &col(&s.theta_ddot),
-            aras_kin::AssemblyMode::Plus,
-        )
-        .map_err(|source| ProcessError::Kinematics {
-            index: i,
-            t: s.t[i],
-            source,
-        })?;
+        let col = |v: &[Vec<f64>; 2]| [v[0][i], v[1][i]];
+        let [x, xd, xdd] = c
+            .map([col(&s.theta), col(&s.theta_dot), col(&s.theta_ddot)])
+            .map_err(|e| ProcessError::Coordinates {
+                index: i,
+                t: s.t[i],
+                source: Box::new(e),
+            })?;
         for j in 0..2 {
             s.x[j][i] = x[j];
             s.x_dot[j][i] = xd[j];

@@ -116,7 +116,12 @@ fn paper_79_predicted_at_the_noise_ceiling_from_the_angles_alone() {
         // Noise-free: no current noise, 2^30-count encoders.
         let clean = simulate(&truth, &traj, &noise_free(f, 11 + k as u64)).unwrap();
         let log = as_csv(&clean, None);
-        let p = process(&log, &every_row(), &truth.geometry().unwrap()).unwrap();
+        let p = process(
+            &log,
+            &every_row(),
+            &aras_kin::task_motion(&truth.geometry().unwrap()),
+        )
+        .unwrap();
         let bw = &p.summary.bandwidth;
         assert_eq!(bw.method, BandwidthMethod::HarmonicSeries, "{f} Hz: {bw:?}");
         assert_eq!(bw.period_origin, Some(PeriodOrigin::Detected));
@@ -134,7 +139,12 @@ fn paper_79_predicted_at_the_noise_ceiling_from_the_angles_alone() {
         quiet.sensors.current_noise_std = [0.0; 2];
         let perfect = simulate(&truth, &traj, &quiet).unwrap();
         let log = as_csv(&noisy, None);
-        let p = process(&log, &every_row(), &truth.geometry().unwrap()).unwrap();
+        let p = process(
+            &log,
+            &every_row(),
+            &aras_kin::task_motion(&truth.geometry().unwrap()),
+        )
+        .unwrap();
         let pred = predict(&truth, &p);
         // The fixed 10 Hz low-pass on the whole record, for comparison.
         let fixed = ProcessOptions {
@@ -142,7 +152,12 @@ fn paper_79_predicted_at_the_noise_ceiling_from_the_angles_alone() {
             period: PeriodSource::Off,
             ..every_row()
         };
-        let pf = process(&log, &fixed, &truth.geometry().unwrap()).unwrap();
+        let pf = process(
+            &log,
+            &fixed,
+            &aras_kin::task_motion(&truth.geometry().unwrap()),
+        )
+        .unwrap();
         let pred_fixed = predict(&truth, &pf);
         let mut fit = [0.0; 2];
         let mut fit_fixed = [0.0; 2];
@@ -217,7 +232,12 @@ fn logged_derivatives_are_used_as_given() {
         use_logged_derivatives: true,
         ..every_row()
     };
-    let p = process(&log, &opts, &truth.geometry().unwrap()).unwrap();
+    let p = process(
+        &log,
+        &opts,
+        &aras_kin::task_motion(&truth.geometry().unwrap()),
+    )
+    .unwrap();
     assert_eq!(
         p.summary.bandwidth.method,
         BandwidthMethod::LoggedDerivatives
@@ -270,7 +290,12 @@ fn jittered_time_steps_are_handled() {
         period: PeriodSource::Off,
         ..every_row()
     };
-    let p = process(&log, &opts, &truth.geometry().unwrap()).unwrap();
+    let p = process(
+        &log,
+        &opts,
+        &aras_kin::task_motion(&truth.geometry().unwrap()),
+    )
+    .unwrap();
     let bw = &p.summary.bandwidth;
     assert!(bw.resampling.is_some(), "{bw:?}");
     assert_eq!(bw.method, BandwidthMethod::Butterworth);

@@ -77,7 +77,12 @@ fn periodic_record_without_filter_is_exact() {
         period: PeriodSource::Seconds(PERIOD),
         ..ProcessOptions::default()
     };
-    let out = process(&log, &opts, &Geometry::aras_diamond()).unwrap();
+    let out = process(
+        &log,
+        &opts,
+        &aras_kin::task_motion(&Geometry::aras_diamond()),
+    )
+    .unwrap();
     let s = &out.samples;
     assert_eq!(s.len(), 2000);
     assert_eq!(out.summary.derivative, DerivativeMethod::Spectral);
@@ -121,7 +126,12 @@ fn ten_hz_filter_barely_touches_the_dynamics() {
         period: PeriodSource::Seconds(PERIOD),
         ..ProcessOptions::default()
     };
-    let out = process(&log, &opts, &Geometry::aras_diamond()).unwrap();
+    let out = process(
+        &log,
+        &opts,
+        &aras_kin::task_motion(&Geometry::aras_diamond()),
+    )
+    .unwrap();
     let f = out.summary.filter.as_ref().unwrap();
     assert_eq!((f.order, f.cutoff_hz), (4, 10.0));
     // X's fastest harmonic is 1.5 Hz (|H|² = 1 − 3e-7 there), but θ = IK(X)
@@ -149,7 +159,12 @@ fn non_periodic_record_uses_central_differences_and_drops_edges() {
         derivative: DerivativeMethod::CentralDifference,
         ..ProcessOptions::default()
     };
-    let out = process(&log, &opts, &Geometry::aras_diamond()).unwrap();
+    let out = process(
+        &log,
+        &opts,
+        &aras_kin::task_motion(&Geometry::aras_diamond()),
+    )
+    .unwrap();
     assert_eq!(out.summary.derivative, DerivativeMethod::CentralDifference);
     assert_eq!(out.samples.len(), 1998);
     assert_eq!(out.summary.samples_dropped, 2);
@@ -183,7 +198,12 @@ fn logged_derivatives_are_used_when_asked() {
         use_logged_derivatives: true,
         ..ProcessOptions::default()
     };
-    let out = process(&log, &opts, &Geometry::aras_diamond()).unwrap();
+    let out = process(
+        &log,
+        &opts,
+        &aras_kin::task_motion(&Geometry::aras_diamond()),
+    )
+    .unwrap();
     assert_eq!(out.samples.len(), 2000);
     assert_eq!(
         out.summary.derivative_source,
@@ -199,7 +219,12 @@ fn logged_derivatives_are_used_when_asked() {
         period: PeriodSource::Off,
         ..ProcessOptions::default()
     };
-    let out = process(&log, &opts, &Geometry::aras_diamond()).unwrap();
+    let out = process(
+        &log,
+        &opts,
+        &aras_kin::task_motion(&Geometry::aras_diamond()),
+    )
+    .unwrap();
     assert!(
         out.notes
             .iter()
@@ -219,7 +244,12 @@ fn wrong_period_is_a_clear_error() {
         period: PeriodSource::Seconds(1.5),
         ..ProcessOptions::default()
     };
-    let e = process(&log, &opts, &Geometry::aras_diamond()).unwrap_err();
+    let e = process(
+        &log,
+        &opts,
+        &aras_kin::task_motion(&Geometry::aras_diamond()),
+    )
+    .unwrap_err();
     assert!(matches!(e, ProcessError::PeriodsDisagree { .. }), "{e}");
     let m = e.to_string();
     assert!(m.contains("differs from the average period by"), "{m}");
@@ -232,7 +262,14 @@ fn wrong_period_is_a_clear_error() {
         period: PeriodSource::Off,
         ..ProcessOptions::default()
     };
-    let m = chain(&process(&log, &opts, &Geometry::aras_diamond()).unwrap_err());
+    let m = chain(
+        &process(
+            &log,
+            &opts,
+            &aras_kin::task_motion(&Geometry::aras_diamond()),
+        )
+        .unwrap_err(),
+    );
     assert!(m.contains("cut-off 800 Hz is invalid"), "{m}");
 }
 
@@ -249,7 +286,12 @@ fn automatic_bandwidth_on_a_periodic_record_is_the_exact_series() {
         period: PeriodSource::Seconds(PERIOD),
         ..ProcessOptions::default()
     };
-    let out = process(&log, &opts, &Geometry::aras_diamond()).unwrap();
+    let out = process(
+        &log,
+        &opts,
+        &aras_kin::task_motion(&Geometry::aras_diamond()),
+    )
+    .unwrap();
     let bw = &out.summary.bandwidth;
     assert_eq!(bw.method, BandwidthMethod::HarmonicSeries, "{bw:?}");
     assert!(out.summary.filter.is_none());
@@ -262,4 +304,45 @@ fn automatic_bandwidth_on_a_periodic_record_is_the_exact_series() {
     }
     let json = serde_json::to_string(&out.summary).unwrap();
     assert!(json.contains("\"method\":\"harmonic_series\""), "{json}");
+}
+
+/// A sample the caller's coordinates reject is an error naming the sample,
+/// with the mapping's own error as its source; the identity maps anything.
+#[test]
+fn a_coordinate_failure_names_the_sample_and_keeps_its_cause() {
+    let log = read_log_from(
+        log_text(1, false).as_bytes(),
+        "c.csv",
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    // A "robot" whose coordinates are undefined once θ1 passes a value the
+    // trajectory reaches only after the first sample.
+    let limit = log.theta[0][0]
+        + 0.05 * (log.theta[0].iter().cloned().fold(f64::MIN, f64::max) - log.theta[0][0]);
+    let picky = |m: aras_signal::Motion| -> Result<aras_signal::Motion, std::fmt::Error> {
+        if m[0][0] > limit {
+            Err(std::fmt::Error)
+        } else {
+            Ok(m)
+        }
+    };
+    let e = process(&log, &ProcessOptions::default(), &picky).unwrap_err();
+    let ProcessError::Coordinates { index, t, .. } = &e else {
+        panic!("{e}");
+    };
+    assert!(*index > 0 && *t > 0.0, "{e}");
+    let c = chain(&e);
+    assert!(
+        c.contains(&format!("sample {index}")) && c.contains("an error occurred when formatting"),
+        "{c}"
+    );
+    let ok = process(
+        &log,
+        &ProcessOptions::default(),
+        &aras_signal::JointCoordinates,
+    )
+    .unwrap();
+    assert_eq!(ok.samples.x, ok.samples.theta);
+    assert_eq!(ok.samples.x_ddot, ok.samples.theta_ddot);
 }

@@ -48,7 +48,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         let p = aras_signal::process(
             &log,
             &process_options(&cfg, log_args.period, false),
-            &geometry,
+            &aras_kin::task_motion(&geometry),
         )
         .with_context(|| format!("processing {}", path.display()))?;
         let name = path.file_name().map_or_else(

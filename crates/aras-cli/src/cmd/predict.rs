@@ -37,7 +37,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let logged = log.theta_dot.is_some() && log.theta_ddot.is_some();
     let mut opts = process_options(&cfg, args.log.period, logged);
     opts.rows = OutputRows::EveryRow;
-    let processed = aras_signal::process(&log, &opts, &geometry)
+    let processed = aras_signal::process(&log, &opts, &aras_kin::task_motion(&geometry))
         .with_context(|| format!("processing {}", args.data.display()))?;
     let samples = &processed.samples;
     let w = aras_pipeline::robot::stack(&model, &geometry, samples)?;

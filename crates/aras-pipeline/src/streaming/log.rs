@@ -591,7 +591,7 @@ fn accumulate_processed(
     window: Option<(usize, usize, usize)>,
     out: &mut Progress,
 ) -> Result<usize, IdentError> {
-    let processed = process(log, popts, &options.geometry)
+    let processed = process(log, popts, &aras_kin::task_motion(&options.geometry))
         .map_err(|e| sig(&format!("processing {}", log.name), e))?;
     let edge = (log.len() - processed.samples.len()) / 2;
     let periodic = popts.period != PeriodSource::Off;
