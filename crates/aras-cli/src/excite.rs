@@ -14,7 +14,7 @@ use crate::config::{Config, CriterionChoice};
 use crate::robot::paper_model;
 
 /// The design's settings from the configuration.
-pub fn settings(cfg: &Config, nominal: &Params) -> Result<DesignSettings> {
+pub fn settings(cfg: &Config) -> Result<DesignSettings> {
     let t = &cfg.trajectory;
     let d = |v: [f64; 2]| Vector2::new(v[0].to_radians(), v[1].to_radians());
     let workspace = Workspace::new(d(t.min_deg), d(t.max_deg), d(t.max_rate_deg_s))
@@ -22,11 +22,7 @@ pub fn settings(cfg: &Config, nominal: &Params) -> Result<DesignSettings> {
     Ok(DesignSettings {
         harmonics: t.harmonics,
         omega_f: std::f64::consts::TAU / t.period_s,
-        limits: Limits {
-            workspace,
-            max_accel: d(t.max_accel_deg_s2),
-        },
-        geometry: nominal.geometry()?,
+        limits: Limits::from_workspace(&workspace, d(t.max_accel_deg_s2)),
         criterion: match t.criterion {
             CriterionChoice::Condition => Criterion::Condition,
             CriterionChoice::DOptimal => Criterion::DOptimal,
@@ -50,7 +46,7 @@ pub fn design(
     spinner: &ProgressBar,
 ) -> Result<Design> {
     let reg = DynRegressor::new(paper_model(nominal)?, nominal.geometry()?);
-    let settings = settings(cfg, nominal)?;
+    let settings = settings(cfg)?;
     let stage = spinner.message();
     let progress = |p: DesignProgress| {
         spinner.set_message(format!("{stage}: {}/{} starts", p.done, p.total));

@@ -13,7 +13,6 @@
 //! the continuous signal stays inside the original bounds. The design
 //! tightens by `1.01·q R` to absorb rounding.
 
-use aras_kin::Workspace;
 use nalgebra::Vector2;
 
 use crate::FourierTrajectory;
@@ -28,36 +27,64 @@ use crate::param::{Grid, Layout, dot};
 /// modest while leaving the rate limit the usual active constraint.
 pub const DEFAULT_MAX_ACCEL_DEG: f64 = 800.0;
 
-/// The limits an excitation trajectory must respect at every instant.
+/// The limits an excitation trajectory must respect at every instant: the
+/// box and rate limits (77) and an acceleration limit, per coordinate of `X`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Limits {
-    /// Task-space box and rate limits, (77).
-    pub workspace: Workspace,
+    /// Lower corner of the box, `min ≤ X` (rad).
+    pub min: Vector2<f64>,
+    /// Upper corner of the box, `X ≤ max` (rad).
+    pub max: Vector2<f64>,
+    /// Rate limit `|Ẋ_i| ≤ max_rate_i` (rad/s).
+    pub max_rate: Vector2<f64>,
     /// Acceleration limit `|Ẍ_i| ≤ max_accel_i` (rad/s²).
     pub max_accel: Vector2<f64>,
 }
 
 impl Limits {
-    /// The paper's box and rates (77) and [`DEFAULT_MAX_ACCEL_DEG`].
+    /// The paper's identification box and rates (77), φ ∈ [30°, 140°],
+    /// γ ∈ [40°, 80°], |φ̇|, |γ̇| ≤ 200°/s, and [`DEFAULT_MAX_ACCEL_DEG`].
     pub fn paper() -> Self {
+        let d = f64::to_radians;
         let a = DEFAULT_MAX_ACCEL_DEG.to_radians();
         Self {
-            workspace: Workspace::paper(),
+            min: Vector2::new(d(30.0), d(40.0)),
+            max: Vector2::new(d(140.0), d(80.0)),
+            max_rate: Vector2::new(d(200.0), d(200.0)),
             max_accel: Vector2::new(a, a),
         }
     }
 
-    /// Errors if the acceleration limit is not finite and positive (the
-    /// workspace validates itself on construction).
+    /// Errors if a bound is not finite, the box is empty, or a rate or
+    /// acceleration limit is not positive; the message names the setting.
     pub fn validate(&self) -> Result<(), ExciteError> {
         for i in 0..2 {
-            check_finite(|| format!("max_accel[{i}]"), self.max_accel[i])?;
-            if self.max_accel[i] <= 0.0 {
+            check_finite(|| format!("min[{i}]"), self.min[i])?;
+            check_finite(|| format!("max[{i}]"), self.max[i])?;
+            if self.min[i] >= self.max[i] {
                 return Err(ExciteError::InvalidSetting {
-                    name: "max_accel",
-                    value: self.max_accel[i],
-                    reason: "the acceleration limit must be positive (rad/s²)".into(),
+                    name: "min/max",
+                    value: self.min[i],
+                    reason: format!(
+                        "the box is empty in coordinate {i}: min {:.4}° is not below max {:.4}°",
+                        self.min[i].to_degrees(),
+                        self.max[i].to_degrees()
+                    ),
                 });
+            }
+            for (name, v) in [
+                ("max_rate", self.max_rate[i]),
+                ("max_accel", self.max_accel[i]),
+            ] {
+                check_finite(|| format!("{name}[{i}]"), v)?;
+                if v <= 0.0 {
+                    return Err(ExciteError::InvalidSetting {
+                        name,
+                        value: v,
+                        reason: "the rate and acceleration limits must be positive (rad/s, rad/s²)"
+                            .into(),
+                    });
+                }
             }
         }
         Ok(())
@@ -66,14 +93,13 @@ impl Limits {
     /// Per coordinate and kind (0 = position, 1 = velocity, 2 = acceleration)
     /// the centre and half-width of the allowed range.
     fn ranges(&self) -> [[(f64, f64); 3]; 2] {
-        let w = &self.workspace;
         std::array::from_fn(|i| {
             [
                 (
-                    0.5 * (w.min()[i] + w.max()[i]),
-                    0.5 * (w.max()[i] - w.min()[i]),
+                    0.5 * (self.min[i] + self.max[i]),
+                    0.5 * (self.max[i] - self.min[i]),
                 ),
-                (0.0, w.max_rate()[i]),
+                (0.0, self.max_rate[i]),
                 (0.0, self.max_accel[i]),
             ]
         })

@@ -20,10 +20,8 @@
 //! contracted per sample with the dual-number derivatives `∂Y/∂(X, Ẋ, Ẍ)`,
 //! and chained through the linear maps from the decision vector.
 
-use aras_kin::Scalar;
 use faer::Mat;
 use nalgebra::{DMatrix, Vector2};
-use num_dual::DualSVec64;
 
 use crate::error::ExciteError;
 use crate::param::Grid;
@@ -65,7 +63,7 @@ impl Assessment {
 
 /// Number of dual directions: `(φ, γ, φ̇, γ̇, φ̈, γ̈)`.
 const DIRS: usize = 6;
-type D6 = DualSVec64<DIRS>;
+type D6 = crate::regressor::Dual;
 
 /// Checks the shape of a base projection against a regressor.
 pub(crate) fn check_projection(e: &DMatrix<f64>, columns: usize) -> Result<(), ExciteError> {
@@ -195,13 +193,13 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
             let xdds = Vector2::new(seed(xdd[0], 4, false), seed(xdd[1], 5, false));
             self.drows.iter_mut().for_each(|v| *v = D6::from_re(0.0));
             self.reg
-                .fill(&xs, &xds, &xdds, &mut self.drows)
+                .fill_dual(&xs, &xds, &xdds, &mut self.drows)
                 .map_err(|e| Self::fail(&x, e))?;
             for r in 0..2 {
                 for c in 0..n {
                     let d = &self.drows[2 * c + r];
                     let row = r * ns + s;
-                    self.w[(row, c)] = d.value();
+                    self.w[(row, c)] = d.re;
                     match &d.eps.0 {
                         Some(g) => {
                             for k in 0..DIRS {
@@ -409,9 +407,9 @@ mod tests {
         ] {
             let (layout, grid, cons) = setup(l);
             let p = interior_point(&cons, seed);
-            let ws = Limits::paper().workspace;
+            let box_ = Limits::paper();
             let mut ev =
-                Evaluator::new(&reg, &e, criterion, grid.len(), Some((ws.min(), ws.max())));
+                Evaluator::new(&reg, &e, criterion, grid.len(), Some((box_.min, box_.max)));
             let mut g = vec![0.0; layout.dim()];
             let f0 = ev.gradient(&grid, &p, &mut g).unwrap().objective;
             let f0v = ev.objective(&grid, &p).unwrap().objective;

@@ -21,7 +21,6 @@ use std::cell::RefCell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-use aras_kin::{Geometry, evaluate};
 use nalgebra::{DMatrix, Vector2};
 use optimization_engine::alm::{
     AlmCache, AlmFactory, AlmOptimizer, AlmProblem, NO_JACOBIAN_MAPPING, NO_MAPPING,
@@ -51,9 +50,6 @@ pub struct DesignSettings {
     pub omega_f: f64,
     /// Box, rate and acceleration limits (default [`Limits::paper`]).
     pub limits: Limits,
-    /// Robot geometry, used to check the box is reachable and non-singular
-    /// (default ARAS-Diamond, α = β = 45°).
-    pub geometry: Geometry,
     /// What to minimise (default [`Criterion::Condition`]).
     pub criterion: Criterion,
     /// Constraint grid points per period (default 200; the limits are
@@ -93,7 +89,6 @@ impl Default for DesignSettings {
             harmonics: DEFAULT_HARMONICS,
             omega_f: DEFAULT_OMEGA_F,
             limits: Limits::paper(),
-            geometry: Geometry::aras_diamond(),
             criterion: Criterion::Condition,
             constraint_points: 200,
             criterion_points: 100,
@@ -173,18 +168,17 @@ impl DesignSettings {
                 reason: "iteration limits must be at least 1".into(),
             });
         }
-        self.check_motion()?;
-        self.check_box()
+        self.check_motion()
     }
 
     /// Errors if the limits leave a coordinate less than `min_excursion`
     /// of peak-to-peak motion. The fundamental harmonic moves most per unit
     /// of rate and acceleration: `2v/ω_f` and `2a/ω_f²` peak to peak.
     fn check_motion(&self) -> Result<(), ExciteError> {
-        let w = &self.limits.workspace;
+        let l = &self.limits;
         for (i, coordinate) in COORDS.into_iter().enumerate() {
-            let width = w.max()[i] - w.min()[i];
-            let (v, a) = (w.max_rate()[i], self.limits.max_accel[i]);
+            let width = l.max[i] - l.min[i];
+            let (v, a) = (l.max_rate[i], l.max_accel[i]);
             let reach = width
                 .min(2.0 * v / self.omega_f)
                 .min(2.0 * a / (self.omega_f * self.omega_f));
@@ -203,36 +197,38 @@ impl DesignSettings {
         Ok(())
     }
 
-    /// Errors if any pose of the box (on a 41 × 41 grid including its edges
-    /// and corners) is unreachable or singular for the geometry.
-    fn check_box(&self) -> Result<(), ExciteError> {
-        let w = &self.limits.workspace;
-        let (lo, hi) = (w.min(), w.max());
-        const K: usize = 41;
-        for i in 0..K {
-            for j in 0..K {
-                let f = |k: usize, c: usize| lo[c] + (hi[c] - lo[c]) * k as f64 / (K - 1) as f64;
-                let x = Vector2::new(f(i, 0), f(j, 1));
-                let z = Vector2::zeros();
-                if let Err(source) = evaluate(&self.geometry, &x, &z, &z) {
-                    return Err(ExciteError::InfeasibleBox {
-                        lo: [lo[0], lo[1]],
-                        hi: [hi[0], hi[1]],
-                        at: [x[0], x[1]],
-                        source,
-                    });
-                }
-            }
-        }
-        Ok(())
-    }
-
     fn layout(&self) -> Layout {
         Layout {
             harmonics: self.harmonics,
             omega_f: self.omega_f,
         }
     }
+}
+
+/// Errors if the regressor cannot be evaluated at some pose of the box (on a
+/// 41 × 41 grid including its edges and corners, at rest): an unreachable or
+/// singular pose would stop the design half-way.
+fn check_box<R: Regressor>(regressor: &R, limits: &Limits) -> Result<(), ExciteError> {
+    let (lo, hi) = (limits.min, limits.max);
+    const K: usize = 41;
+    let mut rows = vec![0.0; 2 * regressor.columns()];
+    let z = Vector2::zeros();
+    for i in 0..K {
+        for j in 0..K {
+            let f = |k: usize, c: usize| lo[c] + (hi[c] - lo[c]) * k as f64 / (K - 1) as f64;
+            let x = Vector2::new(f(i, 0), f(j, 1));
+            rows.iter_mut().for_each(|v| *v = 0.0);
+            if let Err(e) = regressor.fill(&x, &z, &z, &mut rows) {
+                return Err(ExciteError::InfeasibleBox {
+                    lo: [lo[0], lo[1]],
+                    hi: [hi[0], hi[1]],
+                    at: [x[0], x[1]],
+                    source: Box::new(e),
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// How one start of the multi-start went.
@@ -372,6 +368,7 @@ pub fn design_with_progress<R: Regressor>(
     let started = Instant::now();
     settings.validate()?;
     check_projection(projection, regressor.columns())?;
+    check_box(regressor, &settings.limits)?;
     let layout = settings.layout();
     let cons = GridConstraints::new(layout, &settings.limits, settings.constraint_points);
     let grid = Grid::new(layout, settings.criterion_points, 0.5);
@@ -474,13 +471,13 @@ fn run_start<R: Regressor>(
     mut p: Vec<f64>,
 ) -> (Vec<f64>, StartReport) {
     let t0 = Instant::now();
-    let ws = &settings.limits.workspace;
+    let limits = &settings.limits;
     let ev = RefCell::new(Evaluator::new(
         regressor,
         projection,
         settings.criterion,
         grid.len(),
-        Some((ws.min(), ws.max())),
+        Some((limits.min, limits.max)),
     ));
     let failure: RefCell<Option<ExciteError>> = RefCell::new(None);
     let mut report = StartReport {
@@ -532,11 +529,11 @@ fn run_start<R: Regressor>(
     let w = cons.grid.layout.per_coord();
     let (mut umin, mut umax) = (vec![0.0; dim], vec![0.0; dim]);
     for i in 0..2 {
-        let v = 2.0 * ws.max_rate()[i];
+        let v = 2.0 * limits.max_rate[i];
         for m in 0..w {
             let k = i * w + m;
             (umin[k], umax[k]) = if m == 0 {
-                (ws.min()[i], ws.max()[i])
+                (limits.min[i], limits.max[i])
             } else {
                 (-v, v)
             };

@@ -2,8 +2,6 @@
 
 use std::path::PathBuf;
 
-use aras_kin::KinError;
-
 /// Everything that can go wrong when building, reading, sampling or designing
 /// an excitation trajectory.
 ///
@@ -46,11 +44,11 @@ pub enum ExciteError {
         /// The number of harmonics L.
         expected: usize,
     },
-    /// The workspace box contains poses the mechanism cannot reach or that are
-    /// (numerically) singular, so no trajectory inside it can be evaluated.
+    /// The box contains poses the model cannot be evaluated at (unreachable
+    /// or numerically singular), so no trajectory inside it can be designed.
     #[error(
-        "the workspace box φ ∈ [{phi_lo:.3}°, {phi_hi:.3}°], γ ∈ [{gamma_lo:.3}°, {gamma_hi:.3}°] is \
-         infeasible: at φ = {phi:.3}°, γ = {gamma:.3}° the kinematics fail; shrink the \
+        "the box X1 ∈ [{phi_lo:.3}°, {phi_hi:.3}°], X2 ∈ [{gamma_lo:.3}°, {gamma_hi:.3}°] is \
+         infeasible: at X = [{phi:.3}°, {gamma:.3}°] the regressor fails; shrink the \
          box so it stays inside the reachable, non-singular region",
         phi_lo = lo[0].to_degrees(), phi_hi = hi[0].to_degrees(),
         gamma_lo = lo[1].to_degrees(), gamma_hi = hi[1].to_degrees(),
@@ -63,8 +61,8 @@ pub enum ExciteError {
         hi: [f64; 2],
         /// The failing pose (rad).
         at: [f64; 2],
-        /// What the kinematics reported.
-        source: KinError,
+        /// What the regressor reported.
+        source: Box<dyn std::error::Error + Send + Sync + 'static>,
     },
     /// The rate or acceleration limits leave too little room for any useful
     /// motion of a coordinate.
@@ -111,7 +109,7 @@ pub enum ExciteError {
         /// Sample time (s).
         t: f64,
         /// What the kinematics reported.
-        source: KinError,
+        source: Box<dyn std::error::Error + Send + Sync + 'static>,
     },
     /// The user's regressor failed at a sample.
     #[error("the regressor failed at φ = {phi:.4}°, γ = {gamma:.4}°",

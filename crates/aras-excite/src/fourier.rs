@@ -2,7 +2,6 @@
 
 use std::path::Path;
 
-use aras_kin::{Geometry, evaluate};
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
@@ -52,36 +51,6 @@ impl TaskRow {
             s.x_dot[1],
             s.x_ddot[0],
             s.x_ddot[1],
-        ]
-    }
-}
-
-/// One sample mapped to motor space by the kinematics: `t, θ, θ̇, θ̈`, the
-/// columns of the log format (`t, theta1, theta2`, and the optional
-/// `dtheta*`, `ddtheta*`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MotorRow {
-    /// Time (s).
-    pub t: f64,
-    /// Motor angles `θ` (rad), (1)–(2).
-    pub theta: Vector2<f64>,
-    /// Motor rates `θ̇ = J Ẋ` (rad/s).
-    pub theta_dot: Vector2<f64>,
-    /// Motor accelerations `θ̈ = J Ẍ + J̇ Ẋ` (rad/s²).
-    pub theta_ddot: Vector2<f64>,
-}
-
-impl MotorRow {
-    /// `[t, θ1, θ2, θ̇1, θ̇2, θ̈1, θ̈2]` (s, rad, rad/s, rad/s²).
-    pub fn to_array(&self) -> [f64; 7] {
-        [
-            self.t,
-            self.theta[0],
-            self.theta[1],
-            self.theta_dot[0],
-            self.theta_dot[1],
-            self.theta_ddot[0],
-            self.theta_ddot[1],
         ]
     }
 }
@@ -280,32 +249,6 @@ impl FourierTrajectory {
             .collect()
     }
 
-    /// Samples the trajectory at `times` (s) and maps every sample to motor
-    /// space with the kinematics (θ, θ̇, θ̈), the quantities of the log format.
-    ///
-    /// Errors (naming the time) if a sample is unreachable or singular.
-    pub fn motor_samples(
-        &self,
-        geometry: &Geometry,
-        times: &[f64],
-    ) -> Result<Vec<MotorRow>, ExciteError> {
-        times
-            .iter()
-            .map(|&t| {
-                check_finite(|| "t".into(), t)?;
-                let s = self.eval(t);
-                let k = evaluate(geometry, &s.x, &s.x_dot, &s.x_ddot)
-                    .map_err(|source| ExciteError::Kinematics { t, source })?;
-                Ok(MotorRow {
-                    t,
-                    theta: k.theta,
-                    theta_dot: k.theta_dot,
-                    theta_ddot: k.theta_ddot,
-                })
-            })
-            .collect()
-    }
-
     /// Parses the JSON format documented in `docs/excitation.md`.
     pub fn from_json(text: &str) -> Result<Self, ExciteError> {
         parse_json(text, "<string>")
@@ -465,25 +408,5 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("a[1][0]"), "{e}");
-    }
-
-    #[test]
-    fn motor_samples_follow_the_kinematics() {
-        let g = Geometry::aras_diamond();
-        let f = traj(&[
-            0.1, -0.2, 0.1, 0.05, 0.2, -0.1, 0.1, 0.1, 0.05, 0.1, 0.1, 0.0,
-        ]);
-        let rows = f.motor_samples(&g, &[0.0, 1.3, 4.0]).unwrap();
-        for r in &rows {
-            let s = f.eval(r.t);
-            let ik = aras_kin::inverse(&g, &s.x).unwrap();
-            assert!((ik.theta - r.theta).norm() < 1e-14);
-            // θ1 + θ2 = 2φ, (7), so the rates add up the same way.
-            assert!((r.theta_dot.sum() - 2.0 * s.x_dot[0]).abs() < 1e-12);
-            assert!((r.theta_ddot.sum() - 2.0 * s.x_ddot[0]).abs() < 1e-12);
-        }
-        let far = FourierTrajectory::at_rest(1.0, 1, Vector2::new(1.0, 2.0)).unwrap();
-        let e = far.motor_samples(&g, &[0.5]).unwrap_err().to_string();
-        assert!(e.contains("t = 0.5"), "{e}");
     }
 }

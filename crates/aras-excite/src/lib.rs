@@ -1,27 +1,27 @@
-//! Optimal excitation trajectories for identifying the dynamics of the
-//! ARAS-Diamond (or any 2-DOF robot with task coordinates `X = [φ, γ]`),
-//! equations (74)–(77) (`docs/excitation.md`).
+//! Optimal excitation trajectories for identifying the dynamics of any 2-DOF
+//! robot whose model is linear in its parameters, equations (74)–(77)
+//! (`docs/excitation.md`). ARAS-Diamond is one such robot (feature
+//! `aras-diamond`); another brings its own [`Regressor`].
 //!
 //! * [`FourierTrajectory`]: finite Fourier series (74)–(76) per coordinate,
-//!   exact `X`, `Ẋ`, `Ẍ`, JSON I/O (`docs/excitation.md`), sampling in task
-//!   space and, through `aras-kin`, in motor space (θ, θ̇, θ̈) for the log
-//!   format.
+//!   exact `X`, `Ẋ`, `Ẍ`, JSON I/O (`docs/excitation.md`), sampling.
 //! * [`design`]: minimises the condition number of the column-scaled stacked
 //!   *base* regressor ([`Criterion::Condition`]) or a D-optimality criterion
 //!   ([`Criterion::DOptimal`]) over the coefficients, subject to the box and
 //!   rate limits (77), an acceleration limit and zero velocity at the period
 //!   boundary, from several random feasible starts.
 //! * [`Regressor`]: the one thing the design needs from a dynamic model, its
-//!   2 × n regressor rows at `(X, Ẋ, Ẍ)`, generic over [`aras_kin::Scalar`]
-//!   so dual numbers give their exact derivatives.
+//!   2 × n regressor rows at `(X, Ẋ, Ẍ)`, in `f64` and in [`Dual`] numbers
+//!   for their exact derivatives.
 //!
 //! # Conventions
 //!
 //! SI units and radians everywhere (rad, rad/s, rad/s², s); degrees appear
-//! only in messages. Coordinate 0 is φ, 1 is γ. The base projection `E`
-//! (`n × b`, `W_b = W E`) comes from the base-parameter analysis
-//! (`aras-ident`), so the design criterion is on the identifiable
-//! combinations only.
+//! only in messages. `X` are the coordinates the model is written in (joint
+//! angles of a serial arm; `[φ, γ]` for ARAS-Diamond, coordinate 0 is φ).
+//! The base projection `E` (`n × b`, `W_b = W E`) comes from the
+//! base-parameter analysis (`aras-ident`), so the design criterion is on the
+//! identifiable combinations only.
 //!
 //! # Guarantees
 //!
@@ -40,41 +40,46 @@
 //! * `optimization_engine` (OpEn): a maintained, pure-Rust constrained
 //!   optimiser: augmented Lagrangian (ALM) for the linear path constraints,
 //!   PANOC (L-BFGS forward–backward) inside, with user gradients.
-//! * `num-dual` (through `aras-kin`'s `dual` feature): exact derivatives of
-//!   the regressor with respect to `(X, Ẋ, Ẍ)`.
+//! * `num-dual`: exact derivatives of the regressor with respect to
+//!   `(X, Ẋ, Ẍ)` ([`Dual`]).
+//! * `aras-ident` (no default features, so no system library): the AVX
+//!   upper-state clear around faer's kernels.
 //! * `faer`: the thin SVD of the stacked base regressor.
-//! * `nalgebra`: the small fixed-size vectors of the kinematics API, and the
+//! * `nalgebra`: the small fixed-size vectors of the API, and the
 //!   projection matrix `E` at the API edge.
 //! * `rand`: seeded random feasible starts (`Xoshiro256PlusPlus`, portable).
 //! * `rayon`: the starts run in parallel (progress through a callback,
 //!   [`design_with_progress`]).
 //! * `serde`/`serde_json`: the trajectory file format; `thiserror`: errors.
-//! * `aras-dyn`: the robot's regressor ([`DynRegressor`]) and the
-//!   simulator's `Trajectory` trait, implemented by [`FourierTrajectory`].
+//! * With the feature `aras-diamond` only, `aras-kin` and `aras-dyn`: the
+//!   robot's regressor (`DynRegressor`), the simulator's `Trajectory`
+//!   trait for [`FourierTrajectory`], and motor-space samples (`MotorRow`).
 
 #![warn(missing_docs)]
 
+#[cfg(feature = "aras-diamond")]
+mod aras_diamond;
 pub mod constraints;
 pub mod criterion;
 mod design;
-mod dyn_model;
 mod error;
 mod fourier;
 mod param;
 mod regressor;
 
+#[cfg(feature = "aras-diamond")]
+pub use aras_diamond::{DynRegressor, MotorRow};
 pub use constraints::{DEFAULT_MAX_ACCEL_DEG, Limits, Margins};
 pub use criterion::{Assessment, Criterion};
 pub use design::{
     Design, DesignProgress, DesignSettings, StartReport, assess, design, design_with_progress,
     random_feasible,
 };
-pub use dyn_model::DynRegressor;
 pub use error::ExciteError;
 pub use fourier::{
-    DEFAULT_HARMONICS, DEFAULT_OMEGA_F, FORMAT, FourierTrajectory, MotorRow, TaskRow, TaskState,
+    DEFAULT_HARMONICS, DEFAULT_OMEGA_F, FORMAT, FourierTrajectory, TaskRow, TaskState,
 };
-pub use regressor::Regressor;
+pub use regressor::{Dual, Regressor};
 
 // Lets the shared test helpers name this crate the same way in unit tests,
 // integration tests and benches.

@@ -10,7 +10,7 @@
 
 #![allow(dead_code)]
 
-use aras_excite::Regressor;
+use aras_excite::{Dual, Regressor};
 use aras_kin::{Geometry, KinError, Scalar, Workspace, evaluate};
 use nalgebra::{DMatrix, Vector2};
 use rand::rngs::Xoshiro256PlusPlus;
@@ -37,7 +37,29 @@ impl Regressor for StandIn {
         12
     }
 
-    fn fill<T: Scalar>(
+    fn fill(
+        &self,
+        x: &Vector2<f64>,
+        x_dot: &Vector2<f64>,
+        x_ddot: &Vector2<f64>,
+        rows: &mut [f64],
+    ) -> Result<(), KinError> {
+        self.rows(x, x_dot, x_ddot, rows)
+    }
+
+    fn fill_dual(
+        &self,
+        x: &Vector2<Dual>,
+        x_dot: &Vector2<Dual>,
+        x_ddot: &Vector2<Dual>,
+        rows: &mut [Dual],
+    ) -> Result<(), KinError> {
+        self.rows(x, x_dot, x_ddot, rows)
+    }
+}
+
+impl StandIn {
+    fn rows<T: Scalar>(
         &self,
         x: &Vector2<T>,
         x_dot: &Vector2<T>,

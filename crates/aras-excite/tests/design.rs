@@ -7,7 +7,6 @@ mod test_support;
 use aras_excite::{
     Criterion, DesignSettings, ExciteError, Limits, Margins, assess, design, random_feasible,
 };
-use aras_kin::Workspace;
 use aras_testkit::{assert_source_not_repeated, io_source_kind};
 use nalgebra::Vector2;
 use test_support::{StandIn, base_projection};
@@ -159,15 +158,9 @@ fn bad_settings_are_clear_errors() {
 
     // A box reaching beyond the elbow singularity γ = α + β = 90°.
     let deg = f64::to_radians;
-    let ws = Workspace::new(
-        Vector2::new(deg(30.0), deg(40.0)),
-        Vector2::new(deg(140.0), deg(95.0)),
-        Vector2::new(deg(200.0), deg(200.0)),
-    )
-    .unwrap();
     let e = err(DesignSettings {
         limits: Limits {
-            workspace: ws,
+            max: Vector2::new(deg(140.0), deg(95.0)),
             ..Limits::paper()
         },
         ..d()
@@ -175,15 +168,9 @@ fn bad_settings_are_clear_errors() {
     assert!(e.contains("infeasible") && e.contains("unreachable"), "{e}");
 
     // A rate limit too small for any useful motion.
-    let ws = Workspace::new(
-        Vector2::new(deg(30.0), deg(40.0)),
-        Vector2::new(deg(140.0), deg(80.0)),
-        Vector2::new(deg(200.0), deg(0.001)),
-    )
-    .unwrap();
     let e = err(DesignSettings {
         limits: Limits {
-            workspace: ws,
+            max_rate: Vector2::new(deg(200.0), deg(0.001)),
             ..Limits::paper()
         },
         ..d()
