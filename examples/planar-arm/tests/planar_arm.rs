@@ -1,0 +1,165 @@
+//! The crates picked into another robot project, in CI: a 2-link planar arm
+//! that none of them knows, excited by `aras-excite`, processed by
+//! `aras-signal`, identified by `aras-ident`, torques from an independent
+//! Newton–Euler path.
+
+use std::process::Command;
+
+use aras_ident::LinearModel;
+use planar_arm::{Arm, COLUMNS, PlanarArm, Settings, limits, run};
+
+/// Largest relative error, scaled per entry by the truth's magnitude.
+fn worst(est: &[f64], truth: &[f64]) -> f64 {
+    est.iter()
+        .zip(truth)
+        .map(|(e, t)| (e - t).abs() / t.abs())
+        .fold(0.0, f64::max)
+}
+
+/// The hand-derived Lagrangian regressor against the independent recursive
+/// Newton–Euler torques, over the excitation's box: equal to rounding
+/// (1e-12 N·m on torques of order 10 N·m).
+#[test]
+fn regressor_times_parameters_equals_newton_euler_torques() {
+    let arm = Arm::example();
+    let beta = arm.standard();
+    let l = limits();
+    let mut y = vec![0.0; 2 * COLUMNS];
+    for i in 0..500 {
+        let u = |k: f64| ((i as f64 * k).sin() + 1.0) / 2.0;
+        let q = [
+            l.min[0] + u(0.37) * (l.max[0] - l.min[0]),
+            l.min[1] + u(0.53) * (l.max[1] - l.min[1]),
+        ];
+        let qd = [3.0 * (2.0 * u(0.71) - 1.0), 3.0 * (2.0 * u(0.29) - 1.0)];
+        let qdd = [12.0 * (2.0 * u(0.13) - 1.0), 12.0 * (2.0 * u(0.91) - 1.0)];
+        LinearModel::fill(&PlanarArm, &q, &qd, &qdd, &mut y).unwrap();
+        let tau = arm.torques(q, qd, qdd);
+        for j in 0..2 {
+            let model: f64 = (0..COLUMNS).map(|c| y[2 * c + j] * beta[c]).sum();
+            assert!((model - tau[j]).abs() < 1e-12, "sample {i}, joint {j}");
+        }
+    }
+}
+
+/// The dual-number rows aras-excite differentiates are the `f64` rows, and
+/// their derivatives match central differences.
+#[test]
+fn dual_rows_are_the_rows_and_their_derivatives() {
+    use aras_excite::{Dual, Regressor};
+    use nalgebra::Vector2;
+    let (x, xd, xdd) = (
+        Vector2::new(0.3, -0.7),
+        Vector2::new(1.1, -0.4),
+        Vector2::new(-2.0, 3.0),
+    );
+    let seed = |v: &Vector2<f64>, k: usize| {
+        Vector2::new(
+            Dual::from_re(v[0]).derivative(k),
+            Dual::from_re(v[1]).derivative(k + 1),
+        )
+    };
+    let mut d = vec![Dual::from_re(0.0); 2 * COLUMNS];
+    PlanarArm
+        .fill_dual(&seed(&x, 0), &seed(&xd, 2), &seed(&xdd, 4), &mut d)
+        .unwrap();
+    let mut v = vec![0.0; 2 * COLUMNS];
+    Regressor::fill(&PlanarArm, &x, &xd, &xdd, &mut v).unwrap();
+    assert!(d.iter().zip(&v).all(|(a, b)| a.re == *b));
+    // ∂/∂q2 by central differences (h = 1e-6: error ~1e-10 on entries of
+    // order 10).
+    let h = 1e-6;
+    let (mut p, mut m) = (v.clone(), v.clone());
+    Regressor::fill(&PlanarArm, &(x + Vector2::new(0.0, h)), &xd, &xdd, &mut p).unwrap();
+    Regressor::fill(&PlanarArm, &(x - Vector2::new(0.0, h)), &xd, &xdd, &mut m).unwrap();
+    for k in 0..v.len() {
+        let fd = (p[k] - m[k]) / (2.0 * h);
+        let exact = d[k].eps.0.map_or(0.0, |g| g[1]);
+        assert!((fd - exact).abs() < 1e-8, "entry {k}: {exact} vs {fd}");
+    }
+}
+
+/// Designed, logged, processed, identified: noise-free, the base parameters
+/// come back to rounding error.
+#[test]
+fn planar_arm_base_parameters_are_recovered_noise_free() {
+    let o = run(&Settings::default()).unwrap();
+    // The design's κ is finite and modest for a 10-parameter arm.
+    assert!(
+        o.condition_number.is_finite() && o.condition_number < 1e3,
+        "κ {}",
+        o.condition_number
+    );
+    // The processing took the harmonic series on the known period and
+    // differentiated exactly: q̈ to 1e-8 rad/s² on accelerations of order
+    // 10 rad/s².
+    assert!(o.bandwidth.contains("Fourier series"), "{}", o.bandwidth);
+    assert!(o.max_accel_error < 1e-8, "q̈ error {}", o.max_accel_error);
+    // 23 standard parameters, 10 base: Izz, hx, hy of both links with link
+    // 2's mass grouped into link 1's Izz and hx, and 4 friction levels.
+    assert_eq!(o.truth.len(), 10, "{:#?}", o.base_names);
+    // Noise-free: OLS by QR recovers the truth to rounding error (the
+    // column-scaled problem's condition number is far below 1e4, so 1e-6
+    // leaves a wide margin).
+    assert!(
+        worst(&o.ols, &o.truth) < 1e-6,
+        "OLS {:?} vs {:?}",
+        o.ols,
+        o.truth
+    );
+    // The streaming accumulation (Gram path, per-joint groups) of the same
+    // samples agrees as tightly.
+    assert!(
+        worst(&o.streaming, &o.truth) < 1e-6,
+        "streaming {:?} vs {:?}",
+        o.streaming,
+        o.truth
+    );
+    // The truth is physical and inside every bound, so the SDP reproduces it
+    // up to its regulariser (λ = 1e-6 relative, pulling towards a reference
+    // 10 % off) and the solver tolerance: 1e-3 relative.
+    assert_eq!(o.sdp_status, aras_ident::SolverStatus::Solved);
+    assert!(
+        worst(&o.sdp, &o.truth) < 1e-3,
+        "SDP {:?} vs {:?}",
+        o.sdp,
+        o.truth
+    );
+    assert!(
+        o.min_eigenvalues.iter().all(|&e| e > 0.0),
+        "{:?}",
+        o.min_eigenvalues
+    );
+}
+
+/// The proof that the crates can be picked: this package's normal
+/// dependency tree holds neither ARAS-Diamond crate.
+#[test]
+fn neither_aras_kin_nor_aras_dyn_is_a_dependency() {
+    let out = Command::new(env!("CARGO"))
+        .args([
+            "tree",
+            "-p",
+            "planar-arm",
+            "-e",
+            "normal",
+            "--prefix",
+            "none",
+            "--offline",
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("cargo runs");
+    let tree = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for name in ["aras-excite", "aras-signal", "aras-ident"] {
+        assert!(tree.contains(name), "{name} missing:\n{tree}");
+    }
+    for name in ["aras-kin", "aras-dyn", "aras-pipeline"] {
+        assert!(!tree.contains(name), "{name} in the tree:\n{tree}");
+    }
+}
