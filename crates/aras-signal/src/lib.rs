@@ -23,8 +23,6 @@
 //!
 //! * SI units throughout: s, rad, rad/s, rad/s², N·m, Hz. Degrees are
 //!   rejected ([`LogError::Degrees`]), not converted.
-//! * `X = [φ, γ]` from [`aras_kin::forward`] in assembly mode `+`; joint
-//!   numbering as in `aras-kin` (θ1 drives link 2, θ2 link 1).
 //! * Filtering matches `scipy.signal.sosfiltfilt` / `filtfilt` defaults to
 //!   1e-10 (tests against committed reference vectors), so results can be
 //!   cross-checked with Python or MATLAB.
