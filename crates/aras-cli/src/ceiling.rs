@@ -18,7 +18,8 @@
 
 use anyhow::{Context, Result, bail};
 use aras_kin::Geometry;
-use aras_signal::{Log, ProcessOptions};
+use aras_log::Log;
+use aras_signal::ProcessOptions;
 
 use crate::identify::Prepared;
 

@@ -134,13 +134,13 @@ impl LogArgs {
     pub fn sidecar_of(&self, log: &std::path::Path) -> PathBuf {
         self.sidecar
             .clone()
-            .unwrap_or_else(|| aras_dyn::sim::sidecar_path(log))
+            .unwrap_or_else(|| aras_log::sidecar_path(log))
     }
 
     /// The log reader's options: `--sidecar` and `--columns`.
-    pub fn read_options(&self) -> anyhow::Result<aras_signal::ReadOptions> {
+    pub fn read_options(&self) -> anyhow::Result<aras_log::ReadOptions> {
         use anyhow::Context;
-        use aras_signal::{ColumnNames, ReadOptions, SidecarSource};
+        use aras_log::{ColumnNames, ReadOptions, SidecarSource};
         Ok(ReadOptions {
             sidecar: self
                 .sidecar

@@ -19,13 +19,14 @@ use aras_ident::{
     BaseParameters, NoiseVariances, OlsEstimate, ReducedLs, SdpSettings, SdpSolution,
 };
 use aras_kin::{Geometry, Workspace};
+use aras_log::Log;
 use aras_pipeline::robot::{
     self, FilterMode, Stacked, consistent_problem, filter, filter_reach, keep_rows, noise_gain,
     params_from_solution, reversal_mask, stack,
 };
 use aras_signal::{
-    Bandwidth, Butterworth, DerivativeMethod, FilterSpec, Log, OutputRows, PeriodSource,
-    ProcessOptions, Processed, Sos,
+    Bandwidth, Butterworth, DerivativeMethod, FilterSpec, OutputRows, PeriodSource, ProcessOptions,
+    Processed, Sos,
 };
 use faer::MatRef;
 use nalgebra::Vector2;

@@ -447,10 +447,8 @@ impl FileKind {
             Self::Trajectory => json_of(path).is_some_and(|v| {
                 v.get("format").and_then(|f| f.as_str()) == Some("aras-fourier/1")
             }),
-            Self::SimulatedLog => json_of(&aras_dyn::sim::sidecar_path(path)).is_some_and(|v| {
-                v.get("format").and_then(|f| f.as_str()) == Some("aras-log/1")
-                    && v.get("truth").is_some()
-            }),
+            Self::SimulatedLog => aras_log::Sidecar::read(&aras_log::sidecar_path(path))
+                .is_ok_and(|s| s.format.as_deref() == Some(aras_log::FORMAT) && s.truth.is_some()),
             Self::Mjcf => fs::read(path)
                 .map(|b| {
                     let head = String::from_utf8_lossy(&b[..b.len().min(512)]).into_owned();
@@ -491,7 +489,7 @@ pub fn check_new_file(path: &Path, force: bool, kind: FileKind, inputs: &[PathBu
     }
     let mut written = vec![path.to_path_buf()];
     if kind == FileKind::SimulatedLog {
-        written.push(aras_dyn::sim::sidecar_path(path));
+        written.push(aras_log::sidecar_path(path));
     }
     for file in &written {
         if !file.exists() {

@@ -9,8 +9,9 @@ use anyhow::{Context, Result};
 use aras_dyn::{Dynamics, Model, Params, Sinusoid};
 use aras_ident::BaseParameters;
 use aras_ident::validate::{PdRegion, check_positive_definite};
+use aras_log::{ReadOptions, read_log};
 use aras_pipeline::robot::{Stacked, keep_rows, reversal_mask, stack};
-use aras_signal::{OutputRows, ReadOptions, read_log};
+use aras_signal::OutputRows;
 use nalgebra::Vector2;
 use serde::Serialize;
 

@@ -13,7 +13,7 @@ use std::path::Path;
 use aras_cli::config::{Config, Format};
 use aras_dyn::Params;
 use aras_excite::FourierTrajectory;
-use aras_signal::{ReadOptions, Sidecar, read_log_from};
+use aras_log::{ReadOptions, Sidecar, read_log_from};
 use proptest::prelude::*;
 
 fn fixture(rel: &str) -> Vec<u8> {

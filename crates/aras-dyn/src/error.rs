@@ -211,12 +211,11 @@ pub enum SimError {
         /// The underlying error.
         source: DynError,
     },
-    /// Writing the log failed.
-    #[error("cannot write log {}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The operating-system error.
-        source: std::io::Error,
+    /// Writing the log failed (the format's writer says which file and why).
+    #[error("cannot write the simulated log")]
+    Write {
+        /// The writer's error.
+        #[from]
+        source: aras_log::LogError,
     },
 }

@@ -1,9 +1,10 @@
 //! The simulated robot: consistency with the model, determinism, sensors,
 //! the log format.
 
-use aras_dyn::sim::{SimConfig, sidecar_path, simulate, write_log};
+use aras_dyn::sim::{SimConfig, simulate, write_log};
 use aras_dyn::{Cogging, Params, Sinusoid, Stribeck, Trajectory};
 use aras_kin::{AssemblyMode, evaluate, forward};
+use aras_log::sidecar_path;
 use aras_testkit::error_chain as chain;
 use nalgebra::Vector2;
 

@@ -9,8 +9,9 @@ use std::path::PathBuf;
 use aras_dyn::sim::{SimConfig, simulate, write_log};
 use aras_dyn::{Model, Params, Sinusoid, Trajectory};
 use aras_excite::FourierTrajectory;
+use aras_log::{ReadOptions, read_log};
 use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, diagnose};
-use aras_signal::{PeriodSource, ProcessOptions, ReadOptions, process, read_log};
+use aras_signal::{PeriodSource, ProcessOptions, process};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 /// A simulated plain log (CSV without sidecar, read back) of `traj` over

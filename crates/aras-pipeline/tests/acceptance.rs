@@ -20,14 +20,14 @@ use aras_excite::{DesignSettings, DynRegressor, FourierTrajectory, assess, rando
 use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 use aras_kin::{Geometry, Workspace};
+use aras_log::{ReadOptions, read_log};
 use aras_pipeline::robot::base_projection;
 use aras_pipeline::robot::{
     FilterMode, Stacked, base_parameters, consistent_problem, filter, filter_reach, keep_rows,
     noise_gain, params_from_solution, reversal_mask, stack,
 };
 use aras_signal::{
-    Bandwidth, Butterworth, FilterSpec, PeriodSource, ProcessOptions, Processed, ReadOptions,
-    process, read_log,
+    Bandwidth, Butterworth, FilterSpec, PeriodSource, ProcessOptions, Processed, process,
 };
 use nalgebra::Vector2;
 
@@ -65,7 +65,7 @@ fn setup() -> &'static Setup {
 
 /// Simulates, writes the log (CSV + sidecar) and reads it back, as a user's
 /// data would arrive.
-fn run(name: &str, traj: &dyn Trajectory, cfg: &SimConfig) -> aras_signal::Log {
+fn run(name: &str, traj: &dyn Trajectory, cfg: &SimConfig) -> aras_log::Log {
     let log: SimLog = simulate(&setup().truth, traj, cfg).unwrap();
     let dir = std::env::temp_dir().join(format!("aras-accept-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -132,7 +132,7 @@ const CV_REACH_TOL: f64 = 0.5;
 /// regressor with parallel filtering, the reversal exclusion (if `exclude`)
 /// and the filter's noise gain.
 fn pipeline(
-    log: &aras_signal::Log,
+    log: &aras_log::Log,
     period: Option<f64>,
     exclude: Option<f64>,
 ) -> (Processed, Stacked, f64) {

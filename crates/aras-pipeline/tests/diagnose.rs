@@ -30,11 +30,12 @@ use aras_dyn::{Cogging, Effect, Model, Params, Sinusoid, Stribeck, Trajectory};
 use aras_excite::FourierTrajectory;
 use aras_ident::{BaseParameters, OlsEstimate, ols};
 use aras_kin::Workspace;
+use aras_log::{ReadOptions, read_log};
 use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, diagnose};
 use aras_pipeline::robot::{
     FilterMode, base_parameters, filter, filter_reach, keep_rows, reversal_mask, stack,
 };
-use aras_signal::{PeriodSource, ProcessOptions, ReadOptions, process, read_log};
+use aras_signal::{PeriodSource, ProcessOptions, process};
 use rayon::prelude::*;
 
 /// Periods of the 10 s excitation in TRAIN.

@@ -7,12 +7,11 @@ use aras_dyn::{Model, Params};
 use aras_ident::streaming::{Accumulation, QrAccumulator, RegressorStage, States};
 use aras_ident::{BaseParameters, NoiseVariances, ReducedLs, RowGroups, wls};
 use aras_kin::Geometry;
+use aras_log::{ReadOptions, read_log};
 use aras_pipeline::TaskRegressor;
 use aras_pipeline::robot::{filter, filter_reach, keep_rows, noise_gain, reversal_mask, stack};
 use aras_pipeline::streaming::{StreamingOptions, StreamingRoute, identify_log, synthetic};
-use aras_signal::{
-    Bandwidth, Butterworth, FilterSpec, PeriodSource, ReadOptions, process, read_log,
-};
+use aras_signal::{Bandwidth, Butterworth, FilterSpec, PeriodSource, process};
 use aras_testkit::assert_source_not_repeated;
 use faer::Mat;
 use proptest::prelude::*;

@@ -7,9 +7,8 @@ use std::f64::consts::TAU;
 use std::hint::black_box;
 
 use aras_kin::{Geometry, inverse};
-use aras_signal::{
-    Butterworth, OutputRows, PeriodSource, ProcessOptions, ReadOptions, process, read_log_from,
-};
+use aras_log::{ReadOptions, read_log_from};
+use aras_signal::{Butterworth, OutputRows, PeriodSource, ProcessOptions, process};
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Vector2;
 

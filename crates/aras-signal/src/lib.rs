@@ -1,28 +1,25 @@
 //! Measured robot logs → clean, aligned samples `θ, θ̇, θ̈, X, Ẋ, Ẍ, τ` for
 //! identification (`docs/processing.md`). No robot: `X` are whatever
-//! coordinates the caller's model is written in ([`Coordinates`]).
+//! coordinates the caller's model is written in ([`Coordinates`]). No file
+//! format: a log arrives as an [`aras_log::Log`] (read by `aras-log`, or
+//! built in memory).
 //!
 //! # Pipeline
 //!
-//! 1. [`read_log`] / [`read_log_from`] / the streaming [`LogReader`]: the CSV
-//!    format of `docs/log-format.md` plus its optional JSON [`Sidecar`];
-//!    encoder counts and motor currents are converted to joint angles and
-//!    torques; every defect is a [`LogError`] naming file, line and column.
-//! 2. [`process`]: period averaging ([`average_periods`]), zero-phase
+//! 1. [`process`]: period averaging ([`average_periods`]), zero-phase
 //!    Butterworth low-pass ([`Butterworth`], [`Sos`]), derivatives
 //!    ([`derivatives`], [`DerivativeMethod`]), the model's coordinates from
 //!    the caller's [`Coordinates`] ([`JointCoordinates`] when the model is
 //!    written in joint angles), with a serialisable [`ProcessSummary`] for
 //!    the report.
-//! 3. The same [`Sos`] filters any other column (`filtfilt`,
+//! 2. The same [`Sos`] filters any other column (`filtfilt`,
 //!    `filtfilt_into`, `filtfilt_in_place`, `filtfilt_periodic`): the
 //!    identification must filter every regressor column exactly as the
 //!    torques (`docs/processing.md`, "Parallel filtering").
 //!
 //! # Conventions
 //!
-//! * SI units throughout: s, rad, rad/s, rad/s², N·m, Hz. Degrees are
-//!   rejected ([`LogError::Degrees`]), not converted.
+//! * SI units throughout: s, rad, rad/s, rad/s², N·m, Hz.
 //! * Filtering matches `scipy.signal.sosfiltfilt` / `filtfilt` defaults to
 //!   1e-10 (tests against committed reference vectors), so results can be
 //!   cross-checked with Python or MATLAB.
@@ -33,9 +30,8 @@
 //! # Example
 //!
 //! ```
-//! use aras_signal::{
-//!     process, read_log_from, Butterworth, JointCoordinates, ProcessOptions, ReadOptions,
-//! };
+//! use aras_log::{read_log_from, ReadOptions};
+//! use aras_signal::{process, Butterworth, JointCoordinates, ProcessOptions};
 //!
 //! let mut csv = String::from("t,theta1,theta2,tau1,tau2\n");
 //! for i in 0..2000 {
@@ -60,13 +56,9 @@
 //! * `rustfft`: O(n log n) transforms of any length for the periodic filter
 //!   and spectral derivative (an averaged period of 10 000 samples is not a
 //!   power of two; a hand-written mixed-radix FFT would be more code to trust).
-//! * `serde`, `serde_json`: the sidecar and the serialisable summaries.
+//! * `aras-log`: the [`aras_log::Log`] a processing starts from.
+//! * `serde`: the serialisable summaries.
 //! * `thiserror`: the error enums.
-//!
-//! The CSV is parsed by a small purpose-built scanner rather than the `csv`
-//! crate: the format is plain numeric, and the scanner gives exact line and
-//! column positions and reads an hour at 1 kHz in a fraction of a second
-//! (see `benches/signal.rs`).
 
 #![warn(missing_docs)]
 
@@ -76,7 +68,6 @@ mod coordinates;
 mod derivative;
 mod error;
 mod fourier;
-mod log;
 mod periods;
 mod process;
 mod sos;
@@ -89,12 +80,7 @@ pub use bandwidth::{
 pub use butterworth::{Butterworth, MAX_ORDER};
 pub use coordinates::{Coordinates, JointCoordinates, Motion};
 pub use derivative::{DerivativeMethod, Derivatives, derivatives, resolve};
-pub use error::{FilterError, LogError, ProcessError};
-pub use log::{
-    ColumnNames, Columns, Excitation, Extreme, FORMAT, Log, LogReader, LogReport, LogSummary,
-    NOMINAL_WINDOW, ReadOptions, Sensors, Sidecar, SidecarSource, Span, StepDeviation, Warning,
-    read_log, read_log_from,
-};
+pub use error::{FilterError, ProcessError};
 pub use periods::{MAX_BLOCK_MISMATCH, MAX_DRIFT, PeriodAverage, average_periods};
 pub use process::{
     Bandwidth, BandwidthChoice, BandwidthMethod, FilterSpec, FilterSummary, OutputRows,

@@ -24,9 +24,9 @@ use crate::coordinates::Coordinates;
 use crate::derivative::{DerivativeMethod, derivatives, resolve, spectral_with};
 use crate::error::ProcessError;
 use crate::fourier::Fourier;
-use crate::log::{Log, Warning};
 use crate::periods::average_periods;
 use crate::{Butterworth, Sos};
+use aras_log::{Log, Warning};
 
 /// Low-pass filter settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

@@ -13,9 +13,10 @@
 
 use aras_dyn::sim::{SimConfig, SimLog, simulate};
 use aras_dyn::{Dynamics, Params, Sign, Sinusoid};
+use aras_log::{ReadOptions, read_log_from};
 use aras_signal::{
     Bandwidth, BandwidthMethod, FilterSpec, OutputRows, PeriodOrigin, PeriodSource, ProcessOptions,
-    Processed, ReadOptions, process, read_log_from,
+    Processed, process,
 };
 use nalgebra::Vector2;
 
@@ -33,7 +34,7 @@ fn fitness(measured: &[f64], predicted: &[f64]) -> f64 {
 
 /// The log as a user's CSV: time, angles, torques only (no sidecar, so no
 /// period and no derivatives).
-fn as_csv(log: &SimLog, times: Option<&[f64]>) -> aras_signal::Log {
+fn as_csv(log: &SimLog, times: Option<&[f64]>) -> aras_log::Log {
     let mut csv = String::from("t,theta1,theta2,tau1,tau2\n");
     for i in 0..log.t.len() {
         let t = times.map_or(log.t[i], |t| t[i]);

@@ -4,9 +4,10 @@
 use std::f64::consts::TAU;
 
 use aras_kin::{Geometry, evaluate, inverse};
+use aras_log::{ReadOptions, read_log_from};
 use aras_signal::{
     Bandwidth, BandwidthMethod, DerivativeMethod, FilterSpec, PeriodSource, ProcessError,
-    ProcessOptions, ReadOptions, process, read_log_from,
+    ProcessOptions, process,
 };
 use aras_testkit::error_chain as chain;
 use nalgebra::Vector2;

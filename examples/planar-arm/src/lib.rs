@@ -27,9 +27,8 @@ use std::convert::Infallible;
 use aras_excite::{DesignSettings, Dual, Limits, Regressor};
 use aras_ident::streaming::{RegressorStage, States};
 use aras_ident::{BaseParameters, ConsistentLs, LinearModel, LinkLayout, ReducedLs};
-use aras_signal::{
-    Bandwidth, JointCoordinates, OutputRows, PeriodSource, ProcessOptions, ReadOptions,
-};
+use aras_log::ReadOptions;
+use aras_signal::{Bandwidth, JointCoordinates, OutputRows, PeriodSource, ProcessOptions};
 use faer::Mat;
 use nalgebra::{DMatrix, Vector2};
 use num_dual::DualNum;
@@ -418,8 +417,7 @@ pub fn run(settings: &Settings) -> Result<Outcome, Box<dyn std::error::Error>> {
 
     // 3. Processing: the known period gives a harmonic series up to the
     // noise floor; every row is kept.
-    let log =
-        aras_signal::read_log_from(csv.as_bytes(), "planar-arm.csv", &ReadOptions::default())?;
+    let log = aras_log::read_log_from(csv.as_bytes(), "planar-arm.csv", &ReadOptions::default())?;
     let processed = aras_signal::process(
         &log,
         &ProcessOptions {

@@ -5,9 +5,9 @@
 //! `diagnosis.json`, `diagnosis.md`, `diagnosis.html` and the plots.
 
 use anyhow::{Context, Result};
+use aras_log::read_log;
 use aras_pipeline::diagnose::residual::Profile;
 use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, diagnose};
-use aras_signal::read_log;
 
 use crate::cli::{DiagnoseArgs, LogArgs};
 use crate::identify::process_options;
@@ -27,7 +27,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         .map(|p| p.as_path())
         .collect();
     let sidecars: Vec<std::path::PathBuf> = std::iter::once(args.log.sidecar_of(&args.data))
-        .chain(args.validate.iter().map(|p| aras_dyn::sim::sidecar_path(p)))
+        .chain(args.validate.iter().map(|p| aras_log::sidecar_path(p)))
         .collect();
     let mut read = logs.clone();
     read.extend(sidecars.iter().map(|p| p.as_path()));

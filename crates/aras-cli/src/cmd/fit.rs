@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use aras_dyn::Params;
 use aras_excite::Design;
 use aras_ident::BaseParameters;
-use aras_signal::Log;
+use aras_log::Log;
 
 use crate::config::Config;
 use crate::identify::{identify, prepare, process_options};

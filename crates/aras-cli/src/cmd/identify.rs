@@ -3,7 +3,7 @@
 use anyhow::{Context, Result};
 use aras_dyn::{Model, Params};
 use aras_kin::Geometry;
-use aras_signal::read_log;
+use aras_log::read_log;
 
 use crate::cli::{IdentifyArgs, StreamingMode};
 use crate::cmd::fit::{self, FitInput};
@@ -15,9 +15,8 @@ use crate::stages::Stages;
 
 /// The truth stored by the simulator in a sidecar (`truth.params`), if any.
 pub fn sidecar_truth(path: &std::path::Path) -> Option<aras_dyn::Params> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    aras_dyn::Params::from_value(v.get("truth")?.get("params")?).ok()
+    let truth = aras_log::Sidecar::read(path).ok()?.truth?;
+    aras_dyn::Params::from_value(truth.get("params")?).ok()
 }
 
 /// Log size above which `--streaming auto` streams: 256 MB, about 2 M rows

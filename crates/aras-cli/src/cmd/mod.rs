@@ -50,7 +50,7 @@ pub fn input_files(common: &Common, loaded: &Loaded, extra: &[&Path]) -> Vec<Pat
 
 /// Prints the log reader's warnings (saturation, …) on stderr, even with
 /// `--quiet`: they are about the data, not progress.
-pub fn print_warnings(path: &Path, warnings: &[aras_signal::Warning]) {
+pub fn print_warnings(path: &Path, warnings: &[aras_log::Warning]) {
     for w in warnings {
         eprintln!("warning: {}: {w}", path.display());
     }

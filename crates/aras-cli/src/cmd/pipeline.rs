@@ -1,7 +1,7 @@
 //! `aras pipeline`: the whole mission on the simulated robot.
 
 use anyhow::{Context, Result};
-use aras_signal::{ReadOptions, read_log};
+use aras_log::{ReadOptions, read_log};
 
 use crate::cli::PipelineArgs;
 use crate::cmd::fit::{self, FitInput};

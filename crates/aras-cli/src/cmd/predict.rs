@@ -4,7 +4,8 @@ use std::fmt::Write as _;
 
 use anyhow::{Context, Result};
 use aras_dyn::Params;
-use aras_signal::{OutputRows, read_log};
+use aras_log::read_log;
+use aras_signal::OutputRows;
 
 use crate::cli::PredictArgs;
 use crate::identify::{fitness_per_joint, process_options};

@@ -55,7 +55,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         "{} ({} rows) and {}",
         args.out.display(),
         log.len(),
-        aras_dyn::sim::sidecar_path(&args.out).display()
+        aras_log::sidecar_path(&args.out).display()
     );
     Ok(())
 }

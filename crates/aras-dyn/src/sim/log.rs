@@ -2,31 +2,13 @@
 //! derivatives) and the JSON sidecar `LOG.json` with the ground truth
 //! (format `aras-log/1`, `docs/log-format.md`).
 
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+use aras_log::{Columns, Sidecar};
 use serde::Serialize;
 
 use super::SimConfig;
 use crate::{DynError, Effect, Params, SimError, Trajectory};
-
-/// Sensor description needed to interpret the log.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SensorInfo {
-    /// Motor torque constants (N·m/A).
-    pub torque_constants: [f64; 2],
-    /// Drive ratios.
-    pub gear_ratios: [f64; 2],
-    /// Encoder counts per motor revolution.
-    pub counts_per_rev: [u32; 2],
-}
-
-/// The excitation's period, present when the trajectory is periodic.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Excitation {
-    /// Period (s).
-    pub period_s: f64,
-}
 
 /// The noise that was added.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -56,52 +38,36 @@ pub struct Truth {
     pub simulator: SimConfig,
 }
 
-/// The JSON sidecar of a log.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Sidecar {
-    /// Always `"aras-log/1"`.
-    pub format: &'static str,
-    /// Sensors.
-    pub sensors: SensorInfo,
-    /// Present only for periodic trajectories.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub excitation: Option<Excitation>,
-    /// Ground truth (simulated logs only).
-    pub truth: Truth,
-}
-
-impl Sidecar {
-    pub(crate) fn new(
-        truth: &Params,
-        traj: &dyn Trajectory,
-        cfg: &SimConfig,
-    ) -> Result<Self, DynError> {
-        let s = &cfg.sensors;
-        Ok(Self {
-            format: "aras-log/1",
-            sensors: SensorInfo {
-                torque_constants: s.torque_constants,
-                gear_ratios: s.gear_ratios,
-                counts_per_rev: s.counts_per_rev,
-            },
-            excitation: traj
-                .period()
-                .filter(|p| p.is_finite() && *p > 0.0)
-                .map(|period_s| Excitation { period_s }),
-            truth: Truth {
-                params: truth.clone(),
-                effects: truth.model()?.effects().to_vec(),
-                noise: Noise {
-                    current_std_a: s.current_noise_std,
-                    torque_std_nm: s.torque_noise_std(),
-                    encoder_resolution_rad: s.resolution(),
-                    torque_delay_samples: cfg.torque_delay_samples,
-                },
-                seed: cfg.seed,
-                simulator: cfg.clone(),
-            },
-        })
-    }
+/// The `aras-log/1` sidecar of a simulated log: the sensors, the period of a
+/// periodic trajectory, and the ground truth ([`Truth`]) under `truth`.
+pub(crate) fn sidecar(
+    truth: &Params,
+    traj: &dyn Trajectory,
+    cfg: &SimConfig,
+) -> Result<Sidecar, DynError> {
+    let s = &cfg.sensors;
+    let truth = Truth {
+        params: truth.clone(),
+        effects: truth.model()?.effects().to_vec(),
+        noise: Noise {
+            current_std_a: s.current_noise_std,
+            torque_std_nm: s.torque_noise_std(),
+            encoder_resolution_rad: s.resolution(),
+            torque_delay_samples: cfg.torque_delay_samples,
+        },
+        seed: cfg.seed,
+        simulator: cfg.clone(),
+    };
+    let mut sidecar = Sidecar {
+        format: Some(aras_log::FORMAT.into()),
+        truth: Some(serde_json::to_value(&truth).expect("the truth always serialises")),
+        ..Sidecar::default()
+    };
+    sidecar.sensors.torque_constants = Some(s.torque_constants);
+    sidecar.sensors.gear_ratios = Some(s.gear_ratios);
+    sidecar.sensors.counts_per_rev = Some(s.counts_per_rev.map(f64::from));
+    sidecar.excitation.period_s = traj.period().filter(|p| p.is_finite() && *p > 0.0);
+    Ok(sidecar)
 }
 
 /// A simulated log in memory. All columns have the same length.
@@ -121,7 +87,7 @@ pub struct SimLog {
     pub theta_dot: Vec<[f64; 2]>,
     /// Exact motor accelerations (rad/s²).
     pub theta_ddot: Vec<[f64; 2]>,
-    /// The sidecar's content.
+    /// The sidecar: sensors, period, and the [`Truth`] under `truth`.
     pub sidecar: Sidecar,
 }
 
@@ -134,27 +100,7 @@ impl SimLog {
             tau_clean: Vec::with_capacity(n),
             theta_dot: Vec::with_capacity(n),
             theta_ddot: Vec::with_capacity(n),
-            sidecar: Sidecar {
-                format: "aras-log/1",
-                sensors: SensorInfo {
-                    torque_constants: [0.0; 2],
-                    gear_ratios: [0.0; 2],
-                    counts_per_rev: [0; 2],
-                },
-                excitation: None,
-                truth: Truth {
-                    params: Params::zero(45.0, 45.0),
-                    effects: Vec::new(),
-                    noise: Noise {
-                        current_std_a: [0.0; 2],
-                        torque_std_nm: [0.0; 2],
-                        encoder_resolution_rad: [0.0; 2],
-                        torque_delay_samples: 0,
-                    },
-                    seed: 0,
-                    simulator: SimConfig::default(),
-                },
-            },
+            sidecar: Sidecar::default(),
         }
     }
 
@@ -186,59 +132,24 @@ impl SimLog {
     }
 }
 
-/// The sidecar path of a log: the same path with extension `.json`
-/// (`run.csv` → `run.json`).
-pub fn sidecar_path(csv: &Path) -> PathBuf {
-    csv.with_extension("json")
-}
-
-fn atomic_write(
-    path: &Path,
-    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<(), SimError> {
-    let io = |source| SimError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    let file = std::fs::File::create(&tmp).map_err(io)?;
-    let mut w = std::io::BufWriter::new(file);
-    write(&mut w).map_err(io)?;
-    w.into_inner()
-        .map_err(|e| io(e.into_error()))?
-        .sync_all()
-        .map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(io)
-}
-
-/// Writes the log to `csv` and its sidecar to [`sidecar_path`]`(csv)`,
-/// each atomically (temporary file, then rename). Numbers use Rust's
-/// shortest round-trip formatting, so a seed always gives the same bytes.
-/// With `derivatives`, the exact `dtheta1,dtheta2,ddtheta1,ddtheta2`
-/// columns are appended.
+/// Writes the log to `csv` and its sidecar beside it
+/// ([`aras_log::sidecar_path`]) through the format's writer
+/// ([`aras_log::write_log`]: atomic, shortest round-trip numbers, so a seed
+/// always gives the same bytes). With `derivatives`, the exact
+/// `dtheta1,dtheta2,ddtheta1,ddtheta2` columns are appended.
 pub fn write_log(csv: &Path, log: &SimLog, derivatives: bool) -> Result<(), SimError> {
-    atomic_write(csv, |w| {
-        write!(w, "t,theta1,theta2,tau1,tau2")?;
-        if derivatives {
-            write!(w, ",dtheta1,dtheta2,ddtheta1,ddtheta2")?;
-        }
-        writeln!(w)?;
-        for i in 0..log.len() {
-            let (th, tau) = (log.theta[i], log.tau[i]);
-            write!(w, "{},{},{},{},{}", log.t[i], th[0], th[1], tau[0], tau[1])?;
-            if derivatives {
-                let (d, dd) = (log.theta_dot[i], log.theta_ddot[i]);
-                write!(w, ",{},{},{},{}", d[0], d[1], dd[0], dd[1])?;
-            }
-            writeln!(w)?;
-        }
-        Ok(())
-    })?;
-    let json = serde_json::to_string_pretty(&log.sidecar).expect("the sidecar always serialises");
-    atomic_write(&sidecar_path(csv), |w| {
-        w.write_all(json.as_bytes())?;
-        w.write_all(b"\n")
-    })
+    let pair = |v: &[[f64; 2]]| [0, 1].map(|j| v.iter().map(|r| r[j]).collect::<Vec<f64>>());
+    let (theta_dot, theta_ddot) = if derivatives {
+        (pair(&log.theta_dot), pair(&log.theta_ddot))
+    } else {
+        Default::default()
+    };
+    let columns = Columns {
+        t: log.t.clone(),
+        theta: pair(&log.theta),
+        tau: pair(&log.tau),
+        theta_dot,
+        theta_ddot,
+    };
+    Ok(aras_log::write_log(csv, &columns, &log.sidecar)?)
 }

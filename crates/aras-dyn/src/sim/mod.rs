@@ -32,7 +32,7 @@ use serde::Serialize;
 use crate::regressor::Sign;
 use crate::{DynError, Dynamics, Params, SimError, Trajectory};
 
-pub use log::{Excitation, Noise, SensorInfo, Sidecar, SimLog, Truth, sidecar_path, write_log};
+pub use log::{Noise, SimLog, Truth, write_log};
 
 /// Motor-side sensors and drive of each joint.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -356,6 +356,6 @@ pub fn simulate(
         }
     }
     log.sidecar =
-        Sidecar::new(truth, traj, cfg).map_err(|e| SimError::Dynamics { t: 0.0, source: e })?;
+        log::sidecar(truth, traj, cfg).map_err(|e| SimError::Dynamics { t: 0.0, source: e })?;
     Ok(log)
 }

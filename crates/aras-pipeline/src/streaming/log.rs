@@ -4,10 +4,8 @@ use std::path::Path;
 
 use aras_dyn::Model;
 use aras_kin::{AssemblyMode, Geometry};
-use aras_signal::{
-    Bandwidth, Butterworth, Columns, FilterSpec, Log, LogReader, LogReport, LogSummary,
-    PeriodSource, ProcessOptions, ReadOptions, Sidecar, Sos, process,
-};
+use aras_log::{Columns, Log, LogReader, LogReport, LogSummary, ReadOptions, Sidecar};
+use aras_signal::{Bandwidth, Butterworth, FilterSpec, PeriodSource, ProcessOptions, Sos, process};
 use nalgebra::Vector2;
 use serde::Serialize;
 
@@ -478,7 +476,7 @@ fn nominal_step(c: &Columns, given: f64) -> Result<f64, IdentError> {
     if given > 0.0 {
         return Ok(given);
     }
-    let k = (c.len().saturating_sub(1)).min(aras_signal::NOMINAL_WINDOW);
+    let k = (c.len().saturating_sub(1)).min(aras_log::NOMINAL_WINDOW);
     if k == 0 {
         return Err(invalid(
             "estimating the sample step",

@@ -2,7 +2,7 @@
 //! mapped, the standard name of a mapped role becomes an ordinary ignored
 //! column, and mistakes in the mapping or the log name the user's columns.
 
-use aras_signal::{ColumnNames, LogError, ReadOptions, read_log_from};
+use aras_log::{ColumnNames, LogError, ReadOptions, read_log_from};
 
 fn text(header: &str) -> String {
     let mut s = format!("{header}\n");

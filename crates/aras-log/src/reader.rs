@@ -176,8 +176,8 @@ impl<R: Read> Lines<R> {
 /// Streaming reader of one log.
 ///
 /// ```no_run
-/// use aras_signal::{Columns, LogReader, ReadOptions};
-/// # fn main() -> Result<(), aras_signal::LogError> {
+/// use aras_log::{Columns, LogReader, ReadOptions};
+/// # fn main() -> Result<(), aras_log::LogError> {
 /// let mut reader = LogReader::open("run.csv".as_ref(), &ReadOptions::default())?;
 /// let mut chunk = Columns::default();
 /// while reader.read_rows(&mut chunk, 65_536)? > 0 {
@@ -214,7 +214,7 @@ impl LogReader<File> {
         })?;
         let sidecar = match &opts.sidecar {
             SidecarSource::Auto => {
-                let candidate = path.with_extension("json");
+                let candidate = crate::sidecar_path(path);
                 if candidate.is_file() {
                     Some((Sidecar::read(&candidate)?, candidate.display().to_string()))
                 } else {

@@ -15,7 +15,7 @@ pub const FORMAT: &str = "aras-log/1";
 /// Unknown keys are errors (a misspelt `gear_ratio` must not silently leave
 /// the default in place), except the top-level `truth` and `notes`, which
 /// belong to whoever wrote the log (the simulator stores its ground truth in
-/// `truth`) and are skipped unread.
+/// `truth`) and are kept as JSON, unchecked.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Sidecar {
@@ -23,15 +23,18 @@ pub struct Sidecar {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub format: Option<String>,
     /// Sensor constants for currents and encoder counts.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Sensors::is_empty")]
     pub sensors: Sensors,
     /// What the robot was made to do.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Excitation::is_empty")]
     pub excitation: Excitation,
-    #[serde(default, skip_serializing)]
-    truth: Option<serde::de::IgnoredAny>,
-    #[serde(default, skip_serializing)]
-    notes: Option<serde::de::IgnoredAny>,
+    /// Whatever the log's writer knows and wants kept with it (the
+    /// simulator: its ground truth); neither read nor checked here.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub truth: Option<serde_json::Value>,
+    /// Free notes of the log's writer; neither read nor checked here.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub notes: Option<serde_json::Value>,
 }
 
 /// Sensor constants, per actuator `[motor 1, motor 2]`.
@@ -44,9 +47,31 @@ pub struct Sensors {
     /// Gear ratios: motor turns per joint turn (capstan drive).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gear_ratios: Option<[f64; 2]>,
-    /// Encoder counts per motor revolution.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// Encoder counts per motor revolution (written as integers when whole).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "whole_as_integer"
+    )]
     pub counts_per_rev: Option<[f64; 2]>,
+}
+
+/// Writes whole counts as JSON integers (`4096`, not `4096.0`), as a person
+/// would write them.
+fn whole_as_integer<S: serde::Serializer>(v: &Option<[f64; 2]>, s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeSeq;
+    let Some(pair) = v else {
+        return s.serialize_none();
+    };
+    let mut seq = s.serialize_seq(Some(2))?;
+    for x in pair {
+        if x.fract() == 0.0 && x.abs() < 9.0e15 {
+            seq.serialize_element(&(*x as i64))?;
+        } else {
+            seq.serialize_element(x)?;
+        }
+    }
+    seq.end()
 }
 
 /// Excitation description.
@@ -136,7 +161,19 @@ impl Sidecar {
     }
 }
 
+impl Excitation {
+    /// True if nothing is known (the section is then not written).
+    pub fn is_empty(&self) -> bool {
+        self.period_s.is_none()
+    }
+}
+
 impl Sensors {
+    /// True if no constant is given (the section is then not written).
+    pub fn is_empty(&self) -> bool {
+        *self == Sensors::default()
+    }
+
     /// Checks present values: finite everywhere; gear ratios and counts per
     /// revolution positive. Torque constants may be zero here (a placeholder
     /// when the log has torque columns); they are checked when used.

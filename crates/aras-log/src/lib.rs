@@ -1,22 +1,42 @@
-//! Measured logs: the CSV format of `docs/log-format.md`, its JSON sidecar,
-//! and validation (angles from encoders, torques from currents, as in the paper's
-//! experiment: `docs/processing.md`).
+//! The `aras-log/1` log format (`docs/log-format.md`): a CSV of time, joint
+//! angles and torques (or encoder counts and motor currents, as in the
+//! paper's experiment), optional logged derivatives, and an optional JSON
+//! sidecar with sensor constants and the excitation period. Its one reader
+//! (whole-file [`read_log`], streaming [`LogReader`]) and its one writer
+//! ([`write_log`]).
+//!
+//! The reader validates everything a log can get wrong: every defect is a
+//! [`LogError`] naming file, line, column and value, with the fix. No robot
+//! is assumed: a log is two joints' signals.
+//!
+//! # Dependencies
+//!
+//! * `serde`, `serde_json`: the sidecar and the serialisable summaries.
+//! * `thiserror`: the error enum.
+//!
+//! The CSV is parsed by a small purpose-built scanner rather than the `csv`
+//! crate: the format is plain numeric, and the scanner gives exact line and
+//! column positions and reads an hour at 1 kHz in a fraction of a second.
+
+#![warn(missing_docs)]
 
 mod checks;
+mod error;
 mod header;
 mod number;
 mod reader;
 mod sidecar;
+mod writer;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
 pub use checks::{Extreme, NOMINAL_WINDOW, Span, StepDeviation, Warning};
+pub use error::LogError;
 pub use header::ColumnNames;
 pub use reader::{Columns, LogReader, LogReport, LogSummary};
 pub use sidecar::{Excitation, FORMAT, Sensors, Sidecar};
-
-use crate::error::LogError;
+pub use writer::{sidecar_path, write_log};
 
 /// Where to find the JSON sidecar.
 #[derive(Debug, Clone, Default, PartialEq)]

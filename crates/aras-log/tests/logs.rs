@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use aras_signal::{
+use aras_log::{
     Columns, LogReader, ReadOptions, Sensors, SidecarSource, Warning, read_log, read_log_from,
 };
 use aras_testkit::{assert_source_not_repeated, io_source_kind};

@@ -1,0 +1,320 @@
+//! The reader's and writer's errors: what was wrong, where (file, line,
+//! column, value) and how to fix it. A variant with an underlying error
+//! returns it from [`source`](std::error::Error::source) and does not repeat
+//! it in its own message.
+
+use std::path::PathBuf;
+
+/// `x` rounded to 9 significant digits and printed shortest, so differences
+/// of logged times print as `0.004`, not `0.0040000000000000036`.
+pub(crate) fn sig(x: f64) -> f64 {
+    format!("{x:.8e}").parse().unwrap_or(x)
+}
+
+/// Errors of reading and validating a log (CSV plus optional JSON sidecar).
+///
+/// `file` is the display name given to the reader (the path for
+/// [`read_log`](crate::read_log)); `line` and `column` are 1-based, the
+/// column being the field's position in the row.
+#[derive(Debug, thiserror::Error)]
+pub enum LogError {
+    /// The file could not be opened or read.
+    #[error("{file}: cannot read the file")]
+    Io {
+        /// File name.
+        file: String,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A line is not valid UTF-8 text.
+    #[error(
+        "{file}:{line}: the line is not valid UTF-8 text; save the log as UTF-8 (plain ASCII numbers)"
+    )]
+    NotUtf8 {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+    },
+    /// No header line at all.
+    #[error(
+        "{file}: no header line: the log is empty or only comments; the first non-comment line \
+         must name the columns, e.g. `t,theta1,theta2,tau1,tau2`"
+    )]
+    NoHeader {
+        /// File name.
+        file: String,
+    },
+    /// The header is separated by semicolons.
+    #[error(
+        "{file}:{line}: the header is separated by ';' but aras logs are comma-separated: \
+         replace every ';' by ',' (and decimal commas by points)"
+    )]
+    Semicolon {
+        /// File name.
+        file: String,
+        /// Line of the header.
+        line: u64,
+    },
+    /// A header field is empty.
+    #[error(
+        "{file}:{line}:{column}: column {column} of the header has no name: name it or remove the empty field"
+    )]
+    EmptyColumnName {
+        /// File name.
+        file: String,
+        /// Line of the header.
+        line: u64,
+        /// 1-based column.
+        column: usize,
+    },
+    /// A column name appears twice.
+    #[error(
+        "{file}:{line}:{column}: column `{name}` appears twice (columns {first} and {column}): remove or rename one"
+    )]
+    DuplicateColumn {
+        /// File name.
+        file: String,
+        /// Line of the header.
+        line: u64,
+        /// Column of the second occurrence.
+        column: usize,
+        /// Column of the first occurrence.
+        first: usize,
+        /// The duplicated name.
+        name: String,
+    },
+    /// A required column is missing.
+    #[error(
+        "{file}:{line}: required column `{name}` is missing (the header has: {header}); {hint}"
+    )]
+    MissingColumn {
+        /// File name.
+        file: String,
+        /// Line of the header.
+        line: u64,
+        /// The missing column.
+        name: String,
+        /// The header's column names, comma-separated.
+        header: String,
+        /// How to fix it.
+        hint: String,
+    },
+    /// Only one of a pair of optional columns is present.
+    #[error(
+        "{file}:{line}: column `{present}` is present but `{missing}` is not: give both or neither"
+    )]
+    UnpairedColumn {
+        /// File name.
+        file: String,
+        /// Line of the header.
+        line: u64,
+        /// The column that is there.
+        present: String,
+        /// Its missing partner.
+        missing: String,
+    },
+    /// A row has a different number of fields than the header.
+    #[error(
+        "{file}:{line}: the row has {found} fields but the header has {expected}: every row needs one value per column"
+    )]
+    FieldCount {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// Number of header columns.
+        expected: usize,
+        /// Number of fields found.
+        found: usize,
+    },
+    /// A value is not a number.
+    #[error("{file}:{line}:{column}: `{name}` value {text:?} is not a number{hint}")]
+    NotANumber {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// 1-based column.
+        column: usize,
+        /// Column name.
+        name: String,
+        /// The text found.
+        text: String,
+        /// Extra advice (may be empty).
+        hint: String,
+    },
+    /// A value is NaN or infinite.
+    #[error(
+        "{file}:{line}:{column}: `{name}` value {text:?} is not finite: logs must hold finite numbers only (drop or repair the row)"
+    )]
+    NonFinite {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// 1-based column.
+        column: usize,
+        /// Column name.
+        name: String,
+        /// The text found.
+        text: String,
+    },
+    /// Time does not strictly increase.
+    #[error(
+        "{file}:{line}:{column}: time does not increase: t = {t} s follows t = {previous} s; rows \
+         must be sorted by strictly increasing time without repeats"
+    )]
+    TimeNotIncreasing {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// Column of `t`.
+        column: usize,
+        /// Previous time.
+        previous: f64,
+        /// This row's time.
+        t: f64,
+    },
+    /// Fewer data rows than needed.
+    #[error("{file}: only {rows} data rows, at least {needed} are needed: record a longer log")]
+    TooFewRows {
+        /// File name.
+        file: String,
+        /// Rows found.
+        rows: usize,
+        /// Rows needed.
+        needed: usize,
+    },
+    /// The sampling step varies beyond the tolerance.
+    #[error(
+        "{file}:{line}: irregular sampling: the worst step, {s} s ending at t = {t} s, is \
+         {ratio:.3}× the nominal step {n} s (tolerance ±{percent}%); resample the log to a \
+         uniform rate, or raise ReadOptions::step_tolerance"
+    , percent = tolerance * 100.0, s = sig(*step), n = sig(*nominal))]
+    IrregularSampling {
+        /// File name.
+        file: String,
+        /// Line ending the worst step.
+        line: u64,
+        /// Time ending the worst step.
+        t: f64,
+        /// The step (s).
+        step: f64,
+        /// step / nominal.
+        ratio: f64,
+        /// Nominal step (s).
+        nominal: f64,
+        /// Relative tolerance.
+        tolerance: f64,
+    },
+    /// Angle columns hold degrees.
+    #[error(
+        "{file}: angles look like degrees (max |{name}| = {max:.1}): convert to radians (largest value on line {line})"
+    )]
+    Degrees {
+        /// File name.
+        file: String,
+        /// Column name.
+        name: String,
+        /// Largest magnitude found.
+        max: f64,
+        /// Line of that value.
+        line: u64,
+    },
+    /// Angle columns hold values that are neither radians nor degrees.
+    #[error(
+        "{file}: `{name}` reaches {max:.1} (line {line}), which is neither a plausible angle in \
+         radians nor in degrees; if these are encoder counts name the columns enc1, enc2 and give \
+         sensors.counts_per_rev"
+    )]
+    ImplausibleAngle {
+        /// File name.
+        file: String,
+        /// Column name.
+        name: String,
+        /// Largest magnitude found.
+        max: f64,
+        /// Line of that value.
+        line: u64,
+    },
+    /// The sidecar JSON is malformed or has an unknown key.
+    #[error("{file}:{line}:{column}: {message}")]
+    Sidecar {
+        /// Sidecar file name.
+        file: String,
+        /// Line (1-based, 0 if unknown).
+        line: usize,
+        /// Column (1-based, 0 if unknown).
+        column: usize,
+        /// What is wrong and how to fix it.
+        message: String,
+    },
+    /// A sidecar value is out of range.
+    #[error("{file}: {key} = {value} is invalid: {reason}")]
+    SidecarValue {
+        /// Sidecar file name (or "options" for command-line overrides).
+        file: String,
+        /// Dotted key, e.g. `sensors.gear_ratios[1]`.
+        key: String,
+        /// The offending value.
+        value: String,
+        /// What is allowed.
+        reason: String,
+    },
+    /// A conversion needs a sensor constant nobody gave.
+    #[error(
+        "{file}: the log has columns {columns} but no {key} is given: add \"{key}\" to the \
+         sidecar {sidecar} or set it in ReadOptions::sensors (command line)"
+    )]
+    MissingSensor {
+        /// Log file name.
+        file: String,
+        /// The columns needing the constant.
+        columns: String,
+        /// Dotted key, e.g. `sensors.torque_constants`.
+        key: String,
+        /// Where the sidecar was looked for.
+        sidecar: String,
+    },
+    /// An option value is invalid.
+    #[error("invalid read option {name} = {value}: {reason}")]
+    InvalidOption {
+        /// Option name.
+        name: &'static str,
+        /// Its value.
+        value: String,
+        /// What is allowed.
+        reason: String,
+    },
+    /// A sidecar file given explicitly does not exist.
+    #[error("sidecar {path} cannot be read")]
+    SidecarIo {
+        /// The path.
+        path: PathBuf,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A log or sidecar file could not be written.
+    #[error("{path} cannot be written")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The sidecar could not be turned into JSON (e.g. a non-finite number
+    /// in `truth`).
+    #[error("the sidecar {path} cannot be written as JSON")]
+    SidecarWrite {
+        /// The sidecar file.
+        path: PathBuf,
+        /// The serialiser's error.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+}
