@@ -20,15 +20,13 @@ use aras_ident::{
 };
 use aras_kin::{Geometry, Workspace};
 use aras_log::Log;
+use aras_pipeline::prepare::RegressorColumns;
 use aras_pipeline::robot::{
-    self, FilterMode, Stacked, consistent_problem, filter, filter_reach, keep_rows, noise_gain,
-    params_from_solution, reversal_mask, stack,
+    self, FilterMode, Stacked, consistent_problem, keep_rows, params_from_solution,
 };
 use aras_signal::{
-    Bandwidth, Butterworth, DerivativeMethod, FilterSpec, OutputRows, PeriodSource, ProcessOptions,
-    Processed, Sos,
+    Bandwidth, DerivativeMethod, FilterSpec, OutputRows, PeriodSource, ProcessOptions, Processed,
 };
-use faer::MatRef;
 use nalgebra::Vector2;
 
 use crate::config::{BandwidthMode, Config, DerivativeChoice, FilteringMode, Weighting};
@@ -66,70 +64,12 @@ pub fn process_options(
     }
 }
 
-/// Data ready for least squares: the processed samples and the stacked
-/// regressor (`2N × n`, joint 1's rows first) with its torques, filtered as
-/// the filtering mode says (`aras_pipeline::robot::filter`).
-pub struct Prepared {
-    /// What `aras-signal` produced.
-    pub processed: Processed,
-    /// Stacked regressor and torques of every sample.
-    pub stacked: Stacked,
-    /// The zero-phase filter applied, if any.
-    pub filter: Option<Sos>,
-    /// The regressor before that filter (kept only when one was applied):
-    /// predictions compared with the raw torques use it.
-    pub unfiltered: Option<Stacked>,
-}
+/// Data ready for least squares (`aras_pipeline::prepare`).
+pub use aras_pipeline::prepare::Prepared;
 
-impl Prepared {
-    /// Samples per joint.
-    pub fn n(&self) -> usize {
-        self.processed.samples.len()
-    }
-
-    /// True when the record is one averaged block (filtered circularly).
-    pub fn periodic(&self) -> bool {
-        self.processed.summary.periods.is_some()
-    }
-
-    /// Stacked torques `[τ1; τ2]` (all rows).
-    pub fn t(&self) -> &[f64] {
-        &self.stacked.t
-    }
-
-    /// A faer view of the regressor.
-    pub fn w_ref(&self) -> MatRef<'_, f64> {
-        self.stacked.w.as_ref()
-    }
-
-    /// Noise power gain of the filter (`robot::noise_gain`; 1 unfiltered):
-    /// what [`OlsEstimate::with_filtered_noise`] corrects σ by.
-    pub fn noise_gain(&self) -> Result<f64> {
-        Ok(match &self.filter {
-            Some(sos) => noise_gain(sos, self.n(), self.periodic())?,
-            None => 1.0,
-        })
-    }
-
-    /// Rows kept away from velocity reversals (`robot::reversal_mask`):
-    /// joint `j`'s rows with `|θ̇_j| < min_speed`, widened by the filter's
-    /// reach down to `reach_tol` of its impulse-response peak, are dropped.
-    pub fn keep_mask(&self, min_speed: f64, reach_tol: f64) -> Result<Vec<bool>> {
-        let guard = match &self.filter {
-            Some(sos) => filter_reach(sos, self.n(), self.periodic(), reach_tol)?,
-            None => 0,
-        };
-        Ok(reversal_mask(
-            &self.processed.samples.theta_dot,
-            min_speed,
-            guard,
-            self.periodic(),
-        )?)
-    }
-}
-
-/// Processes a log and stacks the model's regressor on it
-/// (`aras_pipeline::robot::{stack, filter}`).
+/// Processes a log and stacks the model's regressor on it, filtered as the
+/// configured filtering mode says (`aras_pipeline::prepare`), keeping the
+/// unfiltered regressor for predictions against the raw torques.
 pub fn prepare(
     log: &Log,
     opts: &ProcessOptions,
@@ -137,9 +77,21 @@ pub fn prepare(
     model: &Model,
     geometry: &Geometry,
 ) -> Result<Prepared> {
-    let processed = aras_signal::process(log, opts, &aras_kin::task_motion(geometry))
-        .with_context(|| format!("processing {}", log.name))?;
-    let n = processed.samples.len();
+    let mode = match mode {
+        FilteringMode::Parallel => FilterMode::Parallel,
+        FilteringMode::TorqueOnly => FilterMode::TorqueOnly,
+    };
+    let prepared = aras_pipeline::prepare::prepare(
+        log,
+        opts,
+        model,
+        geometry,
+        mode,
+        RegressorColumns::Standard,
+        true,
+    )
+    .with_context(|| format!("regressor of {}", log.name))?;
+    let n = prepared.n();
     if n < 2 * model.columns() {
         bail!(
             "{}: only {n} samples after processing, fewer than twice the {} parameters; \
@@ -148,31 +100,7 @@ pub fn prepare(
             model.columns()
         );
     }
-    let mut stacked = stack(model, geometry, &processed.samples)
-        .with_context(|| format!("regressor of {}", log.name))?;
-    let unfiltered = processed.summary.filter.is_some().then(|| stacked.clone());
-    // The Butterworth the processing applied to θ, if any, on the torques
-    // and every regressor column alike (none after a harmonic series).
-    let filter = match &processed.summary.filter {
-        Some(spec) => {
-            let sos =
-                Butterworth::lowpass(spec.order, spec.cutoff_hz, processed.summary.sample_rate_hz)?;
-            let mode = match mode {
-                FilteringMode::Parallel => FilterMode::Parallel,
-                FilteringMode::TorqueOnly => FilterMode::TorqueOnly,
-            };
-            let periodic = processed.summary.periods.is_some();
-            filter(&mut stacked, &sos, mode, periodic)?;
-            Some(sos)
-        }
-        None => None,
-    };
-    Ok(Prepared {
-        processed,
-        stacked,
-        filter,
-        unfiltered,
-    })
+    Ok(prepared)
 }
 
 /// Base parameters (58)–(61) of `model` (`aras_pipeline::robot::base_parameters`)

@@ -9,10 +9,14 @@
 //!    samples, parallel filtering (`docs/processing.md`), the velocity-reversal
 //!    mask, the SDP layout of the four links and the way back into
 //!    `aras_dyn::Params`.
-//! 2. [`streaming`]: identification from a CSV log of any length in bounded
+//! 2. [`prepare`]: one log's way to least squares, written once: process,
+//!    stack, the processing's low-pass on torques and columns alike; the
+//!    in-memory identification, the streaming blocks and the diagnosis's
+//!    data sets all start there.
+//! 3. [`streaming`]: identification from a CSV log of any length in bounded
 //!    memory (chunked reading, filtering with overlap, reversal exclusion,
 //!    `aras_ident`'s accumulators).
-//! 3. [`diagnose`]: where model and measurement disagree, which missing
+//! 4. [`diagnose`]: where model and measurement disagree, which missing
 //!    effect explains it, and how much the gap shrinks once it is added.
 //!
 //! ## Dependencies, and why
@@ -28,6 +32,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod diagnose;
+pub mod prepare;
 mod regressor;
 pub mod robot;
 pub mod streaming;

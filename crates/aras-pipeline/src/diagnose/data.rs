@@ -35,13 +35,7 @@ impl Dataset {
         processed: &aras_signal::Processed,
     ) -> Result<Self, IdentError> {
         let s = &processed.summary;
-        let filter = match &s.filter {
-            Some(f) => Some(
-                aras_signal::Butterworth::lowpass(f.order, f.cutoff_hz, s.sample_rate_hz)
-                    .map_err(|e| IdentError::external("re-designing the processing low-pass", e))?,
-            ),
-            None => None,
-        };
+        let filter = crate::prepare::processing_filter(s)?;
         Ok(Self {
             name: name.into(),
             samples: processed.samples.clone(),

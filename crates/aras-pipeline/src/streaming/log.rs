@@ -5,7 +5,7 @@ use std::path::Path;
 use aras_dyn::Model;
 use aras_kin::{AssemblyMode, Geometry};
 use aras_log::{Columns, Log, LogReader, LogReport, LogSummary, ReadOptions, Sidecar};
-use aras_signal::{Bandwidth, Butterworth, FilterSpec, PeriodSource, ProcessOptions, Sos, process};
+use aras_signal::{Bandwidth, Butterworth, FilterSpec, PeriodSource, ProcessOptions};
 use nalgebra::Vector2;
 use serde::Serialize;
 
@@ -13,7 +13,8 @@ use aras_ident::streaming::{Accumulation, GramCheck, QrAccumulator, RegressorSta
 use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 
 use crate::TaskRegressor;
-use crate::robot::{FilterMode, Stacked, filter, filter_reach, noise_gain, reversal_mask, stack};
+use crate::prepare::{RegressorColumns, prepare};
+use crate::robot::{FilterMode, filter_reach, reversal_mask};
 
 /// Options of [`identify_log`]. `Default` gives the documented defaults.
 #[derive(Debug, Clone)]
@@ -166,7 +167,7 @@ fn invalid(context: &str, reason: &str) -> IdentError {
 /// * **period averaging** (a period from the options or the sidecar): the
 ///   sum of each channel over the period is accumulated while reading
 ///   (memory: one period), then the averaged period is processed exactly as
-///   `aras_signal::process` would, stacked, filtered ([`filter`], periodic)
+///   `aras_signal::process` would, stacked and filtered ([`prepare`], periodic)
 ///   and accumulated. The period-to-period spread check of the in-memory
 ///   path is not made (it needs the average before the periods).
 /// * **overlapping blocks** (everything else): blocks of `chunk_samples`
@@ -589,29 +590,20 @@ fn accumulate_processed(
     window: Option<(usize, usize, usize)>,
     out: &mut Progress,
 ) -> Result<usize, IdentError> {
-    let processed = process(log, popts, &aras_kin::task_motion(&options.geometry))
-        .map_err(|e| sig(&format!("processing {}", log.name), e))?;
-    let edge = (log.len() - processed.samples.len()) / 2;
-    let periodic = popts.period != PeriodSource::Off;
-    let n = processed.samples.len();
-    let st = stack(model, &options.geometry, &processed.samples)?;
-    // Only the base columns are filtered (filtering acts column by column:
-    // the same values as filtering every standard column first).
-    let mut st = Stacked {
-        w: base.base_regressor(st.w.as_ref())?,
-        names: base.base_names(),
-        ..st
-    };
-    let mut guard = 0;
-    if let Some(spec) = &processed.summary.filter {
-        let sos: Sos =
-            Butterworth::lowpass(spec.order, spec.cutoff_hz, 1.0 / log.summary.nominal_step_s)
-                .map_err(|e| sig("designing the regressor filter", e))?;
-        filter(&mut st, &sos, options.filter_mode, periodic)?;
-        guard = filter_reach(&sos, n, periodic, options.reversal_reach)?;
-        if out.gain.is_none() {
-            out.gain = Some(noise_gain(&sos, n, periodic)?);
-        }
+    let prepared = prepare(
+        log,
+        popts,
+        model,
+        &options.geometry,
+        options.filter_mode,
+        RegressorColumns::Base(base),
+        false,
+    )?;
+    let edge = (log.len() - prepared.n()) / 2;
+    let n = prepared.n();
+    let guard = prepared.reach(options.reversal_reach)?;
+    if prepared.filter.is_some() && out.gain.is_none() {
+        out.gain = Some(prepared.noise_gain()?);
     }
     let (i0, i1) = match window {
         None => (0, n),
@@ -627,11 +619,12 @@ fn accumulate_processed(
         return Ok(0);
     }
     let keep = reversal_mask(
-        &processed.samples.theta_dot,
+        &prepared.processed.samples.theta_dot,
         options.min_speed,
         guard,
-        periodic,
+        prepared.periodic(),
     )?;
+    let st = &prepared.stacked;
     let wb = &st.w;
     for g in 0..2 {
         let rows: Vec<usize> = (g * n + i0..g * n + i1).filter(|&i| keep[i]).collect();

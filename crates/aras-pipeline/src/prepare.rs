@@ -1,0 +1,145 @@
+//! One log's way to least squares, written once: process → stack the
+//! regressor → the processing's zero-phase low-pass on the torques and the
+//! regressor columns alike (`docs/processing.md`, "Parallel filtering").
+//! The in-memory identification, every block of the streaming route and the
+//! diagnosis's data sets start here.
+
+use aras_dyn::Model;
+use aras_ident::{BaseParameters, IdentError};
+use aras_kin::Geometry;
+use aras_log::Log;
+use aras_signal::{Butterworth, ProcessOptions, ProcessSummary, Processed, Sos};
+use faer::MatRef;
+
+use crate::robot::{FilterMode, Stacked, filter, filter_reach, noise_gain, reversal_mask, stack};
+
+/// Which columns of the model's regressor are stacked.
+#[derive(Debug, Clone, Copy)]
+pub enum RegressorColumns<'a> {
+    /// Every standard column.
+    Standard,
+    /// The base columns only (`W_b = W E`), filtered alone: filtering acts
+    /// column by column, so the values are those of filtering every standard
+    /// column first, at a fraction of the cost.
+    Base(&'a BaseParameters),
+}
+
+/// A processed log with its stacked regressor and torques (`2N × n`, joint
+/// 1's rows first), filtered as the processing's low-pass says.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// What `aras-signal` produced.
+    pub processed: Processed,
+    /// Stacked regressor and torques of every sample, filtered.
+    pub stacked: Stacked,
+    /// The zero-phase low-pass the processing applied to θ, applied here to
+    /// the torques (and with [`FilterMode::Parallel`] every column); `None`
+    /// when the processing filtered nothing (a harmonic series, logged
+    /// derivatives, no filter).
+    pub filter: Option<Sos>,
+    /// The regressor before that filter, when one was applied and it was
+    /// asked for: predictions compared with the raw torques use it.
+    pub unfiltered: Option<Stacked>,
+}
+
+/// The processing's zero-phase low-pass, designed again from its summary
+/// (same order, cut-off and rate); `None` if it applied none.
+pub fn processing_filter(summary: &ProcessSummary) -> Result<Option<Sos>, IdentError> {
+    summary
+        .filter
+        .as_ref()
+        .map(|f| {
+            Butterworth::lowpass(f.order, f.cutoff_hz, summary.sample_rate_hz)
+                .map_err(|e| IdentError::external("re-designing the processing low-pass", e))
+        })
+        .transpose()
+}
+
+/// Processes `log` (`aras_signal::process` with the model's task
+/// coordinates), stacks `model`'s `columns` on the samples and applies the
+/// processing's low-pass to torques and columns (`mode`); keeps a copy of
+/// the unfiltered regressor when `keep_unfiltered` and a filter was applied.
+pub fn prepare(
+    log: &Log,
+    opts: &ProcessOptions,
+    model: &Model,
+    geometry: &Geometry,
+    mode: FilterMode,
+    columns: RegressorColumns<'_>,
+    keep_unfiltered: bool,
+) -> Result<Prepared, IdentError> {
+    let processed = aras_signal::process(log, opts, &aras_kin::task_motion(geometry))
+        .map_err(|e| IdentError::external(format!("processing {}", log.name), e))?;
+    let mut stacked = stack(model, geometry, &processed.samples)?;
+    if let RegressorColumns::Base(base) = columns {
+        stacked = Stacked {
+            w: base.base_regressor(stacked.w.as_ref())?,
+            names: base.base_names(),
+            ..stacked
+        };
+    }
+    let filter_sos = processing_filter(&processed.summary)?;
+    let unfiltered = (keep_unfiltered && filter_sos.is_some()).then(|| stacked.clone());
+    if let Some(sos) = &filter_sos {
+        filter(&mut stacked, sos, mode, processed.summary.periods.is_some())?;
+    }
+    Ok(Prepared {
+        processed,
+        stacked,
+        filter: filter_sos,
+        unfiltered,
+    })
+}
+
+impl Prepared {
+    /// Samples per joint.
+    pub fn n(&self) -> usize {
+        self.processed.samples.len()
+    }
+
+    /// True when the record is one averaged block (filtered circularly).
+    pub fn periodic(&self) -> bool {
+        self.processed.summary.periods.is_some()
+    }
+
+    /// Stacked torques `[τ1; τ2]` (all rows).
+    pub fn t(&self) -> &[f64] {
+        &self.stacked.t
+    }
+
+    /// A faer view of the regressor.
+    pub fn w_ref(&self) -> MatRef<'_, f64> {
+        self.stacked.w.as_ref()
+    }
+
+    /// Noise power gain of the filter ([`noise_gain`]; 1 unfiltered): what
+    /// `aras_ident::OlsEstimate::with_filtered_noise` corrects σ by.
+    pub fn noise_gain(&self) -> Result<f64, IdentError> {
+        match &self.filter {
+            Some(sos) => noise_gain(sos, self.n(), self.periodic()),
+            None => Ok(1.0),
+        }
+    }
+
+    /// Samples the reversal exclusion widens by: the filter's reach down to
+    /// `reach_tol` of its impulse-response peak ([`filter_reach`]; 0
+    /// unfiltered).
+    pub fn reach(&self, reach_tol: f64) -> Result<usize, IdentError> {
+        match &self.filter {
+            Some(sos) => filter_reach(sos, self.n(), self.periodic(), reach_tol),
+            None => Ok(0),
+        }
+    }
+
+    /// Rows kept away from velocity reversals ([`reversal_mask`]): joint
+    /// `j`'s rows with `|θ̇_j| < min_speed`, widened by [`Self::reach`], are
+    /// dropped. Joint-major, like [`Self::stacked`].
+    pub fn keep_mask(&self, min_speed: f64, reach_tol: f64) -> Result<Vec<bool>, IdentError> {
+        reversal_mask(
+            &self.processed.samples.theta_dot,
+            min_speed,
+            self.reach(reach_tol)?,
+            self.periodic(),
+        )
+    }
+}
