@@ -272,3 +272,51 @@ mod reversal_mask_sweep {
         }
     }
 }
+
+/// The pseudo-inertia has two homes that cannot share code: the model's
+/// (`aras_dyn::LinkParams::pseudo_inertia`, from a link's parameters) and the
+/// robot-agnostic SDP's (`aras_ident`, from a parameter vector and a
+/// `LinkLayout`, as its PSD constraint (67)–(69) needs). They must agree:
+/// the smallest eigenvalue of every link, for the default robot and for
+/// links made non-physical in each way (tensor, first moment, mass), to
+/// rounding (1e-15 kg·m² on eigenvalues of order 1e-3).
+#[test]
+fn model_and_sdp_pseudo_inertias_agree() {
+    let model = Model::paper(Vector3::new(0.0, -9.81, 0.0)).unwrap();
+    let names = model.names();
+    let index = |n: String| names.iter().position(|m| *m == n).unwrap();
+    let mut variants = vec![Params::aras_diamond()];
+    for k in 0..4 {
+        let mut p = Params::aras_diamond();
+        match k {
+            0 => p.links[0].ixx = -p.links[0].ixx,
+            1 => p.links[1].h.x *= 40.0,
+            2 => p.links[2].mass *= 0.01,
+            _ => p.links[3].iyz = 0.9 * p.links[3].iyy,
+        }
+        variants.push(p);
+    }
+    let mut negative = 0;
+    for p in &variants {
+        let beta = p.standard_vector(&model).unwrap();
+        for (k, link) in p.links.iter().enumerate() {
+            let f = |s: &str| index(format!("L{}.{s}", k + 1));
+            let layout = aras_ident::LinkLayout::new(
+                format!("L{}", k + 1),
+                ["Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz"].map(f),
+                ["hx", "hy", "hz"].map(f),
+                link.mass,
+            );
+            let sdp =
+                aras_ident::pseudo_inertia_min_eigenvalue(beta.as_slice(), &layout, link.mass)
+                    .unwrap();
+            let j = link.pseudo_inertia();
+            let a: [[f64; 4]; 4] = std::array::from_fn(|r| std::array::from_fn(|c| j[(r, c)]));
+            let own = aras_ident::symmetric_eigenvalues(&a)[0];
+            assert!((sdp - own).abs() < 1e-15, "link {}: {sdp} vs {own}", k + 1);
+            negative += usize::from(own < 0.0);
+        }
+    }
+    // Every broken variant breaks exactly its link.
+    assert_eq!(negative, 4, "{negative}");
+}
