@@ -65,6 +65,7 @@
 #![warn(missing_docs)]
 
 mod dynamics;
+mod effects;
 mod error;
 mod json;
 mod lagrange;
@@ -77,9 +78,10 @@ pub mod sim;
 mod trajectory;
 
 pub use dynamics::Dynamics;
+pub use effects::{Effect, EffectId, UnknownEffect};
 pub use error::{DynError, ParamError, SimError};
 pub use lagrange::{LagrangeTerms, lagrange_terms};
-pub use model::{Effect, EffectId, Model, UnknownEffect};
+pub use model::Model;
 pub use params::{
     Cogging, DEFAULT_GRAVITY, Extras, Friction, LinkParams, MAX_COGGING_ORDER, Params, Stribeck,
 };

@@ -15,9 +15,9 @@ use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use serde_json::Value;
 
+use crate::EffectId;
 use crate::ParamError;
 use crate::json::{Obj, finite, parse};
-use crate::model::EffectId;
 
 /// Inertial parameters of one link, in its frame, about the RCM.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

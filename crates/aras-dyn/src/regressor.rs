@@ -14,7 +14,7 @@ use aras_kin::{Geometry, KinematicSample, Scalar};
 use nalgebra::{DMatrix, Matrix2xX, Vector2, Vector3};
 use rayon::prelude::*;
 
-use crate::{DynError, Effect, Model};
+use crate::{DynError, Model};
 
 /// How `sign(θ̇)` is evaluated in friction-like columns.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -29,7 +29,7 @@ pub enum Sign {
 
 impl Sign {
     #[inline(always)]
-    fn eval<T: Scalar>(self, v: T) -> T {
+    pub(crate) fn eval<T: Scalar>(self, v: T) -> T {
         match self {
             Sign::Exact => {
                 let r = v.value();
@@ -42,134 +42,6 @@ impl Sign {
                 }
             }
             Sign::Tanh(w) => (v / T::lift(w)).tanh(),
-        }
-    }
-}
-
-/// `J⁻ᵀ v` for `J = [[1, K], [1, −K]]`: `½ [v0 + v1/K, v0 − v1/K]`.
-#[inline(always)]
-fn inv_t<T: Scalar>(k: T, v0: T, v1: T) -> (T, T) {
-    let half = T::lift(0.5);
-    let q = v1 / k;
-    (half * (v0 + q), half * (v0 - q))
-}
-
-/// Rigid-link columns (2×36) of (45): per link `J⁻ᵀ J_ωkᵀ R_k [Λ_k, [g^k]×]`
-/// with `Λ_k = L(Ω̇^k) + [Ω^k]× L(Ω^k)` (40).
-#[inline(always)]
-fn rigid_links<T: Scalar>(s: &KinematicSample<T>, g: &Vector3<T>, out: &mut [T]) {
-    let k_inv = T::one() / s.jacobian.k();
-    let half = T::lift(0.5);
-    for k in 0..4 {
-        let r = &s.rotations[k];
-        let w = r.tr_mul(&s.omega[k]);
-        let wd = r.tr_mul(&s.omega_dot[k]);
-        let gk = r.tr_mul(g);
-        // Link-frame Jacobian B = Rᵀ J_ω; rows of A = J⁻ᵀ Bᵀ are u0ᵀ, u1ᵀ.
-        let b = r.tr_mul(&s.link_jacobians[k]);
-        let c0 = b.column(0);
-        let c1 = b.column(1) * k_inv;
-        let u0 = (c0 + c1) * half;
-        let u1 = (c0 - c1) * half;
-        let (wx, wy, wz) = (w.x, w.y, w.z);
-        let (ax, ay, az) = (wd.x, wd.y, wd.z);
-        let (gx, gy, gz) = (gk.x, gk.y, gk.z);
-        let z = T::zero();
-        let cols: [[T; 3]; 9] = [
-            [ax, wx * wz, -(wx * wy)],
-            [ay - wx * wz, ax + wy * wz, wx * wx - wy * wy],
-            [az + wx * wy, wz * wz - wx * wx, ax - wy * wz],
-            [-(wy * wz), ay, wx * wy],
-            [wy * wy - wz * wz, az - wx * wy, ay + wx * wz],
-            [wy * wz, -(wx * wz), az],
-            [z, gz, -gy],
-            [-gz, z, gx],
-            [gy, -gx, z],
-        ];
-        let base = 18 * k;
-        for (j, c) in cols.iter().enumerate() {
-            out[base + 2 * j] = u0.x * c[0] + u0.y * c[1] + u0.z * c[2];
-            out[base + 2 * j + 1] = u1.x * c[0] + u1.y * c[1] + u1.z * c[2];
-        }
-    }
-}
-
-/// Column of a passive hinge between links `i` and `j` (kin indices).
-#[inline(always)]
-fn hinge<T: Scalar>(s: &KinematicSample<T>, i: usize, j: usize) -> (T, T) {
-    let jr = s.link_jacobians[i] - s.link_jacobians[j];
-    let w = s.omega[i] - s.omega[j];
-    let v = jr.tr_mul(&w);
-    inv_t(s.jacobian.k(), v[0], v[1])
-}
-
-impl Effect {
-    /// Writes this effect's 2×`columns()` block (column-major) for one
-    /// sample. `out.len()` must be `2 * self.columns()`.
-    #[inline]
-    pub(crate) fn fill<T: Scalar>(
-        &self,
-        s: &KinematicSample<T>,
-        g: &Vector3<T>,
-        sign: Sign,
-        out: &mut [T],
-    ) {
-        let z = T::zero();
-        let (td, th) = (s.theta_dot, s.theta);
-        let diag = |a: T, b: T, out: &mut [T]| {
-            out[0] = a;
-            out[1] = z;
-            out[2] = z;
-            out[3] = b;
-        };
-        match *self {
-            Effect::RigidLinks => rigid_links(s, g, out),
-            Effect::Friction => {
-                out.copy_from_slice(&[
-                    td[0],
-                    z,
-                    sign.eval(td[0]),
-                    z,
-                    z,
-                    td[1],
-                    z,
-                    sign.eval(td[1]),
-                ]);
-            }
-            Effect::Elasticity => diag(th[0], th[1], out),
-            Effect::TorqueOffset => diag(T::one(), T::one(), out),
-            Effect::CoulombAsymmetry => diag(sign.eval(td[0]).abs(), sign.eval(td[1]).abs(), out),
-            Effect::StribeckFriction { v_s } => {
-                let f = |v: T| {
-                    let q = v / T::lift(v_s);
-                    sign.eval(v) * (-(q * q)).exp()
-                };
-                diag(f(td[0]), f(td[1]), out)
-            }
-            Effect::PassiveJointViscous => {
-                for (c, (i, j)) in [(2, 0), (3, 1), (2, 3)].into_iter().enumerate() {
-                    let (a, b) = hinge(s, i, j);
-                    out[2 * c] = a;
-                    out[2 * c + 1] = b;
-                }
-            }
-            Effect::Cogging {
-                cycles_per_rev,
-                order,
-            } => {
-                let mut c = 0;
-                for j in 0..2 {
-                    for h in 1..=order {
-                        let (sn, cs) = (th[j] * T::lift(h as f64 * cycles_per_rev)).sin_cos();
-                        out[2 * c + j] = sn;
-                        out[2 * c + 1 - j] = z;
-                        out[2 * c + 2 + j] = cs;
-                        out[2 * c + 3 - j] = z;
-                        c += 2;
-                    }
-                }
-            }
-            Effect::QuadraticDamping => diag(td[0] * td[0].abs(), td[1] * td[1].abs(), out),
         }
     }
 }

@@ -378,8 +378,9 @@ pub fn keep_rows(stacked: &Stacked, keep: &[bool]) -> Result<Stacked, IdentError
 
 /// The physically consistent problem for `model` (which must contain the
 /// rigid links) with `reference` (e.g. the CAD parameters) as regulariser
-/// target and mass reference (bounds ±20 %), and `Fv, Fc ≥ 0`, `Ke ≥ 0` (70)
-/// for the effects the model has.
+/// target and mass reference (bounds ±20 %), and the sign constraints (70)
+/// of the effects the model has ([`Effect::nonnegative`]: `Fv, Fc ≥ 0`,
+/// `Ke ≥ 0`).
 pub fn consistent_problem(model: &Model, reference: &Params) -> Result<ConsistentLs, IdentError> {
     let names = model.names();
     let beta = reference
@@ -405,9 +406,10 @@ pub fn consistent_problem(model: &Model, reference: &Params) -> Result<Consisten
             link.mass,
         )?;
     }
-    let signed: Vec<&String> = names
+    let signed: Vec<&str> = model
+        .effects()
         .iter()
-        .filter(|n| ["Fv1", "Fc1", "Fv2", "Fc2", "Ke1", "Ke2"].contains(&n.as_str()))
+        .flat_map(|e| e.nonnegative().iter().copied())
         .collect();
     p.nonnegative(&signed)?;
     Ok(p)

@@ -76,50 +76,15 @@ impl Candidate {
     }
 }
 
-/// The physical explanation of a candidate identifier (empty for an unknown
-/// identifier).
+/// The physical explanation of a candidate identifier (the effect's own,
+/// [`EffectId::explanation`]; empty for an unknown identifier).
 pub fn explanation(id: &str) -> &'static str {
     if id == TIME_DELAY {
         return "torque and angle samples are not simultaneous (current-loop or communication \
                 latency, filter group delay in the drive); the residual is proportional to the \
                 torque's rate of change";
     }
-    let Ok(effect) = id.parse::<EffectId>() else {
-        return "";
-    };
-    match effect {
-        EffectId::TorqueOffset => {
-            "a constant torque bias per motor: current-sensor or amplifier offset, or a cable \
-             or counterweight load that does not depend on the pose; the residual is shifted by \
-             the same amount everywhere"
-        }
-        EffectId::CoulombAsymmetry => {
-            "the Coulomb friction level differs between the two directions of motion (capstan \
-             cable pre-tension, seal or bearing asymmetry); while the joint moves it acts like \
-             an offset, at rest it vanishes"
-        }
-        EffectId::StribeckFriction => {
-            "friction rises above the Coulomb level at low speed and decays with the Stribeck \
-             velocity v_s (boundary lubrication); the residual peaks, with the sign of the \
-             velocity, just after each velocity reversal"
-        }
-        EffectId::PassiveJointViscous => {
-            "viscous friction in the passive hinges about b, c and d (bearings of the distal \
-             links), proportional to their relative angular rates and mapped to the motors by \
-             virtual work; the residual depends on velocity and pose together"
-        }
-        EffectId::Cogging => {
-            "torque periodic in the motor angle (permanent-magnet detent torque, gear or \
-             capstan-groove ripple), with a fixed number of cycles per joint revolution; the \
-             residual oscillates with the joint angle"
-        }
-        EffectId::QuadraticDamping => {
-            "damping growing with the square of the speed (fluid or air drag, windage, \
-             velocity-dependent seal friction); the residual grows faster than linearly with \
-             |θ̇| and keeps its sign"
-        }
-        EffectId::RigidLinks | EffectId::Friction | EffectId::Elasticity => "",
-    }
+    id.parse::<EffectId>().map_or("", EffectId::explanation)
 }
 
 /// Which candidates are scanned, and over which grids.

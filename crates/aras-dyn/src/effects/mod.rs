@@ -1,0 +1,357 @@
+//! The effects a model is made of, one file each: its columns, parameter
+//! names, settings, physical explanation and sign constraints. [`Effect`]
+//! (with its settings) and [`EffectId`] (without) are the one spelling of
+//! the effect identifiers, shared by the parameter file's `extra` sections,
+//! the MJCF notes, `aras identify --effects` and the diagnosis candidates.
+
+mod cogging;
+mod coulomb_asymmetry;
+mod elasticity;
+mod friction;
+mod passive_joint_viscous;
+mod quadratic_damping;
+mod rigid_links;
+mod stribeck_friction;
+mod torque_offset;
+
+use std::fmt;
+use std::str::FromStr;
+
+use aras_kin::{KinematicSample, Scalar};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use crate::{DynError, Sign};
+
+/// One physical effect of the model, with its non-linear settings.
+///
+/// Serialised as an object tagged by `id`, e.g.
+/// `{"id": "stribeck_friction", "v_s": 0.05}`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "id", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Effect {
+    /// Rigid links 1–4: 9 columns each (`Lk.Ixx … Lk.hz`), (38)–(46).
+    RigidLinks,
+    /// Viscous + Coulomb friction per actuator: `Fv1, Fc1, Fv2, Fc2`, (49).
+    Friction,
+    /// Capstan elasticity `τ_e = K_e θ`: `Ke1, Ke2`, (50).
+    Elasticity,
+    /// Constant torque offset per actuator: `tau0_1, tau0_2`.
+    TorqueOffset,
+    /// Direction-dependent Coulomb level: `Fca1, Fca2`, columns `|sign θ̇_j|`
+    /// (1 while moving, 0 at rest). While the joint moves this is
+    /// indistinguishable from a torque offset; the two differ only at rest.
+    CoulombAsymmetry,
+    /// Stribeck friction, columns `sign(θ̇_j) exp(−(θ̇_j/v_s)²)`: `Fs1, Fs2`.
+    StribeckFriction {
+        /// Shape velocity (rad/s, > 0).
+        v_s: f64,
+    },
+    /// Viscous friction in the passive hinges about `b`, `c`, `d`:
+    /// `Fpb, Fpc, Fpd`. The hinges' relative angular velocities
+    /// (`Ω3 − Ω1`, `Ω4 − Ω2`, `Ω3 − Ω4`) are mapped to the motors by virtual
+    /// work: column `J⁻ᵀ (J_ωi − J_ωj)ᵀ (Ω_i − Ω_j)`.
+    PassiveJointViscous,
+    /// Cogging per joint, harmonics `h = 1..order` of `sin/cos(h n_c θ_j)`:
+    /// `Cs{j}_{h}, Cc{j}_{h}`.
+    Cogging {
+        /// Cycles per joint revolution `n_c` (> 0).
+        cycles_per_rev: f64,
+        /// Number of harmonics (1–16).
+        order: usize,
+    },
+    /// Quadratic damping, columns `θ̇_j |θ̇_j|`: `Fq1, Fq2`.
+    QuadraticDamping,
+}
+
+/// Which effect, without its settings: the one spelling of the effect
+/// identifiers, shared by [`Effect`]'s serde tag, the parameter file's
+/// `extra.<id>` sections, the `aras` CLI's `--effects` and the diagnosis
+/// candidates. Parses from and prints as the identifier (`FromStr`,
+/// `Display`, serde: `"stribeck_friction"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EffectId {
+    /// [`Effect::RigidLinks`].
+    RigidLinks,
+    /// [`Effect::Friction`].
+    Friction,
+    /// [`Effect::Elasticity`].
+    Elasticity,
+    /// [`Effect::TorqueOffset`].
+    TorqueOffset,
+    /// [`Effect::CoulombAsymmetry`].
+    CoulombAsymmetry,
+    /// [`Effect::StribeckFriction`].
+    StribeckFriction,
+    /// [`Effect::PassiveJointViscous`].
+    PassiveJointViscous,
+    /// [`Effect::Cogging`].
+    Cogging,
+    /// [`Effect::QuadraticDamping`].
+    QuadraticDamping,
+}
+
+impl EffectId {
+    /// Every effect, in the order of [`Effect`].
+    pub const ALL: [EffectId; 9] = [
+        EffectId::RigidLinks,
+        EffectId::Friction,
+        EffectId::Elasticity,
+        EffectId::TorqueOffset,
+        EffectId::CoulombAsymmetry,
+        EffectId::StribeckFriction,
+        EffectId::PassiveJointViscous,
+        EffectId::Cogging,
+        EffectId::QuadraticDamping,
+    ];
+
+    /// The effects beyond the paper's model (the parameter file's `extra`
+    /// section, the candidates of the diagnosis), in that order.
+    pub const EXTRA: [EffectId; 6] = [
+        EffectId::TorqueOffset,
+        EffectId::CoulombAsymmetry,
+        EffectId::StribeckFriction,
+        EffectId::PassiveJointViscous,
+        EffectId::Cogging,
+        EffectId::QuadraticDamping,
+    ];
+
+    /// The stable identifier, e.g. `"stribeck_friction"`.
+    pub const fn as_str(self) -> &'static str {
+        match self {
+            EffectId::RigidLinks => "rigid_links",
+            EffectId::Friction => "friction",
+            EffectId::Elasticity => "elasticity",
+            EffectId::TorqueOffset => "torque_offset",
+            EffectId::CoulombAsymmetry => "coulomb_asymmetry",
+            EffectId::StribeckFriction => "stribeck_friction",
+            EffectId::PassiveJointViscous => "passive_joint_viscous",
+            EffectId::Cogging => "cogging",
+            EffectId::QuadraticDamping => "quadratic_damping",
+        }
+    }
+}
+
+impl EffectId {
+    /// Why such an effect exists physically, and how it shows in the data.
+    pub const fn explanation(self) -> &'static str {
+        match self {
+            EffectId::RigidLinks => rigid_links::EXPLANATION,
+            EffectId::Friction => friction::EXPLANATION,
+            EffectId::Elasticity => elasticity::EXPLANATION,
+            EffectId::TorqueOffset => torque_offset::EXPLANATION,
+            EffectId::CoulombAsymmetry => coulomb_asymmetry::EXPLANATION,
+            EffectId::StribeckFriction => stribeck_friction::EXPLANATION,
+            EffectId::PassiveJointViscous => passive_joint_viscous::EXPLANATION,
+            EffectId::Cogging => cogging::EXPLANATION,
+            EffectId::QuadraticDamping => quadratic_damping::EXPLANATION,
+        }
+    }
+}
+
+impl fmt::Display for EffectId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl FromStr for EffectId {
+    type Err = UnknownEffect;
+
+    fn from_str(s: &str) -> Result<Self, UnknownEffect> {
+        EffectId::ALL
+            .into_iter()
+            .find(|e| e.as_str() == s)
+            .ok_or_else(|| UnknownEffect { id: s.to_owned() })
+    }
+}
+
+/// A name that is not an effect identifier.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown effect `{id}`; known effects: {}", known_effects())]
+pub struct UnknownEffect {
+    /// The name given.
+    pub id: String,
+}
+
+fn known_effects() -> String {
+    EffectId::ALL.map(EffectId::as_str).join(", ")
+}
+
+impl Effect {
+    /// Which effect this is, without its settings.
+    pub fn kind(&self) -> EffectId {
+        match self {
+            Effect::RigidLinks => EffectId::RigidLinks,
+            Effect::Friction => EffectId::Friction,
+            Effect::Elasticity => EffectId::Elasticity,
+            Effect::TorqueOffset => EffectId::TorqueOffset,
+            Effect::CoulombAsymmetry => EffectId::CoulombAsymmetry,
+            Effect::StribeckFriction { .. } => EffectId::StribeckFriction,
+            Effect::PassiveJointViscous => EffectId::PassiveJointViscous,
+            Effect::Cogging { .. } => EffectId::Cogging,
+            Effect::QuadraticDamping => EffectId::QuadraticDamping,
+        }
+    }
+
+    /// Stable identifier (the serde tag): [`EffectId::as_str`] of
+    /// [`kind`](Self::kind).
+    pub fn id(&self) -> &'static str {
+        self.kind().as_str()
+    }
+
+    /// Number of regressor columns (= parameters).
+    pub fn columns(&self) -> usize {
+        match *self {
+            Effect::RigidLinks => rigid_links::COLUMNS,
+            Effect::Friction => friction::NAMES.len(),
+            Effect::PassiveJointViscous => passive_joint_viscous::NAMES.len(),
+            Effect::Cogging { order, .. } => cogging::columns(order),
+            _ => 2,
+        }
+    }
+
+    /// Parameter names in column order.
+    pub fn names(&self) -> Vec<String> {
+        let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect();
+        match *self {
+            Effect::RigidLinks => rigid_links::names(),
+            Effect::Friction => s(&friction::NAMES),
+            Effect::Elasticity => s(&elasticity::NAMES),
+            Effect::TorqueOffset => s(&torque_offset::NAMES),
+            Effect::CoulombAsymmetry => s(&coulomb_asymmetry::NAMES),
+            Effect::StribeckFriction { .. } => s(&stribeck_friction::NAMES),
+            Effect::PassiveJointViscous => s(&passive_joint_viscous::NAMES),
+            Effect::Cogging { order, .. } => cogging::names(order),
+            Effect::QuadraticDamping => s(&quadratic_damping::NAMES),
+        }
+    }
+
+    /// Checks the settings.
+    pub fn validate(&self) -> Result<(), DynError> {
+        match *self {
+            Effect::StribeckFriction { v_s } => stribeck_friction::validate(v_s),
+            Effect::Cogging {
+                cycles_per_rev,
+                order,
+            } => cogging::validate(cycles_per_rev, order),
+            _ => Ok(()),
+        }
+    }
+
+    /// Why such an effect exists physically, and how it shows in the data
+    /// (the diagnosis quotes it when it names the effect).
+    pub fn explanation(&self) -> &'static str {
+        self.kind().explanation()
+    }
+
+    /// The parameters physics keeps non-negative, (70) (the physically
+    /// consistent fit imposes them). Rigid links have a matrix constraint
+    /// instead (the pseudo-inertia, (67)–(69)); the candidate effects are
+    /// fitted with their signs free.
+    pub fn nonnegative(&self) -> &'static [&'static str] {
+        match self {
+            Effect::Friction => friction::NONNEGATIVE,
+            Effect::Elasticity => elasticity::NONNEGATIVE,
+            _ => &[],
+        }
+    }
+
+    /// True for the three effects of the paper's model.
+    pub fn is_paper(&self) -> bool {
+        matches!(
+            self,
+            Effect::RigidLinks | Effect::Friction | Effect::Elasticity
+        )
+    }
+}
+
+impl Effect {
+    /// Writes this effect's 2×`columns()` block (column-major) for one
+    /// sample. `out.len()` must be `2 * self.columns()`.
+    #[inline]
+    pub(crate) fn fill<T: Scalar>(
+        &self,
+        s: &KinematicSample<T>,
+        g: &Vector3<T>,
+        sign: Sign,
+        out: &mut [T],
+    ) {
+        match *self {
+            Effect::RigidLinks => rigid_links::fill(s, g, out),
+            Effect::Friction => friction::fill(s, sign, out),
+            Effect::Elasticity => elasticity::fill(s, out),
+            Effect::TorqueOffset => torque_offset::fill(out),
+            Effect::CoulombAsymmetry => coulomb_asymmetry::fill(s, sign, out),
+            Effect::StribeckFriction { v_s } => stribeck_friction::fill(s, v_s, sign, out),
+            Effect::PassiveJointViscous => passive_joint_viscous::fill(s, out),
+            Effect::Cogging {
+                cycles_per_rev,
+                order,
+            } => cogging::fill(s, cycles_per_rev, order, out),
+            Effect::QuadraticDamping => quadratic_damping::fill(s, out),
+        }
+    }
+}
+
+/// A 2×2 diagonal block `diag(a, b)`, column-major: one column per joint.
+#[inline(always)]
+fn diagonal<T: Scalar>(a: T, b: T, out: &mut [T]) {
+    let z = T::zero();
+    out[0] = a;
+    out[1] = z;
+    out[2] = z;
+    out[3] = b;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every effect: as many names as columns, distinct; an explanation;
+    /// its sign constraints name its own parameters; the identifier round
+    /// trips.
+    #[test]
+    fn each_effect_is_complete() {
+        let all = [
+            Effect::RigidLinks,
+            Effect::Friction,
+            Effect::Elasticity,
+            Effect::TorqueOffset,
+            Effect::CoulombAsymmetry,
+            Effect::StribeckFriction { v_s: 0.05 },
+            Effect::PassiveJointViscous,
+            Effect::Cogging {
+                cycles_per_rev: 12.0,
+                order: 3,
+            },
+            Effect::QuadraticDamping,
+        ];
+        assert_eq!(all.map(|e| e.kind()), EffectId::ALL);
+        for e in all {
+            let names = e.names();
+            assert_eq!(names.len(), e.columns(), "{e:?}");
+            let mut unique = names.clone();
+            unique.sort();
+            unique.dedup();
+            assert_eq!(unique.len(), names.len(), "{e:?}");
+            assert!(e.explanation().len() > 40, "{e:?}");
+            assert!(
+                e.nonnegative().iter().all(|n| names.iter().any(|m| m == n)),
+                "{e:?}"
+            );
+            assert_eq!(e.id().parse::<EffectId>().unwrap(), e.kind());
+            e.validate().unwrap();
+        }
+        assert!(Effect::StribeckFriction { v_s: 0.0 }.validate().is_err());
+        assert!(
+            Effect::Cogging {
+                cycles_per_rev: 1.0,
+                order: 17
+            }
+            .validate()
+            .is_err()
+        );
+    }
+}

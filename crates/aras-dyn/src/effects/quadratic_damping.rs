@@ -1,0 +1,21 @@
+//! Quadratic damping, parameters `Fq1, Fq2`, columns `θ̇_j |θ̇_j|`. Fitted
+//! with its sign free, like the other candidate effects.
+
+use aras_kin::{KinematicSample, Scalar};
+
+use super::diagonal;
+
+/// Parameter names in column order.
+pub(super) const NAMES: [&str; 2] = ["Fq1", "Fq2"];
+
+/// Why the effect exists and how it shows in the data.
+pub(super) const EXPLANATION: &str = "damping growing with the square of the speed (fluid or air \
+    drag, windage, velocity-dependent seal friction); the residual grows faster than linearly \
+    with |θ̇| and keeps its sign";
+
+/// Columns `θ̇_j |θ̇_j|` on each joint's row.
+#[inline(always)]
+pub(super) fn fill<T: Scalar>(s: &KinematicSample<T>, out: &mut [T]) {
+    let td = s.theta_dot;
+    diagonal(td[0] * td[0].abs(), td[1] * td[1].abs(), out);
+}
