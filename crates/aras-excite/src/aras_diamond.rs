@@ -13,6 +13,7 @@ use nalgebra::Vector2;
 use crate::error::{ExciteError, check_finite};
 use crate::regressor::Dual;
 use crate::{FourierTrajectory, Limits, Regressor};
+use aras_ident::LinearModel;
 
 /// An `aras-dyn` [`Model`] (e.g. [`Model::paper`], 42 columns) seen through
 /// the kinematics of a [`Geometry`]: `Y(X, Ẋ, Ẍ)` in task coordinates
@@ -63,8 +64,22 @@ impl DynRegressor {
     }
 }
 
-impl Regressor for DynRegressor {
+/// For `aras-ident` and the design alike: task coordinates `X = [φ, γ]`
+/// and their rates in, the 2 × n regressor (45)–(53) out.
+impl LinearModel for DynRegressor {
     type Error = DynError;
+
+    fn coordinates(&self) -> usize {
+        2
+    }
+
+    fn outputs(&self) -> usize {
+        2
+    }
+
+    fn names(&self) -> Vec<String> {
+        self.model.names()
+    }
 
     fn columns(&self) -> usize {
         self.model.columns()
@@ -72,22 +87,26 @@ impl Regressor for DynRegressor {
 
     fn fill(
         &self,
-        x: &Vector2<f64>,
-        x_dot: &Vector2<f64>,
-        x_ddot: &Vector2<f64>,
+        q: &[f64],
+        q_dot: &[f64],
+        q_ddot: &[f64],
         rows: &mut [f64],
     ) -> Result<(), DynError> {
-        self.rows(x, x_dot, x_ddot, rows)
+        let v = |a: &[f64]| Vector2::new(a[0], a[1]);
+        self.rows(&v(q), &v(q_dot), &v(q_ddot), rows)
     }
+}
 
+impl Regressor for DynRegressor {
     fn fill_dual(
         &self,
-        x: &Vector2<Dual>,
-        x_dot: &Vector2<Dual>,
-        x_ddot: &Vector2<Dual>,
+        q: &[Dual],
+        q_dot: &[Dual],
+        q_ddot: &[Dual],
         rows: &mut [Dual],
     ) -> Result<(), DynError> {
-        self.rows(x, x_dot, x_ddot, rows)
+        let v = |a: &[Dual]| Vector2::new(a[0], a[1]);
+        self.rows(&v(q), &v(q_dot), &v(q_ddot), rows)
     }
 }
 
@@ -193,11 +212,12 @@ mod tests {
             Vector2::new(2.0, 1.0),
         );
         let mut rows = vec![0.0; 84];
-        r.fill(&x, &xd, &xdd, &mut rows).unwrap();
+        r.fill(x.as_slice(), xd.as_slice(), xdd.as_slice(), &mut rows)
+            .unwrap();
         let s = evaluate(r.geometry(), &x, &xd, &xdd).unwrap();
         let y = r.model().regressor(&s);
         assert_eq!(y.as_slice(), &rows[..]);
-        let lift = |v: Vector2<f64>| v.map(Dual::from_re);
+        let lift = |v: Vector2<f64>| [Dual::from_re(v[0]), Dual::from_re(v[1])];
         let mut drows = vec![Dual::from_re(0.0); 84];
         r.fill_dual(&lift(x), &lift(xd), &lift(xdd), &mut drows)
             .unwrap();

@@ -66,7 +66,26 @@ const DIRS: usize = 6;
 type D6 = crate::regressor::Dual;
 
 /// Checks the shape of a base projection against a regressor.
-pub(crate) fn check_projection(e: &DMatrix<f64>, columns: usize) -> Result<(), ExciteError> {
+pub(crate) fn check_projection<R: Regressor>(
+    e: &DMatrix<f64>,
+    regressor: &R,
+) -> Result<(), ExciteError> {
+    for (what, n) in [
+        ("coordinates", regressor.coordinates()),
+        ("outputs", regressor.outputs()),
+    ] {
+        if n != 2 {
+            return Err(ExciteError::InvalidSetting {
+                name: "regressor",
+                value: n as f64,
+                reason: format!(
+                    "the model has {n} {what}; the Fourier design moves two coordinates \
+                     driven by two actuators"
+                ),
+            });
+        }
+    }
+    let columns = regressor.columns();
     if e.nrows() != columns || e.ncols() == 0 {
         return Err(ExciteError::ProjectionShape {
             rows: e.nrows(),
@@ -153,14 +172,14 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         // Start the scalar loop clean whatever ran on this thread before
         // (see `aras_ident::simd`).
         aras_ident::simd::clear_upper_state();
-        let n = self.reg.columns();
+        let n = self.w.ncols();
         let ns = self.samples;
         for s in 0..ns {
             let [x, xd, xdd] = state(s);
             let (x, _) = self.clamped(x);
             self.rows.iter_mut().for_each(|v| *v = 0.0);
             self.reg
-                .fill(&x, &xd, &xdd, &mut self.rows)
+                .fill(x.as_slice(), xd.as_slice(), xdd.as_slice(), &mut self.rows)
                 .map_err(|e| Self::fail(&x, e))?;
             for r in 0..2 {
                 for c in 0..n {
@@ -179,7 +198,7 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         // Start the scalar loop clean whatever ran on this thread before
         // (see `aras_ident::simd`).
         aras_ident::simd::clear_upper_state();
-        let n = self.reg.columns();
+        let n = self.w.ncols();
         let ns = self.samples;
         for s in 0..ns {
             let [x, xd, xdd] = state(s);
@@ -188,9 +207,9 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
                 let d = D6::from_re(v);
                 if fixed { d } else { d.derivative(k) }
             };
-            let xs = Vector2::new(seed(x[0], 0, clamped[0]), seed(x[1], 1, clamped[1]));
-            let xds = Vector2::new(seed(xd[0], 2, false), seed(xd[1], 3, false));
-            let xdds = Vector2::new(seed(xdd[0], 4, false), seed(xdd[1], 5, false));
+            let xs = [seed(x[0], 0, clamped[0]), seed(x[1], 1, clamped[1])];
+            let xds = [seed(xd[0], 2, false), seed(xd[1], 3, false)];
+            let xdds = [seed(xdd[0], 4, false), seed(xdd[1], 5, false)];
             self.drows.iter_mut().for_each(|v| *v = D6::from_re(0.0));
             self.reg
                 .fill_dual(&xs, &xds, &xdds, &mut self.drows)
@@ -348,9 +367,11 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Dual;
     use crate::constraints::{GridConstraints, Limits};
     use crate::param::Layout;
     use crate::test_support::{StandIn, base_projection};
+    use aras_ident::LinearModel;
     use rand::SeedableRng;
     use rand::rngs::Xoshiro256PlusPlus;
 
@@ -432,12 +453,14 @@ mod tests {
         }
     }
 
-    /// A wrong-shaped or non-finite projection is rejected by name.
+    /// A wrong-shaped or non-finite projection, or a model that is not
+    /// 2-DOF, is rejected by name.
     #[test]
     fn projection_is_checked() {
+        let reg = StandIn::default();
         let e = DMatrix::<f64>::zeros(11, 3);
         assert!(
-            check_projection(&e, 12)
+            check_projection(&e, &reg)
                 .unwrap_err()
                 .to_string()
                 .contains("11×3")
@@ -445,11 +468,50 @@ mod tests {
         let mut e = DMatrix::<f64>::zeros(12, 3);
         e[(2, 1)] = f64::NAN;
         assert!(
-            check_projection(&e, 12)
+            check_projection(&e, &reg)
                 .unwrap_err()
                 .to_string()
                 .contains("E[2, 1]")
         );
+        /// The stand-in claiming a third coordinate.
+        struct ThreeDof(StandIn);
+        impl LinearModel for ThreeDof {
+            type Error = <StandIn as LinearModel>::Error;
+            fn coordinates(&self) -> usize {
+                3
+            }
+            fn outputs(&self) -> usize {
+                2
+            }
+            fn names(&self) -> Vec<String> {
+                self.0.names()
+            }
+            fn fill(
+                &self,
+                q: &[f64],
+                q_dot: &[f64],
+                q_ddot: &[f64],
+                rows: &mut [f64],
+            ) -> Result<(), Self::Error> {
+                self.0.fill(q, q_dot, q_ddot, rows)
+            }
+        }
+        impl Regressor for ThreeDof {
+            fn fill_dual(
+                &self,
+                q: &[Dual],
+                q_dot: &[Dual],
+                q_ddot: &[Dual],
+                rows: &mut [Dual],
+            ) -> Result<(), Self::Error> {
+                self.0.fill_dual(q, q_dot, q_ddot, rows)
+            }
+        }
+        let e = DMatrix::<f64>::zeros(12, 3);
+        let m = check_projection(&e, &ThreeDof(StandIn::default()))
+            .unwrap_err()
+            .to_string();
+        assert!(m.contains("3 coordinates"), "{m}");
     }
 
     /// Motionless trajectories cannot excite anything: a clear error.

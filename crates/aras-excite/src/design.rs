@@ -212,13 +212,13 @@ fn check_box<R: Regressor>(regressor: &R, limits: &Limits) -> Result<(), ExciteE
     let (lo, hi) = (limits.min, limits.max);
     const K: usize = 41;
     let mut rows = vec![0.0; 2 * regressor.columns()];
-    let z = Vector2::zeros();
+    let z = Vector2::<f64>::zeros();
     for i in 0..K {
         for j in 0..K {
             let f = |k: usize, c: usize| lo[c] + (hi[c] - lo[c]) * k as f64 / (K - 1) as f64;
             let x = Vector2::new(f(i, 0), f(j, 1));
             rows.iter_mut().for_each(|v| *v = 0.0);
-            if let Err(e) = regressor.fill(&x, &z, &z, &mut rows) {
+            if let Err(e) = regressor.fill(x.as_slice(), z.as_slice(), z.as_slice(), &mut rows) {
                 return Err(ExciteError::InfeasibleBox {
                     lo: [lo[0], lo[1]],
                     hi: [hi[0], hi[1]],
@@ -285,7 +285,7 @@ pub fn assess<R: Regressor>(
     trajectory: &FourierTrajectory,
     points: usize,
 ) -> Result<Assessment, ExciteError> {
-    check_projection(projection, regressor.columns())?;
+    check_projection(projection, regressor)?;
     let points = points.max(1);
     let mut ev = Evaluator::new(regressor, projection, Criterion::Condition, points, None);
     let h = trajectory.period() / points as f64;
@@ -367,7 +367,7 @@ pub fn design_with_progress<R: Regressor>(
 ) -> Result<Design, ExciteError> {
     let started = Instant::now();
     settings.validate()?;
-    check_projection(projection, regressor.columns())?;
+    check_projection(projection, regressor)?;
     check_box(regressor, &settings.limits)?;
     let layout = settings.layout();
     let cons = GridConstraints::new(layout, &settings.limits, settings.constraint_points);

@@ -10,9 +10,10 @@
 //!   ([`Criterion::DOptimal`]) over the coefficients, subject to the box and
 //!   rate limits (77), an acceleration limit and zero velocity at the period
 //!   boundary, from several random feasible starts.
-//! * [`Regressor`]: the one thing the design needs from a dynamic model, its
-//!   2 × n regressor rows at `(X, Ẋ, Ẍ)`, in `f64` and in [`Dual`] numbers
-//!   for their exact derivatives.
+//! * [`Regressor`]: the one thing the design needs from a dynamic model:
+//!   `aras-ident`'s `LinearModel` (its 2 × n regressor rows at `(X, Ẋ, Ẍ)`,
+//!   the same model the identification uses) that also gives its rows in
+//!   [`Dual`] numbers for their exact derivatives.
 //!
 //! # Conventions
 //!
@@ -42,8 +43,9 @@
 //!   PANOC (L-BFGS forward–backward) inside, with user gradients.
 //! * `num-dual`: exact derivatives of the regressor with respect to
 //!   `(X, Ẋ, Ẍ)` ([`Dual`]).
-//! * `aras-ident` (no default features, so no system library): the AVX
-//!   upper-state clear around faer's kernels.
+//! * `aras-ident` (no default features, so no system library): the
+//!   `LinearModel` trait [`Regressor`] extends, faer's SVD behind its AVX
+//!   upper-state clear.
 //! * `faer`: the thin SVD of the stacked base regressor.
 //! * `nalgebra`: the small fixed-size vectors of the API, and the
 //!   projection matrix `E` at the API edge.

@@ -11,6 +11,7 @@
 #![allow(dead_code)]
 
 use aras_excite::{Dual, Regressor};
+use aras_ident::LinearModel;
 use aras_kin::{Geometry, KinError, Scalar, Workspace, evaluate};
 use nalgebra::{DMatrix, Vector2};
 use rand::rngs::Xoshiro256PlusPlus;
@@ -30,8 +31,20 @@ impl Default for StandIn {
     }
 }
 
-impl Regressor for StandIn {
+impl LinearModel for StandIn {
     type Error = KinError;
+
+    fn coordinates(&self) -> usize {
+        2
+    }
+
+    fn outputs(&self) -> usize {
+        2
+    }
+
+    fn names(&self) -> Vec<String> {
+        (0..12).map(|c| format!("c{c}")).collect()
+    }
 
     fn columns(&self) -> usize {
         12
@@ -39,22 +52,26 @@ impl Regressor for StandIn {
 
     fn fill(
         &self,
-        x: &Vector2<f64>,
-        x_dot: &Vector2<f64>,
-        x_ddot: &Vector2<f64>,
+        q: &[f64],
+        q_dot: &[f64],
+        q_ddot: &[f64],
         rows: &mut [f64],
     ) -> Result<(), KinError> {
-        self.rows(x, x_dot, x_ddot, rows)
+        let v = |a: &[f64]| Vector2::new(a[0], a[1]);
+        self.rows(&v(q), &v(q_dot), &v(q_ddot), rows)
     }
+}
 
+impl Regressor for StandIn {
     fn fill_dual(
         &self,
-        x: &Vector2<Dual>,
-        x_dot: &Vector2<Dual>,
-        x_ddot: &Vector2<Dual>,
+        q: &[Dual],
+        q_dot: &[Dual],
+        q_ddot: &[Dual],
         rows: &mut [Dual],
     ) -> Result<(), KinError> {
-        self.rows(x, x_dot, x_ddot, rows)
+        let v = |a: &[Dual]| Vector2::new(a[0], a[1]);
+        self.rows(&v(q), &v(q_dot), &v(q_ddot), rows)
     }
 }
 
@@ -112,7 +129,7 @@ pub fn base_projection<R: Regressor>(reg: &R, samples: usize, seed: u64) -> DMat
         let xd = Vector2::new(r(-3.0, 3.0), r(-3.0, 3.0));
         let xdd = Vector2::new(r(-10.0, 10.0), r(-10.0, 10.0));
         rows.iter_mut().for_each(|v| *v = 0.0);
-        reg.fill(&x, &xd, &xdd, &mut rows)
+        reg.fill(x.as_slice(), xd.as_slice(), xdd.as_slice(), &mut rows)
             .unwrap_or_else(|e| panic!("regressor failed: {e}"));
         for j in 0..2 {
             for c in 0..n {

@@ -5,11 +5,13 @@
 //! The arm's regressor is written by hand here, once, generic over the
 //! number type, and handed to
 //!
-//! * `aras-excite` (its [`Regressor`] trait, in `f64` and dual numbers), which
+//! * `aras-excite` (its [`Regressor`] trait: the same [`LinearModel`] plus its
+//!   rows in dual numbers), which
 //!   designs the excitation (74)–(77) in joint coordinates;
 //! * `aras-signal`, which processes the arm's log (angles and torques only)
 //!   into `q, q̇, q̈` with [`JointCoordinates`];
-//! * `aras-ident` (its [`LinearModel`] trait): base parameters, OLS in memory
+//! * `aras-ident` (its [`LinearModel`] trait, the one the design uses too):
+//!   base parameters, OLS in memory
 //!   and streaming, and the physically consistent SDP.
 //!
 //! The torques of the log come from an independent code path (recursive
@@ -31,6 +33,7 @@ use aras_log::ReadOptions;
 use aras_signal::{Bandwidth, JointCoordinates, OutputRows, PeriodSource, ProcessOptions};
 use faer::Mat;
 use nalgebra::{DMatrix, Vector2};
+
 use num_dual::DualNum;
 
 /// Gravity, m/s² (along −y).
@@ -233,6 +236,10 @@ impl LinearModel for PlanarArm {
         2
     }
 
+    fn columns(&self) -> usize {
+        COLUMNS
+    }
+
     fn names(&self) -> Vec<String> {
         let body = ["Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz", "hx", "hy", "hz"];
         let mut n: Vec<String> = ["L1", "L2"]
@@ -249,34 +256,18 @@ impl LinearModel for PlanarArm {
     }
 }
 
-/// For `aras-excite`: the same rows in `f64` and in dual numbers.
+/// For `aras-excite`: the same rows in dual numbers (the `f64` rows are the
+/// [`LinearModel`]'s).
 impl Regressor for PlanarArm {
-    type Error = Infallible;
-
-    fn columns(&self) -> usize {
-        COLUMNS
-    }
-
-    fn fill(
-        &self,
-        x: &Vector2<f64>,
-        x_dot: &Vector2<f64>,
-        x_ddot: &Vector2<f64>,
-        rows: &mut [f64],
-    ) -> Result<(), Infallible> {
-        Self::fill_rows((*x).into(), (*x_dot).into(), (*x_ddot).into(), rows);
-        Ok(())
-    }
-
     fn fill_dual(
         &self,
-        x: &Vector2<Dual>,
-        x_dot: &Vector2<Dual>,
-        x_ddot: &Vector2<Dual>,
+        q: &[Dual],
+        q_dot: &[Dual],
+        q_ddot: &[Dual],
         rows: &mut [Dual],
     ) -> Result<(), Infallible> {
-        let a = |v: &Vector2<Dual>| [v[0], v[1]];
-        Self::fill_rows(a(x), a(x_dot), a(x_ddot), rows);
+        let a = |v: &[Dual]| [v[0], v[1]];
+        Self::fill_rows(a(q), a(q_dot), a(q_ddot), rows);
         Ok(())
     }
 }

@@ -47,31 +47,26 @@ fn regressor_times_parameters_equals_newton_euler_torques() {
 #[test]
 fn dual_rows_are_the_rows_and_their_derivatives() {
     use aras_excite::{Dual, Regressor};
-    use nalgebra::Vector2;
-    let (x, xd, xdd) = (
-        Vector2::new(0.3, -0.7),
-        Vector2::new(1.1, -0.4),
-        Vector2::new(-2.0, 3.0),
-    );
-    let seed = |v: &Vector2<f64>, k: usize| {
-        Vector2::new(
+    let (x, xd, xdd) = ([0.3, -0.7], [1.1, -0.4], [-2.0, 3.0]);
+    let seed = |v: &[f64; 2], k: usize| {
+        [
             Dual::from_re(v[0]).derivative(k),
             Dual::from_re(v[1]).derivative(k + 1),
-        )
+        ]
     };
     let mut d = vec![Dual::from_re(0.0); 2 * COLUMNS];
     PlanarArm
         .fill_dual(&seed(&x, 0), &seed(&xd, 2), &seed(&xdd, 4), &mut d)
         .unwrap();
     let mut v = vec![0.0; 2 * COLUMNS];
-    Regressor::fill(&PlanarArm, &x, &xd, &xdd, &mut v).unwrap();
+    LinearModel::fill(&PlanarArm, &x, &xd, &xdd, &mut v).unwrap();
     assert!(d.iter().zip(&v).all(|(a, b)| a.re == *b));
     // ∂/∂q2 by central differences (h = 1e-6: error ~1e-10 on entries of
     // order 10).
     let h = 1e-6;
     let (mut p, mut m) = (v.clone(), v.clone());
-    Regressor::fill(&PlanarArm, &(x + Vector2::new(0.0, h)), &xd, &xdd, &mut p).unwrap();
-    Regressor::fill(&PlanarArm, &(x - Vector2::new(0.0, h)), &xd, &xdd, &mut m).unwrap();
+    LinearModel::fill(&PlanarArm, &[x[0], x[1] + h], &xd, &xdd, &mut p).unwrap();
+    LinearModel::fill(&PlanarArm, &[x[0], x[1] - h], &xd, &xdd, &mut m).unwrap();
     for k in 0..v.len() {
         let fd = (p[k] - m[k]) / (2.0 * h);
         let exact = d[k].eps.0.map_or(0.0, |g| g[1]);
