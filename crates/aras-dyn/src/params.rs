@@ -392,7 +392,8 @@ impl Params {
     }
 
     /// Writes the parameter file (pretty JSON, shortest round-trip numbers),
-    /// atomically: a temporary file in the same directory, then a rename.
+    /// atomically ([`aras_log::write_atomic`]: a new temporary file in the
+    /// same directory, then a rename; no other file is touched).
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), ParamError> {
         let path = path.as_ref();
         self.validate()?;
@@ -402,9 +403,7 @@ impl Params {
         };
         let mut text = self.to_json_string();
         text.push('\n');
-        let tmp = path.with_extension("json.tmp");
-        std::fs::write(&tmp, text).map_err(io)?;
-        std::fs::rename(&tmp, path).map_err(io)
+        aras_log::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(io)
     }
 
     /// Pretty JSON text of the parameter file.

@@ -2,6 +2,7 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::{Columns, LogError, Sidecar};
 
@@ -15,8 +16,11 @@ pub fn sidecar_path(csv: &Path) -> PathBuf {
 /// `dtheta1,dtheta2,ddtheta1,ddtheta2` when the columns hold logged
 /// derivatives) and `sidecar` to [`sidecar_path`]`(csv)`.
 ///
-/// Each file is written to a temporary file beside it and renamed into
-/// place, so a reader never sees half a log. Numbers use Rust's shortest
+/// Each file is written to a new temporary file beside it and renamed into
+/// place, so a reader never sees half a log and no other file is touched. An
+/// existing file at `csv` or its sidecar path is replaced: whether that is
+/// allowed is the caller's decision (the `aras` tools replace only files they
+/// wrote). Numbers use Rust's shortest
 /// round-trip formatting: the reader gets back exactly these `f64`s, and the
 /// same data always gives the same bytes. Columns of unequal lengths are an
 /// error, nothing is written then.
@@ -44,7 +48,7 @@ pub fn write_log(csv: &Path, columns: &Columns, sidecar: &Sidecar) -> Result<(),
             reason: format!("every column must have as many values as `t` ({n})"),
         });
     }
-    atomic_write(csv, |w| {
+    write_atomic(csv, |w| {
         write!(w, "t,theta1,theta2,tau1,tau2")?;
         if derivatives {
             write!(w, ",dtheta1,dtheta2,ddtheta1,ddtheta2")?;
@@ -64,38 +68,64 @@ pub fn write_log(csv: &Path, columns: &Columns, sidecar: &Sidecar) -> Result<(),
             writeln!(w)?;
         }
         Ok(())
+    })
+    .map_err(|source| LogError::Write {
+        path: csv.to_path_buf(),
+        source,
     })?;
     let json = serde_json::to_string_pretty(sidecar).map_err(|e| LogError::SidecarWrite {
         path: sidecar_path(csv),
         source: e.into(),
     })?;
-    atomic_write(&sidecar_path(csv), |w| {
+    let sidecar_file = sidecar_path(csv);
+    write_atomic(&sidecar_file, |w| {
         w.write_all(json.as_bytes())?;
         w.write_all(b"\n")
     })
+    .map_err(|source| LogError::Write {
+        path: sidecar_file,
+        source,
+    })
 }
 
-fn atomic_write(
+/// Writes a file atomically: `write` fills a new temporary file beside `path`
+/// (`.NAME.PID-N.tmp`, opened with `create_new`, so no existing file is ever
+/// truncated), which is synced and renamed onto `path`. On any failure the
+/// temporary file is removed and `path` is untouched. An existing file at
+/// `path` is replaced: whether that is allowed is the caller's decision.
+pub fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-) -> Result<(), LogError> {
-    let io = |source| LogError::Write {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    let file = std::fs::File::create(&tmp).map_err(io)?;
+) -> std::io::Result<()> {
+    let (tmp, file) = new_temp_file(path)?;
     let mut w = std::io::BufWriter::new(file);
     let written = write(&mut w)
         .and_then(|()| w.into_inner().map_err(|e| e.into_error()))
-        .and_then(|f| f.sync_all());
-    if let Err(e) = written {
+        .and_then(|f| f.sync_all())
+        .and_then(|()| std::fs::rename(&tmp, path));
+    if written.is_err() {
         let _ = std::fs::remove_file(&tmp);
-        return Err(io(e));
     }
-    std::fs::rename(&tmp, path).map_err(io)
+    written
+}
+
+/// A temporary file beside `path` that did not exist before.
+fn new_temp_file(path: &Path) -> std::io::Result<(PathBuf, std::fs::File)> {
+    static COUNTER: AtomicUsize = AtomicUsize::new(0);
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    loop {
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let tmp = path.with_file_name(format!(".{name}.{}-{n}.tmp", std::process::id()));
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+        {
+            Ok(f) => return Ok((tmp, f)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(e),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -151,12 +181,51 @@ mod tests {
             let text = std::fs::read_to_string(sidecar_path(&path)).unwrap();
             assert!(text.contains("4096,") || text.contains("4096\n"), "{text}");
         }
+        // A file that merely looks like a temporary file is left alone.
+        let bystander = dir.join("runfalse.csv.tmp");
+        std::fs::write(&bystander, "mine").unwrap();
+        write_log(
+            &dir.join("runfalse.csv"),
+            &columns(false),
+            &Sidecar::default(),
+        )
+        .unwrap();
+        assert_eq!(std::fs::read_to_string(&bystander).unwrap(), "mine");
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".tmp") && n.starts_with('.'))
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
+        // A failing write leaves the target as it was and no temporary file.
+        let target = dir.join("keep.txt");
+        std::fs::write(&target, "before").unwrap();
+        let e = write_atomic(&target, |w| {
+            w.write_all(b"half")?;
+            Err(std::io::Error::other("disk full"))
+        })
+        .unwrap_err();
+        assert_eq!(e.to_string(), "disk full");
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "before");
         let mut ragged = columns(false);
         ragged.tau[1].pop();
         let path = dir.join("ragged.csv");
         let e = write_log(&path, &ragged, &Sidecar::default()).unwrap_err();
         assert!(e.to_string().contains("tau2: 39 values"), "{e}");
         assert!(!path.exists() && !sidecar_path(&path).exists());
+        let temps = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter(|e| {
+                let n = e
+                    .as_ref()
+                    .unwrap()
+                    .file_name()
+                    .to_string_lossy()
+                    .into_owned();
+                n.starts_with('.') && n.ends_with(".tmp")
+            })
+            .count();
+        assert_eq!(temps, 0);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
