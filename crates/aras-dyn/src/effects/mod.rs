@@ -106,16 +106,22 @@ impl EffectId {
         EffectId::QuadraticDamping,
     ];
 
+    /// How many of [`ALL`](Self::ALL) make the paper's model (rigid links,
+    /// friction, elasticity); the rest are [`EXTRA`](Self::EXTRA).
+    const PAPER: usize = 3;
+
     /// The effects beyond the paper's model (the parameter file's `extra`
-    /// section, the candidates of the diagnosis), in that order.
-    pub const EXTRA: [EffectId; 6] = [
-        EffectId::TorqueOffset,
-        EffectId::CoulombAsymmetry,
-        EffectId::StribeckFriction,
-        EffectId::PassiveJointViscous,
-        EffectId::Cogging,
-        EffectId::QuadraticDamping,
-    ];
+    /// section, the candidates of the diagnosis), in that order: the tail of
+    /// [`ALL`](Self::ALL).
+    pub const EXTRA: [EffectId; Self::ALL.len() - Self::PAPER] = {
+        let mut out = [EffectId::RigidLinks; Self::ALL.len() - Self::PAPER];
+        let mut i = 0;
+        while i < out.len() {
+            out[i] = Self::ALL[Self::PAPER + i];
+            i += 1;
+        }
+        out
+    };
 
     /// The stable identifier, e.g. `"stribeck_friction"`.
     pub const fn as_str(self) -> &'static str {
@@ -260,10 +266,7 @@ impl Effect {
 
     /// True for the three effects of the paper's model.
     pub fn is_paper(&self) -> bool {
-        matches!(
-            self,
-            Effect::RigidLinks | Effect::Friction | Effect::Elasticity
-        )
+        !EffectId::EXTRA.contains(&self.kind())
     }
 }
 
@@ -329,6 +332,13 @@ mod tests {
             Effect::QuadraticDamping,
         ];
         assert_eq!(all.map(|e| e.kind()), EffectId::ALL);
+        // The paper's model is rigid links, friction and elasticity (42);
+        // every other effect is an extra, in `ALL`'s order.
+        assert_eq!(
+            all.map(|e| e.is_paper()),
+            [true, true, true, false, false, false, false, false, false]
+        );
+        assert_eq!(EffectId::EXTRA[..], EffectId::ALL[3..]);
         for e in all {
             let names = e.names();
             assert_eq!(names.len(), e.columns(), "{e:?}");
