@@ -199,6 +199,7 @@ impl FourierTrajectory {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_support::fourier as traj;
 
     /// The adapter gives exactly the model's own regressor, in values and
     /// in the real part of its dual rows.
@@ -233,17 +234,6 @@ mod tests {
     fn paper_limits_are_the_paper_workspace() {
         let p = Limits::paper();
         assert_eq!(Limits::from_workspace(&Workspace::paper(), p.max_accel), p);
-    }
-
-    fn traj(seed: &[f64]) -> FourierTrajectory {
-        let l = seed.len() / 4;
-        FourierTrajectory::new(
-            0.7,
-            [1.2, 1.0],
-            [seed[..l].to_vec(), seed[l..2 * l].to_vec()],
-            [seed[2 * l..3 * l].to_vec(), seed[3 * l..4 * l].to_vec()],
-        )
-        .unwrap()
     }
 
     #[test]

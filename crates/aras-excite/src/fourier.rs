@@ -314,18 +314,8 @@ pub(crate) fn check_omega(omega_f: f64) -> Result<(), ExciteError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_support::fourier as traj;
     use proptest::prelude::*;
-
-    fn traj(seed: &[f64]) -> FourierTrajectory {
-        let l = seed.len() / 4;
-        FourierTrajectory::new(
-            0.7,
-            [1.2, 1.0],
-            [seed[..l].to_vec(), seed[l..2 * l].to_vec()],
-            [seed[2 * l..3 * l].to_vec(), seed[3 * l..4 * l].to_vec()],
-        )
-        .unwrap()
-    }
 
     proptest! {
         // Velocity and acceleration are the exact derivatives of (74): a

@@ -4,6 +4,7 @@
 //! * [`StandIn`]: a smooth, nonlinear stand-in regressor with robot-like
 //!   columns built on the real kinematics, one exactly dependent column and
 //!   one zero column (so the base projection has work to do).
+//! * [`fourier`]: a trajectory from a flat list of coefficients.
 //! * [`base_projection`]: a base projection `E` by faer's column-pivoted QR
 //!   on a stacked regressor of random samples. The real pipeline takes `E`
 //!   from `aras-ident`; this helper exists only for tests and benches.
@@ -150,4 +151,17 @@ pub fn base_projection<R: Regressor>(reg: &R, samples: usize, seed: u64) -> DMat
         e[(col, k)] = 1.0;
     }
     e
+}
+
+/// A trajectory with `ω_f = 0.7`, offsets `[1.2, 1.0]` rad and the
+/// coefficients `seed` (`a` of both coordinates, then `b`; four equal parts).
+pub fn fourier(seed: &[f64]) -> aras_excite::FourierTrajectory {
+    let l = seed.len() / 4;
+    aras_excite::FourierTrajectory::new(
+        0.7,
+        [1.2, 1.0],
+        [seed[..l].to_vec(), seed[l..2 * l].to_vec()],
+        [seed[2 * l..3 * l].to_vec(), seed[3 * l..4 * l].to_vec()],
+    )
+    .unwrap()
 }
