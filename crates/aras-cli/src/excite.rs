@@ -3,7 +3,8 @@
 
 use anyhow::{Context, Result};
 use aras_dyn::Params;
-use aras_excite::{Criterion, Design, DesignProgress, DesignSettings, DynRegressor, Limits};
+use aras_dyn::TaskRegressor;
+use aras_excite::{Criterion, Design, DesignProgress, DesignSettings, Limits};
 use aras_ident::BaseParameters;
 use aras_kin::Workspace;
 use aras_pipeline::robot::base_projection;
@@ -45,7 +46,7 @@ pub fn design(
     base: &BaseParameters,
     spinner: &ProgressBar,
 ) -> Result<Design> {
-    let reg = DynRegressor::new(paper_model(nominal)?, nominal.geometry()?);
+    let reg = TaskRegressor::new(paper_model(nominal)?, nominal.geometry()?);
     let settings = settings(cfg)?;
     let stage = spinner.message();
     let progress = |p: DesignProgress| {

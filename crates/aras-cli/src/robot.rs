@@ -1,5 +1,5 @@
 //! The robot as the configuration describes it. The adapters between the
-//! library crates live in them: `aras_excite::DynRegressor` (the model as
+//! library crates live in them: `aras_excite::TaskRegressor` (the model as
 //! the design's regressor), `aras_excite::FourierTrajectory` implements
 //! `aras_dyn::Trajectory`, and `aras_pipeline::robot` stacks, filters and
 //! builds the physically consistent problem.

@@ -75,6 +75,8 @@ mod params;
 mod regressor;
 mod robots;
 pub mod sim;
+#[cfg(feature = "ident")]
+mod task_regressor;
 mod trajectory;
 
 pub use dynamics::Dynamics;
@@ -87,4 +89,6 @@ pub use params::{
 };
 pub use regressor::Sign;
 pub use robots::{ArcLink, PointMass, arc_robot};
+#[cfg(feature = "ident")]
+pub use task_regressor::{RegressorError, TaskRegressor};
 pub use trajectory::{Sinusoid, Trajectory};

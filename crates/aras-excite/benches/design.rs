@@ -7,11 +7,12 @@ mod test_support;
 
 use std::hint::black_box;
 
-use aras_excite::{DesignSettings, DynRegressor, assess, design, random_feasible};
+use aras_dyn::TaskRegressor;
+use aras_excite::{DesignSettings, assess, design, random_feasible};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn benches(c: &mut Criterion) {
-    let reg = DynRegressor::aras_diamond().unwrap();
+    let reg = TaskRegressor::aras_diamond().unwrap();
     let e = test_support::base_projection(&reg, 400, 7);
     let settings = DesignSettings {
         ..DesignSettings::default()

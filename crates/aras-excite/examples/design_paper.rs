@@ -10,10 +10,11 @@
 #[path = "../src/test_support.rs"]
 mod test_support;
 
-use aras_excite::{Criterion, DesignSettings, DynRegressor, assess, design, random_feasible};
+use aras_dyn::TaskRegressor;
+use aras_excite::{Criterion, DesignSettings, assess, design, random_feasible};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let reg = DynRegressor::aras_diamond()?;
+    let reg = TaskRegressor::aras_diamond()?;
     let e = test_support::base_projection(&reg, 400, 7);
     println!("{} columns, {} base parameters", e.nrows(), e.ncols());
     let mut settings = DesignSettings::default();

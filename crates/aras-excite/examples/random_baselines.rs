@@ -10,7 +10,8 @@
 #[path = "../src/test_support.rs"]
 mod test_support;
 
-use aras_excite::{DesignSettings, DynRegressor, FourierTrajectory, assess, random_feasible};
+use aras_dyn::TaskRegressor;
+use aras_excite::{DesignSettings, FourierTrajectory, assess, random_feasible};
 
 fn scaled(t: &FourierTrajectory, s: f64) -> FourierTrajectory {
     let o = t.offset();
@@ -25,7 +26,7 @@ fn scaled(t: &FourierTrajectory, s: f64) -> FourierTrajectory {
 }
 
 fn main() {
-    let reg = DynRegressor::aras_diamond().expect("the paper's model");
+    let reg = TaskRegressor::aras_diamond().expect("the paper's model");
     let e = test_support::base_projection(&reg, 400, 7);
     let s = DesignSettings {
         ..DesignSettings::default()

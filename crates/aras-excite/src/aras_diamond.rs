@@ -1,112 +1,32 @@
-//! ARAS-Diamond through this crate's traits (feature `aras-diamond`): the
-//! `aras-dyn` model as a design [`Regressor`], [`FourierTrajectory`] as the
-//! simulator's [`Trajectory`], and motor-space samples of a trajectory.
+//! ARAS-Diamond through this crate's traits (feature `aras-diamond`):
+//! `aras-dyn`'s [`TaskRegressor`] as a design [`Regressor`],
+//! [`FourierTrajectory`] as the simulator's [`Trajectory`], and motor-space
+//! samples of a trajectory.
 //!
 //! The rest of the crate knows no robot; this module is the only one that
 //! names `aras-kin` and `aras-dyn`, so a project with its own robot leaves
 //! the feature off and neither crate is built.
 
-use aras_dyn::{DynError, Model, Trajectory};
-use aras_kin::{Geometry, Scalar, Workspace, evaluate};
+use aras_dyn::{RegressorError, TaskRegressor, Trajectory};
+use aras_kin::{Geometry, Workspace, evaluate};
 use nalgebra::Vector2;
 
 use crate::error::{ExciteError, check_finite};
 use crate::regressor::Dual;
 use crate::{FourierTrajectory, Limits, Regressor};
-use aras_ident::LinearModel;
 
-/// An `aras-dyn` [`Model`] (e.g. [`Model::paper`], 42 columns) seen through
-/// the kinematics of a [`Geometry`]: `Y(X, Ẋ, Ẍ)` in task coordinates
-/// `X = [φ, γ]` for the design.
-///
-/// The model is generic over the scalar, so the dual-number rows are the
-/// model's own; `sign(θ̇)` columns have zero derivative.
-#[derive(Debug, Clone, PartialEq)]
-pub struct DynRegressor {
-    model: Model,
-    geometry: Geometry,
-}
-
-impl DynRegressor {
-    /// Wraps a model and the geometry its kinematics use.
-    pub fn new(model: Model, geometry: Geometry) -> Self {
-        Self { model, geometry }
-    }
-
-    /// The paper's model (rigid links, friction, elasticity) for the
-    /// ARAS-Diamond with gravity `[0, −9.81, 0]` m/s² (`docs/model.md`, "Default robot").
-    pub fn aras_diamond() -> Result<Self, DynError> {
-        Ok(Self::new(
-            Model::paper(nalgebra::Vector3::new(0.0, -9.81, 0.0))?,
-            Geometry::aras_diamond(),
-        ))
-    }
-
-    /// The wrapped model.
-    pub fn model(&self) -> &Model {
-        &self.model
-    }
-
-    /// The geometry.
-    pub fn geometry(&self) -> &Geometry {
-        &self.geometry
-    }
-
-    fn rows<T: Scalar>(
-        &self,
-        x: &Vector2<T>,
-        x_dot: &Vector2<T>,
-        x_ddot: &Vector2<T>,
-        rows: &mut [T],
-    ) -> Result<(), DynError> {
-        let s = evaluate(&self.geometry, x, x_dot, x_ddot)?;
-        self.model.fill(&s, rows)
-    }
-}
-
-/// For `aras-ident` and the design alike: task coordinates `X = [φ, γ]`
-/// and their rates in, the 2 × n regressor (45)–(53) out.
-impl LinearModel for DynRegressor {
-    type Error = DynError;
-
-    fn coordinates(&self) -> usize {
-        2
-    }
-
-    fn outputs(&self) -> usize {
-        2
-    }
-
-    fn names(&self) -> Vec<String> {
-        self.model.names()
-    }
-
-    fn columns(&self) -> usize {
-        self.model.columns()
-    }
-
-    fn fill(
-        &self,
-        q: &[f64],
-        q_dot: &[f64],
-        q_ddot: &[f64],
-        rows: &mut [f64],
-    ) -> Result<(), DynError> {
-        let v = |a: &[f64]| Vector2::new(a[0], a[1]);
-        self.rows(&v(q), &v(q_dot), &v(q_ddot), rows)
-    }
-}
-
-impl Regressor for DynRegressor {
+/// The design differentiates `aras-dyn`'s [`TaskRegressor`] (the same
+/// [`aras_ident::LinearModel`] identification uses) by its dual-number rows.
+impl Regressor for TaskRegressor {
     fn fill_dual(
         &self,
         q: &[Dual],
         q_dot: &[Dual],
         q_ddot: &[Dual],
         rows: &mut [Dual],
-    ) -> Result<(), DynError> {
+    ) -> Result<(), RegressorError> {
         let v = |a: &[Dual]| Vector2::new(a[0], a[1]);
-        self.rows(&v(q), &v(q_dot), &v(q_ddot), rows)
+        self.fill_rows(&v(q), &v(q_dot), &v(q_ddot), rows)
     }
 }
 
@@ -200,12 +120,13 @@ impl FourierTrajectory {
 mod tests {
     use super::*;
     use crate::test_support::fourier as traj;
+    use aras_ident::LinearModel;
 
     /// The adapter gives exactly the model's own regressor, in values and
     /// in the real part of its dual rows.
     #[test]
     fn adapter_matches_model() {
-        let r = DynRegressor::aras_diamond().unwrap();
+        let r = TaskRegressor::aras_diamond().unwrap();
         assert_eq!(r.columns(), 42);
         let (x, xd, xdd) = (
             Vector2::new(1.4, 1.0),

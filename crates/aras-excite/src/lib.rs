@@ -54,8 +54,9 @@
 //!   [`design_with_progress`]).
 //! * `serde`/`serde_json`: the trajectory file format; `thiserror`: errors.
 //! * With the feature `aras-diamond` only, `aras-kin` and `aras-dyn`: the
-//!   robot's regressor (`DynRegressor`), the simulator's `Trajectory`
-//!   trait for [`FourierTrajectory`], and motor-space samples (`MotorRow`).
+//!   robot's regressor (`aras_dyn::TaskRegressor`) as a [`Regressor`], the
+//!   simulator's `Trajectory` trait for [`FourierTrajectory`], and
+//!   motor-space samples (`MotorRow`).
 
 #![warn(missing_docs)]
 
@@ -70,7 +71,7 @@ mod param;
 mod regressor;
 
 #[cfg(feature = "aras-diamond")]
-pub use aras_diamond::{DynRegressor, MotorRow};
+pub use aras_diamond::MotorRow;
 pub use constraints::{DEFAULT_MAX_ACCEL_DEG, Limits, Margins};
 pub use criterion::{Assessment, Criterion};
 pub use design::{

@@ -15,11 +15,12 @@ mod test_support;
 
 use std::sync::OnceLock;
 
-use aras_excite::{Design, DesignSettings, DynRegressor, Margins, assess, design, random_feasible};
+use aras_dyn::TaskRegressor;
+use aras_excite::{Design, DesignSettings, Margins, assess, design, random_feasible};
 use nalgebra::DMatrix;
 
 struct Case {
-    reg: DynRegressor,
+    reg: TaskRegressor,
     e: DMatrix<f64>,
     settings: DesignSettings,
     /// The default design (8 starts, seed 1).
@@ -29,7 +30,7 @@ struct Case {
 fn case() -> &'static Case {
     static C: OnceLock<Case> = OnceLock::new();
     C.get_or_init(|| {
-        let reg = DynRegressor::aras_diamond().unwrap();
+        let reg = TaskRegressor::aras_diamond().unwrap();
         let e = test_support::base_projection(&reg, 400, 7);
         let settings = DesignSettings::default();
         let default = design(&reg, &e, &settings).unwrap();

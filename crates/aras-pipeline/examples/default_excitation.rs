@@ -15,7 +15,8 @@
 use std::path::PathBuf;
 
 use aras_dyn::Params;
-use aras_excite::{DesignSettings, DynRegressor, design};
+use aras_dyn::TaskRegressor;
+use aras_excite::{DesignSettings, design};
 use aras_kin::Workspace;
 use aras_pipeline::robot::{base_parameters, base_projection};
 
@@ -34,7 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         seed: SEED,
         ..DesignSettings::default()
     };
-    let d = design(&DynRegressor::new(model, geometry), &e, &settings)?;
+    let d = design(&TaskRegressor::new(model, geometry), &e, &settings)?;
     let out = std::env::args()
         .nth(1)
         .map(PathBuf::from)

@@ -3,9 +3,9 @@
 //! The robot-specific half of identification, on top of the robot-agnostic
 //! `aras-ident`:
 //!
-//! 1. [`robot`]: the ARAS-Diamond's regressor (`aras-dyn`'s model seen
-//!    through `aras-kin`'s kinematics) as an [`aras_ident::LinearModel`]
-//!    ([`TaskRegressor`]), stacked regressors from `aras-signal`'s
+//! 1. [`robot`]: with the ARAS-Diamond's regressor as an
+//!    [`aras_ident::LinearModel`] ([`TaskRegressor`], `aras-dyn`'s with its
+//!    feature `ident`), stacked regressors from `aras-signal`'s
 //!    samples, parallel filtering (`docs/processing.md`), the velocity-reversal
 //!    mask, the SDP layout of the four links and the way back into
 //!    `aras_dyn::Params`.
@@ -25,16 +25,14 @@
 //!   estimation this crate wires together.
 //! * `faer`: the stacked regressors handed to `aras-ident`; `nalgebra`: the
 //!   robot crates' small vectors; `rayon`: parallel filtering and
-//!   candidate fits; `serde`: results serialise for reports; `thiserror`:
-//!   the regressor's error type.
+//!   candidate fits; `serde`: results serialise for reports.
 #![warn(missing_docs)]
 // Dense linear algebra on small fixed matrices reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
 pub mod diagnose;
 pub mod prepare;
-mod regressor;
 pub mod robot;
 pub mod streaming;
 
-pub use regressor::{RegressorError, TaskRegressor};
+pub use aras_dyn::{RegressorError, TaskRegressor};

@@ -14,9 +14,10 @@ mod common;
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
+use aras_dyn::TaskRegressor;
 use aras_dyn::sim::{SimConfig, SimLog, simulate, write_log};
 use aras_dyn::{Model, Params, Sinusoid, Trajectory};
-use aras_excite::{DesignSettings, DynRegressor, FourierTrajectory, assess, random_feasible};
+use aras_excite::{DesignSettings, FourierTrajectory, assess, random_feasible};
 use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 use aras_kin::{Geometry, Workspace};
@@ -425,7 +426,7 @@ fn design_sigma_percent_below_5_for_parameters_above_1_percent_of_torque() {
 #[test]
 fn designed_excitation_2_5x_below_median_of_100_random_at_the_limits() {
     let s = setup();
-    let reg = DynRegressor::new(s.model.clone(), s.geometry);
+    let reg = TaskRegressor::new(s.model.clone(), s.geometry);
     let e = base_projection(&s.base);
     let settings = DesignSettings::default();
     let designed = assess(&reg, &e, &s.excitation, settings.criterion_points)
@@ -457,7 +458,7 @@ fn designed_excitation_2_5x_below_median_of_100_random_at_the_limits() {
 #[test]
 fn fixture_is_what_the_design_produces() {
     let s = setup();
-    let reg = DynRegressor::new(s.model.clone(), s.geometry);
+    let reg = TaskRegressor::new(s.model.clone(), s.geometry);
     let d = aras_excite::design(
         &reg,
         &base_projection(&s.base),

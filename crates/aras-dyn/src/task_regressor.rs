@@ -1,10 +1,12 @@
-//! The ARAS-Diamond's regressor as an [`aras_ident::LinearModel`].
+//! The ARAS-Diamond's regressor as an [`aras_ident::LinearModel`] (feature
+//! `ident`): the one adapter identification and excitation design share.
 
-use aras_dyn::{DynError, Model};
 use aras_ident::LinearModel;
-use aras_kin::{Geometry, KinError};
+use aras_kin::{Geometry, KinError, Scalar};
 use nalgebra::Vector2;
 use thiserror::Error;
+
+use crate::{DynError, Model};
 
 /// An `aras-dyn` [`Model`] seen through the kinematics of a [`Geometry`]:
 /// task coordinates `q = X = [φ, γ]` (rad) and their rates in, the 2 × n
@@ -22,6 +24,31 @@ impl TaskRegressor {
     /// Wraps a model and the geometry its kinematics use.
     pub fn new(model: Model, geometry: Geometry) -> Self {
         Self { model, geometry }
+    }
+
+    /// The paper's model (rigid links, friction, elasticity) for the
+    /// ARAS-Diamond with gravity `[0, −9.81, 0]` m/s² (`docs/model.md`,
+    /// "Default robot").
+    pub fn aras_diamond() -> Result<Self, DynError> {
+        Ok(Self::new(
+            Model::paper(nalgebra::Vector3::new(0.0, -9.81, 0.0))?,
+            Geometry::aras_diamond(),
+        ))
+    }
+
+    /// The regressor rows at `(X, Ẋ, Ẍ)` in any [`Scalar`] (dual numbers
+    /// give their exact derivatives; `sign(θ̇)` columns have zero
+    /// derivative): what [`LinearModel::fill`] computes in `f64`.
+    pub fn fill_rows<T: Scalar>(
+        &self,
+        x: &Vector2<T>,
+        x_dot: &Vector2<T>,
+        x_ddot: &Vector2<T>,
+        rows: &mut [T],
+    ) -> Result<(), RegressorError> {
+        let s = aras_kin::evaluate(&self.geometry, x, x_dot, x_ddot)
+            .map_err(RegressorError::Kinematics)?;
+        self.model.fill(&s, rows).map_err(RegressorError::Model)
     }
 
     /// The wrapped model.
@@ -74,13 +101,7 @@ impl LinearModel for TaskRegressor {
         q_ddot: &[f64],
         rows: &mut [f64],
     ) -> Result<(), RegressorError> {
-        let s = aras_kin::evaluate(
-            &self.geometry,
-            &Vector2::new(q[0], q[1]),
-            &Vector2::new(q_dot[0], q_dot[1]),
-            &Vector2::new(q_ddot[0], q_ddot[1]),
-        )
-        .map_err(RegressorError::Kinematics)?;
-        self.model.fill(&s, rows).map_err(RegressorError::Model)
+        let v = |a: &[f64]| Vector2::new(a[0], a[1]);
+        self.fill_rows(&v(q), &v(q_dot), &v(q_ddot), rows)
     }
 }
