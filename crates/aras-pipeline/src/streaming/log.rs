@@ -601,7 +601,6 @@ fn accumulate_processed(
     )?;
     let edge = (log.len() - prepared.n()) / 2;
     let n = prepared.n();
-    let guard = prepared.reach(options.reversal_reach)?;
     if prepared.filter.is_some() && out.gain.is_none() {
         out.gain = Some(prepared.noise_gain()?);
     }
@@ -618,12 +617,7 @@ fn accumulate_processed(
     if i1 == i0 {
         return Ok(0);
     }
-    let keep = reversal_mask(
-        &prepared.processed.samples.theta_dot,
-        options.min_speed,
-        guard,
-        prepared.periodic(),
-    )?;
+    let keep = prepared.keep_mask(options.min_speed, options.reversal_reach)?;
     let st = &prepared.stacked;
     let wb = &st.w;
     for g in 0..2 {
