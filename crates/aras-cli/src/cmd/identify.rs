@@ -14,9 +14,8 @@ use crate::robot::{model_with_effects, nominal, parse_effect};
 use crate::stages::Stages;
 
 /// The truth stored by the simulator in a sidecar (`truth.params`), if any.
-pub fn sidecar_truth(path: &std::path::Path) -> Option<aras_dyn::Params> {
-    let truth = aras_log::Sidecar::read(path).ok()?.truth?;
-    aras_dyn::Params::from_value(truth.get("params")?).ok()
+pub fn sidecar_truth(sidecar: &aras_log::Sidecar) -> Option<aras_dyn::Params> {
+    aras_dyn::Params::from_value(sidecar.truth.as_ref()?.get("params")?).ok()
 }
 
 /// Log size above which `--streaming auto` streams: 256 MB, about 2 M rows
@@ -96,8 +95,8 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         .run("read log", |_| read_log(&args.data, &read))
         .with_context(|| format!("reading {}", args.data.display()))?;
     super::print_warnings(&args.data, &log.warnings);
-    let sidecar = args.log.sidecar_of(&args.data);
-    let truth = sidecar_truth(&sidecar);
+    // The sidecar the reader took (`--sidecar`, else LOG.json beside the log).
+    let truth = sidecar_truth(&log.sidecar);
     let base = stages.run("base parameters (58)", |_| {
         base_parameters(&model, &geometry, &cfg)
     })?;
@@ -151,8 +150,10 @@ fn run_streaming(args: &IdentifyArgs) -> Result<()> {
         model,
         geometry,
     } = setup(args)?;
-    let sidecar = args.log.sidecar_of(&args.data);
-    let truth = sidecar_truth(&sidecar);
+    // The streaming reader keeps no sidecar for us: read it for its truth.
+    let truth = aras_log::Sidecar::read(&args.log.sidecar_of(&args.data))
+        .ok()
+        .and_then(|s| sidecar_truth(&s));
     let base = stages.run("base parameters (58)", |_| {
         base_parameters(&model, &geometry, &cfg)
     })?;
