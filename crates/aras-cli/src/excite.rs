@@ -7,7 +7,6 @@ use aras_dyn::TaskRegressor;
 use aras_excite::{Criterion, Design, DesignProgress, DesignSettings, Limits};
 use aras_ident::BaseParameters;
 use aras_kin::Workspace;
-use aras_pipeline::robot::base_projection;
 use indicatif::ProgressBar;
 use nalgebra::Vector2;
 
@@ -52,6 +51,11 @@ pub fn design(
     let progress = |p: DesignProgress| {
         spinner.set_message(format!("{stage}: {}/{} starts", p.done, p.total));
     };
-    aras_excite::design_with_progress(&reg, &base_projection(base), &settings, &progress)
-        .context("designing the excitation trajectory")
+    aras_excite::design_with_progress(
+        &reg,
+        &aras_excite::base_projection(base),
+        &settings,
+        &progress,
+    )
+    .context("designing the excitation trajectory")
 }

@@ -23,6 +23,8 @@
 use faer::Mat;
 use nalgebra::{DMatrix, Vector2};
 
+use aras_ident::BaseParameters;
+
 use crate::error::ExciteError;
 use crate::param::Grid;
 use crate::regressor::Regressor;
@@ -64,6 +66,18 @@ impl Assessment {
 /// Number of dual directions: `(φ, γ, φ̇, γ̇, φ̈, γ̈)`.
 const DIRS: usize = 6;
 type D6 = crate::regressor::Dual;
+
+/// The base projection `E` (`n × b`, `W_b = W E`: column `j` selects the
+/// standard column of base parameter `j`) of a base-parameter analysis, as
+/// the dense matrix [`design`](crate::design) and [`assess`](crate::assess)
+/// take.
+pub fn base_projection(base: &BaseParameters) -> DMatrix<f64> {
+    let mut e = DMatrix::zeros(base.n_standard(), base.n_base());
+    for (j, &c) in base.independent().iter().enumerate() {
+        e[(c, j)] = 1.0;
+    }
+    e
+}
 
 /// Checks the shape of a base projection against a regressor.
 pub(crate) fn check_projection<R: Regressor>(

@@ -73,7 +73,7 @@ mod regressor;
 #[cfg(feature = "aras-diamond")]
 pub use aras_diamond::MotorRow;
 pub use constraints::{DEFAULT_MAX_ACCEL_DEG, Limits, Margins};
-pub use criterion::{Assessment, Criterion};
+pub use criterion::{Assessment, Criterion, base_projection};
 pub use design::{
     Design, DesignProgress, DesignSettings, StartReport, assess, design, design_with_progress,
     random_feasible,

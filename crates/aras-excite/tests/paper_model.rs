@@ -1,6 +1,6 @@
 //! The design on the paper's 42-parameter model (aras-dyn), with a base
 //! projection from the test-only QR helper (`src/test_support.rs`; the
-//! product uses `aras_ident::robot::base_projection`, whose column scaling
+//! product uses `aras_excite::base_projection`, whose column scaling
 //! gives slightly different condition numbers, see docs/excitation.md).
 //!
 //! The acceptance of the design: feasible on a finer grid, within 5 % of

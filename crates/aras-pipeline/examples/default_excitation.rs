@@ -18,7 +18,7 @@ use aras_dyn::Params;
 use aras_dyn::TaskRegressor;
 use aras_excite::{DesignSettings, design};
 use aras_kin::Workspace;
-use aras_pipeline::robot::{base_parameters, base_projection};
+use aras_pipeline::robot::base_parameters;
 
 /// Samples of the base analysis (the acceptance tests use the same number).
 pub const BASE_SAMPLES: usize = 400;
@@ -30,7 +30,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let model = truth.model()?;
     let geometry = truth.geometry()?;
     let base = base_parameters(&model, &geometry, &Workspace::paper(), BASE_SAMPLES)?;
-    let e = base_projection(&base);
+    let e = aras_excite::base_projection(&base);
     let settings = DesignSettings {
         seed: SEED,
         ..DesignSettings::default()

@@ -140,17 +140,6 @@ pub fn base_parameters(
     BaseParameters::from_regressor(w, &model.names(), DEFAULT_RANK_TOLERANCE)
 }
 
-/// The base projection `E` (`n × b`, `W_b = W E`: column `j` selects the
-/// standard column of base parameter `j`) as a dense matrix, the form
-/// `aras-excite`'s design takes.
-pub fn base_projection(base: &BaseParameters) -> nalgebra::DMatrix<f64> {
-    let mut e = nalgebra::DMatrix::zeros(base.n_standard(), base.n_base());
-    for (j, &c) in base.independent().iter().enumerate() {
-        e[(c, j)] = 1.0;
-    }
-    e
-}
-
 /// What the zero-phase filter is applied to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FilterMode {

@@ -22,7 +22,6 @@ use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 use aras_kin::{Geometry, Workspace};
 use aras_log::{ReadOptions, read_log};
-use aras_pipeline::robot::base_projection;
 use aras_pipeline::robot::{
     FilterMode, Stacked, base_parameters, consistent_problem, filter, filter_reach, keep_rows,
     noise_gain, params_from_solution, reversal_mask, stack,
@@ -427,7 +426,7 @@ fn design_sigma_percent_below_5_for_parameters_above_1_percent_of_torque() {
 fn designed_excitation_2_5x_below_median_of_100_random_at_the_limits() {
     let s = setup();
     let reg = TaskRegressor::new(s.model.clone(), s.geometry);
-    let e = base_projection(&s.base);
+    let e = aras_excite::base_projection(&s.base);
     let settings = DesignSettings::default();
     let designed = assess(&reg, &e, &s.excitation, settings.criterion_points)
         .unwrap()
@@ -461,7 +460,7 @@ fn fixture_is_what_the_design_produces() {
     let reg = TaskRegressor::new(s.model.clone(), s.geometry);
     let d = aras_excite::design(
         &reg,
-        &base_projection(&s.base),
+        &aras_excite::base_projection(&s.base),
         &DesignSettings {
             seed: 1,
             ..DesignSettings::default()

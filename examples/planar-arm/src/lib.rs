@@ -32,7 +32,7 @@ use aras_ident::{BaseParameters, ConsistentLs, LinearModel, LinkLayout, ReducedL
 use aras_log::ReadOptions;
 use aras_signal::{Bandwidth, JointCoordinates, OutputRows, PeriodSource, ProcessOptions};
 use faer::Mat;
-use nalgebra::{DMatrix, Vector2};
+use nalgebra::Vector2;
 
 use num_dual::DualNum;
 
@@ -375,13 +375,9 @@ pub fn run(settings: &Settings) -> Result<Outcome, Box<dyn std::error::Error>> {
 
     // 1. Base parameters and the excitation designed on them.
     let base = base_parameters()?;
-    let mut e = DMatrix::zeros(base.n_standard(), base.n_base());
-    for (j, &c) in base.independent().iter().enumerate() {
-        e[(c, j)] = 1.0;
-    }
     let design = aras_excite::design(
         &model,
-        &e,
+        &aras_excite::base_projection(&base),
         &DesignSettings {
             harmonics: settings.harmonics,
             omega_f: std::f64::consts::TAU / settings.period_s,
