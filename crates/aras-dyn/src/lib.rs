@@ -79,14 +79,13 @@ pub mod sim;
 mod task_regressor;
 mod trajectory;
 
+pub use aras_core::Inertia;
 pub use dynamics::Dynamics;
 pub use effects::{Effect, EffectId, UnknownEffect};
 pub use error::{DynError, ParamError, SimError};
 pub use lagrange::{LagrangeTerms, lagrange_terms};
 pub use model::Model;
-pub use params::{
-    Cogging, DEFAULT_GRAVITY, Extras, Friction, LinkParams, MAX_COGGING_ORDER, Params, Stribeck,
-};
+pub use params::{Cogging, DEFAULT_GRAVITY, Extras, Friction, MAX_COGGING_ORDER, Params, Stribeck};
 pub use regressor::Sign;
 pub use robots::{ArcLink, PointMass, arc_robot};
 #[cfg(feature = "ident")]

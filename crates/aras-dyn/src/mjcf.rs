@@ -60,7 +60,7 @@ use std::fmt::Write as _;
 use nalgebra::{Matrix3, SymmetricEigen, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::{EffectId, LinkParams, ParamError, Params};
+use crate::{EffectId, Inertia, ParamError, Params};
 
 /// Words in the opening comment of every exported file: how a tool tells
 /// a file it wrote (and may replace) from someone else's MJCF.
@@ -174,7 +174,7 @@ pub struct Inertial {
 impl Inertial {
     /// The inertial of a physically consistent link (the inverse of
     /// (28)); `link` (1–4) names it in errors.
-    pub fn from_link(link: usize, l: &LinkParams) -> Result<Self, MjcfError> {
+    pub fn from_link(link: usize, l: &Inertia) -> Result<Self, MjcfError> {
         let bad = |reason: String| MjcfError::NotPhysical { link, reason };
         if l.mass.is_nan() || l.mass <= 0.0 {
             return Err(bad(format!("its mass {} kg is not positive", l.mass)));
@@ -209,8 +209,8 @@ impl Inertial {
 
     /// Back to the standard parameters by the parallel-axis theorem (28):
     /// `I_O = I_G + m(|ρ|²1 − ρρᵀ)`, `h = mρ`.
-    pub fn to_link(&self) -> LinkParams {
-        LinkParams::from_com(self.mass, &self.inertia_com, &self.pos)
+    pub fn to_link(&self) -> Inertia {
+        Inertia::from_com(self.mass, &self.inertia_com, &self.pos)
     }
 }
 
@@ -592,7 +592,7 @@ fn inertial(w: &mut String, indent: &str, i: &Inertial) {
 /// Visual-only capsules along a link's arc (from its joint axis `z`
 /// towards `x`, spanning `span`) at the radius of its centre of mass
 /// (`fallback` if that is zero): no mass, no contacts.
-fn arc(w: &mut String, indent: &str, l: &LinkParams, span: f64, fallback: f64) {
+fn arc(w: &mut String, indent: &str, l: &Inertia, span: f64, fallback: f64) {
     const SEGMENTS: usize = 6;
     let rho = if l.mass > 0.0 {
         (l.h / l.mass).norm()

@@ -10,105 +10,19 @@
 use std::path::Path;
 
 use aras_kin::Geometry;
-use nalgebra::{Matrix3, Matrix4, Vector3};
+use nalgebra::{Matrix4, Vector3};
 use serde::ser::SerializeMap;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use serde_json::Value;
 
-use crate::EffectId;
 use crate::ParamError;
 use crate::json::{Obj, finite, parse};
-
-/// Inertial parameters of one link, in its frame, about the RCM.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct LinkParams {
-    /// `I[0,0]` (kg·m²).
-    pub ixx: f64,
-    /// `I[0,1]` (kg·m²), a tensor entry: `−Σ m x y`.
-    pub ixy: f64,
-    /// `I[0,2]` (kg·m²).
-    pub ixz: f64,
-    /// `I[1,1]` (kg·m²).
-    pub iyy: f64,
-    /// `I[1,2]` (kg·m²).
-    pub iyz: f64,
-    /// `I[2,2]` (kg·m²).
-    pub izz: f64,
-    /// First moment of mass `h = m ρ` (kg·m), `ρ` the centre of mass.
-    pub h: Vector3<f64>,
-    /// Mass (kg); not in the dynamics, only for consistency checks.
-    pub mass: f64,
-}
+use crate::{EffectId, Inertia};
 
 /// JSON keys of a link, in file order (`mass` last).
 pub(crate) const LINK_KEYS: [&str; 10] = [
     "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz", "hx", "hy", "hz", "mass",
 ];
-
-impl LinkParams {
-    /// The inertia tensor about the RCM (symmetric 3×3, link frame).
-    pub fn inertia(&self) -> Matrix3<f64> {
-        Matrix3::new(
-            self.ixx, self.ixy, self.ixz, self.ixy, self.iyy, self.iyz, self.ixz, self.iyz,
-            self.izz,
-        )
-    }
-
-    /// Sets the six entries from a symmetric tensor (upper triangle read).
-    pub fn set_inertia(&mut self, i: &Matrix3<f64>) {
-        self.ixx = i[(0, 0)];
-        self.ixy = i[(0, 1)];
-        self.ixz = i[(0, 2)];
-        self.iyy = i[(1, 1)];
-        self.iyz = i[(1, 2)];
-        self.izz = i[(2, 2)];
-    }
-
-    /// The 9 standard parameters `[Ixx Ixy Ixz Iyy Iyz Izz hx hy hz]`, (46).
-    pub fn standard(&self) -> [f64; 9] {
-        [
-            self.ixx, self.ixy, self.ixz, self.iyy, self.iyz, self.izz, self.h.x, self.h.y,
-            self.h.z,
-        ]
-    }
-
-    /// Sets the 9 standard parameters (mass unchanged).
-    pub fn set_standard(&mut self, v: &[f64; 9]) {
-        [
-            self.ixx, self.ixy, self.ixz, self.iyy, self.iyz, self.izz, self.h.x, self.h.y,
-            self.h.z,
-        ] = *v;
-    }
-
-    /// Pseudo-inertia `𝒥 = [[½tr(I)·1 − I, h], [hᵀ, m]]` (Wensing et al.
-    /// 2017): `𝒥 ≻ 0` exactly when the link is physically consistent
-    /// (positive mass, positive-definite COM inertia, triangle inequality),
-    /// (67)–(69); see `docs/model.md`, "Physical consistency".
-    pub fn pseudo_inertia(&self) -> Matrix4<f64> {
-        let i = self.inertia();
-        let s = Matrix3::identity() * (0.5 * i.trace()) - i;
-        let mut p = Matrix4::zeros();
-        p.fixed_view_mut::<3, 3>(0, 0).copy_from(&s);
-        p.fixed_view_mut::<3, 1>(0, 3).copy_from(&self.h);
-        p.fixed_view_mut::<1, 3>(3, 0)
-            .copy_from(&self.h.transpose());
-        p[(3, 3)] = self.mass;
-        p
-    }
-
-    /// The inertia about the centre of mass, `I_G = I_O − m[ρ]×ᵀ[ρ]×`
-    /// (inverse of (28)); `None` if the mass is not positive.
-    pub fn inertia_about_com(&self) -> Option<Matrix3<f64>> {
-        if self.mass <= 0.0 {
-            return None;
-        }
-        let rho = self.h / self.mass;
-        Some(
-            self.inertia()
-                - (Matrix3::identity() * rho.norm_squared() - rho * rho.transpose()) * self.mass,
-        )
-    }
-}
 
 /// Viscous and Coulomb friction per actuator, (49).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -187,7 +101,7 @@ pub struct Params {
     /// Gravity in the base frame {0} (m/s²); default `[0, −9.81, 0]`.
     pub gravity: Vector3<f64>,
     /// Links 1–4 (paper numbering) at index 0–3.
-    pub links: [LinkParams; 4],
+    pub links: [Inertia; 4],
     /// Viscous + Coulomb friction (49).
     pub friction: Friction,
     /// Capstan elasticity `[Ke1, Ke2]` (N·m/rad), (50).
@@ -206,7 +120,7 @@ impl Params {
             alpha_deg,
             beta_deg,
             gravity: Vector3::from(DEFAULT_GRAVITY),
-            links: [LinkParams::default(); 4],
+            links: [Inertia::default(); 4],
             friction: Friction::default(),
             elasticity: [0.0; 2],
             extra: Extras::default(),
@@ -236,7 +150,7 @@ impl Params {
     }
 
     /// Pseudo-inertia of link `k` (1–4, paper numbering; index `k − 1`),
-    /// see [`LinkParams::pseudo_inertia`]. A link number outside 1–4 is a
+    /// see [`Inertia::pseudo_inertia`]. A link number outside 1–4 is a
     /// [`ParamError::Invalid`] (it used to panic: a caller's off-by-one
     /// must not abort a long identification run).
     pub fn pseudo_inertia(&self, k: usize) -> Result<Matrix4<f64>, ParamError> {
@@ -565,7 +479,7 @@ impl Serialize for Flat<'_> {
     }
 }
 
-struct Links<'a>(&'a [LinkParams; 4]);
+struct Links<'a>(&'a [Inertia; 4]);
 
 impl Serialize for Links<'_> {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {

@@ -3,28 +3,9 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::params::{DEFAULT_GRAVITY, Friction, LinkParams};
+use crate::Inertia;
+use crate::params::{DEFAULT_GRAVITY, Friction};
 use crate::{ParamError, Params};
-
-/// `m [ρ]×ᵀ [ρ]× = m (|ρ|² 1 − ρ ρᵀ)`: the parallel-axis shift (28).
-fn shift(mass: f64, rho: &Vector3<f64>) -> Matrix3<f64> {
-    (Matrix3::identity() * rho.norm_squared() - rho * rho.transpose()) * mass
-}
-
-impl LinkParams {
-    /// A link from its mass, its inertia about the centre of mass `I_G`
-    /// (link frame) and the centre of mass `ρ` (link frame, from the RCM),
-    /// by the parallel-axis theorem (28): `I_O = I_G + m[ρ]×ᵀ[ρ]×`, `h = mρ`.
-    pub fn from_com(mass: f64, inertia_com: &Matrix3<f64>, rho: &Vector3<f64>) -> Self {
-        let mut l = LinkParams {
-            h: rho * mass,
-            mass,
-            ..Default::default()
-        };
-        l.set_inertia(&(inertia_com + shift(mass, rho)));
-        l
-    }
-}
 
 /// One row of the CAD table (`docs/model.md`, "Default robot").
 struct CadRow {
@@ -75,7 +56,7 @@ impl Params {
             let (s, co) = c.angle_deg.to_radians().sin_cos();
             // Ry(q)·[0, 0, r] = [r sin q, 0, r cos q].
             let rho = Vector3::new(c.r * s, 0.0, c.r * co);
-            LinkParams::from_com(c.mass, &Matrix3::from_diagonal(&Vector3::from(c.ig)), &rho)
+            Inertia::from_com(c.mass, &Matrix3::from_diagonal(&Vector3::from(c.ig)), &rho)
         });
         Self {
             alpha_deg: 45.0,
@@ -125,7 +106,7 @@ impl ArcLink {
     /// `Ixx = m r²(1 − (L/2 − sin 2L/4)/L)`, `Iyy = m r²`,
     /// `Izz = m r²(1 − (L/2 + sin 2L/4)/L)`, `Ixz = −m r² sin²L/(2L)`;
     /// each point mass adds `m(|p|² 1 − p pᵀ)` and `m p`.
-    pub fn link_params(&self, span: f64) -> LinkParams {
+    pub fn link_params(&self, span: f64) -> Inertia {
         let (m, r, l) = (self.arc_mass, self.arc_radius, span);
         let mr2 = m * r * r;
         let s2 = l / 2.0 - (2.0 * l).sin() / 4.0;
@@ -147,11 +128,11 @@ impl ArcLink {
         for p in &self.points {
             let (s, c) = p.angle.sin_cos();
             let pos = Vector3::new(p.radius * s, 0.0, p.radius * c);
-            i += shift(p.mass, &pos);
+            i += Inertia::point_mass(p.mass, &pos).inertia();
             h += pos * p.mass;
             mass += p.mass;
         }
-        let mut out = LinkParams {
+        let mut out = Inertia {
             h,
             mass,
             ..Default::default()

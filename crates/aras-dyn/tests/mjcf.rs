@@ -9,7 +9,7 @@
 use std::collections::HashMap;
 
 use aras_dyn::mjcf::{MjcfError, MjcfOptions, passive_hinge_angles, to_mjcf};
-use aras_dyn::{Cogging, LinkParams, Params};
+use aras_dyn::{Cogging, Inertia, Params};
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector2, Vector3};
 use proptest::prelude::*;
 
@@ -91,7 +91,7 @@ fn find<'a>(els: &'a [Element], name: &str, key: &str, value: &str) -> &'a Eleme
 }
 
 /// The body's inertial, back to the standard parameters by (28).
-fn read_link(els: &[Element], k: usize) -> LinkParams {
+fn read_link(els: &[Element], k: usize) -> Inertia {
     let body = format!("link{k}");
     let i = els
         .iter()
@@ -101,7 +101,7 @@ fn read_link(els: &[Element], k: usize) -> LinkParams {
     let mass: f64 = i.attrs["mass"].parse().unwrap();
     let f = numbers(&i.attrs["fullinertia"]);
     let ig = Matrix3::new(f[0], f[3], f[4], f[3], f[1], f[5], f[4], f[5], f[2]);
-    LinkParams::from_com(mass, &ig, &Vector3::new(pos[0], pos[1], pos[2]))
+    Inertia::from_com(mass, &ig, &Vector3::new(pos[0], pos[1], pos[2]))
 }
 
 fn assert_round_trip(p: &Params) {
@@ -289,7 +289,7 @@ fn bodies_mujoco_would_reject_are_refused_with_the_link() {
     let mut p = Params::aras_diamond();
     let l = &p.links[2];
     let rho = l.h / l.mass;
-    p.links[2] = LinkParams::from_com(
+    p.links[2] = Inertia::from_com(
         l.mass,
         &Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 3e-4)),
         &rho,
@@ -340,10 +340,10 @@ fn bodies_mujoco_would_reject_are_refused_with_the_link() {
 /// A physically consistent link: four point masses at random positions
 /// (their inertia about the COM is positive definite and obeys the
 /// triangle inequality strictly unless they are coplanar with the COM).
-fn point_mass_link() -> impl Strategy<Value = LinkParams> {
+fn point_mass_link() -> impl Strategy<Value = Inertia> {
     prop::collection::vec((0.01f64..0.5, -0.3f64..0.3, -0.3f64..0.3, -0.3f64..0.3), 4).prop_map(
         |pts| {
-            let mut l = LinkParams::default();
+            let mut l = Inertia::default();
             let mut i = Matrix3::zeros();
             for (m, x, y, z) in pts {
                 let r = Vector3::new(x, y, z);

@@ -39,6 +39,7 @@
 use std::fmt;
 use std::time::Instant;
 
+use aras_core::Inertia;
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
@@ -592,31 +593,29 @@ impl ConsistentLs {
         // 3. PSD: svec(T𝒥T − εI) ∈ S⁴₊ per link (upper triangle by columns,
         // off-diagonals × √2, as clarabel packs them).
         let r2 = std::f64::consts::SQRT_2;
+        let basis = pseudo_inertia_basis();
         let mut margins = Vec::with_capacity(nl);
         for (kk, l) in self.links.iter().enumerate() {
-            let [ixx, ixy, ixz, iyy, iyz, izz] = l.inertia;
-            let [hx, hy, hz] = l.first_moment;
             let len = lens[kk];
             let eps = s.psd_margin * l.mass_reference * len * len;
             margins.push(eps);
-            // Entries of T𝒥T as (coefficient, variable) lists, in svec order.
-            let entries: [(&[(f64, usize)], bool); 10] = [
-                (&[(-0.5, ixx), (0.5, iyy), (0.5, izz)], true), // (0,0)
-                (&[(-r2, ixy)], false),                         // (0,1)
-                (&[(0.5, ixx), (-0.5, iyy), (0.5, izz)], true), // (1,1)
-                (&[(-r2, ixz)], false),                         // (0,2)
-                (&[(-r2, iyz)], false),                         // (1,2)
-                (&[(0.5, ixx), (0.5, iyy), (-0.5, izz)], true), // (2,2)
-                (&[(r2 * len, hx)], false),                     // (0,3)
-                (&[(r2 * len, hy)], false),                     // (1,3)
-                (&[(r2 * len, hz)], false),                     // (2,3)
-                (&[(len * len, n + kk)], true),                 // (3,3)
-            ];
-            for (terms, diag) in entries {
-                for &(c, v) in terms {
-                    push(row, v, -c);
+            // The variable multiplying input `p` of `𝒥` (nine standard
+            // parameters, then the mass).
+            let var = |p: usize| match p {
+                0..6 => l.inertia[p],
+                6..9 => l.first_moment[p - 6],
+                _ => n + kk,
+            };
+            for (r, c) in SVEC4 {
+                let scale = if r == 3 { len } else { 1.0 } * if c == 3 { len } else { 1.0 };
+                let packing = if r == c { 1.0 } else { r2 };
+                for (p, unit) in basis.iter().enumerate() {
+                    let coefficient = unit[c][r] * scale;
+                    if coefficient != 0.0 {
+                        push(row, var(p), -(coefficient * packing));
+                    }
                 }
-                rhs.push(if diag { -eps } else { 0.0 });
+                rhs.push(if r == c { -eps } else { 0.0 });
                 row += 1;
             }
             cones.push(SupportedConeT::PSDTriangleConeT(4));
@@ -737,6 +736,40 @@ fn solver_status(s: SolverStatus) -> crate::SolverStatus {
     }
 }
 
+/// Upper-triangle entries `(row, column)` of a symmetric 4×4 matrix, by
+/// columns: the order clarabel packs a PSD cone's `svec` in.
+const SVEC4: [(usize, usize); 10] = [
+    (0, 0),
+    (0, 1),
+    (1, 1),
+    (0, 2),
+    (1, 2),
+    (2, 2),
+    (0, 3),
+    (1, 3),
+    (2, 3),
+    (3, 3),
+];
+
+/// `𝒥` of each unit input (nine standard parameters, then the mass),
+/// column-major: `𝒥` is linear in them, so these are the coefficients of
+/// the constraint, taken from [`Inertia::pseudo_inertia`] rather than
+/// written out a second time.
+fn pseudo_inertia_basis() -> [[[f64; 4]; 4]; 10] {
+    std::array::from_fn(|p| {
+        let mut standard = [0.0; 9];
+        let mass = if p < 9 {
+            standard[p] = 1.0;
+            0.0
+        } else {
+            1.0
+        };
+        Inertia::from_standard(&standard, mass)
+            .pseudo_inertia()
+            .into()
+    })
+}
+
 /// The pseudo-inertia `𝒥` of a link and its scaled form `T𝒥T`.
 fn pseudo_inertia(
     beta: &[f64],
@@ -745,14 +778,10 @@ fn pseudo_inertia(
     len: f64,
 ) -> ([[f64; 4]; 4], [[f64; 4]; 4]) {
     let [ixx, ixy, ixz, iyy, iyz, izz] = l.inertia.map(|i| beta[i]);
-    let h = l.first_moment.map(|i| beta[i]);
-    let tr = 0.5 * (ixx + iyy + izz);
-    let j = [
-        [tr - ixx, -ixy, -ixz, h[0]],
-        [-ixy, tr - iyy, -iyz, h[1]],
-        [-ixz, -iyz, tr - izz, h[2]],
-        [h[0], h[1], h[2], m],
-    ];
+    let [hx, hy, hz] = l.first_moment.map(|i| beta[i]);
+    let j: [[f64; 4]; 4] = Inertia::from_standard(&[ixx, ixy, ixz, iyy, iyz, izz, hx, hy, hz], m)
+        .pseudo_inertia()
+        .into();
     let mut js = j;
     for i in 0..3 {
         js[i][3] *= len;

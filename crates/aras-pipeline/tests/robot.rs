@@ -274,7 +274,7 @@ mod reversal_mask_sweep {
 }
 
 /// The pseudo-inertia has two homes that cannot share code: the model's
-/// (`aras_dyn::LinkParams::pseudo_inertia`, from a link's parameters) and the
+/// (`aras_dyn::Inertia::pseudo_inertia`, from a link's parameters) and the
 /// robot-agnostic SDP's (`aras_ident`, from a parameter vector and a
 /// `LinkLayout`, as its PSD constraint (67)–(69) needs). They must agree:
 /// the smallest eigenvalue of every link, for the default robot and for

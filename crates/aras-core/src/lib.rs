@@ -1,0 +1,26 @@
+//! The value types every ARAS crate speaks, with no robot in them.
+//!
+//! * [`Motion`]: position, rate and acceleration of two coordinates at one
+//!   instant — a task pose `X = [φ, γ]` with `Ẋ, Ẍ`, or joint angles
+//!   `θ, θ̇, θ̈`. Trajectories return it, kinematics map it between joint
+//!   and task space, processing hands it to the caller's coordinate map.
+//! * [`Inertia`]: a rigid link's inertial parameters about its pivot, and
+//!   the pseudo-inertia `𝒥` whose positive (semi)definiteness is physical
+//!   consistency (67)–(69). The model builds its dynamics from it and the
+//!   physically consistent identification constrains it.
+//!
+//! They live here, apart from the kinematics and the model, so that the
+//! robot-agnostic crates (processing, identification, excitation design)
+//! share them without depending on ARAS-Diamond.
+//!
+//! # Dependencies
+//!
+//! * `nalgebra`: the small fixed-size vectors and matrices.
+
+#![warn(missing_docs)]
+
+mod inertia;
+mod motion;
+
+pub use inertia::Inertia;
+pub use motion::Motion;
