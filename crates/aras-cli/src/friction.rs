@@ -7,7 +7,7 @@
 
 use anyhow::{Context, Result, bail};
 use aras_friction::{
-    CoulombViscous, Dahl, FrictionModel, JointLog, LuGre, Motion, Separable, Stribeck,
+    CoulombViscous, Dahl, FrictionModel, JointLog, LuGre, Separable, Stribeck, Track,
     effects::{Effect, EffectValue, LibrarySettings, Profile, library, residual_profiles},
     fit::{
         Estimate, FitSettings, FitStatus, Fitted, Metrics, Problem, estimates_with_extra,
@@ -124,7 +124,7 @@ pub enum AnyModel {
 impl AnyModel {
     /// Prediction along a log.
     pub fn predict(&self, log: &JointLog) -> Result<Vec<f64>> {
-        let m = Motion::new(&log.t, &log.q, &log.dq)?;
+        let m = Track::new(&log.t, &log.q, &log.dq)?;
         Ok(match self {
             AnyModel::CoulombViscous(x) => x.predict(&m),
             AnyModel::Stribeck(x) => x.predict(&m),
@@ -387,7 +387,7 @@ fn predict_with_effects(
 
 /// Columns of a separable model at its fitted structure, on one log.
 fn base_columns<M: Separable>(m: &M, log: &JointLog) -> Result<Vec<Vec<f64>>> {
-    let motion = Motion::new(&log.t, &log.q, &log.dq)?;
+    let motion = Track::new(&log.t, &log.q, &log.dq)?;
     Ok(M::columns(&m.structure(), &motion))
 }
 
@@ -437,9 +437,9 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
 ) -> Result<(DiagnosisResult, Option<Refined>)> {
     let effects = library(train, &settings.library);
     let logs: Vec<&JointLog> = std::iter::once(train).chain(vals).collect();
-    let motions: Vec<Motion> = logs
+    let motions: Vec<Track> = logs
         .iter()
-        .map(|l| Motion::new(&l.t, &l.q, &l.dq))
+        .map(|l| Track::new(&l.t, &l.q, &l.dq))
         .collect::<Result<_, _>>()?;
     // Every log's prediction, base columns and candidate columns are
     // independent: computed in parallel (the state models integrate a
@@ -685,7 +685,7 @@ fn result<M: Separable + Sync>(f: &Fitted<M>, vals: &[JointLog]) -> Result<Model
     let validation = vals
         .par_iter()
         .map(|v| {
-            let m = Motion::new(&v.t, &v.q, &v.dq)?;
+            let m = Track::new(&v.t, &v.q, &v.dq)?;
             Ok(metrics(&v.tau, &f.model.predict(&m)))
         })
         .collect::<Result<Vec<_>>>()?;
@@ -706,8 +706,8 @@ pub fn analyse(
     vals: &[JointLog],
     settings: &FrictionSettings,
 ) -> Result<FrictionRun> {
-    let m = Motion::new(&train.t, &train.q, &train.dq)
-        .with_context(|| format!("log {}", train.name))?;
+    let m =
+        Track::new(&train.t, &train.q, &train.dq).with_context(|| format!("log {}", train.name))?;
     let fs = &settings.fit;
     let tau = &train.tau;
     let ((cv, st), dahl) = rayon::join(

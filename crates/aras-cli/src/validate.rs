@@ -180,11 +180,11 @@ fn workspace_box(cfg: &Config) -> ([f64; 2], [f64; 2]) {
 
 /// Motor-space mass matrix `J⁻ᵀ M J⁻¹` (80) at pose `x`.
 fn mass_motor(dy: &Dynamics, x: &[f64; 2]) -> Result<[[f64; 2]; 2], aras_dyn::DynError> {
-    let s = dy.sample(
-        &Vector2::new(x[0], x[1]),
-        &Vector2::zeros(),
-        &Vector2::zeros(),
-    )?;
+    let s = dy.sample(&aras_kin::Motion::new(
+        Vector2::new(x[0], x[1]),
+        Vector2::zeros(),
+        Vector2::zeros(),
+    ))?;
     let m = dy.mass_matrix_motor(&s);
     Ok([[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]])
 }

@@ -6,26 +6,13 @@ use std::hint::black_box;
 
 use aras_dyn::sim::{SimConfig, simulate};
 use aras_dyn::{Dynamics, Params, Sinusoid, Trajectory};
-use aras_kin::evaluate;
+use aras_kin::{Motion, evaluate};
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Vector2;
 
-type States = (Vec<Vector2<f64>>, Vec<Vector2<f64>>, Vec<Vector2<f64>>);
-
-fn states(n: usize) -> States {
+fn states(n: usize) -> Vec<Motion> {
     let traj = Sinusoid::paper_79(0.5).unwrap();
-    let mut out = (
-        Vec::with_capacity(n),
-        Vec::with_capacity(n),
-        Vec::with_capacity(n),
-    );
-    for i in 0..n {
-        let (x, v, a) = traj.eval(i as f64 * 1e-3);
-        out.0.push(x);
-        out.1.push(v);
-        out.2.push(a);
-    }
-    out
+    (0..n).map(|i| traj.eval(i as f64 * 1e-3)).collect()
 }
 
 fn per_sample(c: &mut Criterion) {
@@ -35,9 +22,11 @@ fn per_sample(c: &mut Criterion) {
     let g = p.geometry().unwrap();
     let s = evaluate(
         &g,
-        &Vector2::new(1.4, 1.0),
-        &Vector2::new(0.5, -0.3),
-        &Vector2::new(4.0, 2.0),
+        &Motion::new(
+            Vector2::new(1.4, 1.0),
+            Vector2::new(0.5, -0.3),
+            Vector2::new(4.0, 2.0),
+        ),
     )
     .unwrap();
     let mut buf = vec![0.0; 2 * model.columns()];
@@ -51,7 +40,7 @@ fn per_sample(c: &mut Criterion) {
     );
     c.bench_function("regressor per sample incl. kinematics", |b| {
         b.iter(|| {
-            let s = evaluate(&g, black_box(&x), &v, &a).unwrap();
+            let s = evaluate(&g, &Motion::new(*black_box(&x), v, a)).unwrap();
             model.fill(&s, &mut buf).unwrap()
         })
     });
@@ -70,20 +59,18 @@ fn stacked(c: &mut Criterion) {
     let p = Params::aras_diamond();
     let model = p.model().unwrap();
     let g = p.geometry().unwrap();
-    let (x, v, a) = states(160_000);
-    let samples: Vec<_> = (0..x.len())
-        .map(|i| evaluate(&g, &x[i], &v[i], &a[i]).unwrap())
-        .collect();
+    let task = states(160_000);
+    let samples: Vec<_> = task.iter().map(|t| evaluate(&g, t).unwrap()).collect();
     let mut grp = c.benchmark_group("stacked 160k");
     grp.sample_size(10);
-    let mut w = nalgebra::DMatrix::zeros(2 * x.len(), model.columns());
+    let mut w = nalgebra::DMatrix::zeros(2 * task.len(), model.columns());
     grp.bench_function("from samples, into buffer", |b| {
         b.iter(|| model.stacked_into(black_box(&samples), &mut w).unwrap())
     });
     grp.bench_function("from states (kinematics included), into buffer", |b| {
         b.iter(|| {
             model
-                .stacked_from_states_into(&g, black_box(&x), &v, &a, &mut w)
+                .stacked_from_states_into(&g, black_box(&task), &mut w)
                 .unwrap()
         })
     });

@@ -7,7 +7,7 @@
 //! computation from the link-frame regressor, so that `Y β` against
 //! [`Dynamics::inverse`] is a real check.
 
-use aras_kin::{Geometry, KinematicSample};
+use aras_kin::{Geometry, KinematicSample, Motion};
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 
 use crate::regressor::Sign;
@@ -64,13 +64,8 @@ impl Dynamics {
     }
 
     /// Kinematics at `(X, Ẋ, Ẍ)` for this robot's geometry.
-    pub fn sample(
-        &self,
-        x: &Vector2<f64>,
-        x_dot: &Vector2<f64>,
-        x_ddot: &Vector2<f64>,
-    ) -> Result<KinematicSample, DynError> {
-        Ok(aras_kin::evaluate(&self.geometry, x, x_dot, x_ddot)?)
+    pub fn sample(&self, task: &Motion) -> Result<KinematicSample, DynError> {
+        Ok(aras_kin::evaluate(&self.geometry, task)?)
     }
 
     /// `I_k⁰ = R_k I_k R_kᵀ` (30) and `h_k⁰ = R_k h_k`.
@@ -143,8 +138,8 @@ impl Dynamics {
     /// elasticity + extra effects, the direct counterpart of `Y β` (48).
     pub fn inverse(&self, s: &KinematicSample) -> Vector2<f64> {
         self.link_torque(s)
-            + self.friction_torque(&s.theta_dot, Sign::Exact)
-            + self.elastic_torque(&s.theta)
+            + self.friction_torque(&s.joint.vel, Sign::Exact)
+            + self.elastic_torque(&s.joint.pos)
             + self.extra_torque(s, Sign::Exact)
     }
 
@@ -166,13 +161,13 @@ impl Dynamics {
     }
 
     /// Task-space Coriolis/centrifugal term
-    /// `c(X, Ẋ) = Σ J_ωkᵀ (I_k⁰ J̇_ωk Ẋ + Ω_k × I_k⁰ Ω_k)` (ignores `s.x_ddot`).
+    /// `c(X, Ẋ) = Σ J_ωkᵀ (I_k⁰ J̇_ωk Ẋ + Ω_k × I_k⁰ Ω_k)` (ignores `s.task.acc`).
     pub fn coriolis(&self, s: &KinematicSample) -> Vector2<f64> {
         let mut c = Vector2::zeros();
         for k in 0..4 {
             let (i0, _) = self.base_frame(s, k);
             let w = &s.omega[k];
-            let f = i0 * (s.link_jacobian_dots[k] * s.x_dot) + w.cross(&(i0 * w));
+            let f = i0 * (s.link_jacobian_dots[k] * s.task.vel) + w.cross(&(i0 * w));
             c += s.link_jacobians[k].tr_mul(&f);
         }
         c
@@ -213,16 +208,16 @@ impl Dynamics {
         x_dot: &Vector2<f64>,
         tau: &Vector2<f64>,
     ) -> Result<Vector2<f64>, DynError> {
-        let s = self.sample(x, x_dot, &Vector2::zeros())?;
-        let other = self.friction_torque(&s.theta_dot, Sign::Exact)
-            + self.elastic_torque(&s.theta)
+        let s = self.sample(&Motion::new(*x, *x_dot, Vector2::zeros()))?;
+        let other = self.friction_torque(&s.joint.vel, Sign::Exact)
+            + self.elastic_torque(&s.joint.pos)
             + self.extra_torque(&s, Sign::Exact);
         self.forward_links(&s, &(tau - other))
     }
 
     /// Rigid-body forward dynamics: the task acceleration produced by motor
     /// torques `tau_links` acting on the links alone, at the pose and rate
-    /// of `s` (its `x_ddot` is ignored). Errors if `M` is not positive
+    /// of `s` (its `task.acc` is ignored). Errors if `M` is not positive
     /// definite.
     pub fn forward_links(
         &self,
@@ -232,8 +227,8 @@ impl Dynamics {
         let (m, bias) = self.task_terms(s);
         let rhs = s.jacobian.matrix().transpose() * tau_links - bias;
         solve_spd(&m, &rhs).ok_or(DynError::NotPositiveDefinite {
-            phi_deg: s.x[0].to_degrees(),
-            gamma_deg: s.x[1].to_degrees(),
+            phi_deg: s.task.pos[0].to_degrees(),
+            gamma_deg: s.task.pos[1].to_degrees(),
             det: m.determinant(),
             m11: m[(0, 0)],
         })
@@ -250,7 +245,7 @@ impl Dynamics {
             let jw = &s.link_jacobians[k];
             let w = &s.omega[k];
             m += jw.tr_mul(&(i0 * jw));
-            let f = i0 * (s.link_jacobian_dots[k] * s.x_dot) + w.cross(&(i0 * w))
+            let f = i0 * (s.link_jacobian_dots[k] * s.task.vel) + w.cross(&(i0 * w))
                 - h0.cross(&self.gravity);
             bias += jw.tr_mul(&f);
         }

@@ -121,7 +121,10 @@ pub fn lagrange_terms(
 ) -> Result<LagrangeTerms, DynError> {
     params.validate()?;
     // Reject what the kinematics would reject (unreachable / singular).
-    aras_kin::evaluate(&params.geometry()?, x, x_dot, &Vector2::zeros())?;
+    aras_kin::evaluate(
+        &params.geometry()?,
+        &aras_kin::Motion::new(*x, *x_dot, Vector2::zeros()),
+    )?;
     let z = SVector::<f64, 4>::new(x[0], x[1], x_dot[0], x_dot[1]);
     let (kinetic, grad, h) = hessian(
         |z: SVector<Dual2SVec64<4>, 4>| energies(params, [z[0], z[1]], [z[2], z[3]]).0,

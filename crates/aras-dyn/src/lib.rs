@@ -23,13 +23,15 @@
 //!
 //! ```
 //! use aras_dyn::{Dynamics, Params};
+//! use aras_kin::Motion;
 //! use nalgebra::Vector2;
 //!
 //! let p = Params::aras_diamond();
 //! let model = p.model()?; // rigid links + friction + elasticity: 42 columns
 //! let beta = p.standard_vector(&model)?;
 //! let dy = Dynamics::new(&p)?;
-//! let s = dy.sample(&Vector2::new(1.5, 1.0), &Vector2::new(0.3, -0.2), &Vector2::new(2.0, 1.0))?;
+//! let task = Motion::new(Vector2::new(1.5, 1.0), Vector2::new(0.3, -0.2), Vector2::new(2.0, 1.0));
+//! let s = dy.sample(&task)?;
 //! let tau = model.regressor(&s) * &beta; // τ = Y β (48)
 //! assert!((tau - dy.inverse(&s)).norm() < 1e-12);
 //! # Ok::<(), aras_dyn::DynError>(())

@@ -10,7 +10,7 @@
 //! joint 1 of every sample, rows `N..2N` joint 2, so each joint's block of a
 //! column is one contiguous slice.
 
-use aras_kin::{Geometry, KinematicSample, Scalar};
+use aras_kin::{Geometry, KinematicSample, Motion, Scalar};
 use nalgebra::{DMatrix, Matrix2xX, Vector2, Vector3};
 use rayon::prelude::*;
 
@@ -132,18 +132,17 @@ impl Model {
         })
     }
 
-    /// Stacked joint-major regressor of the samples `(X_i, Ẋ_i, Ẍ_i)`,
-    /// evaluating the kinematics on the fly (no per-sample storage). Errors
-    /// with the first failing sample's kinematic error.
+    /// Stacked joint-major regressor of the task motion samples
+    /// `(X_i, Ẋ_i, Ẍ_i)`, evaluating the kinematics on the fly (no
+    /// per-sample storage). Errors with the first failing sample's
+    /// kinematic error.
     pub fn stacked_from_states(
         &self,
         geometry: &Geometry,
-        x: &[Vector2<f64>],
-        x_dot: &[Vector2<f64>],
-        x_ddot: &[Vector2<f64>],
+        task: &[Motion],
     ) -> Result<DMatrix<f64>, DynError> {
-        let mut out = DMatrix::zeros(2 * x.len(), self.columns());
-        self.stacked_from_states_into(geometry, x, x_dot, x_ddot, &mut out)?;
+        let mut out = DMatrix::zeros(2 * task.len(), self.columns());
+        self.stacked_from_states_into(geometry, task, &mut out)?;
         Ok(out)
     }
 
@@ -151,23 +150,12 @@ impl Model {
     pub fn stacked_from_states_into(
         &self,
         geometry: &Geometry,
-        x: &[Vector2<f64>],
-        x_dot: &[Vector2<f64>],
-        x_ddot: &[Vector2<f64>],
+        task: &[Motion],
         out: &mut DMatrix<f64>,
     ) -> Result<(), DynError> {
-        for (what, len) in [("x_dot", x_dot.len()), ("x_ddot", x_ddot.len())] {
-            if len != x.len() {
-                return Err(DynError::Length {
-                    what,
-                    expected: x.len(),
-                    found: len,
-                });
-            }
-        }
-        self.check_shape(x.len(), out)?;
-        self.stacked_blocks(x.len(), out, |i, buf| {
-            let s = aras_kin::evaluate(geometry, &x[i], &x_dot[i], &x_ddot[i])?;
+        self.check_shape(task.len(), out)?;
+        self.stacked_blocks(task.len(), out, |i, buf| {
+            let s = aras_kin::evaluate(geometry, &task[i])?;
             self.fill_unchecked(&s, Sign::Exact, buf);
             Ok(())
         })

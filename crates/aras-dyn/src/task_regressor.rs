@@ -2,7 +2,7 @@
 //! `ident`): the one adapter identification and excitation design share.
 
 use aras_ident::LinearModel;
-use aras_kin::{Geometry, KinError, Scalar};
+use aras_kin::{Geometry, KinError, Motion, Scalar};
 use nalgebra::Vector2;
 use thiserror::Error;
 
@@ -41,13 +41,10 @@ impl TaskRegressor {
     /// derivative): what [`LinearModel::fill`] computes in `f64`.
     pub fn fill_rows<T: Scalar>(
         &self,
-        x: &Vector2<T>,
-        x_dot: &Vector2<T>,
-        x_ddot: &Vector2<T>,
+        task: &Motion<T>,
         rows: &mut [T],
     ) -> Result<(), RegressorError> {
-        let s = aras_kin::evaluate(&self.geometry, x, x_dot, x_ddot)
-            .map_err(RegressorError::Kinematics)?;
+        let s = aras_kin::evaluate(&self.geometry, task).map_err(RegressorError::Kinematics)?;
         self.model.fill(&s, rows).map_err(RegressorError::Model)
     }
 
@@ -102,6 +99,6 @@ impl LinearModel for TaskRegressor {
         rows: &mut [f64],
     ) -> Result<(), RegressorError> {
         let v = |a: &[f64]| Vector2::new(a[0], a[1]);
-        self.fill_rows(&v(q), &v(q_dot), &v(q_ddot), rows)
+        self.fill_rows(&Motion::new(v(q), v(q_dot), v(q_ddot)), rows)
     }
 }

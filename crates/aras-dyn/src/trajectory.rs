@@ -1,6 +1,7 @@
 //! Desired task-space trajectories that the simulator tracks, and the
 //! paper's validation trajectories (47) and (79).
 
+use aras_kin::Motion;
 use nalgebra::Vector2;
 
 use crate::DynError;
@@ -8,7 +9,7 @@ use crate::DynError;
 /// A desired motion `X(t) = [φ, γ]` with its first two derivatives.
 pub trait Trajectory: Sync {
     /// `(X, Ẋ, Ẍ)` at time `t` (s), in rad, rad/s, rad/s².
-    fn eval(&self, t: f64) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>);
+    fn eval(&self, t: f64) -> Motion;
 
     /// The period (s) if the motion is periodic.
     fn period(&self) -> Option<f64>;
@@ -101,7 +102,7 @@ impl Sinusoid {
 }
 
 impl Trajectory for Sinusoid {
-    fn eval(&self, t: f64) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>) {
+    fn eval(&self, t: f64) -> Motion {
         let w = self.omega;
         let mut x = Vector2::zeros();
         let mut v = Vector2::zeros();
@@ -112,7 +113,7 @@ impl Trajectory for Sinusoid {
             v[i] = self.amplitude[i] * w * c;
             a[i] = -self.amplitude[i] * w * w * s;
         }
-        (x, v, a)
+        Motion::new(x, v, a)
     }
 
     fn period(&self) -> Option<f64> {

@@ -2,6 +2,7 @@
 //! balance, mass-matrix properties, forward/inverse consistency.
 
 use aras_dyn::{Dynamics, Params, Sinusoid, Trajectory, lagrange_terms};
+use aras_kin::Motion;
 use aras_kin::{Geometry, Workspace, evaluate};
 use nalgebra::{Matrix2, Vector2, Vector3};
 use proptest::prelude::*;
@@ -25,7 +26,7 @@ proptest! {
         p.gravity = Vector3::new(gx, -9.81, gz);
         let dy = Dynamics::new(&p).unwrap();
         let (x, xd) = (Vector2::new(phi, gamma), Vector2::new(pd, gd));
-        let Ok(s) = evaluate(dy.geometry(), &x, &xd, &Vector2::zeros()) else { return Ok(()) };
+        let Ok(s) = evaluate(dy.geometry(), &Motion::new(x, xd, Vector2::zeros())) else { return Ok(()) };
         let l = lagrange_terms(&p, &x, &xd).unwrap();
         let m = dy.mass_matrix(&s);
         let mscale = m.norm();
@@ -48,7 +49,7 @@ proptest! {
                                pd in -3f64..3.0, gd in -3f64..3.0, pdd in -40f64..40.0, gdd in -40f64..40.0) {
         let dy = Dynamics::new(&Params::aras_diamond()).unwrap();
         let (x, xd, xdd) = (Vector2::new(phi, gamma), Vector2::new(pd, gd), Vector2::new(pdd, gdd));
-        let s = dy.sample(&x, &xd, &xdd).unwrap();
+        let s = dy.sample(&Motion::new(x, xd, xdd)).unwrap();
         let tau = dy.inverse(&s);
         let back = dy.forward(&x, &xd, &tau).unwrap();
         prop_assert!((back - xdd).norm() <= 1e-10 * (1.0 + xdd.norm()), "{back} vs {xdd}");
@@ -67,7 +68,9 @@ fn mass_matrix_spd_over_workspace() {
             let x = w.min()
                 + (w.max() - w.min())
                     .component_mul(&Vector2::new(i as f64 / 40.0, j as f64 / 40.0));
-            let s = dy.sample(&x, &Vector2::zeros(), &Vector2::zeros()).unwrap();
+            let s = dy
+                .sample(&Motion::new(x, Vector2::zeros(), Vector2::zeros()))
+                .unwrap();
             for m in [dy.mass_matrix(&s), dy.mass_matrix_motor(&s)] {
                 assert!((m - m.transpose()).norm() <= 1e-15 * m.norm());
                 let e = m.symmetric_eigenvalues();
@@ -100,8 +103,7 @@ fn energy_balance(traj: &dyn Trajectory, t_end: f64) -> (f64, f64, f64) {
     p.elasticity = [0.0; 2];
     let dy = Dynamics::new(&p).unwrap();
     let energy = |t: f64| {
-        let (x, v, a) = traj.eval(t);
-        let s = dy.sample(&x, &v, &a).unwrap();
+        let s = dy.sample(&traj.eval(t)).unwrap();
         dy.kinetic_energy(&s) + dy.potential_energy(&s)
     };
     let panels = 2000;
@@ -111,9 +113,8 @@ fn energy_balance(traj: &dyn Trajectory, t_end: f64) -> (f64, f64, f64) {
         let mid = (k as f64 + 0.5) * h;
         for (xi, wi) in GL5 {
             let t = mid + 0.5 * h * xi;
-            let (x, v, a) = traj.eval(t);
-            let s = dy.sample(&x, &v, &a).unwrap();
-            let pw = dy.inverse(&s).dot(&s.theta_dot);
+            let s = dy.sample(&traj.eval(t)).unwrap();
+            let pw = dy.inverse(&s).dot(&s.joint.vel);
             work += 0.5 * h * wi * pw;
             abs_work += 0.5 * h * wi * pw.abs();
         }
@@ -130,16 +131,16 @@ struct Fourier {
 }
 
 impl Trajectory for Fourier {
-    fn eval(&self, t: f64) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>) {
-        let mut out = (Vector2::zeros(), Vector2::zeros(), Vector2::zeros());
+    fn eval(&self, t: f64) -> Motion {
+        let mut out = Motion::default();
         for i in 0..2 {
-            out.0[i] = self.x0[i];
+            out.pos[i] = self.x0[i];
             for l in 0..5 {
                 let wl = self.wf * (l + 1) as f64;
                 let (s, c) = (wl * t).sin_cos();
-                out.0[i] += self.a[i][l] / wl * s - self.b[i][l] / wl * c;
-                out.1[i] += self.a[i][l] * c + self.b[i][l] * s;
-                out.2[i] += -self.a[i][l] * wl * s + self.b[i][l] * wl * c;
+                out.pos[i] += self.a[i][l] / wl * s - self.b[i][l] / wl * c;
+                out.vel[i] += self.a[i][l] * c + self.b[i][l] * s;
+                out.acc[i] += -self.a[i][l] * wl * s + self.b[i][l] * wl * c;
             }
         }
         out
@@ -192,7 +193,7 @@ fn kinetic_energy_is_quadratic_form() {
     let g = Geometry::aras_diamond();
     let x = Vector2::new(1.5, 1.1);
     let xd = Vector2::new(0.7, -1.3);
-    let s = evaluate(&g, &x, &xd, &Vector2::zeros()).unwrap();
+    let s = evaluate(&g, &Motion::new(x, xd, Vector2::zeros())).unwrap();
     let m: Matrix2<f64> = dy.mass_matrix(&s);
     let t = 0.5 * xd.dot(&(m * xd));
     assert!((t - dy.kinetic_energy(&s)).abs() <= 1e-14 * t);

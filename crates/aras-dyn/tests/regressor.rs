@@ -2,6 +2,7 @@
 //! derivatives.
 
 use aras_dyn::{Cogging, Dynamics, Effect, Model, Params, Sign, Stribeck};
+use aras_kin::Motion;
 use aras_kin::{Geometry, evaluate};
 use nalgebra::{DVector, Vector2, Vector3};
 use num_dual::Dual64;
@@ -60,7 +61,7 @@ proptest! {
     #[test]
     fn y_beta_equals_direct(([phi, gamma, pd, gd, pdd, gdd], r) in state()) {
         let g = Geometry::aras_diamond();
-        let s = evaluate(&g, &Vector2::new(phi, gamma), &Vector2::new(pd, gd), &Vector2::new(pdd, gdd)).unwrap();
+        let s = evaluate(&g, &Motion::new(Vector2::new(phi, gamma), Vector2::new(pd, gd), Vector2::new(pdd, gdd))).unwrap();
         for p in [random_params(&r), all_extras(random_params(&r))] {
             let model = p.model().unwrap();
             let beta = p.standard_vector(&model).unwrap();
@@ -83,7 +84,7 @@ proptest! {
         p.beta_deg = be;
         let g = p.geometry().unwrap();
         let x = Vector2::new(1.2, 0.5 * (al + be).to_radians().min(1.4));
-        let Ok(s) = evaluate(&g, &x, &Vector2::new(pd, 0.7), &Vector2::new(3.0, gdd)) else { return Ok(()) };
+        let Ok(s) = evaluate(&g, &Motion::new(x, Vector2::new(pd, 0.7), Vector2::new(3.0, gdd))) else { return Ok(()) };
         let model = p.model().unwrap();
         let tau_y = model.regressor(&s) * p.standard_vector(&model).unwrap();
         let tau_d = Dynamics::new(&p).unwrap().inverse(&s);
@@ -143,9 +144,11 @@ fn fill_checks_buffer_length() {
     let m = p.model().unwrap();
     let s = evaluate(
         &p.geometry().unwrap(),
-        &Vector2::new(1.4, 1.0),
-        &Vector2::new(0.1, 0.2),
-        &Vector2::zeros(),
+        &Motion::new(
+            Vector2::new(1.4, 1.0),
+            Vector2::new(0.1, 0.2),
+            Vector2::zeros(),
+        ),
     )
     .unwrap();
     let mut short = vec![0.0; 83];
@@ -175,11 +178,10 @@ fn stacked_layout_is_joint_major() {
     let as_: Vec<_> = (0..n)
         .map(|i| Vector2::new(2.0, (i as f64 * 0.02).cos()))
         .collect();
-    let samples: Vec<_> = (0..n)
-        .map(|i| evaluate(&g, &xs[i], &vs[i], &as_[i]).unwrap())
-        .collect();
+    let task: Vec<_> = (0..n).map(|i| Motion::new(xs[i], vs[i], as_[i])).collect();
+    let samples: Vec<_> = task.iter().map(|t| evaluate(&g, t).unwrap()).collect();
     let w = m.stacked(&samples).unwrap();
-    let w2 = m.stacked_from_states(&g, &xs, &vs, &as_).unwrap();
+    let w2 = m.stacked_from_states(&g, &task).unwrap();
     assert_eq!(w, w2);
     assert_eq!(w.shape(), (2 * n, m.columns()));
     for i in [0, 1, 2047, 2048, 4999] {
@@ -190,11 +192,10 @@ fn stacked_layout_is_joint_major() {
         }
     }
     // Errors name the failing kinematics.
-    let mut bad = xs.clone();
-    bad[3][1] = 2.0; // γ beyond α + β
-    let e = m.stacked_from_states(&g, &bad, &vs, &as_).unwrap_err();
+    let mut bad = task.clone();
+    bad[3].pos[1] = 2.0; // γ beyond α + β
+    let e = m.stacked_from_states(&g, &bad).unwrap_err();
     assert!(e.to_string().contains("unreachable"), "{e}");
-    assert!(m.stacked_from_states(&g, &xs[..3], &vs, &as_).is_err());
 }
 
 /// The regressor in dual numbers gives the exact derivative: compare with
@@ -216,16 +217,16 @@ fn dual_regressor_matches_finite_differences() {
         let lift = |x: &Vector2<f64>, o: usize| {
             Vector2::new(Dual64::new(x[0], e[o]), Dual64::new(x[1], e[o + 1]))
         };
-        let s = evaluate(&g, &lift(&x0, 0), &lift(&v0, 2), &lift(&a0, 4)).unwrap();
+        let s = evaluate(&g, &Motion::new(lift(&x0, 0), lift(&v0, 2), lift(&a0, 4))).unwrap();
         let mut yd = vec![Dual64::from(0.0); 2 * m.columns()];
         m.fill(&s, &mut yd).unwrap();
         let h = 1e-6;
         let at = |sgn: f64| {
             let d = |o: usize| Vector2::new(e[o], e[o + 1]) * (sgn * h);
-            m.regressor(&evaluate(&g, &(x0 + d(0)), &(v0 + d(2)), &(a0 + d(4))).unwrap())
+            m.regressor(&evaluate(&g, &Motion::new(x0 + d(0), v0 + d(2), a0 + d(4))).unwrap())
         };
         let fd = (at(1.0) - at(-1.0)) / (2.0 * h);
-        let y0 = m.regressor(&evaluate(&g, &x0, &v0, &a0).unwrap());
+        let y0 = m.regressor(&evaluate(&g, &Motion::new(x0, v0, a0)).unwrap());
         for (i, ydi) in yd.iter().enumerate() {
             assert!((ydi.re - y0.as_slice()[i]).abs() <= 1e-15 * (1.0 + y0.as_slice()[i].abs()));
             let f = fd.as_slice()[i];
@@ -277,9 +278,11 @@ fn smooth_sign_converges() {
     let m = p.model().unwrap();
     let s = evaluate(
         &p.geometry().unwrap(),
-        &Vector2::new(1.4, 1.0),
-        &Vector2::new(0.5, 0.2),
-        &Vector2::zeros(),
+        &Motion::new(
+            Vector2::new(1.4, 1.0),
+            Vector2::new(0.5, 0.2),
+            Vector2::zeros(),
+        ),
     )
     .unwrap();
     let mut a = vec![0.0; 84];

@@ -3,6 +3,7 @@
 
 use aras_dyn::sim::{SimConfig, simulate, write_log};
 use aras_dyn::{Cogging, Params, Sinusoid, Stribeck, Trajectory};
+use aras_kin::Motion;
 use aras_kin::{AssemblyMode, evaluate, forward};
 use aras_log::sidecar_path;
 use aras_testkit::error_chain as chain;
@@ -63,12 +64,12 @@ fn logged_data_satisfy_the_model() {
                 continue;
             }
             let x = forward(&g, &th, AssemblyMode::Plus).unwrap();
-            let s0 = evaluate(&g, &x, &Vector2::zeros(), &Vector2::zeros()).unwrap();
+            let s0 = evaluate(&g, &Motion::new(x, Vector2::zeros(), Vector2::zeros())).unwrap();
             let ji = s0.jacobian.inverse();
             let xd = ji * td;
-            let s1 = evaluate(&g, &x, &xd, &Vector2::zeros()).unwrap();
+            let s1 = evaluate(&g, &Motion::new(x, xd, Vector2::zeros())).unwrap();
             let xdd = ji * (tdd - s1.jacobian_dot * xd);
-            let s = evaluate(&g, &x, &xd, &xdd).unwrap();
+            let s = evaluate(&g, &Motion::new(x, xd, xdd)).unwrap();
             let tau = model.regressor(&s) * &beta;
             let err = (tau - Vector2::from(log.tau[i])).amax();
             assert!(
@@ -94,7 +95,7 @@ fn pd_tracks_the_trajectory() {
     let g = aras_kin::Geometry::aras_diamond();
     let mut worst = 0.0f64;
     for i in 0..log.len() {
-        let (x, _, _) = traj.eval(log.t[i]);
+        let Motion { pos: x, .. } = traj.eval(log.t[i]);
         let th_d = aras_kin::inverse(&g, &x).unwrap().theta;
         worst = worst.max((th_d - Vector2::from(log.theta[i])).amax());
         for j in 0..2 {
@@ -221,8 +222,8 @@ fn deterministic_for_a_seed_and_byte_identical_logs() {
 fn aperiodic_trajectory_has_no_excitation_section() {
     struct Hold;
     impl Trajectory for Hold {
-        fn eval(&self, _t: f64) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>) {
-            (Vector2::new(1.4, 1.0), Vector2::zeros(), Vector2::zeros())
+        fn eval(&self, _t: f64) -> Motion {
+            Motion::new(Vector2::new(1.4, 1.0), Vector2::zeros(), Vector2::zeros())
         }
         fn period(&self) -> Option<f64> {
             None
@@ -295,7 +296,7 @@ fn feedforward_reduces_tracking_error() {
             .iter()
             .zip(&log.theta)
             .map(|(t, th)| {
-                let th_d = aras_kin::inverse(&g, &traj.eval(*t).0).unwrap().theta;
+                let th_d = aras_kin::inverse(&g, &traj.eval(*t).pos).unwrap().theta;
                 (th_d - Vector2::from(*th)).amax()
             })
             .fold(0.0, f64::max)
@@ -362,17 +363,21 @@ fn bad_settings_are_named() {
 fn trajectory_79_and_47() {
     let tr = Sinusoid::paper_79(0.7).unwrap();
     assert!((tr.period().unwrap() - 1.0 / 0.7).abs() < 1e-15);
-    let (x0, _, _) = tr.eval(0.0);
+    let Motion { pos: x0, .. } = tr.eval(0.0);
     assert!((x0 - Vector2::new(115f64.to_radians(), 60f64.to_radians())).norm() < 1e-15);
     for t in [0.1, 0.77, 3.0] {
         let h = 1e-5;
-        let (_, v, a) = tr.eval(t);
-        let (xp, vp, _) = tr.eval(t + h);
-        let (xm, vm, _) = tr.eval(t - h);
+        let Motion { vel: v, acc: a, .. } = tr.eval(t);
+        let Motion {
+            pos: xp, vel: vp, ..
+        } = tr.eval(t + h);
+        let Motion {
+            pos: xm, vel: vm, ..
+        } = tr.eval(t - h);
         assert!(((xp - xm) / (2.0 * h) - v).norm() < 1e-7 * (1.0 + v.norm()));
         assert!(((vp - vm) / (2.0 * h) - a).norm() < 1e-7 * (1.0 + a.norm()));
     }
-    let (x, _, _) = Sinusoid::paper_47().eval(std::f64::consts::FRAC_PI_4);
+    let Motion { pos: x, .. } = Sinusoid::paper_47().eval(std::f64::consts::FRAC_PI_4);
     assert!((x - Vector2::new(170f64.to_radians(), 85f64.to_radians())).norm() < 1e-14);
     assert!(Sinusoid::paper_79(-1.0).is_err());
 }

@@ -13,7 +13,7 @@ use nalgebra::Vector2;
 
 use crate::error::{ExciteError, check_finite};
 use crate::regressor::Dual;
-use crate::{FourierTrajectory, Limits, Regressor};
+use crate::{FourierTrajectory, Limits, Motion, Regressor};
 
 /// The design differentiates `aras-dyn`'s [`TaskRegressor`] (the same
 /// [`aras_ident::LinearModel`] identification uses) by its dual-number rows.
@@ -26,14 +26,13 @@ impl Regressor for TaskRegressor {
         rows: &mut [Dual],
     ) -> Result<(), RegressorError> {
         let v = |a: &[Dual]| Vector2::new(a[0], a[1]);
-        self.fill_rows(&v(q), &v(q_dot), &v(q_ddot), rows)
+        self.fill_rows(&Motion::new(v(q), v(q_dot), v(q_ddot)), rows)
     }
 }
 
 impl Trajectory for FourierTrajectory {
-    fn eval(&self, t: f64) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>) {
-        let s = FourierTrajectory::eval(self, t);
-        (s.x, s.x_dot, s.x_ddot)
+    fn eval(&self, t: f64) -> Motion {
+        FourierTrajectory::eval(self, t)
     }
 
     fn period(&self) -> Option<f64> {
@@ -99,17 +98,18 @@ impl FourierTrajectory {
             .map(|&t| {
                 check_finite(|| "t".into(), t)?;
                 let s = self.eval(t);
-                let k = evaluate(geometry, &s.x, &s.x_dot, &s.x_ddot).map_err(|source| {
-                    ExciteError::Kinematics {
-                        t,
-                        source: Box::new(source),
-                    }
-                })?;
+                let k =
+                    evaluate(geometry, &Motion::new(s.pos, s.vel, s.acc)).map_err(|source| {
+                        ExciteError::Kinematics {
+                            t,
+                            source: Box::new(source),
+                        }
+                    })?;
                 Ok(MotorRow {
                     t,
-                    theta: k.theta,
-                    theta_dot: k.theta_dot,
-                    theta_ddot: k.theta_ddot,
+                    theta: k.joint.pos,
+                    theta_dot: k.joint.vel,
+                    theta_ddot: k.joint.acc,
                 })
             })
             .collect()
@@ -136,7 +136,7 @@ mod tests {
         let mut rows = vec![0.0; 84];
         r.fill(x.as_slice(), xd.as_slice(), xdd.as_slice(), &mut rows)
             .unwrap();
-        let s = evaluate(r.geometry(), &x, &xd, &xdd).unwrap();
+        let s = evaluate(r.geometry(), &Motion::new(x, xd, xdd)).unwrap();
         let y = r.model().regressor(&s);
         assert_eq!(y.as_slice(), &rows[..]);
         let lift = |v: Vector2<f64>| [Dual::from_re(v[0]), Dual::from_re(v[1])];
@@ -146,7 +146,7 @@ mod tests {
         assert!(drows.iter().zip(&rows).all(|(d, v)| d.re == *v));
         let f = FourierTrajectory::at_rest(1.0, 2, x).unwrap();
         assert_eq!(Trajectory::period(&f), Some(std::f64::consts::TAU));
-        assert_eq!(Trajectory::eval(&f, 0.3).0, x);
+        assert_eq!(Trajectory::eval(&f, 0.3).pos, x);
     }
 
     /// The paper's limits are the kinematics' workspace (77) with the
@@ -166,11 +166,11 @@ mod tests {
         let rows = f.motor_samples(&g, &[0.0, 1.3, 4.0]).unwrap();
         for r in &rows {
             let s = f.eval(r.t);
-            let ik = aras_kin::inverse(&g, &s.x).unwrap();
+            let ik = aras_kin::inverse(&g, &s.pos).unwrap();
             assert!((ik.theta - r.theta).norm() < 1e-14);
             // θ1 + θ2 = 2φ, (7), so the rates add up the same way.
-            assert!((r.theta_dot.sum() - 2.0 * s.x_dot[0]).abs() < 1e-12);
-            assert!((r.theta_ddot.sum() - 2.0 * s.x_ddot[0]).abs() < 1e-12);
+            assert!((r.theta_dot.sum() - 2.0 * s.vel[0]).abs() < 1e-12);
+            assert!((r.theta_ddot.sum() - 2.0 * s.acc[0]).abs() < 1e-12);
         }
         let far = FourierTrajectory::at_rest(1.0, 1, Vector2::new(1.0, 2.0)).unwrap();
         let e = far.motor_samples(&g, &[0.5]).unwrap_err().to_string();

@@ -139,7 +139,7 @@ impl Margins {
         let ranges = limits.ranges();
         let mut m = [[f64::INFINITY; 3]; 2];
         for row in trajectory.sample(points.max(1), 1) {
-            let v = [row.state.x, row.state.x_dot, row.state.x_ddot];
+            let v = [row.state.pos, row.state.vel, row.state.acc];
             for i in 0..2 {
                 for k in 0..3 {
                     let (c, r) = ranges[i][k];

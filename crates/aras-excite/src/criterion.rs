@@ -25,6 +25,7 @@ use nalgebra::{DMatrix, Vector2};
 
 use aras_ident::BaseParameters;
 
+use crate::Motion;
 use crate::error::ExciteError;
 use crate::param::Grid;
 use crate::regressor::Regressor;
@@ -179,17 +180,18 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
     }
 
     /// Fills `W` (values only) from the states of every sample.
-    pub fn fill_values(
-        &mut self,
-        state: impl Fn(usize) -> [Vector2<f64>; 3],
-    ) -> Result<(), ExciteError> {
+    pub fn fill_values(&mut self, state: impl Fn(usize) -> Motion) -> Result<(), ExciteError> {
         // Start the scalar loop clean whatever ran on this thread before
         // (see `aras_ident::simd`).
         aras_ident::simd::clear_upper_state();
         let n = self.w.ncols();
         let ns = self.samples;
         for s in 0..ns {
-            let [x, xd, xdd] = state(s);
+            let Motion {
+                pos: x,
+                vel: xd,
+                acc: xdd,
+            } = state(s);
             let (x, _) = self.clamped(x);
             self.rows.iter_mut().for_each(|v| *v = 0.0);
             self.reg
@@ -205,17 +207,18 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
     }
 
     /// Fills `W` and its derivatives `∂W/∂z_k` by dual numbers.
-    pub fn fill_derivatives(
-        &mut self,
-        state: impl Fn(usize) -> [Vector2<f64>; 3],
-    ) -> Result<(), ExciteError> {
+    pub fn fill_derivatives(&mut self, state: impl Fn(usize) -> Motion) -> Result<(), ExciteError> {
         // Start the scalar loop clean whatever ran on this thread before
         // (see `aras_ident::simd`).
         aras_ident::simd::clear_upper_state();
         let n = self.w.ncols();
         let ns = self.samples;
         for s in 0..ns {
-            let [x, xd, xdd] = state(s);
+            let Motion {
+                pos: x,
+                vel: xd,
+                acc: xdd,
+            } = state(s);
             let (x, clamped) = self.clamped(x);
             let seed = |v: f64, k: usize, fixed: bool| {
                 let d = D6::from_re(v);

@@ -289,10 +289,7 @@ pub fn assess<R: Regressor>(
     let points = points.max(1);
     let mut ev = Evaluator::new(regressor, projection, Criterion::Condition, points, None);
     let h = trajectory.period() / points as f64;
-    ev.fill_values(|s| {
-        let st = trajectory.eval((s as f64 + 0.5) * h);
-        [st.x, st.x_dot, st.x_ddot]
-    })?;
+    ev.fill_values(|s| trajectory.eval((s as f64 + 0.5) * h))?;
     Ok(ev.analyse(false)?.assessment)
 }
 

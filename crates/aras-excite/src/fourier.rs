@@ -2,6 +2,7 @@
 
 use std::path::Path;
 
+use aras_core::Motion;
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
@@ -19,24 +20,13 @@ pub const DEFAULT_OMEGA_F: f64 = std::f64::consts::TAU / 10.0;
 /// Names of the task coordinates, for messages and key paths.
 pub(crate) const COORDS: [&str; 2] = ["phi", "gamma"];
 
-/// Position, velocity and acceleration in task space at one instant.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TaskState {
-    /// `X = [φ, γ]` (rad).
-    pub x: Vector2<f64>,
-    /// `Ẋ` (rad/s).
-    pub x_dot: Vector2<f64>,
-    /// `Ẍ` (rad/s²).
-    pub x_ddot: Vector2<f64>,
-}
-
 /// One sample of a trajectory in task space: `t, φ, γ, φ̇, γ̇, φ̈, γ̈`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TaskRow {
     /// Time (s).
     pub t: f64,
     /// The state at `t`.
-    pub state: TaskState,
+    pub state: Motion,
 }
 
 impl TaskRow {
@@ -44,13 +34,7 @@ impl TaskRow {
     pub fn to_array(&self) -> [f64; 7] {
         let s = &self.state;
         [
-            self.t,
-            s.x[0],
-            s.x[1],
-            s.x_dot[0],
-            s.x_dot[1],
-            s.x_ddot[0],
-            s.x_ddot[1],
+            self.t, s.pos[0], s.pos[1], s.vel[0], s.vel[1], s.acc[0], s.acc[1],
         ]
     }
 }
@@ -213,7 +197,7 @@ impl FourierTrajectory {
 
     /// Exact position, velocity and acceleration at time `t` (s),
     /// (74)–(76). No allocation.
-    pub fn eval(&self, t: f64) -> TaskState {
+    pub fn eval(&self, t: f64) -> Motion {
         let mut x = self.offset();
         let mut xd = Vector2::zeros();
         let mut xdd = Vector2::zeros();
@@ -227,11 +211,7 @@ impl FourierTrajectory {
                 xdd[i] += w * (b * c - a * s);
             }
         }
-        TaskState {
-            x,
-            x_dot: xd,
-            x_ddot: xdd,
-        }
+        Motion::new(x, xd, xdd)
     }
 
     /// Samples `points_per_period` equally spaced instants per period, for
@@ -329,10 +309,10 @@ mod tests {
             let f = traj(&c);
             let h = 1e-5;
             let (p, m, s) = (f.eval(t + h), f.eval(t - h), f.eval(t));
-            let v = (p.x - m.x) / (2.0 * h);
-            let a = (p.x_dot - m.x_dot) / (2.0 * h);
-            prop_assert!((v - s.x_dot).norm() < 1e-7);
-            prop_assert!((a - s.x_ddot).norm() < 1e-7);
+            let v = (p.pos - m.pos) / (2.0 * h);
+            let a = (p.vel - m.vel) / (2.0 * h);
+            prop_assert!((v - s.vel).norm() < 1e-7);
+            prop_assert!((a - s.acc).norm() < 1e-7);
         }
 
         // Periodic with 2π/ω_f, and the offset is the mean over a period
@@ -342,9 +322,9 @@ mod tests {
         fn periodic_and_offset_is_mean(c in proptest::collection::vec(-1.0..1.0f64, 12), t in 0.0..10.0f64) {
             let f = traj(&c);
             let (x0, x1) = (f.eval(t), f.eval(t + f.period()));
-            prop_assert!((x0.x - x1.x).norm() < 1e-12);
+            prop_assert!((x0.pos - x1.pos).norm() < 1e-12);
             let rows = f.sample(64, 1);
-            let mean = rows.iter().map(|r| r.state.x).sum::<Vector2<f64>>() / 64.0;
+            let mean = rows.iter().map(|r| r.state.pos).sum::<Vector2<f64>>() / 64.0;
             prop_assert!((mean - f.offset()).norm() < 1e-12);
         }
     }

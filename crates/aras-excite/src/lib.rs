@@ -70,6 +70,7 @@ mod fourier;
 mod param;
 mod regressor;
 
+pub use aras_core::Motion;
 #[cfg(feature = "aras-diamond")]
 pub use aras_diamond::MotorRow;
 pub use constraints::{DEFAULT_MAX_ACCEL_DEG, Limits, Margins};
@@ -79,9 +80,7 @@ pub use design::{
     random_feasible,
 };
 pub use error::ExciteError;
-pub use fourier::{
-    DEFAULT_HARMONICS, DEFAULT_OMEGA_F, FORMAT, FourierTrajectory, TaskRow, TaskState,
-};
+pub use fourier::{DEFAULT_HARMONICS, DEFAULT_OMEGA_F, FORMAT, FourierTrajectory, TaskRow};
 pub use regressor::{Dual, Regressor};
 
 // Lets the shared test helpers name this crate the same way in unit tests,

@@ -9,9 +9,7 @@
 //! what makes the constraint Jacobians and the chain rule of the criterion
 //! gradient exact and cheap.
 
-use nalgebra::Vector2;
-
-use crate::{ExciteError, FourierTrajectory};
+use crate::{ExciteError, FourierTrajectory, Motion};
 
 /// Layout of the decision vector for `L` harmonics at base frequency ω_f.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -131,14 +129,14 @@ impl Grid {
     }
 
     /// `(X, Ẋ, Ẍ)` at grid point `j` for decision vector `p`.
-    pub fn state(&self, p: &[f64], j: usize) -> [Vector2<f64>; 3] {
+    pub fn state(&self, p: &[f64], j: usize) -> Motion {
         let w = self.layout.per_coord();
-        let mut out = [Vector2::zeros(); 3];
+        let mut out = Motion::default();
         for i in 0..2 {
             let block = &p[i * w..(i + 1) * w];
-            out[0][i] = dot(self.row(&self.pos, j), block);
-            out[1][i] = dot(self.row(&self.vel, j), block);
-            out[2][i] = dot(self.row(&self.acc, j), block);
+            out.pos[i] = dot(self.row(&self.pos, j), block);
+            out.vel[i] = dot(self.row(&self.vel, j), block);
+            out.acc[i] = dot(self.row(&self.acc, j), block);
         }
         out
     }
@@ -170,12 +168,12 @@ mod tests {
             layout.basis(t, &mut a, &mut b, &mut c);
             g.pos = a; g.vel = b; g.acc = c;
             let s = f.eval(t);
-            let [x, xd, xdd] = g.state(&p, 0);
-            prop_assert!((x - s.x).norm() < 1e-12);
-            prop_assert!((xd - s.x_dot).norm() < 1e-12);
-            prop_assert!((xdd - s.x_ddot).norm() < 1e-12);
+            let Motion { pos: x, vel: xd, acc: xdd } = g.state(&p, 0);
+            prop_assert!((x - s.pos).norm() < 1e-12);
+            prop_assert!((xd - s.vel).norm() < 1e-12);
+            prop_assert!((xdd - s.acc).norm() < 1e-12);
             // Zero velocity at the period boundary, by construction.
-            prop_assert!(f.eval(0.0).x_dot.norm() < 1e-12);
+            prop_assert!(f.eval(0.0).vel.norm() < 1e-12);
         }
     }
 
@@ -188,6 +186,6 @@ mod tests {
         let f = layout.trajectory(&[1.0, 0.3, 0.9, -0.2]).unwrap();
         assert_eq!(f.a(0), &[0.0]);
         assert_eq!(f.b(1), &[-0.2]);
-        assert_eq!(f.offset(), Vector2::new(1.0, 0.9));
+        assert_eq!(f.offset(), nalgebra::Vector2::new(1.0, 0.9));
     }
 }

@@ -84,8 +84,8 @@ impl StandIn {
         x_ddot: &Vector2<T>,
         rows: &mut [T],
     ) -> Result<(), KinError> {
-        let k = evaluate(&self.geometry, x, x_dot, x_ddot)?;
-        let (th, thd, thdd) = (k.theta, k.theta_dot, k.theta_ddot);
+        let k = evaluate(&self.geometry, &aras_kin::Motion::new(*x, *x_dot, *x_ddot))?;
+        let (th, thd, thdd) = (k.joint.pos, k.joint.vel, k.joint.acc);
         let cd = (th[0] - th[1]).cos();
         // Column-major 2 × 12: entry (joint j, column c) at 2c + j.
         let cols: [[T; 2]; 11] = [

@@ -36,7 +36,7 @@ fn design_is_feasible_and_better_than_random() {
     assert!(d.margins.worst_relative >= 0.0, "{:?}", d.margins);
     let finer = Margins::measure(&d.trajectory, &s.limits, 37 * s.constraint_points + 1);
     assert!(finer.worst_relative >= 0.0, "{finer:?}");
-    assert!(d.trajectory.eval(0.0).x_dot.norm() < 1e-12);
+    assert!(d.trajectory.eval(0.0).vel.norm() < 1e-12);
     let random = random_feasible(&s, 100, 99).unwrap();
     let kappas: Vec<f64> = random
         .iter()

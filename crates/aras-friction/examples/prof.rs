@@ -1,4 +1,4 @@
-use aras_friction::{Motion, fit::*, sim::*};
+use aras_friction::{Track, fit::*, sim::*};
 fn main() {
     let sim = JointSimulation {
         duration: 120.0,
@@ -7,7 +7,7 @@ fn main() {
     };
     let s = sim.run("x");
     let log = &s.log;
-    let m = Motion::new(&log.t, &log.q, &log.dq).unwrap();
+    let m = Track::new(&log.t, &log.q, &log.dq).unwrap();
     let st = FitSettings::default();
     let t0 = std::time::Instant::now();
     let s = fit_stribeck(&m, &log.tau, &st).unwrap();

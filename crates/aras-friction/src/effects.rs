@@ -21,7 +21,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{Dahl, FrictionError, JointLog, Motion, Separable, log::derivative, sgn};
+use crate::{Dahl, FrictionError, JointLog, Separable, Track, log::derivative, sgn};
 
 /// A candidate effect (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -141,7 +141,7 @@ impl Effect {
             ],
             Effect::OffsetDrift => vec![log.t.iter().map(|t| t - t0).collect()],
             Effect::Hysteresis { length } => {
-                let m = Motion::new(&log.t, &log.q, &log.dq)?;
+                let m = Track::new(&log.t, &log.q, &log.dq)?;
                 let cols = Dahl::columns(&[length], &m);
                 vec![cols[1].clone()]
             }

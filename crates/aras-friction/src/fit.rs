@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::{
-    CoulombViscous, Dahl, FrictionError, LuGre, Motion, ParamInfo, Separable, Stribeck,
+    CoulombViscous, Dahl, FrictionError, LuGre, ParamInfo, Separable, Stribeck, Track,
     linalg::{Qr, bounded_lstsq},
 };
 
@@ -168,7 +168,7 @@ pub struct SeparableFit {
 /// The outer problem of variable projection for model `M` plus optional
 /// extra columns with free coefficients.
 pub struct Problem<'a, M: Separable + Sync> {
-    motion: Motion<'a>,
+    motion: Track<'a>,
     y: &'a [f64],
     extra: &'a [Vec<f64>],
     lower: Vec<f64>,
@@ -185,7 +185,7 @@ impl<'a, M: Separable + Sync> Problem<'a, M> {
     /// narrows the physical ranges of `θ` (e.g. to the data's velocity
     /// range); equal bounds hold a parameter fixed.
     pub fn new(
-        motion: Motion<'a>,
+        motion: Track<'a>,
         y: &'a [f64],
         extra: &'a [Vec<f64>],
         theta_bounds: &[(f64, f64)],
@@ -317,7 +317,7 @@ impl<'a, M: Separable + Sync> Problem<'a, M> {
         let y = pick(self.y);
         let extra: Vec<Vec<f64>> = self.extra.iter().map(|e| pick(e)).collect();
         let coarse = Problem::<M> {
-            motion: Motion::new(&t, &q, &dq)?,
+            motion: Track::new(&t, &q, &dq)?,
             y: &y,
             extra: &extra,
             lower: self.lower.clone(),
@@ -550,7 +550,7 @@ pub(crate) struct Scales {
     pub(crate) range: f64,
 }
 
-pub(crate) fn scales(motion: &Motion) -> Scales {
+pub(crate) fn scales(motion: &Track) -> Scales {
     let mut v: Vec<f64> = motion.dq().iter().map(|v| v.abs()).collect();
     let k = ((v.len() as f64) * 0.99) as usize;
     let vmax = if v.is_empty() {
@@ -575,7 +575,7 @@ fn estimates<M: Separable + Sync>(
     base: &[f64],
     extra: &[Vec<f64>],
     extra_beta: &[f64],
-    motion: &Motion,
+    motion: &Track,
     rss: f64,
     fixed: &[bool],
 ) -> (Vec<Estimate>, Vec<Option<f64>>) {
@@ -630,7 +630,7 @@ fn estimates<M: Separable + Sync>(
 
 fn finish<M: Separable + Sync>(
     fit: &SeparableFit,
-    motion: &Motion,
+    motion: &Track,
     y: &[f64],
     fixed: &[bool],
 ) -> Fitted<M> {
@@ -655,7 +655,7 @@ pub fn estimates_with_extra<M: Separable + Sync>(
     model: &M,
     extra: &[Vec<f64>],
     extra_beta: &[f64],
-    motion: &Motion,
+    motion: &Track,
     rss: f64,
     fixed: &[bool],
 ) -> (Vec<Estimate>, Vec<Option<f64>>) {
@@ -665,7 +665,7 @@ pub fn estimates_with_extra<M: Separable + Sync>(
 
 /// Fits offset + Coulomb + viscous friction (linear least squares).
 pub fn fit_coulomb_viscous(
-    motion: &Motion,
+    motion: &Track,
     tau: &[f64],
     settings: &FitSettings,
 ) -> Result<Fitted<CoulombViscous>, FrictionError> {
@@ -683,7 +683,7 @@ fn vs_box(s: Scales) -> (f64, f64) {
 /// Fits the Stribeck model; starts on a grid of `v_s` (7 log-spaced values
 /// over the data's velocity range) and `δ ∈ {0.7, 1, 2}`.
 pub fn fit_stribeck(
-    motion: &Motion,
+    motion: &Track,
     tau: &[f64],
     settings: &FitSettings,
 ) -> Result<Fitted<Stribeck>, FrictionError> {
@@ -706,7 +706,7 @@ pub fn fit_stribeck(
 /// Fits the Dahl model; starts on 9 log-spaced presliding displacements
 /// from 1e-6 rad to a tenth of the travelled range.
 pub fn fit_dahl(
-    motion: &Motion,
+    motion: &Track,
     tau: &[f64],
     settings: &FitSettings,
 ) -> Result<Fitted<Dahl>, FrictionError> {
@@ -723,7 +723,7 @@ pub fn fit_dahl(
 /// The search box and start grid of the LuGre structure
 /// `θ = (κ, F_s/F_c, v_s, δ)` around a Stribeck fit of the same data.
 pub fn lugre_starts(
-    motion: &Motion,
+    motion: &Track,
     stribeck: &Stribeck,
     settings: &FitSettings,
 ) -> (Vec<(f64, f64)>, Vec<Vec<f64>>) {
@@ -757,7 +757,7 @@ pub fn lugre_starts(
 /// fit of the same data (LuGre's steady state is the Stribeck curve), the
 /// presliding length `F_c/σ₀` from 9 log-spaced values.
 pub fn fit_lugre(
-    motion: &Motion,
+    motion: &Track,
     tau: &[f64],
     stribeck: &Stribeck,
     settings: &FitSettings,

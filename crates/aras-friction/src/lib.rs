@@ -4,7 +4,7 @@
 //! drive, a harmonic-drive joint — from a log of time, position, velocity and
 //! friction torque (the measured joint torque minus the rigid-body model).
 //!
-//! * [`Motion`]: time, position and velocity on the log's own, possibly
+//! * [`Track`]: time, position and velocity on the log's own, possibly
 //!   irregular, time grid.
 //! * [`models`]: [`CoulombViscous`], [`Stribeck`], [`Dahl`] and [`LuGre`],
 //!   each with its equations, parameter vector with physical bounds
@@ -42,8 +42,8 @@ pub mod fit;
 mod linalg;
 pub mod log;
 pub mod models;
-mod motion;
 pub mod sim;
+mod track;
 
 pub use error::FrictionError;
 pub use log::{ColumnMap, JointLog, LogError, read_joint_log, read_joint_log_from};
@@ -51,4 +51,4 @@ pub use models::{
     CoulombViscous, Dahl, FrictionModel, LuGre, ParamInfo, Separable, Stribeck, predict_parts, sgn,
     stribeck_decay,
 };
-pub use motion::Motion;
+pub use track::Track;

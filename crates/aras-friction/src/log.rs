@@ -14,7 +14,7 @@ use std::{fmt, io::BufRead, path::Path, str::FromStr};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::{FrictionError, Motion};
+use crate::{FrictionError, Track};
 
 /// Errors reading a joint log. `line` and `column` are 1-based.
 #[derive(Debug, Error)]
@@ -235,8 +235,8 @@ pub struct JointLog {
 
 impl JointLog {
     /// The motion (t, q, dq) of this log.
-    pub fn motion(&self) -> Result<Motion<'_>, FrictionError> {
-        Motion::new(&self.t, &self.q, &self.dq)
+    pub fn motion(&self) -> Result<Track<'_>, FrictionError> {
+        Track::new(&self.t, &self.q, &self.dq)
     }
 
     /// Number of samples.

@@ -38,7 +38,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{FrictionError, Motion, motion::HermiteInterval};
+use crate::{FrictionError, Track, track::HermiteInterval};
 
 /// Largest change of the normalised Stribeck function `h(v)` over one
 /// integration piece. The state error grows in proportion to it where the
@@ -123,7 +123,7 @@ pub trait FrictionModel {
     /// The parameter vector.
     fn parameters(&self) -> Vec<f64>;
     /// Friction torque (N·m) at every sample of the motion.
-    fn predict(&self, motion: &Motion) -> Vec<f64>;
+    fn predict(&self, motion: &Track) -> Vec<f64>;
 }
 
 /// A model that is linear in its coefficients `β` once its structural
@@ -138,7 +138,7 @@ pub trait Separable: FrictionModel + Sized {
     /// This model's `β`.
     fn coefficients(&self) -> Vec<f64>;
     /// The regressor columns `Φ(θ)` along the motion, one `Vec` per coefficient.
-    fn columns(theta: &[f64], motion: &Motion) -> Vec<Vec<f64>>;
+    fn columns(theta: &[f64], motion: &Track) -> Vec<Vec<f64>>;
     /// The physical model from `θ` and `β`.
     fn from_parts(theta: &[f64], beta: &[f64]) -> Self;
     /// The model from its parameter vector ([`FrictionModel::parameters`]
@@ -190,7 +190,7 @@ pub fn combine(columns: &[Vec<f64>], beta: &[f64]) -> Vec<f64> {
 /// Integrates `dz/dt = v − κ |v| z / h(v)` along the motion (module docs) and
 /// returns `z` and `dz/dt` at every sample.
 pub(crate) fn integrate_state(
-    motion: &Motion,
+    motion: &Track,
     kappa: f64,
     h: impl Fn(f64) -> f64,
 ) -> (Vec<f64>, Vec<f64>) {
@@ -326,7 +326,7 @@ impl FrictionModel for CoulombViscous {
     fn parameters(&self) -> Vec<f64> {
         vec![self.offset, self.coulomb, self.viscous]
     }
-    fn predict(&self, motion: &Motion) -> Vec<f64> {
+    fn predict(&self, motion: &Track) -> Vec<f64> {
         motion
             .dq()
             .iter()
@@ -348,7 +348,7 @@ impl Separable for CoulombViscous {
     fn coefficients(&self) -> Vec<f64> {
         self.parameters()
     }
-    fn columns(_theta: &[f64], motion: &Motion) -> Vec<Vec<f64>> {
+    fn columns(_theta: &[f64], motion: &Track) -> Vec<Vec<f64>> {
         let dq = motion.dq();
         vec![
             vec![1.0; dq.len()],
@@ -434,7 +434,7 @@ impl FrictionModel for Stribeck {
             self.viscous,
         ]
     }
-    fn predict(&self, motion: &Motion) -> Vec<f64> {
+    fn predict(&self, motion: &Track) -> Vec<f64> {
         motion.dq().iter().map(|&v| self.at(v)).collect()
     }
 }
@@ -457,7 +457,7 @@ impl Separable for Stribeck {
             self.viscous,
         ]
     }
-    fn columns(theta: &[f64], motion: &Motion) -> Vec<Vec<f64>> {
+    fn columns(theta: &[f64], motion: &Track) -> Vec<Vec<f64>> {
         let dq = motion.dq();
         let n = dq.len();
         let mut c = vec![vec![1.0; n], vec![0.0; n], vec![0.0; n], dq.to_vec()];
@@ -528,7 +528,7 @@ impl Dahl {
 
     /// The normalised state `w = F / F_c ∈ [−1, 1]` for a presliding
     /// displacement `x_d`.
-    fn normalised_state(x_d: f64, motion: &Motion) -> Vec<f64> {
+    fn normalised_state(x_d: f64, motion: &Track) -> Vec<f64> {
         let (mut z, _) = integrate_state(motion, 1.0 / x_d, |_| 1.0);
         // z is in rad with steady state ±x_d; w = z / x_d.
         for v in &mut z {
@@ -548,7 +548,7 @@ impl FrictionModel for Dahl {
     fn parameters(&self) -> Vec<f64> {
         vec![self.offset, self.coulomb, self.stiffness, self.viscous]
     }
-    fn predict(&self, motion: &Motion) -> Vec<f64> {
+    fn predict(&self, motion: &Track) -> Vec<f64> {
         if self.coulomb == 0.0 {
             return CoulombViscous::from_parts(&[], &[self.offset, 0.0, self.viscous])
                 .predict(motion);
@@ -575,7 +575,7 @@ impl Separable for Dahl {
     fn coefficients(&self) -> Vec<f64> {
         vec![self.offset, self.coulomb, self.viscous]
     }
-    fn columns(theta: &[f64], motion: &Motion) -> Vec<Vec<f64>> {
+    fn columns(theta: &[f64], motion: &Track) -> Vec<Vec<f64>> {
         vec![
             vec![1.0; motion.len()],
             Self::normalised_state(theta[0], motion),
@@ -659,11 +659,11 @@ impl LuGre {
     }
 
     /// Internal state `z` (rad) and its rate `dz/dt` at every sample.
-    pub fn state(&self, motion: &Motion) -> (Vec<f64>, Vec<f64>) {
+    pub fn state(&self, motion: &Track) -> (Vec<f64>, Vec<f64>) {
         Self::state_for(&self.structure(), motion)
     }
 
-    fn state_for(theta: &[f64], motion: &Motion) -> (Vec<f64>, Vec<f64>) {
+    fn state_for(theta: &[f64], motion: &Track) -> (Vec<f64>, Vec<f64>) {
         let (kappa, r, vs, delta) = (theta[0], theta[1], theta[2], theta[3]);
         integrate_state(motion, kappa, |v| {
             1.0 + (r - 1.0) * stribeck_decay(v, vs, delta)
@@ -702,7 +702,7 @@ impl FrictionModel for LuGre {
             self.sigma2,
         ]
     }
-    fn predict(&self, motion: &Motion) -> Vec<f64> {
+    fn predict(&self, motion: &Track) -> Vec<f64> {
         let (z, zd) = self.state(motion);
         z.iter()
             .zip(&zd)
@@ -730,7 +730,7 @@ impl Separable for LuGre {
     fn coefficients(&self) -> Vec<f64> {
         vec![self.offset, self.sigma0, self.sigma1, self.sigma2]
     }
-    fn columns(theta: &[f64], motion: &Motion) -> Vec<Vec<f64>> {
+    fn columns(theta: &[f64], motion: &Track) -> Vec<Vec<f64>> {
         let (z, zd) = Self::state_for(theta, motion);
         vec![vec![1.0; motion.len()], z, zd, motion.dq().to_vec()]
     }
@@ -763,6 +763,6 @@ impl Separable for LuGre {
 
 /// Prediction `Φ(θ) β` of a separable model from its parts (the same as
 /// [`FrictionModel::predict`] of [`Separable::from_parts`]).
-pub fn predict_parts<M: Separable>(theta: &[f64], beta: &[f64], motion: &Motion) -> Vec<f64> {
+pub fn predict_parts<M: Separable>(theta: &[f64], beta: &[f64], motion: &Track) -> Vec<f64> {
     combine(&M::columns(theta, motion), beta)
 }

@@ -4,7 +4,7 @@
 //! simulator's RK4 integration on the exact motion.
 
 use aras_friction::{
-    FrictionModel, LuGre, Motion,
+    FrictionModel, LuGre, Track,
     fit::{FitSettings, fit_coulomb_viscous, fit_dahl, fit_lugre, fit_stribeck},
     sim::{JointSimulation, SensorNoise, TrueFriction, typical_lugre},
 };
@@ -44,7 +44,7 @@ fn check(name: &str, got: &[f64], want: &[f64], tol: &[f64]) {
 fn coulomb_viscous_and_stribeck_recover_their_parameters() {
     let sim = quiet(30.0, typical_lugre()).run("x");
     let log = &sim.log;
-    let m = Motion::new(&log.t, &log.q, &log.dq).unwrap();
+    let m = Track::new(&log.t, &log.q, &log.dq).unwrap();
     let sg = |v: f64| {
         if v > 0.0 {
             1.0
@@ -91,7 +91,7 @@ fn dahl_recovers_its_parameters() {
     };
     let sim = quiet(30.0, truth).run("x");
     let log = &sim.log;
-    let m = Motion::new(&log.t, &log.q, &log.dq).unwrap();
+    let m = Track::new(&log.t, &log.q, &log.dq).unwrap();
     let f = fit_dahl(&m, &log.tau, &FitSettings::default()).unwrap();
     check(
         "dahl",
@@ -106,7 +106,7 @@ fn lugre_recovers_its_parameters() {
     let truth = typical_lugre();
     let sim = quiet(60.0, truth).run("x");
     let log = &sim.log;
-    let m = Motion::new(&log.t, &log.q, &log.dq).unwrap();
+    let m = Track::new(&log.t, &log.q, &log.dq).unwrap();
     let settings = FitSettings::default();
     let s = fit_stribeck(&m, &log.tau, &settings).unwrap();
     let f = fit_lugre(&m, &log.tau, &s.model, &settings).unwrap();

@@ -3,7 +3,7 @@
 //! independent fine RK4 integration, separable form = physical prediction.
 
 use aras_friction::{
-    CoulombViscous, Dahl, FrictionModel, LuGre, Motion, Separable, Stribeck, predict_parts, sgn,
+    CoulombViscous, Dahl, FrictionModel, LuGre, Separable, Stribeck, Track, predict_parts, sgn,
     stribeck_decay,
 };
 use proptest::prelude::*;
@@ -102,7 +102,7 @@ fn lugre_steady_state_is_the_stribeck_curve() {
         let t: Vec<f64> = (0..n).map(|i| dur * i as f64 / (n - 1) as f64).collect();
         let q: Vec<f64> = t.iter().map(|t| v * t).collect();
         let dq = vec![v; n];
-        let tau = m.predict(&Motion::new(&t, &q, &dq).unwrap());
+        let tau = m.predict(&Track::new(&t, &q, &dq).unwrap());
         let want = curve.at(v);
         // Pure rounding: the exact update is exact for constant velocity.
         assert!(
@@ -136,8 +136,8 @@ fn lugre_presliding_stiffness_is_sigma0() {
     }
     // Start at rest: first sample velocity 0 gives a relaxed state; the
     // Hermite interpolant of the first interval has the exact displacement.
-    let tau = m.predict(&Motion::new(&t, &q, &dq).unwrap());
-    let (z, zd) = m.state(&Motion::new(&t, &q, &dq).unwrap());
+    let tau = m.predict(&Track::new(&t, &q, &dq).unwrap());
+    let (z, zd) = m.state(&Track::new(&t, &q, &dq).unwrap());
     let k = n - 1;
     let stiffness = (tau[k] - m.offset - m.sigma1 * zd[k] - m.sigma2 * v) / q[k];
     assert!(
@@ -152,7 +152,7 @@ fn lugre_matches_fine_rk4_on_irregular_grid() {
     let m = lugre();
     let t = irregular_grid(8.0);
     let (q, dq) = sample(&t);
-    let tau = m.predict(&Motion::new(&t, &q, &dq).unwrap());
+    let tau = m.predict(&Track::new(&t, &q, &dq).unwrap());
     let reference = lugre_reference(&m, &t);
     let err = tau
         .iter()
@@ -180,8 +180,8 @@ fn lugre_is_step_size_independent() {
     fine.push(*coarse.last().unwrap());
     let (qc, dqc) = sample(&coarse);
     let (qf, dqf) = sample(&fine);
-    let tc = m.predict(&Motion::new(&coarse, &qc, &dqc).unwrap());
-    let tf = m.predict(&Motion::new(&fine, &qf, &dqf).unwrap());
+    let tc = m.predict(&Track::new(&coarse, &qc, &dqc).unwrap());
+    let tf = m.predict(&Track::new(&fine, &qf, &dqf).unwrap());
     let err = (0..coarse.len())
         .map(|i| (tc[i] - tf[16 * i]).abs())
         .fold(0.0, f64::max);
@@ -196,7 +196,7 @@ fn stiff_lugre_stays_finite_and_bounded() {
     m.sigma0 = 1e9;
     let t = irregular_grid(3.0);
     let (q, dq) = sample(&t);
-    let tau = m.predict(&Motion::new(&t, &q, &dq).unwrap());
+    let tau = m.predict(&Track::new(&t, &q, &dq).unwrap());
     let curve = m.steady_state();
     for (i, x) in tau.iter().enumerate() {
         assert!(x.is_finite());
@@ -221,8 +221,8 @@ fn dahl_is_rate_independent() {
     let (q, dq) = sample(&t);
     let slow_t: Vec<f64> = t.iter().map(|t| 3.0 * t).collect();
     let slow_dq: Vec<f64> = dq.iter().map(|v| v / 3.0).collect();
-    let a = m.predict(&Motion::new(&t, &q, &dq).unwrap());
-    let b = m.predict(&Motion::new(&slow_t, &q, &slow_dq).unwrap());
+    let a = m.predict(&Track::new(&t, &q, &dq).unwrap());
+    let b = m.predict(&Track::new(&slow_t, &q, &slow_dq).unwrap());
     for (x, y) in a.iter().zip(&b) {
         // Same path, three times slower: identical up to rounding.
         assert!((x - y).abs() < 1e-12);
@@ -256,7 +256,7 @@ proptest! {
     ) {
         let m = LuGre { offset: 0.0, coulomb: fc, static_friction: ratio * fc,
             stribeck_velocity: vs, shape: delta, sigma0, sigma1: 0.0, sigma2: 0.0 };
-        let motion = Motion::new(&t, &q, &dq).unwrap();
+        let motion = Track::new(&t, &q, &dq).unwrap();
         let (z, zd) = m.state(&motion);
         // |z| ≤ max(F_c, F_s)/σ₀: the exact update is a convex combination of
         // z and a steady state within that bound.
@@ -271,7 +271,7 @@ proptest! {
     fn dahl_state_stays_within_coulomb((t, q, dq) in motion_strategy(),
         fc in 0.01f64..5.0, sigma0 in 1.0f64..1e9) {
         let m = Dahl { offset: 0.0, coulomb: fc, stiffness: sigma0, viscous: 0.0 };
-        let tau = m.predict(&Motion::new(&t, &q, &dq).unwrap());
+        let tau = m.predict(&Track::new(&t, &q, &dq).unwrap());
         for x in tau {
             prop_assert!(x.abs() <= fc * (1.0 + 1e-12));
         }
@@ -281,7 +281,7 @@ proptest! {
     fn separable_form_equals_prediction((t, q, dq) in motion_strategy(),
         f0 in -1.0f64..1.0, fc in 0.01f64..2.0, fs in 0.01f64..2.0, vs in 1e-3f64..1.0,
         delta in 0.5f64..3.0, fv in 0.0f64..1.0, sigma0 in 1.0f64..1e6, sigma1 in 0.0f64..10.0) {
-        let motion = Motion::new(&t, &q, &dq).unwrap();
+        let motion = Track::new(&t, &q, &dq).unwrap();
         let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-9 * (1.0 + y.abs()));
         let cv = CoulombViscous { offset: f0, coulomb: fc, viscous: fv };
         prop_assert!(close(&predict_parts::<CoulombViscous>(&cv.structure(), &cv.coefficients(), &motion), &cv.predict(&motion)));

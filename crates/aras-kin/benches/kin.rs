@@ -15,7 +15,12 @@ fn bench(c: &mut Criterion) {
         b.iter(|| forward(&g, black_box(&th), AssemblyMode::Plus))
     });
     c.bench_function("evaluate (full per-sample)", |b| {
-        b.iter(|| evaluate(&g, black_box(&x), black_box(&xd), black_box(&xdd)))
+        b.iter(|| {
+            evaluate(
+                &g,
+                &aras_kin::Motion::new(*black_box(&x), *black_box(&xd), *black_box(&xdd)),
+            )
+        })
     });
 }
 

@@ -17,9 +17,11 @@ fn main() {
         let x = Vector2::new(1.5 + 0.5 * t.sin(), 1.0 + 0.3 * t.cos());
         let s = evaluate(
             &g,
-            black_box(&x),
-            &Vector2::new(0.3, -0.7),
-            &Vector2::new(1.1, 0.4),
+            &aras_kin::Motion::new(
+                *black_box(&x),
+                Vector2::new(0.3, -0.7),
+                Vector2::new(1.1, 0.4),
+            ),
         )
         .unwrap();
         acc += s.omega_dot[3][2];

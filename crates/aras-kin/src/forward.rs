@@ -3,7 +3,7 @@
 use nalgebra::Vector2;
 
 use crate::pose::{Pose, check_finite};
-use crate::{Geometry, KinError};
+use crate::{Geometry, KinError, Motion};
 
 /// Assembly mode of the distal links: the sign in (6).
 ///
@@ -33,34 +33,32 @@ pub fn forward(
     Ok(forward_pose(g, theta, mode)?.0)
 }
 
-/// [`forward_motion`] in assembly mode `+` as a function of plain arrays
-/// `[θ, θ̇, θ̈] → [X, Ẋ, Ẍ]` that owns its geometry: the shape a
-/// robot-agnostic consumer takes for "the model's coordinates" (a closure of
-/// this type is an `aras_signal::Coordinates`).
+/// [`forward_motion`] in assembly mode `+` as a function that owns its
+/// geometry: the shape a robot-agnostic consumer takes for "the model's
+/// coordinates" (a closure of this type is an `aras_signal::Coordinates`).
 pub fn task_motion(
     g: &Geometry,
-) -> impl Fn([[f64; 2]; 3]) -> Result<[[f64; 2]; 3], KinError> + Copy + Send + Sync {
+) -> impl Fn(Motion) -> Result<Motion, KinError> + Copy + Send + Sync {
     let g = *g;
-    move |[theta, rate, accel]| {
-        let v = |a: [f64; 2]| Vector2::new(a[0], a[1]);
-        let [x, xd, xdd] = forward_motion(&g, &v(theta), &v(rate), &v(accel), AssemblyMode::Plus)?;
-        Ok([[x[0], x[1]], [xd[0], xd[1]], [xdd[0], xdd[1]]])
-    }
+    move |joint| forward_motion(&g, &joint, AssemblyMode::Plus)
 }
 
 /// Task-space motion from motor-space motion: forward kinematics (6)–(7)
 /// with `Ẋ = J⁻¹ θ̇` and `Ẍ = J⁻¹ (θ̈ − J̇ Ẋ)`, `J̇ Ẋ = [K′γ̇², −K′γ̇²]`.
 ///
-/// Returns `[X, Ẋ, Ẍ]`. This is what turns measured encoder angles and
+/// Returns `(X, Ẋ, Ẍ)`. This is what turns measured encoder angles and
 /// their derivatives into the task-space inputs of the dynamics; it skips
 /// the link frames [`evaluate`](crate::evaluate) would also build.
 pub fn forward_motion(
     g: &Geometry,
-    theta: &Vector2<f64>,
-    theta_dot: &Vector2<f64>,
-    theta_ddot: &Vector2<f64>,
+    joint: &Motion,
     mode: AssemblyMode,
-) -> Result<[Vector2<f64>; 3], KinError> {
+) -> Result<Motion, KinError> {
+    let Motion {
+        pos: theta,
+        vel: theta_dot,
+        acc: theta_ddot,
+    } = joint;
     check_finite("theta1_dot", theta_dot[0])?;
     check_finite("theta2_dot", theta_dot[1])?;
     check_finite("theta1_ddot", theta_ddot[0])?;
@@ -70,7 +68,7 @@ pub fn forward_motion(
     let x_dot = inv(*theta_dot);
     let jd = pose.k_prime * x_dot[1] * x_dot[1];
     let x_ddot = inv(theta_ddot - Vector2::new(jd, -jd));
-    Ok([x, x_dot, x_ddot])
+    Ok(Motion::new(x, x_dot, x_ddot))
 }
 
 fn forward_pose(

@@ -31,7 +31,7 @@
 //! # Example
 //!
 //! ```
-//! use aras_kin::{evaluate, forward, inverse, AssemblyMode, Geometry};
+//! use aras_kin::{evaluate, forward, inverse, AssemblyMode, Geometry, Motion};
 //! use nalgebra::Vector2;
 //!
 //! let g = Geometry::aras_diamond();
@@ -40,7 +40,7 @@
 //! let back = forward(&g, &ik.theta, AssemblyMode::Plus)?;
 //! assert!((back - x).norm() < 1e-12);
 //!
-//! let s = evaluate(&g, &x, &Vector2::new(0.3, -0.7), &Vector2::zeros())?;
+//! let s = evaluate(&g, &Motion::new(x, Vector2::new(0.3, -0.7), Vector2::zeros()))?;
 //! assert!((s.omega[2] - nalgebra::Vector3::new(0.74048, 0.43208, 0.58577)).norm() < 1e-5);
 //! # Ok::<(), aras_kin::KinError>(())
 //! ```
@@ -63,6 +63,7 @@ mod sample;
 mod scalar;
 mod workspace;
 
+pub use aras_core::Motion;
 pub use error::KinError;
 pub use forward::{AssemblyMode, forward, forward_motion, task_motion};
 pub use geometry::{DEFAULT_SINGULARITY_TOLERANCE, Geometry};

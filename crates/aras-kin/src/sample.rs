@@ -4,9 +4,9 @@ use nalgebra::{Matrix2, Matrix3, Matrix3x2, Vector2, Vector3};
 
 use crate::links::LINKS;
 use crate::pose::{Pose, check_finite};
-use crate::{Geometry, Jacobian, KinError, Scalar, SingularityDistance};
+use crate::{Geometry, Jacobian, KinError, Motion, Scalar, SingularityDistance};
 
-/// Kinematics of the whole mechanism at one sample `(X, Ẋ, Ẍ)`.
+/// Kinematics of the whole mechanism at one task motion sample `(X, Ẋ, Ẍ)`.
 ///
 /// All vectors are in the base frame {0}; angles in rad, rates in rad/s,
 /// accelerations in rad/s². Link arrays are indexed 0–3 for links 1–4 (see
@@ -14,18 +14,11 @@ use crate::{Geometry, Jacobian, KinError, Scalar, SingularityDistance};
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub struct KinematicSample<T: Scalar = f64> {
-    /// Task pose `X = [φ, γ]`.
-    pub x: Vector2<T>,
-    /// Task rate `Ẋ`.
-    pub x_dot: Vector2<T>,
-    /// Task acceleration `Ẍ`.
-    pub x_ddot: Vector2<T>,
-    /// Motor angles `θ`, (1)–(2).
-    pub theta: Vector2<T>,
-    /// Motor rates `θ̇ = J Ẋ`.
-    pub theta_dot: Vector2<T>,
-    /// Motor accelerations `θ̈ = J Ẍ + J̇ Ẋ`.
-    pub theta_ddot: Vector2<T>,
+    /// Task motion `X = [φ, γ]`, `Ẋ`, `Ẍ`: what the sample was evaluated at.
+    pub task: Motion<T>,
+    /// Motor motion: angles `θ` (1)–(2), rates `θ̇ = J Ẋ` and accelerations
+    /// `θ̈ = J Ẍ + J̇ Ẋ`.
+    pub joint: Motion<T>,
     /// Motor Jacobian `J`, (8)–(11).
     pub jacobian: Jacobian<T>,
     /// `J̇` along the sample's motion.
@@ -56,12 +49,12 @@ pub struct KinematicSample<T: Scalar = f64> {
 /// numbers (feature `dual`) to get exact derivatives of everything with
 /// respect to the inputs.
 #[inline]
-pub fn evaluate<T: Scalar>(
-    g: &Geometry,
-    x: &Vector2<T>,
-    x_dot: &Vector2<T>,
-    x_ddot: &Vector2<T>,
-) -> Result<KinematicSample<T>, KinError> {
+pub fn evaluate<T: Scalar>(g: &Geometry, task: &Motion<T>) -> Result<KinematicSample<T>, KinError> {
+    let Motion {
+        pos: x,
+        vel: x_dot,
+        acc: x_ddot,
+    } = task;
     check_finite("phi_dot", x_dot[0])?;
     check_finite("gamma_dot", x_dot[1])?;
     check_finite("phi_ddot", x_ddot[0])?;
@@ -78,12 +71,8 @@ pub fn evaluate<T: Scalar>(
     let omega_dot =
         std::array::from_fn(|k| link_jacobians[k] * x_ddot + link_jacobian_dots[k] * x_dot);
     Ok(KinematicSample {
-        x: *x,
-        x_dot: *x_dot,
-        x_ddot: *x_ddot,
-        theta: Vector2::new(p.theta1, p.theta2),
-        theta_dot,
-        theta_ddot,
+        task: *task,
+        joint: Motion::new(Vector2::new(p.theta1, p.theta2), theta_dot, theta_ddot),
         jacobian: jac,
         jacobian_dot,
         rotations: p.frames(g),

@@ -6,6 +6,7 @@
 //! derivative and whose rounding error is ≈ 1e-16/h ≈ 1e-11, so a relative
 //! error of 1e-7 is a strict but safe bound away from singularities.
 
+use aras_kin::Motion;
 use aras_kin::{
     AssemblyMode, Geometry, KinError, Singularity, Workspace, evaluate, forward, inverse, jacobian,
     link_frames, link_jacobians, singularity_distance,
@@ -157,7 +158,7 @@ proptest! {
     fn accelerations_match_finite_differences(x in pose(), xd in rate(), xdd in rate()) {
         let g = Geometry::aras_diamond();
         // Along the parabola X(t) = X + Ẋ t + ½ Ẍ t², the derivative of Ω_k and θ̇ at t = 0.
-        let at = |t: f64| evaluate(&g, &(x + xd * t + xdd * (0.5 * t * t)), &(xd + xdd * t), &xdd).unwrap();
+        let at = |t: f64| evaluate(&g, &Motion::new(x + xd * t + xdd * (0.5 * t * t), xd + xdd * t, xdd)).unwrap();
         let (p, m, s) = (at(H), at(-H), at(0.0));
         for k in 0..4 {
             let fd = (p.omega[k] - m.omega[k]) / (2.0 * H);
@@ -165,27 +166,27 @@ proptest! {
             let jfd = (p.link_jacobians[k] - m.link_jacobians[k]) / (2.0 * H);
             prop_assert!((s.link_jacobian_dots[k] - jfd).norm() <= 1e-7 * (1.0 + jfd.norm()));
         }
-        let fd = (p.theta_dot - m.theta_dot) / (2.0 * H);
-        prop_assert!((s.theta_ddot - fd).norm() <= 1e-7 * (1.0 + fd.norm()));
-        let fd = (p.theta - m.theta) / (2.0 * H);
-        prop_assert!((s.theta_dot - fd).norm() <= 1e-7 * (1.0 + fd.norm()));
+        let fd = (p.joint.vel - m.joint.vel) / (2.0 * H);
+        prop_assert!((s.joint.acc - fd).norm() <= 1e-7 * (1.0 + fd.norm()));
+        let fd = (p.joint.pos - m.joint.pos) / (2.0 * H);
+        prop_assert!((s.joint.vel - fd).norm() <= 1e-7 * (1.0 + fd.norm()));
     }
 
     #[test]
     fn forward_motion_inverts_the_motor_motion(x in pose(), xd in rate(), xdd in rate()) {
         let g = Geometry::aras_diamond();
-        let s = evaluate(&g, &x, &xd, &xdd).unwrap();
-        let [x2, xd2, xdd2] = aras_kin::forward_motion(&g, &s.theta, &s.theta_dot, &s.theta_ddot, AssemblyMode::Plus).unwrap();
-        prop_assert!((x2 - x).norm() < 1e-12);
-        prop_assert!((xd2 - xd).norm() < 1e-11 * (1.0 + xd.norm()));
-        prop_assert!((xdd2 - xdd).norm() < 1e-10 * (1.0 + xdd.norm() + xd.norm_squared()));
+        let s = evaluate(&g, &Motion::new(x, xd, xdd)).unwrap();
+        let back = aras_kin::forward_motion(&g, &s.joint, AssemblyMode::Plus).unwrap();
+        prop_assert!((back.pos - x).norm() < 1e-12);
+        prop_assert!((back.vel - xd).norm() < 1e-11 * (1.0 + xd.norm()));
+        prop_assert!((back.acc - xdd).norm() < 1e-10 * (1.0 + xdd.norm() + xd.norm_squared()));
     }
 
     #[test]
     fn sample_agrees_with_single_functions(x in pose(), xd in rate(), xdd in rate()) {
         let g = Geometry::aras_diamond();
-        let s = evaluate(&g, &x, &xd, &xdd).unwrap();
-        prop_assert_eq!(s.theta, inverse(&g, &x).unwrap().theta);
+        let s = evaluate(&g, &Motion::new(x, xd, xdd)).unwrap();
+        prop_assert_eq!(s.joint.pos, inverse(&g, &x).unwrap().theta);
         prop_assert_eq!(s.rotations, link_frames(&g, &x).unwrap());
         prop_assert_eq!(s.link_jacobians, link_jacobians(&g, &x).unwrap());
         prop_assert_eq!(s.jacobian, jacobian(&g, &x).unwrap());
@@ -197,7 +198,7 @@ proptest! {
         let mut v = [x[0], x[1], 0.1, 0.2, 0.3, 0.4];
         v[which] = bad;
         let names = ["phi", "gamma", "phi_dot", "gamma_dot", "phi_ddot", "gamma_ddot"];
-        let err = evaluate(&g, &Vector2::new(v[0], v[1]), &Vector2::new(v[2], v[3]), &Vector2::new(v[4], v[5])).unwrap_err();
+        let err = evaluate(&g, &Motion::new(Vector2::new(v[0], v[1]), Vector2::new(v[2], v[3]), Vector2::new(v[4], v[5]))).unwrap_err();
         prop_assert!(matches!(err, KinError::NonFinite { name, .. } if name == names[which]), "{err}");
     }
 }
@@ -219,7 +220,11 @@ fn spec_numeric_check() {
     );
     // B = C, and Ω3 from docs/kinematics.md (link angular velocities).
     assert_eq!(ik.passive.b, ik.passive.c);
-    let s = evaluate(&g, &x, &Vector2::new(0.3, -0.7), &Vector2::zeros()).unwrap();
+    let s = evaluate(
+        &g,
+        &Motion::new(x, Vector2::new(0.3, -0.7), Vector2::zeros()),
+    )
+    .unwrap();
     assert!((s.omega[2] - Vector3::new(0.74048, 0.43208, 0.58577)).norm() < 1e-5);
     // Our elbow rate μ equals −G of (17): G = sin γ/(sin β sin α sin B).
     let gg = x[1].sin() / (g.beta().sin() * g.alpha().sin() * ik.passive.b.sin());
@@ -266,9 +271,11 @@ fn singular_poses_are_named() {
     // γ = α + β: elbows stretched, A = 0.
     let err = evaluate(
         &g,
-        &Vector2::new(1.0, deg(90.0)),
-        &Vector2::zeros(),
-        &Vector2::zeros(),
+        &Motion::new(
+            Vector2::new(1.0, deg(90.0)),
+            Vector2::zeros(),
+            Vector2::zeros(),
+        ),
     )
     .unwrap_err();
     assert!(
@@ -431,11 +438,11 @@ fn dual_numbers_give_exact_derivatives() {
     let xd = Vector2::new(0.3, -0.7);
     let x = Vector2::new(D::from(x0[0]).derivative(0), D::from(x0[1]).derivative(1));
     let lift = |v: &Vector2<f64>| v.map(D::from);
-    let s = evaluate(&g, &x, &lift(&xd), &lift(&Vector2::zeros())).unwrap();
+    let s = evaluate(&g, &Motion::new(x, lift(&xd), lift(&Vector2::zeros()))).unwrap();
     // dθ/dX from the dual part equals the Jacobian.
     let j = jacobian(&g, &x0).unwrap().matrix();
     for r in 0..2 {
-        let eps = s.theta[r]
+        let eps = s.joint.pos[r]
             .eps
             .unwrap_generic(nalgebra::Const::<2>, nalgebra::Const::<1>);
         for c in 0..2 {
@@ -443,7 +450,7 @@ fn dual_numbers_give_exact_derivatives() {
         }
     }
     // Real parts equal the f64 evaluation.
-    let f = evaluate(&g, &x0, &xd, &Vector2::zeros()).unwrap();
+    let f = evaluate(&g, &Motion::new(x0, xd, Vector2::zeros())).unwrap();
     for k in 0..4 {
         for i in 0..3 {
             assert!((s.omega[k][i].re - f.omega[k][i]).abs() < 1e-15);

@@ -5,6 +5,7 @@
 use aras_dyn::Params;
 use aras_ident::BaseParameters;
 use aras_ident::streaming::{Accumulation, RegressorStage, States};
+use aras_kin::Motion;
 use aras_pipeline::TaskRegressor;
 use aras_pipeline::robot::stack;
 use aras_pipeline::streaming::synthetic;
@@ -90,12 +91,14 @@ fn bench(c: &mut Criterion) {
             for i in 0..n {
                 let k = aras_kin::evaluate(
                     &geo,
-                    &Vector2::new(s[0][0][i], s[0][1][i]),
-                    &Vector2::new(s[1][0][i], s[1][1][i]),
-                    &Vector2::new(s[2][0][i], s[2][1][i]),
+                    &Motion::new(
+                        Vector2::new(s[0][0][i], s[0][1][i]),
+                        Vector2::new(s[1][0][i], s[1][1][i]),
+                        Vector2::new(s[2][0][i], s[2][1][i]),
+                    ),
                 )
                 .unwrap();
-                acc += k.theta[0];
+                acc += k.joint.pos[0];
             }
             black_box(acc)
         })
@@ -105,9 +108,11 @@ fn bench(c: &mut Criterion) {
             for i in 0..n {
                 let k = aras_kin::evaluate(
                     &geo,
-                    &Vector2::new(s[0][0][i], s[0][1][i]),
-                    &Vector2::new(s[1][0][i], s[1][1][i]),
-                    &Vector2::new(s[2][0][i], s[2][1][i]),
+                    &Motion::new(
+                        Vector2::new(s[0][0][i], s[0][1][i]),
+                        Vector2::new(s[1][0][i], s[1][1][i]),
+                        Vector2::new(s[2][0][i], s[2][1][i]),
+                    ),
                 )
                 .unwrap();
                 model.fill(&k, &mut y).unwrap();

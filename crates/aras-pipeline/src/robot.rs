@@ -4,7 +4,7 @@
 //! parameter type.
 
 use aras_dyn::{Effect, Model, Params};
-use aras_kin::{Geometry, Workspace};
+use aras_kin::{Geometry, Motion, Workspace};
 use aras_signal::{Samples, Sos};
 use faer::Mat;
 use nalgebra::Vector2;
@@ -44,9 +44,6 @@ fn invalid(context: &str, reason: impl Into<String>) -> IdentError {
 /// samples were derived) and their torques.
 pub fn stack(model: &Model, geometry: &Geometry, samples: &Samples) -> Result<Stacked, IdentError> {
     let n = samples.len();
-    let v = |a: &[Vec<f64>; 2]| -> Vec<Vector2<f64>> {
-        (0..n).map(|i| Vector2::new(a[0][i], a[1][i])).collect()
-    };
     for (what, a) in [
         ("x", &samples.x),
         ("x_dot", &samples.x_dot),
@@ -64,13 +61,18 @@ pub fn stack(model: &Model, geometry: &Geometry, samples: &Samples) -> Result<St
             ));
         }
     }
+    let at = |a: &[Vec<f64>; 2], i: usize| Vector2::new(a[0][i], a[1][i]);
+    let task: Vec<Motion> = (0..n)
+        .map(|i| {
+            Motion::new(
+                at(&samples.x, i),
+                at(&samples.x_dot, i),
+                at(&samples.x_ddot, i),
+            )
+        })
+        .collect();
     let w = model
-        .stacked_from_states(
-            geometry,
-            &v(&samples.x),
-            &v(&samples.x_dot),
-            &v(&samples.x_ddot),
-        )
+        .stacked_from_states(geometry, &task)
         .map_err(|e| dyn_err("stacking the regressor", e))?;
     let w = faer::MatRef::from_column_major_slice(w.as_slice(), 2 * n, model.columns()).to_owned();
     let t = samples.tau[0]
@@ -115,26 +117,21 @@ pub fn base_parameters(
     const PRIMES: [u64; 6] = [2, 3, 5, 7, 11, 13];
     const ACCEL: f64 = 20.0;
     let (lo, hi, rate) = (workspace.min(), workspace.max(), workspace.max_rate());
-    let mut x = Vec::with_capacity(samples);
-    let mut xd = Vec::with_capacity(samples);
-    let mut xdd = Vec::with_capacity(samples);
-    for i in 0..samples as u64 {
-        let u: [f64; 6] = std::array::from_fn(|d| radical_inverse(i + 1, PRIMES[d]));
-        x.push(Vector2::new(
-            lo[0] + u[0] * (hi[0] - lo[0]),
-            lo[1] + u[1] * (hi[1] - lo[1]),
-        ));
-        xd.push(Vector2::new(
-            rate[0] * (2.0 * u[2] - 1.0),
-            rate[1] * (2.0 * u[3] - 1.0),
-        ));
-        xdd.push(Vector2::new(
-            ACCEL * (2.0 * u[4] - 1.0),
-            ACCEL * (2.0 * u[5] - 1.0),
-        ));
-    }
+    let task: Vec<Motion> = (0..samples as u64)
+        .map(|i| {
+            let u: [f64; 6] = std::array::from_fn(|d| radical_inverse(i + 1, PRIMES[d]));
+            Motion::new(
+                Vector2::new(
+                    lo[0] + u[0] * (hi[0] - lo[0]),
+                    lo[1] + u[1] * (hi[1] - lo[1]),
+                ),
+                Vector2::new(rate[0] * (2.0 * u[2] - 1.0), rate[1] * (2.0 * u[3] - 1.0)),
+                Vector2::new(ACCEL * (2.0 * u[4] - 1.0), ACCEL * (2.0 * u[5] - 1.0)),
+            )
+        })
+        .collect();
     let w = model
-        .stacked_from_states(geometry, &x, &xd, &xdd)
+        .stacked_from_states(geometry, &task)
         .map_err(|e| dyn_err("stacking the regressor for the base analysis", e))?;
     let w = faer::MatRef::from_column_major_slice(w.as_slice(), 2 * samples, model.columns());
     BaseParameters::from_regressor(w, &model.names(), DEFAULT_RANK_TOLERANCE)

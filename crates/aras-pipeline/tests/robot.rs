@@ -7,6 +7,7 @@ mod common;
 use aras_dyn::{Effect, Model, Params};
 use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{BaseParameters, ReducedLs, RowGroups};
+use aras_kin::Motion;
 use aras_kin::Workspace;
 use aras_pipeline::robot::{FilterMode, consistent_problem, filter, params_from_solution, stack};
 use aras_signal::{Butterworth, Samples};
@@ -22,24 +23,19 @@ fn random_regressor(model: &Model, n: usize, seed: u64) -> Mat<f64> {
     let ws = Workspace::paper();
     let mut r = common::rng(seed);
     let (lo, hi, rate) = (ws.min(), ws.max(), ws.max_rate());
-    let mut x = Vec::new();
-    let mut xd = Vec::new();
-    let mut xdd = Vec::new();
-    for _ in 0..n {
-        x.push(Vector2::new(
-            r.random_range(lo[0]..hi[0]),
-            r.random_range(lo[1]..hi[1]),
-        ));
-        xd.push(Vector2::new(
-            r.random_range(-rate[0]..rate[0]),
-            r.random_range(-rate[1]..rate[1]),
-        ));
-        xdd.push(Vector2::new(
-            5.0 * common::normal(&mut r),
-            5.0 * common::normal(&mut r),
-        ));
-    }
-    let w = model.stacked_from_states(&g, &x, &xd, &xdd).unwrap();
+    let task: Vec<Motion> = (0..n)
+        .map(|_| {
+            Motion::new(
+                Vector2::new(r.random_range(lo[0]..hi[0]), r.random_range(lo[1]..hi[1])),
+                Vector2::new(
+                    r.random_range(-rate[0]..rate[0]),
+                    r.random_range(-rate[1]..rate[1]),
+                ),
+                Vector2::new(5.0 * common::normal(&mut r), 5.0 * common::normal(&mut r)),
+            )
+        })
+        .collect();
+    let w = model.stacked_from_states(&g, &task).unwrap();
     faer::MatRef::from_column_major_slice(w.as_slice(), 2 * n, model.columns()).to_owned()
 }
 

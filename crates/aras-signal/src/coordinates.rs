@@ -7,8 +7,7 @@
 
 use std::convert::Infallible;
 
-/// One sample of motion: position, rate and acceleration, each `[q1, q2]`.
-pub type Motion = [[f64; 2]; 3];
+pub use aras_core::Motion;
 
 /// Maps joint motion `[θ, θ̇, θ̈]` to the model's coordinates `[X, Ẋ, Ẍ]`.
 ///
@@ -53,10 +52,14 @@ mod tests {
 
     #[test]
     fn joint_coordinates_are_the_identity_and_closures_map() {
-        let m = [[0.1, -0.2], [1.0, 2.0], [-3.0, 4.0]];
+        let m = Motion::from_arrays([[0.1, -0.2], [1.0, 2.0], [-3.0, 4.0]]);
         assert_eq!(JointCoordinates.map(m).unwrap(), m);
-        let doubled =
-            |m: Motion| -> Result<Motion, Infallible> { Ok(m.map(|r| r.map(|v| 2.0 * v))) };
-        assert_eq!(doubled.map(m).unwrap()[2], [-6.0, 8.0]);
+        let doubled = |m: Motion| -> Result<Motion, Infallible> {
+            Ok(Motion::new(m.pos * 2.0, m.vel * 2.0, m.acc * 2.0))
+        };
+        assert_eq!(
+            doubled.map(m).unwrap().acc,
+            nalgebra::Vector2::new(-6.0, 8.0)
+        );
     }
 }

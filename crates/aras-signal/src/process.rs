@@ -14,13 +14,14 @@
 //!    sample, so joint-space terms (friction on θ̇) and task-space terms agree,
 //!    and logged θ̇ columns are used as they are.
 
+use nalgebra::Vector2;
 use serde::Serialize;
 
 use crate::bandwidth::{
     CUTOFF_MARGIN, HarmonicSelection, PeriodDetection, PeriodOrigin, SpectrumCutoff, detect_period,
     harmonic_fit, hermite_at, resample, spectrum_cutoff, uniform_derivatives,
 };
-use crate::coordinates::Coordinates;
+use crate::coordinates::{Coordinates, Motion};
 use crate::derivative::{DerivativeMethod, derivatives, resolve, spectral_with};
 use crate::error::ProcessError;
 use crate::fourier::Fourier;
@@ -1088,18 +1089,22 @@ fn filter_all(
 /// Fills the model's coordinates X, Ẋ, Ẍ from θ, θ̇, θ̈ at every sample.
 fn model_coordinates(s: &mut Samples, c: &impl Coordinates) -> Result<(), ProcessError> {
     for i in 0..s.len() {
-        let col = |v: &[Vec<f64>; 2]| [v[0][i], v[1][i]];
-        let [x, xd, xdd] = c
-            .map([col(&s.theta), col(&s.theta_dot), col(&s.theta_ddot)])
+        let col = |v: &[Vec<f64>; 2]| Vector2::new(v[0][i], v[1][i]);
+        let task = c
+            .map(Motion::new(
+                col(&s.theta),
+                col(&s.theta_dot),
+                col(&s.theta_ddot),
+            ))
             .map_err(|e| ProcessError::Coordinates {
                 index: i,
                 t: s.t[i],
                 source: Box::new(e),
             })?;
         for j in 0..2 {
-            s.x[j][i] = x[j];
-            s.x_dot[j][i] = xd[j];
-            s.x_ddot[j][i] = xdd[j];
+            s.x[j][i] = task.pos[j];
+            s.x_dot[j][i] = task.vel[j];
+            s.x_ddot[j][i] = task.acc[j];
         }
     }
     Ok(())

@@ -53,13 +53,15 @@ fn predict(truth: &Params, p: &Processed) -> [Vec<f64>; 2] {
     let mut out = [Vec::new(), Vec::new()];
     for i in 0..s.len() {
         let v = |a: &[Vec<f64>; 2]| Vector2::new(a[0][i], a[1][i]);
-        let k = dy.sample(&v(&s.x), &v(&s.x_dot), &v(&s.x_ddot)).unwrap();
+        let k = dy
+            .sample(&aras_kin::Motion::new(v(&s.x), v(&s.x_dot), v(&s.x_ddot)))
+            .unwrap();
         // The simulator's own torque law: friction (49) with its
         // tanh(θ̇/w) sign (`SimConfig::friction_smoothing`).
         let sign = Sign::Tanh(SimConfig::default().friction_smoothing);
         let tau = dy.link_torque(&k)
-            + dy.friction_torque(&k.theta_dot, sign)
-            + dy.elastic_torque(&k.theta)
+            + dy.friction_torque(&k.joint.vel, sign)
+            + dy.elastic_torque(&k.joint.pos)
             + dy.extra_torque(&k, sign);
         out[0].push(tau[0]);
         out[1].push(tau[1]);

@@ -3,7 +3,7 @@
 
 use std::f64::consts::TAU;
 
-use aras_kin::{Geometry, evaluate, inverse};
+use aras_kin::{Geometry, Motion, evaluate, inverse};
 use aras_log::{ReadOptions, read_log_from};
 use aras_signal::{
     Bandwidth, BandwidthMethod, DerivativeMethod, FilterSpec, PeriodSource, ProcessError,
@@ -16,7 +16,7 @@ const PERIOD: f64 = 2.0;
 const DT: f64 = 0.001;
 
 /// X, Ẋ, Ẍ of a 3-harmonic trajectory inside the workspace (77).
-fn trajectory(t: f64) -> [Vector2<f64>; 3] {
+fn trajectory(t: f64) -> Motion {
     let w = TAU / PERIOD;
     let mut x = Vector2::new(85f64.to_radians(), 60f64.to_radians());
     let mut xd = Vector2::zeros();
@@ -31,7 +31,7 @@ fn trajectory(t: f64) -> [Vector2<f64>; 3] {
             xdd[c] -= al * wl * wl * (wl * t + ph).sin();
         }
     }
-    [x, xd, xdd]
+    Motion::new(x, xd, xdd)
 }
 
 /// A log of `periods` periods; optional logged derivative columns.
@@ -45,12 +45,18 @@ fn log_text(periods: usize, with_derivatives: bool) -> String {
     let n = (periods as f64 * PERIOD / DT).round() as usize;
     for i in 0..n {
         let t = i as f64 * DT;
-        let [x, xd, xdd] = trajectory(t);
-        let k = evaluate(&g, &x, &xd, &xdd).unwrap();
-        let th = inverse(&g, &x).unwrap().theta;
-        s += &format!("{t},{},{},{},{}", th[0], th[1], 0.3 * xdd[0], -0.2 * xd[1]);
+        let m = trajectory(t);
+        let k = evaluate(&g, &m).unwrap();
+        let th = inverse(&g, &m.pos).unwrap().theta;
+        s += &format!(
+            "{t},{},{},{},{}",
+            th[0],
+            th[1],
+            0.3 * m.acc[0],
+            -0.2 * m.vel[1]
+        );
         if with_derivatives {
-            let (a, b) = (k.theta_dot, k.theta_ddot);
+            let (a, b) = (k.joint.vel, k.joint.acc);
             s += &format!(",{},{},{},{}", a[0], a[1], b[0], b[1]);
         }
         s += "\n";
@@ -101,12 +107,12 @@ fn periodic_record_without_filter_is_exact() {
     // derivatives and the Jacobian keep X to 1e-12, Ẋ to 1e-9 (×ω ≈ 10),
     // Ẍ to 1e-7 (×ω² ≈ 100, and J⁻¹ with |K| ≈ 0.8).
     for c in 0..2 {
-        assert!(max_err(&s.x[c], &s.t, |t| trajectory(t)[0][c]) < 1e-12);
-        assert!(max_err(&s.x_dot[c], &s.t, |t| trajectory(t)[1][c]) < 1e-9);
-        assert!(max_err(&s.x_ddot[c], &s.t, |t| trajectory(t)[2][c]) < 1e-7);
+        assert!(max_err(&s.x[c], &s.t, |t| trajectory(t).pos[c]) < 1e-12);
+        assert!(max_err(&s.x_dot[c], &s.t, |t| trajectory(t).vel[c]) < 1e-9);
+        assert!(max_err(&s.x_ddot[c], &s.t, |t| trajectory(t).acc[c]) < 1e-7);
     }
     // τ passes unchanged (no filter) and θ̇ = J Ẋ holds sample by sample.
-    assert!(max_err(&s.tau[0], &s.t, |t| 0.3 * trajectory(t)[2][0]) < 1e-12);
+    assert!(max_err(&s.tau[0], &s.t, |t| 0.3 * trajectory(t).acc[0]) < 1e-12);
     let serialized = serde_json::to_string(&out.summary).unwrap();
     assert!(
         serialized.contains("\"periods_averaged\":3"),
@@ -141,7 +147,7 @@ fn ten_hz_filter_barely_touches_the_dynamics() {
     // on Ẍ of amplitude ≈ 5 rad/s², so 1e-4 (2e-5 relative).
     let s = &out.samples;
     for c in 0..2 {
-        let e = max_err(&s.x_ddot[c], &s.t, |t| trajectory(t)[2][c]);
+        let e = max_err(&s.x_ddot[c], &s.t, |t| trajectory(t).acc[c]);
         assert!(e < 1e-4, "{e}");
     }
 }
@@ -179,7 +185,7 @@ fn non_periodic_record_uses_central_differences_and_drops_edges() {
     let mid = 400..1600;
     for c in 0..2 {
         let e = max_err(&s.x_dot[c][mid.clone()], &s.t[mid.clone()], |t| {
-            trajectory(t)[1][c]
+            trajectory(t).vel[c]
         });
         assert!(e < 1e-4, "{e}");
     }
@@ -212,8 +218,8 @@ fn logged_derivatives_are_used_when_asked() {
     );
     let s = &out.samples;
     for c in 0..2 {
-        assert!(max_err(&s.x_dot[c], &s.t, |t| trajectory(t)[1][c]) < 1e-12);
-        assert!(max_err(&s.x_ddot[c], &s.t, |t| trajectory(t)[2][c]) < 1e-10);
+        assert!(max_err(&s.x_dot[c], &s.t, |t| trajectory(t).vel[c]) < 1e-12);
+        assert!(max_err(&s.x_ddot[c], &s.t, |t| trajectory(t).acc[c]) < 1e-10);
     }
     // By default they are ignored, with a note.
     let opts = ProcessOptions {
@@ -300,7 +306,7 @@ fn automatic_bandwidth_on_a_periodic_record_is_the_exact_series() {
     // as exact as with no filter at all (the unfiltered test's 1e-7).
     let s = &out.samples;
     for c in 0..2 {
-        let e = max_err(&s.x_ddot[c], &s.t, |t| trajectory(t)[2][c]);
+        let e = max_err(&s.x_ddot[c], &s.t, |t| trajectory(t).acc[c]);
         assert!(e < 1e-7, "{e}");
     }
     let json = serde_json::to_string(&out.summary).unwrap();
@@ -322,7 +328,7 @@ fn a_coordinate_failure_names_the_sample_and_keeps_its_cause() {
     let limit = log.theta[0][0]
         + 0.05 * (log.theta[0].iter().cloned().fold(f64::MIN, f64::max) - log.theta[0][0]);
     let picky = |m: aras_signal::Motion| -> Result<aras_signal::Motion, std::fmt::Error> {
-        if m[0][0] > limit {
+        if m.pos[0] > limit {
             Err(std::fmt::Error)
         } else {
             Ok(m)

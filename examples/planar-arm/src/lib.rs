@@ -397,9 +397,9 @@ pub fn run(settings: &Settings) -> Result<Outcome, Box<dyn std::error::Error>> {
     for i in 0..n {
         let t = (i as f64 + 0.5) * dt;
         let s = traj.eval(t);
-        let tau = arm.torques(s.x.into(), s.x_dot.into(), s.x_ddot.into());
-        csv += &format!("{t},{},{},{},{}\n", s.x[0], s.x[1], tau[0], tau[1]);
-        exact_accel.push(s.x_ddot);
+        let tau = arm.torques(s.pos.into(), s.vel.into(), s.acc.into());
+        csv += &format!("{t},{},{},{},{}\n", s.pos[0], s.pos[1], tau[0], tau[1]);
+        exact_accel.push(s.acc);
     }
 
     // 3. Processing: the known period gives a harmonic series up to the

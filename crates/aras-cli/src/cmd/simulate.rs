@@ -70,7 +70,7 @@ fn check_in_box(tr: &FourierTrajectory, cfg: &crate::config::Config, path: &Path
     let names = ["φ", "γ"];
     for row in tr.sample(2000, 1) {
         for i in 0..2 {
-            let deg = row.state.x[i].to_degrees();
+            let deg = row.state.pos[i].to_degrees();
             if !(lo[i]..=hi[i]).contains(&deg) {
                 bail!(
                     "{}: the trajectory leaves the workspace box (77): {} = {deg:.2}° at t = {:.4} s, \

@@ -148,8 +148,8 @@ pub fn build(d: &RunData) -> Result<Report> {
         let n = 500;
         let ts: Vec<f64> = (0..=n).map(|i| tr.period() * i as f64 / n as f64).collect();
         let st: Vec<_> = ts.iter().map(|&t| tr.eval(t)).collect();
-        let phi: Vec<f64> = st.iter().map(|s| s.x[0].to_degrees()).collect();
-        let gam: Vec<f64> = st.iter().map(|s| s.x[1].to_degrees()).collect();
+        let phi: Vec<f64> = st.iter().map(|s| s.pos[0].to_degrees()).collect();
+        let gam: Vec<f64> = st.iter().map(|s| s.pos[1].to_degrees()).collect();
         let svg = lines(
             "Excitation trajectory (one period)",
             "t (s)",

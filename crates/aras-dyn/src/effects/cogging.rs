@@ -52,7 +52,7 @@ pub(super) fn fill<T: Scalar>(
     order: usize,
     out: &mut [T],
 ) {
-    let (z, th) = (T::zero(), s.theta);
+    let (z, th) = (T::zero(), s.joint.pos);
     let mut c = 0;
     for j in 0..2 {
         for h in 1..=order {

@@ -19,6 +19,6 @@ pub(super) const EXPLANATION: &str = "the Coulomb friction level differs between
 /// Columns `|sign θ̇_j|` on each joint's row.
 #[inline(always)]
 pub(super) fn fill<T: Scalar>(s: &KinematicSample<T>, sign: Sign, out: &mut [T]) {
-    let td = s.theta_dot;
+    let td = s.joint.vel;
     diagonal(sign.eval(td[0]).abs(), sign.eval(td[1]).abs(), out);
 }

@@ -18,5 +18,5 @@ pub(super) const EXPLANATION: &str = "the capstan cables act as springs: a torqu
 /// Columns `θ1` and `θ2` on their joints' rows.
 #[inline(always)]
 pub(super) fn fill<T: Scalar>(s: &KinematicSample<T>, out: &mut [T]) {
-    diagonal(s.theta[0], s.theta[1], out);
+    diagonal(s.joint.pos[0], s.joint.pos[1], out);
 }

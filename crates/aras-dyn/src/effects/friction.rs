@@ -20,6 +20,6 @@ pub(super) const EXPLANATION: &str = "friction in the motors, capstans and activ
 /// Columns `[θ̇1, sign θ̇1]` on joint 1's row, `[θ̇2, sign θ̇2]` on joint 2's.
 #[inline(always)]
 pub(super) fn fill<T: Scalar>(s: &KinematicSample<T>, sign: Sign, out: &mut [T]) {
-    let (z, td) = (T::zero(), s.theta_dot);
+    let (z, td) = (T::zero(), s.joint.vel);
     out.copy_from_slice(&[td[0], z, sign.eval(td[0]), z, z, td[1], z, sign.eval(td[1])]);
 }

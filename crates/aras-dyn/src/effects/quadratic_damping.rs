@@ -16,6 +16,6 @@ pub(super) const EXPLANATION: &str = "damping growing with the square of the spe
 /// Columns `θ̇_j |θ̇_j|` on each joint's row.
 #[inline(always)]
 pub(super) fn fill<T: Scalar>(s: &KinematicSample<T>, out: &mut [T]) {
-    let td = s.theta_dot;
+    let td = s.joint.vel;
     diagonal(td[0] * td[0].abs(), td[1] * td[1].abs(), out);
 }

@@ -38,5 +38,5 @@ pub(super) fn fill<T: Scalar>(s: &KinematicSample<T>, v_s: f64, sign: Sign, out:
         let q = v / T::lift(v_s);
         sign.eval(v) * (-(q * q)).exp()
     };
-    diagonal(f(s.theta_dot[0]), f(s.theta_dot[1]), out);
+    diagonal(f(s.joint.vel[0]), f(s.joint.vel[1]), out);
 }

@@ -22,6 +22,7 @@
 
 mod log;
 
+use aras_kin::Motion;
 use aras_kin::{Geometry, evaluate};
 use nalgebra::Vector2;
 use rand::SeedableRng;
@@ -229,9 +230,9 @@ impl Plant<'_> {
         v: &Vector2<f64>,
         tau: &Vector2<f64>,
     ) -> Result<Vector2<f64>, DynError> {
-        let s = evaluate(&self.geometry, x, v, &Vector2::zeros())?;
-        let other = self.dy.friction_torque(&s.theta_dot, self.sign)
-            + self.dy.elastic_torque(&s.theta)
+        let s = evaluate(&self.geometry, &Motion::new(*x, *v, Vector2::zeros()))?;
+        let other = self.dy.friction_torque(&s.joint.vel, self.sign)
+            + self.dy.elastic_torque(&s.joint.pos)
             + self.dy.extra_torque(&s, self.sign);
         self.dy.forward_links(&s, &(tau - other))
     }
@@ -292,22 +293,21 @@ pub fn simulate(
     let mut rng = StdRng::seed_from_u64(cfg.seed);
 
     let desired = |t: f64| -> Result<aras_kin::KinematicSample, SimError> {
-        let (x, v, a) = traj.eval(t);
-        evaluate(&g, &x, &v, &a).map_err(|e| SimError::Trajectory {
+        evaluate(&g, &traj.eval(t)).map_err(|e| SimError::Trajectory {
             t,
             source: e.into(),
         })
     };
     let d0 = desired(0.0)?;
-    let (mut x, mut v) = (d0.x, d0.x_dot);
+    let (mut x, mut v) = (d0.task.pos, d0.task.vel);
     let quantise = |th: &Vector2<f64>| {
         Vector2::new(
             (th[0] / res[0]).round() * res[0],
             (th[1] / res[1]).round() * res[1],
         )
     };
-    let mut theta_prev = quantise(&d0.theta);
-    let mut vel_est = d0.theta_dot;
+    let mut theta_prev = quantise(&d0.joint.pos);
+    let mut vel_est = d0.joint.vel;
 
     let mut log = SimLog::with_capacity(n);
     // (measured, noise-free) torque of every step, for the delayed rows.
@@ -315,8 +315,8 @@ pub fn simulate(
     for k in 0..n {
         let t = k as f64 * dt;
         let at = |source| SimError::Dynamics { t, source };
-        let s = evaluate(&g, &x, &v, &Vector2::zeros()).map_err(|e| at(e.into()))?;
-        let theta_meas = quantise(&s.theta);
+        let s = evaluate(&g, &Motion::new(x, v, Vector2::zeros())).map_err(|e| at(e.into()))?;
+        let theta_meas = quantise(&s.joint.pos);
         if k > 0 {
             let raw = (theta_meas - theta_prev) / dt;
             vel_est += (raw - vel_est) * alpha;
@@ -328,8 +328,8 @@ pub fn simulate(
             tau += f.inverse(&d);
         }
         for j in 0..2 {
-            tau[j] +=
-                c.kp[j] * (d.theta[j] - theta_meas[j]) + c.kd[j] * (d.theta_dot[j] - vel_est[j]);
+            tau[j] += c.kp[j] * (d.joint.pos[j] - theta_meas[j])
+                + c.kd[j] * (d.joint.vel[j] - vel_est[j]);
             tau[j] = tau[j].clamp(-cfg.torque_limit[j], cfg.torque_limit[j]);
         }
         let xdd = plant.accel(&x, &v, &tau).map_err(at)?;
@@ -347,7 +347,7 @@ pub fn simulate(
                 [theta_meas[0], theta_meas[1]],
                 measured,
                 clean,
-                [s.theta_dot[0], s.theta_dot[1]],
+                [s.joint.vel[0], s.joint.vel[1]],
                 [theta_ddot[0], theta_ddot[1]],
             );
         }

@@ -110,8 +110,11 @@ pub(crate) fn window_kinematics(
     let v = |a: &[Vec<f64>; 2], i: usize| Vector2::new(a[0][i], a[1][i]);
     (lo..hi)
         .map(|i| {
-            aras_kin::evaluate(geometry, &v(&s.x, i), &v(&s.x_dot, i), &v(&s.x_ddot, i))
-                .map_err(|e| IdentError::external(format!("kinematics of sample {i}"), e))
+            aras_kin::evaluate(
+                geometry,
+                &aras_kin::Motion::new(v(&s.x, i), v(&s.x_dot, i), v(&s.x_ddot, i)),
+            )
+            .map_err(|e| IdentError::external(format!("kinematics of sample {i}"), e))
         })
         .collect()
 }

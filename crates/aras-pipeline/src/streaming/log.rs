@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use aras_dyn::Model;
-use aras_kin::{AssemblyMode, Geometry};
+use aras_kin::{AssemblyMode, Geometry, Motion};
 use aras_log::{Columns, Log, LogReader, LogReport, LogSummary, ReadOptions, Sidecar};
 use aras_signal::{Bandwidth, Butterworth, FilterSpec, PeriodSource, ProcessOptions};
 use nalgebra::Vector2;
@@ -279,23 +279,22 @@ pub fn identify_log_with_progress(
             }
             for i in 0..n {
                 let th = |a: &[Vec<f64>; 2]| Vector2::new(a[0][i], a[1][i]);
-                let [p, v, a] = aras_kin::forward_motion(
-                    &options.geometry,
-                    &th(&chunk.theta),
-                    &th(&chunk.theta_dot),
-                    &th(&chunk.theta_ddot),
-                    AssemblyMode::Plus,
-                )
-                .map_err(|e| {
-                    sig(
-                        &format!("{name}: forward kinematics of sample {}", out.read + i),
-                        e,
-                    )
-                })?;
+                let joint = Motion::new(
+                    th(&chunk.theta),
+                    th(&chunk.theta_dot),
+                    th(&chunk.theta_ddot),
+                );
+                let task = aras_kin::forward_motion(&options.geometry, &joint, AssemblyMode::Plus)
+                    .map_err(|e| {
+                        sig(
+                            &format!("{name}: forward kinematics of sample {}", out.read + i),
+                            e,
+                        )
+                    })?;
                 for c in 0..2 {
-                    x[c][i] = p[c];
-                    xd[c][i] = v[c];
-                    xdd[c][i] = a[c];
+                    x[c][i] = task.pos[c];
+                    xd[c][i] = task.vel[c];
+                    xdd[c][i] = task.acc[c];
                 }
             }
             let states = States {

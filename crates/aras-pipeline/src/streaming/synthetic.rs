@@ -8,8 +8,7 @@ use std::io::Write;
 use std::path::Path;
 
 use aras_dyn::Model;
-use aras_kin::Geometry;
-use nalgebra::Vector2;
+use aras_kin::{Geometry, Motion};
 use rayon::prelude::*;
 
 use aras_ident::IdentError;
@@ -26,8 +25,8 @@ const COMPONENTS: [[(f64, f64, f64); 3]; 2] = [
 const CENTRE: [f64; 2] = [1.48, 1.05];
 
 /// `X, Ẋ, Ẍ` of the trajectory at time `t` (s).
-pub fn state(t: f64) -> [Vector2<f64>; 3] {
-    let mut out = [Vector2::zeros(); 3];
+pub fn state(t: f64) -> Motion {
+    let mut out = Motion::default();
     for a in 0..2 {
         let (mut x, mut xd, mut xdd) = (CENTRE[a], 0.0, 0.0);
         for &(amp, h, ph) in &COMPONENTS[a] {
@@ -37,9 +36,9 @@ pub fn state(t: f64) -> [Vector2<f64>; 3] {
             xd += amp * w * c;
             xdd -= amp * w * w * s;
         }
-        out[0][a] = x;
-        out[1][a] = xd;
-        out[2][a] = xdd;
+        out.pos[a] = x;
+        out.vel[a] = xd;
+        out.acc[a] = xdd;
     }
     out
 }
@@ -100,12 +99,12 @@ fn row(
 ) -> Result<[f64; 8], IdentError> {
     let (s, tau) = sample(model, geometry, beta, i, fs, noise_std)?;
     Ok([
-        s.x[0],
-        s.x[1],
-        s.x_dot[0],
-        s.x_dot[1],
-        s.x_ddot[0],
-        s.x_ddot[1],
+        s.task.pos[0],
+        s.task.pos[1],
+        s.task.vel[0],
+        s.task.vel[1],
+        s.task.acc[0],
+        s.task.acc[1],
         tau[0],
         tau[1],
     ])
@@ -119,8 +118,7 @@ fn sample(
     fs: f64,
     noise_std: f64,
 ) -> Result<(aras_kin::KinematicSample, [f64; 2]), IdentError> {
-    let [x, xd, xdd] = state(i as f64 / fs);
-    let s = aras_kin::evaluate(geometry, &x, &xd, &xdd)
+    let s = aras_kin::evaluate(geometry, &state(i as f64 / fs))
         .map_err(|e| IdentError::external("synthetic trajectory", e))?;
     let tau = model
         .torque(&s, beta)
@@ -168,12 +166,12 @@ pub fn write_log(
                         out,
                         "{:.6},{:.12},{:.12},{:.12},{:.12},{:.12},{:.12},{:.12},{:.12}",
                         i as f64 / fs,
-                        s.theta[0],
-                        s.theta[1],
-                        s.theta_dot[0],
-                        s.theta_dot[1],
-                        s.theta_ddot[0],
-                        s.theta_ddot[1],
+                        s.joint.pos[0],
+                        s.joint.pos[1],
+                        s.joint.vel[0],
+                        s.joint.vel[1],
+                        s.joint.acc[0],
+                        s.joint.acc[1],
                         tau[0],
                         tau[1]
                     );

@@ -32,7 +32,7 @@ pub fn task_mass_pd(
     check_positive_definite(
         |x: &[f64; 2]| -> Result<[[f64; 2]; 2], String> {
             let s = dy
-                .sample(&Vector2::new(x[0], x[1]), &z, &z)
+                .sample(&aras_kin::Motion::new(Vector2::new(x[0], x[1]), z, z))
                 .map_err(|e| e.to_string())?;
             let m = dy.mass_matrix(&s);
             Ok([[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]])

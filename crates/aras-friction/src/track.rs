@@ -1,4 +1,4 @@
-//! A joint's motion along a (possibly irregular) time grid.
+//! A joint's track: its motion along a (possibly irregular) time grid.
 
 use crate::FrictionError;
 
@@ -9,13 +9,13 @@ use crate::FrictionError;
 /// constant step. Construction checks lengths, finiteness and strictly
 /// increasing time, so every model can rely on clean input.
 #[derive(Debug, Clone, Copy)]
-pub struct Motion<'a> {
+pub struct Track<'a> {
     t: &'a [f64],
     q: &'a [f64],
     dq: &'a [f64],
 }
 
-impl<'a> Motion<'a> {
+impl<'a> Track<'a> {
     /// Checks and wraps time `t` (s), position `q` (rad) and velocity `dq` (rad/s).
     pub fn new(t: &'a [f64], q: &'a [f64], dq: &'a [f64]) -> Result<Self, FrictionError> {
         let n = t.len();
@@ -182,14 +182,14 @@ mod tests {
     fn motion_rejects_bad_time() {
         let t = [0.0, 0.1, 0.1];
         let z = [0.0; 3];
-        let e = Motion::new(&t, &z, &z).unwrap_err();
+        let e = Track::new(&t, &z, &z).unwrap_err();
         assert!(matches!(
             e,
             FrictionError::TimeNotIncreasing { index: 2, .. }
         ));
         let q = [0.0, f64::NAN, 0.0];
         let t = [0.0, 0.1, 0.2];
-        let e = Motion::new(&t, &q, &z).unwrap_err();
+        let e = Track::new(&t, &q, &z).unwrap_err();
         assert!(matches!(e, FrictionError::NonFinite { index: 1, .. }));
     }
 }
