@@ -2,16 +2,19 @@
 //! regressor → the processing's zero-phase low-pass on the torques and the
 //! regressor columns alike (`docs/processing.md`, "Parallel filtering").
 //! The in-memory identification, every block of the streaming route and the
-//! diagnosis's data sets start here.
+//! diagnosis's data sets start here; the diagnosis's bounded-memory pass
+//! runs the regressor step alone ([`columns_on`]) window by window.
 
 use aras_dyn::Model;
 use aras_ident::{BaseParameters, IdentError};
-use aras_kin::Geometry;
+use aras_kin::{Geometry, KinematicSample};
 use aras_log::Log;
 use aras_signal::{Butterworth, ProcessOptions, ProcessSummary, Processed, Sos};
-use faer::MatRef;
+use faer::{Mat, MatRef};
 
-use crate::robot::{FilterMode, Stacked, filter, filter_reach, noise_gain, reversal_mask, stack};
+use crate::robot::{
+    FilterMode, Stacked, filter, filter_columns, filter_reach, noise_gain, reversal_mask, stack,
+};
 
 /// Which columns of the model's regressor are stacked.
 #[derive(Debug, Clone, Copy)]
@@ -22,6 +25,44 @@ pub enum RegressorColumns<'a> {
     /// column by column, so the values are those of filtering every standard
     /// column first, at a fraction of the cost.
     Base(&'a BaseParameters),
+}
+
+impl RegressorColumns<'_> {
+    /// These columns of a stacked standard regressor `w`: `w` itself, or
+    /// the base columns `W E`.
+    fn select(self, w: MatRef<'_, f64>) -> Result<Mat<f64>, IdentError> {
+        match self {
+            Self::Standard => Ok(w.to_owned()),
+            Self::Base(base) => base.base_regressor(w),
+        }
+    }
+}
+
+/// The regressor step of [`prepare`] on kinematics that are evaluated once
+/// and shared by several models (the diagnosis's windows: the current model
+/// and every candidate): `model`'s `columns` on `kinematics`, joint-major,
+/// then `low_pass` (the processing's filter, and whether the record is one
+/// period, filtered circularly) on every column. The torques are left to
+/// the caller, who filters them once per record.
+pub fn columns_on(
+    model: &Model,
+    columns: RegressorColumns<'_>,
+    kinematics: &[KinematicSample],
+    low_pass: Option<(&Sos, bool)>,
+) -> Result<Mat<f64>, IdentError> {
+    let n = kinematics.len();
+    let w = model
+        .stacked(kinematics)
+        .map_err(|e| IdentError::external("stacking the regressor", e))?;
+    let mut w = columns.select(MatRef::from_column_major_slice(
+        w.as_slice(),
+        2 * n,
+        model.columns(),
+    ))?;
+    if let Some((sos, periodic)) = low_pass {
+        filter_columns(&mut w, n, sos, periodic)?;
+    }
+    Ok(w)
 }
 
 /// A processed log with its stacked regressor and torques (`2N × n`, joint
@@ -73,7 +114,7 @@ pub fn prepare(
     let mut stacked = stack(model, geometry, &processed.samples)?;
     if let RegressorColumns::Base(base) = columns {
         stacked = Stacked {
-            w: base.base_regressor(stacked.w.as_ref())?,
+            w: columns.select(stacked.w.as_ref())?,
             names: base.base_names(),
             ..stacked
         };

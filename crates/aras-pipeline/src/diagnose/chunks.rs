@@ -9,17 +9,17 @@
 //! tolerance (relative to the column's scale). A window touching an end of
 //! the record is padded exactly as the whole-record filter pads it. Period-averaged
 //! records (one period, short) are filtered whole with the periodic
-//! filter, as before.
+//! filter. A window's columns come from [`crate::prepare::columns_on`],
+//! the same regressor step a whole log goes through in
+//! [`crate::prepare::prepare`].
 
-use aras_dyn::Model;
 use aras_kin::{Geometry, KinematicSample};
 use nalgebra::Vector2;
 use rayon::prelude::*;
 
 use super::data::Dataset;
-use crate::robot::{filter_columns, filter_reach};
-use aras_ident::{BaseParameters, IdentError};
-use faer::Mat;
+use crate::robot::filter_reach;
+use aras_ident::IdentError;
 
 /// Samples per chunk: with ≈ 170 columns the window's columns of both
 /// joints take ≈ 15 MB per lane.
@@ -117,32 +117,6 @@ pub(crate) fn window_kinematics(
             .map_err(|e| IdentError::external(format!("kinematics of sample {i}"), e))
         })
         .collect()
-}
-
-/// Filtered regressor columns of `model` on a window's kinematics `kin`
-/// ([`window_kinematics`]), joint-major; only `base`'s columns when given
-/// (selected before filtering, which filters column by column: the same
-/// values, fewer columns filtered). The torques are not filtered here
-/// ([`filtered_torques`] does it once per record).
-pub(crate) fn window_columns(
-    model: &Model,
-    base: Option<&BaseParameters>,
-    kin: &[KinematicSample],
-    data: &Dataset,
-) -> Result<Mat<f64>, IdentError> {
-    let n = kin.len();
-    let w = model
-        .stacked(kin)
-        .map_err(|e| IdentError::external("stacking the window's regressor", e))?;
-    let w = faer::MatRef::from_column_major_slice(w.as_slice(), 2 * n, model.columns());
-    let mut w = match base {
-        Some(b) => b.base_regressor(w)?,
-        None => w.to_owned(),
-    };
-    if let Some(sos) = &data.filter {
-        filter_columns(&mut w, n, sos, data.periodic)?;
-    }
-    Ok(w)
 }
 
 /// The whole record's filtered torques per joint (two vectors: the

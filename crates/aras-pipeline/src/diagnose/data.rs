@@ -4,6 +4,11 @@
 
 use aras_signal::{Samples, Sos};
 
+use aras_dyn::Model;
+use aras_kin::KinematicSample;
+use faer::Mat;
+
+use crate::prepare::{RegressorColumns, columns_on};
 use crate::robot::{filter_reach, reversal_mask};
 use aras_ident::IdentError;
 
@@ -101,6 +106,22 @@ impl Dataset {
             Some(sos) => crate::robot::noise_gain(sos, self.len(), self.periodic),
             None => Ok(1.0),
         }
+    }
+
+    /// [`crate::prepare::columns_on`] a window's kinematics of this data
+    /// set, with its low-pass.
+    pub(crate) fn columns(
+        &self,
+        model: &Model,
+        columns: RegressorColumns<'_>,
+        kinematics: &[KinematicSample],
+    ) -> Result<Mat<f64>, IdentError> {
+        columns_on(
+            model,
+            columns,
+            kinematics,
+            self.filter.as_ref().map(|sos| (sos, self.periodic)),
+        )
     }
 
     pub(crate) fn check(&self) -> Result<(), IdentError> {

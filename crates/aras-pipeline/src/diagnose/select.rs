@@ -9,9 +9,10 @@ use faer::{Mat, MatRef};
 use serde::Serialize;
 
 use super::candidates::{Candidate, CandidateGrid};
-use super::chunks::{Plan, filtered_torques, in_lanes, window_columns, window_kinematics};
+use super::chunks::{Plan, filtered_torques, in_lanes, window_kinematics};
 use super::data::{Dataset, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse};
+use crate::prepare::RegressorColumns;
 use crate::robot::consistent_problem;
 use aras_ident::BaseParameters;
 use aras_ident::IdentError;
@@ -332,11 +333,11 @@ impl Context<'_> {
                 let (wl, wh) = p.plan.window(a, b);
                 let nw = wh - wl;
                 let kin = window_kinematics(self.geometry, d, wl, wh)?;
-                let wb = window_columns(self.start, Some(&self.base), &kin, d)?;
+                let wb = d.columns(self.start, RegressorColumns::Base(&self.base), &kin)?;
                 let blocks = effect_models
                     .iter()
                     .map(|m| match m {
-                        Some(m) => window_columns(m, None, &kin, d).map(Some),
+                        Some(m) => d.columns(m, RegressorColumns::Standard, &kin).map(Some),
                         None => Ok(None),
                     })
                     .collect::<Result<Vec<_>, _>>()?;
@@ -413,11 +414,13 @@ impl Context<'_> {
             let (wl, wh) = p.plan.window(a, b);
             let nw = wh - wl;
             let kin = window_kinematics(self.geometry, d, wl, wh)?;
-            let wb = window_columns(self.start, Some(&self.base), &kin, d)?;
+            let wb = d.columns(self.start, RegressorColumns::Base(&self.base), &kin)?;
             let blocks = used
                 .iter()
                 .map(|&k| match &self.effect_models[k] {
-                    Some(m) => window_columns(m, None, &kin, d).map(|w| (k, w)),
+                    Some(m) => d
+                        .columns(m, RegressorColumns::Standard, &kin)
+                        .map(|w| (k, w)),
                     None => Ok((k, Mat::zeros(0, 0))),
                 })
                 .collect::<Result<Vec<_>, _>>()?;
@@ -473,7 +476,7 @@ impl Context<'_> {
             let (wl, wh) = p.plan.window(a, b);
             let nw = wh - wl;
             let kin = window_kinematics(self.geometry, d, wl, wh)?;
-            let wb = window_columns(model, Some(base), &kin, d)?;
+            let wb = d.columns(model, RegressorColumns::Base(base), &kin)?;
             for g in 0..2 {
                 let idx = Self::rows(p, g, a, b);
                 let m = Mat::from_fn(idx.len(), wb.ncols(), |r, j| wb[(g * nw + idx[r] - wl, j)]);
