@@ -57,7 +57,8 @@
 //!
 //! # Dependencies
 //!
-//! `aras-kin` (kinematics, with its `dual` feature), `nalgebra` (fixed-size
+//! `aras-core` ([`Inertia`], a link's inertial parameters and
+//! pseudo-inertia), `aras-kin` (kinematics, with its `dual` feature), `nalgebra` (fixed-size
 //! stack matrices in per-sample code), `num-dual` (exact second derivatives
 //! for the Lagrange check), `serde`/`serde_json` (parameter files, log
 //! sidecars), `thiserror` (error enums), `rayon` (stacking the regressor

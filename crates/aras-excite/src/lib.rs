@@ -46,6 +46,7 @@
 //! * `aras-ident` (no default features, so no system library): the
 //!   `LinearModel` trait [`Regressor`] extends, faer's SVD behind its AVX
 //!   upper-state clear.
+//! * `aras-core`: [`Motion`], the motion sample trajectories return.
 //! * `faer`: the thin SVD of the stacked base regressor.
 //! * `nalgebra`: the small fixed-size vectors of the API, and the
 //!   projection matrix `E` at the API edge.

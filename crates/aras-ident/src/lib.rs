@@ -48,6 +48,7 @@
 //!   crate needs no system library.
 //! * `rayon`: parallel tall-skinny QR, streaming regressor blocks and
 //!   workspace scans.
+//! * `aras-core`: `Inertia`, whose pseudo-inertia the SDP constrains.
 //! * `serde`: results serialise for reports; `thiserror`: the error type.
 #![warn(missing_docs)]
 // Dense linear algebra on small fixed matrices reads best with explicit indices.

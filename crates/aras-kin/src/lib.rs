@@ -47,8 +47,9 @@
 //!
 //! # Dependencies
 //!
-//! Only `nalgebra` (fixed-size stack types, so per-sample evaluation does not
-//! allocate) and `thiserror`. The optional feature `dual` adds `num-dual`
+//! `aras-core` ([`Motion`], the motion sample kinematics map), `nalgebra`
+//! (fixed-size stack types, so per-sample evaluation does not allocate) and
+//! `thiserror`. The optional feature `dual` adds `num-dual`
 //! (forward-mode dual numbers) so every quantity can be differentiated
 //! exactly; see [`Scalar`].
 

@@ -57,6 +57,8 @@
 //!   and spectral derivative (an averaged period of 10 000 samples is not a
 //!   power of two; a hand-written mixed-radix FFT would be more code to trust).
 //! * `aras-log`: the [`aras_log::Log`] a processing starts from.
+//! * `aras-core`: [`Motion`], the motion sample the caller's [`Coordinates`]
+//!   map, shared with the kinematics and the excitation design.
 //! * `serde`: the serialisable summaries.
 //! * `thiserror`: the error enums.
 
