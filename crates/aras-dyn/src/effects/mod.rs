@@ -252,15 +252,22 @@ impl Effect {
         self.kind().explanation()
     }
 
-    /// The parameters physics keeps non-negative, (70) (the physically
-    /// consistent fit imposes them). Rigid links have a matrix constraint
-    /// instead (the pseudo-inertia, (67)–(69)); the candidate effects are
-    /// fitted with their signs free.
+    /// The parameters physics keeps non-negative, (70): what the physically
+    /// consistent fit imposes (least squares leaves every sign free). Rigid
+    /// links have a matrix constraint instead (the pseudo-inertia,
+    /// (67)–(69)); an offset, a Coulomb asymmetry and cogging may have
+    /// either sign.
     pub fn nonnegative(&self) -> &'static [&'static str] {
         match self {
             Effect::Friction => friction::NONNEGATIVE,
             Effect::Elasticity => elasticity::NONNEGATIVE,
-            _ => &[],
+            Effect::StribeckFriction { .. } => stribeck_friction::NONNEGATIVE,
+            Effect::PassiveJointViscous => passive_joint_viscous::NONNEGATIVE,
+            Effect::QuadraticDamping => quadratic_damping::NONNEGATIVE,
+            Effect::RigidLinks
+            | Effect::TorqueOffset
+            | Effect::CoulombAsymmetry
+            | Effect::Cogging { .. } => &[],
         }
     }
 

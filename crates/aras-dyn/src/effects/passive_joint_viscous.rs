@@ -1,13 +1,18 @@
 //! Viscous friction in the passive hinges about `b`, `c`, `d`, parameters
 //! `Fpb, Fpc, Fpd`. The hinges' relative angular velocities (`Ω3 − Ω1`,
 //! `Ω4 − Ω2`, `Ω3 − Ω4`) are mapped to the motors by virtual work: column
-//! `J⁻ᵀ (J_ωi − J_ωj)ᵀ (Ω_i − Ω_j)`. The coefficients are fitted with their
-//! sign free (a negative one flags a misfit rather than being clipped).
+//! `J⁻ᵀ (J_ωi − J_ωj)ᵀ (Ω_i − Ω_j)`. Least squares fits the coefficients
+//! with their sign free (a negative one flags a misfit rather than being
+//! clipped); the physically consistent fit keeps them ≥ 0 (a hinge's
+//! viscous friction dissipates).
 
 use aras_kin::{KinematicSample, Scalar};
 
 /// Parameter names in column order.
 pub(super) const NAMES: [&str; 3] = ["Fpb", "Fpc", "Fpd"];
+
+/// Parameters that must not be negative (dissipation).
+pub(super) const NONNEGATIVE: &[&str] = &NAMES;
 
 /// Why the effect exists and how it shows in the data.
 pub(super) const EXPLANATION: &str = "viscous friction in the passive hinges about b, c and d \

@@ -1,5 +1,6 @@
-//! Quadratic damping, parameters `Fq1, Fq2`, columns `θ̇_j |θ̇_j|`. Fitted
-//! with its sign free, like the other candidate effects.
+//! Quadratic damping, parameters `Fq1, Fq2`, columns `θ̇_j |θ̇_j|`. Least
+//! squares fits the sign free; the physically consistent fit keeps it ≥ 0
+//! (`τ θ̇ = Fq |θ̇|³` dissipates only then).
 
 use aras_kin::{KinematicSample, Scalar};
 
@@ -7,6 +8,9 @@ use super::diagonal;
 
 /// Parameter names in column order.
 pub(super) const NAMES: [&str; 2] = ["Fq1", "Fq2"];
+
+/// Parameters that must not be negative (dissipation).
+pub(super) const NONNEGATIVE: &[&str] = &NAMES;
 
 /// Why the effect exists and how it shows in the data.
 pub(super) const EXPLANATION: &str = "damping growing with the square of the speed (fluid or air \

@@ -1,8 +1,9 @@
 //! Stribeck friction, parameters `Fs1, Fs2`, columns
 //! `sign(θ̇_j) exp(−(θ̇_j/v_s)²)` with the shape velocity `v_s` (rad/s, > 0,
-//! a non-linear setting of the effect). The level above Coulomb is fitted
-//! with its sign left free, so a fit can also say the low-speed friction is
-//! lower than Coulomb.
+//! a non-linear setting of the effect). Least squares fits the level above
+//! Coulomb with its sign left free, so a fit can also say the low-speed
+//! friction is lower than Coulomb; the physically consistent fit keeps it
+//! ≥ 0, the breakaway hump the effect describes.
 
 use aras_kin::{KinematicSample, Scalar};
 
@@ -11,6 +12,9 @@ use crate::{DynError, Sign};
 
 /// Parameter names in column order.
 pub(super) const NAMES: [&str; 2] = ["Fs1", "Fs2"];
+
+/// Parameters the physically consistent fit keeps non-negative.
+pub(super) const NONNEGATIVE: &[&str] = &NAMES;
 
 /// Why the effect exists and how it shows in the data.
 pub(super) const EXPLANATION: &str = "friction rises above the Coulomb level at low speed and \

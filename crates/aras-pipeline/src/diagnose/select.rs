@@ -341,6 +341,9 @@ impl Context<'_> {
                         None => Ok(None),
                     })
                     .collect::<Result<Vec<_>, _>>()?;
+                // The columns hold what the chunk needs from the window's
+                // kinematics: free them before the rows are gathered.
+                drop(kin);
                 for g in 0..2 {
                     let idx = Self::rows(p, g, a, b);
                     let mut m = Mat::<f64>::zeros(idx.len(), width);
@@ -1010,9 +1013,6 @@ fn refine_stribeck(
     })
 }
 
-/// Friction-like levels that must not be negative (dissipation).
-const NONNEGATIVE: [&str; 7] = ["Fs1", "Fs2", "Fpb", "Fpc", "Fpd", "Fq1", "Fq2"];
-
 /// The physically consistent re-identification of the final model: its
 /// reduced least-squares problem accumulated chunk by chunk (incremental
 /// QR), its validation fitness from a second pass per set.
@@ -1029,14 +1029,9 @@ fn consistent_fit(
     workspace: &Workspace,
 ) -> Result<ConsistentFit, IdentError> {
     let base = crate::robot::base_parameters(model, ctx.geometry, workspace, base_samples)?;
-    let mut problem = consistent_problem(model, reference)?;
+    // The effects' own sign constraints (70) come with the problem.
+    let problem = consistent_problem(model, reference)?;
     let names = model.names();
-    let extra: Vec<&str> = NONNEGATIVE
-        .iter()
-        .copied()
-        .filter(|n| names.iter().any(|m| m == n))
-        .collect();
-    problem.nonnegative(&extra)?;
     let bn = base.base_names();
     let lanes = ctx.model_pass(
         train.0,
