@@ -60,6 +60,10 @@ use std::fmt::Write as _;
 use nalgebra::{Matrix3, SymmetricEigen, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
+use crate::effects::{
+    COULOMB_ASYMMETRY_NAMES, PASSIVE_JOINT_VISCOUS_NAMES, QUADRATIC_DAMPING_NAMES,
+    STRIBECK_FRICTION_NAMES, TORQUE_OFFSET_NAMES, cogging_names,
+};
 use crate::{EffectId, Inertia, ParamError, Params};
 
 /// Words in the opening comment of every exported file: how a tool tells
@@ -267,21 +271,21 @@ pub fn unrepresented(params: &Params) -> Vec<Unrepresented> {
     {
         out.push(Unrepresented {
             effect: EffectId::PassiveJointViscous,
-            values: named(&["Fpd"], &[fpd]),
+            values: named(&PASSIVE_JOINT_VISCOUS_NAMES[2..], &[fpd]),
             why: "the hinge about d is the connect equality, not a joint, so it has no damping",
         });
     }
     if let Some(v) = e.torque_offset.filter(|v| v.iter().any(|x| *x != 0.0)) {
         out.push(Unrepresented {
             effect: EffectId::TorqueOffset,
-            values: named(&["tau0_1", "tau0_2"], &v),
+            values: named(&TORQUE_OFFSET_NAMES, &v),
             why: "a constant joint torque is no passive element of MJCF",
         });
     }
     if let Some(v) = e.coulomb_asymmetry.filter(|v| v.iter().any(|x| *x != 0.0)) {
         out.push(Unrepresented {
             effect: EffectId::CoulombAsymmetry,
-            values: named(&["Fca1", "Fca2"], &v),
+            values: named(&COULOMB_ASYMMETRY_NAMES, &v),
             why: "frictionloss is symmetric",
         });
     }
@@ -291,18 +295,18 @@ pub fn unrepresented(params: &Params) -> Vec<Unrepresented> {
     {
         out.push(Unrepresented {
             effect: EffectId::StribeckFriction,
-            values: named(&["v_s", "Fs1", "Fs2"], &[s.v_s, s.level[0], s.level[1]]),
+            values: named(
+                &[&["v_s"][..], &STRIBECK_FRICTION_NAMES].concat(),
+                &[s.v_s, s.level[0], s.level[1]],
+            ),
             why: "frictionloss has one level, no velocity dependence",
         });
     }
     if let Some(c) = &e.cogging {
+        let amplitudes =
+            (0..2).flat_map(|j| (0..c.order()).flat_map(move |h| [c.sin[j][h], c.cos[j][h]]));
         let mut values = vec![("cycles_per_rev".to_string(), c.cycles_per_rev)];
-        for j in 0..2 {
-            for h in 0..c.order() {
-                values.push((format!("Cs{}_{}", j + 1, h + 1), c.sin[j][h]));
-                values.push((format!("Cc{}_{}", j + 1, h + 1), c.cos[j][h]));
-            }
-        }
+        values.extend(cogging_names(c.order()).into_iter().zip(amplitudes));
         if values.iter().skip(1).any(|(_, v)| *v != 0.0) {
             out.push(Unrepresented {
                 effect: EffectId::Cogging,
@@ -314,7 +318,7 @@ pub fn unrepresented(params: &Params) -> Vec<Unrepresented> {
     if let Some(v) = e.quadratic_damping.filter(|v| v.iter().any(|x| *x != 0.0)) {
         out.push(Unrepresented {
             effect: EffectId::QuadraticDamping,
-            values: named(&["Fq1", "Fq2"], &v),
+            values: named(&QUADRATIC_DAMPING_NAMES, &v),
             why: "joint damping is linear in the velocity",
         });
     }

@@ -16,8 +16,12 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use serde_json::Value;
 
 use crate::ParamError;
+use crate::effects::{
+    COULOMB_ASYMMETRY_NAMES, ELASTICITY_NAMES, FRICTION_NAMES, PASSIVE_JOINT_VISCOUS_NAMES,
+    QUADRATIC_DAMPING_NAMES, STRIBECK_FRICTION_NAMES, TORQUE_OFFSET_NAMES, cogging_names,
+};
 use crate::json::{Obj, finite, parse};
-use crate::{EffectId, Inertia};
+use crate::{Effect, EffectId, Inertia};
 
 /// JSON keys of a link, in file order (`mass` last).
 pub(crate) const LINK_KEYS: [&str; 10] = [
@@ -220,24 +224,23 @@ impl Params {
             finite(self.elasticity[j], &format!("elasticity.Ke{}", j + 1))?;
         }
         let e = &self.extra;
-        let check = |sec: &str, names: &[&str], v: &[f64]| -> Result<(), ParamError> {
-            for (n, x) in names.iter().zip(v) {
-                finite(*x, &format!("extra.{sec}.{n}"))?;
+        // Keys `extra.<effect>.<parameter>`, the parameters named by the
+        // effect itself.
+        let check = |effect: Effect, v: &[f64]| -> Result<(), ParamError> {
+            for (n, x) in effect.names().iter().zip(v) {
+                finite(*x, &format!("extra.{}.{n}", effect.id()))?;
             }
             Ok(())
         };
         if let Some(v) = &e.torque_offset {
-            check(EffectId::TorqueOffset.as_str(), &["tau0_1", "tau0_2"], v)?;
+            check(Effect::TorqueOffset, v)?;
         }
         if let Some(v) = &e.coulomb_asymmetry {
-            check(EffectId::CoulombAsymmetry.as_str(), &["Fca1", "Fca2"], v)?;
+            check(Effect::CoulombAsymmetry, v)?;
         }
         if let Some(s) = &e.stribeck_friction {
-            check(
-                EffectId::StribeckFriction.as_str(),
-                &["v_s", "Fs1", "Fs2"],
-                &[s.v_s, s.level[0], s.level[1]],
-            )?;
+            finite(s.v_s, "extra.stribeck_friction.v_s")?;
+            check(Effect::StribeckFriction { v_s: s.v_s }, &s.level)?;
             if s.v_s <= 0.0 {
                 return Err(ParamError::Invalid {
                     key: "extra.stribeck_friction.v_s".into(),
@@ -247,11 +250,7 @@ impl Params {
             }
         }
         if let Some(v) = &e.passive_joint_viscous {
-            check(
-                EffectId::PassiveJointViscous.as_str(),
-                &["Fpb", "Fpc", "Fpd"],
-                v,
-            )?;
+            check(Effect::PassiveJointViscous, v)?;
         }
         if let Some(c) = &e.cogging {
             let key = "extra.cogging.cycles_per_rev";
@@ -287,7 +286,7 @@ impl Params {
             }
         }
         if let Some(v) = &e.quadratic_damping {
-            check(EffectId::QuadraticDamping.as_str(), &["Fq1", "Fq2"], v)?;
+            check(Effect::QuadraticDamping, v)?;
         }
         Ok(())
     }
@@ -361,14 +360,14 @@ impl Params {
             l.mass = o.num("mass")?;
         }
         let f = top.obj("friction")?;
-        f.only(&["Fv1", "Fc1", "Fv2", "Fc2"])?;
+        let [fv1, fc1, fv2, fc2] = FRICTION_NAMES;
+        f.only(&FRICTION_NAMES)?;
         p.friction = Friction {
-            viscous: [f.num("Fv1")?, f.num("Fv2")?],
-            coulomb: [f.num("Fc1")?, f.num("Fc2")?],
+            viscous: [f.num(fv1)?, f.num(fv2)?],
+            coulomb: [f.num(fc1)?, f.num(fc2)?],
         };
         let e = top.obj("elasticity")?;
-        e.only(&["Ke1", "Ke2"])?;
-        p.elasticity = [e.num("Ke1")?, e.num("Ke2")?];
+        p.elasticity = pair(&e, ELASTICITY_NAMES)?;
         if top.opt("extra").is_some() {
             p.extra = read_extras(&top.obj("extra")?)?;
         }
@@ -380,7 +379,7 @@ impl Params {
 /// Largest cogging order accepted.
 pub const MAX_COGGING_ORDER: usize = 16;
 
-fn pair(o: &Obj, a: &str, b: &str) -> Result<[f64; 2], ParamError> {
+fn pair(o: &Obj, [a, b]: [&str; 2]) -> Result<[f64; 2], ParamError> {
     o.only(&[a, b])?;
     Ok([o.num(a)?, o.num(b)?])
 }
@@ -392,29 +391,29 @@ fn read_extras(x: &Obj) -> Result<Extras, ParamError> {
     if has(EffectId::TorqueOffset.as_str()) {
         e.torque_offset = Some(pair(
             &x.obj(EffectId::TorqueOffset.as_str())?,
-            "tau0_1",
-            "tau0_2",
+            TORQUE_OFFSET_NAMES,
         )?);
     }
     if has(EffectId::CoulombAsymmetry.as_str()) {
         e.coulomb_asymmetry = Some(pair(
             &x.obj(EffectId::CoulombAsymmetry.as_str())?,
-            "Fca1",
-            "Fca2",
+            COULOMB_ASYMMETRY_NAMES,
         )?);
     }
     if has(EffectId::StribeckFriction.as_str()) {
         let o = x.obj(EffectId::StribeckFriction.as_str())?;
-        o.only(&["v_s", "Fs1", "Fs2"])?;
+        let [fs1, fs2] = STRIBECK_FRICTION_NAMES;
+        o.only(&["v_s", fs1, fs2])?;
         e.stribeck_friction = Some(Stribeck {
             v_s: o.num("v_s")?,
-            level: [o.num("Fs1")?, o.num("Fs2")?],
+            level: [o.num(fs1)?, o.num(fs2)?],
         });
     }
     if has(EffectId::PassiveJointViscous.as_str()) {
         let o = x.obj(EffectId::PassiveJointViscous.as_str())?;
-        o.only(&["Fpb", "Fpc", "Fpd"])?;
-        e.passive_joint_viscous = Some([o.num("Fpb")?, o.num("Fpc")?, o.num("Fpd")?]);
+        o.only(&PASSIVE_JOINT_VISCOUS_NAMES)?;
+        let [b, c, d] = PASSIVE_JOINT_VISCOUS_NAMES;
+        e.passive_joint_viscous = Some([o.num(b)?, o.num(c)?, o.num(d)?]);
     }
     if has(EffectId::Cogging.as_str()) {
         let o = x.obj(EffectId::Cogging.as_str())?;
@@ -427,18 +426,28 @@ fn read_extras(x: &Obj) -> Result<Extras, ParamError> {
             });
         }
         let order = order_v as usize;
-        let mut keys = vec!["cycles_per_rev".to_string(), "order".to_string()];
-        keys.extend(cogging_names(order));
-        o.only(&keys.iter().map(String::as_str).collect::<Vec<_>>())?;
+        let names = cogging_names(order);
+        let mut keys = vec!["cycles_per_rev", "order"];
+        keys.extend(names.iter().map(String::as_str));
+        o.only(&keys)?;
         let mut c = Cogging {
             cycles_per_rev: o.num("cycles_per_rev")?,
             sin: [vec![0.0; order], vec![0.0; order]],
             cos: [vec![0.0; order], vec![0.0; order]],
         };
+        // Names in column order: per joint, per harmonic the sine then the
+        // cosine.
+        let mut names = names.iter();
         for j in 0..2 {
             for h in 0..order {
-                c.sin[j][h] = o.num(&format!("Cs{}_{}", j + 1, h + 1))?;
-                c.cos[j][h] = o.num(&format!("Cc{}_{}", j + 1, h + 1))?;
+                for amplitude in [&mut c.sin[j][h], &mut c.cos[j][h]] {
+                    let name = names.next().ok_or(ParamError::Invalid {
+                        key: o.key_path("order"),
+                        value: order_v,
+                        reason: "internal: fewer cogging names than amplitudes",
+                    })?;
+                    *amplitude = o.num(name)?;
+                }
             }
         }
         e.cogging = Some(c);
@@ -446,24 +455,15 @@ fn read_extras(x: &Obj) -> Result<Extras, ParamError> {
     if has(EffectId::QuadraticDamping.as_str()) {
         e.quadratic_damping = Some(pair(
             &x.obj(EffectId::QuadraticDamping.as_str())?,
-            "Fq1",
-            "Fq2",
+            QUADRATIC_DAMPING_NAMES,
         )?);
     }
     Ok(e)
 }
 
-/// Parameter names of the cogging effect for an order, in column order:
-/// joint 1 then joint 2; per harmonic `h`: `Cs{j}_{h}` (sine), `Cc{j}_{h}` (cosine).
-pub(crate) fn cogging_names(order: usize) -> Vec<String> {
-    let mut v = Vec::with_capacity(4 * order);
-    for j in 1..=2 {
-        for h in 1..=order {
-            v.push(format!("Cs{j}_{h}"));
-            v.push(format!("Cc{j}_{h}"));
-        }
-    }
-    v
+/// `(name, value)` pairs of equally long name and value lists.
+fn named<const N: usize>(names: [&'static str; N], values: [f64; N]) -> [(&'static str, f64); N] {
+    std::array::from_fn(|i| (names[i], values[i]))
 }
 
 /// Serialises an ordered list of (key, number) pairs as a map.
@@ -503,21 +503,22 @@ impl Serialize for ExtrasSer<'_> {
         if let Some([a, b]) = e.torque_offset {
             m.serialize_entry(
                 EffectId::TorqueOffset.as_str(),
-                &Flat(&[("tau0_1", a), ("tau0_2", b)]),
+                &Flat(&named(TORQUE_OFFSET_NAMES, [a, b])),
             )?;
         }
         if let Some([a, b]) = e.coulomb_asymmetry {
             m.serialize_entry(
                 EffectId::CoulombAsymmetry.as_str(),
-                &Flat(&[("Fca1", a), ("Fca2", b)]),
+                &Flat(&named(COULOMB_ASYMMETRY_NAMES, [a, b])),
             )?;
         }
         if let Some(st) = &e.stribeck_friction {
-            let kv = [("v_s", st.v_s), ("Fs1", st.level[0]), ("Fs2", st.level[1])];
+            let [fs1, fs2] = named(STRIBECK_FRICTION_NAMES, st.level);
+            let kv = [("v_s", st.v_s), fs1, fs2];
             m.serialize_entry(EffectId::StribeckFriction.as_str(), &Flat(&kv))?;
         }
         if let Some([a, b, c]) = e.passive_joint_viscous {
-            let kv = [("Fpb", a), ("Fpc", b), ("Fpd", c)];
+            let kv = named(PASSIVE_JOINT_VISCOUS_NAMES, [a, b, c]);
             m.serialize_entry(EffectId::PassiveJointViscous.as_str(), &Flat(&kv))?;
         }
         if let Some(c) = &e.cogging {
@@ -539,7 +540,7 @@ impl Serialize for ExtrasSer<'_> {
         if let Some([a, b]) = e.quadratic_damping {
             m.serialize_entry(
                 EffectId::QuadraticDamping.as_str(),
-                &Flat(&[("Fq1", a), ("Fq2", b)]),
+                &Flat(&named(QUADRATIC_DAMPING_NAMES, [a, b])),
             )?;
         }
         m.end()
@@ -558,16 +559,14 @@ impl Serialize for Params {
         let f = &self.friction;
         m.serialize_entry(
             "friction",
-            &Flat(&[
-                ("Fv1", f.viscous[0]),
-                ("Fc1", f.coulomb[0]),
-                ("Fv2", f.viscous[1]),
-                ("Fc2", f.coulomb[1]),
-            ]),
+            &Flat(&named(
+                FRICTION_NAMES,
+                [f.viscous[0], f.coulomb[0], f.viscous[1], f.coulomb[1]],
+            )),
         )?;
         m.serialize_entry(
             "elasticity",
-            &Flat(&[("Ke1", self.elasticity[0]), ("Ke2", self.elasticity[1])]),
+            &Flat(&named(ELASTICITY_NAMES, self.elasticity)),
         )?;
         if !self.extra.is_empty() {
             m.serialize_entry("extra", &ExtrasSer(&self.extra))?;

@@ -18,9 +18,17 @@ pub(super) fn columns(order: usize) -> usize {
     4 * order
 }
 
-/// `Cs1_1, Cc1_1, …, Cs2_order, Cc2_order`.
-pub(super) fn names(order: usize) -> Vec<String> {
-    crate::params::cogging_names(order)
+/// `Cs1_1, Cc1_1, …, Cs2_order, Cc2_order`: joint 1 then joint 2; per
+/// harmonic `h` the sine `Cs{j}_{h}`, then the cosine `Cc{j}_{h}`.
+pub(crate) fn names(order: usize) -> Vec<String> {
+    let mut v = Vec::with_capacity(4 * order);
+    for j in 1..=2 {
+        for h in 1..=order {
+            v.push(format!("Cs{j}_{h}"));
+            v.push(format!("Cc{j}_{h}"));
+        }
+    }
+    v
 }
 
 /// Errors unless `cycles_per_rev` is positive and `order` in 1–16.

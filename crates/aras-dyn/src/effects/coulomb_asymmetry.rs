@@ -9,7 +9,7 @@ use super::diagonal;
 use crate::Sign;
 
 /// Parameter names in column order.
-pub(super) const NAMES: [&str; 2] = ["Fca1", "Fca2"];
+pub(crate) const NAMES: [&str; 2] = ["Fca1", "Fca2"];
 
 /// Why the effect exists and how it shows in the data.
 pub(super) const EXPLANATION: &str = "the Coulomb friction level differs between the two \

@@ -6,7 +6,7 @@ use aras_kin::{KinematicSample, Scalar};
 use super::diagonal;
 
 /// Parameter names in column order.
-pub(super) const NAMES: [&str; 2] = ["Ke1", "Ke2"];
+pub(crate) const NAMES: [&str; 2] = ["Ke1", "Ke2"];
 
 /// Parameters that must not be negative, (70).
 pub(super) const NONNEGATIVE: &[&str] = &NAMES;

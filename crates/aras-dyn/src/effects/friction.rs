@@ -7,7 +7,7 @@ use aras_kin::{KinematicSample, Scalar};
 use crate::Sign;
 
 /// Parameter names in column order.
-pub(super) const NAMES: [&str; 4] = ["Fv1", "Fc1", "Fv2", "Fc2"];
+pub(crate) const NAMES: [&str; 4] = ["Fv1", "Fc1", "Fv2", "Fc2"];
 
 /// Parameters that must not be negative, (70).
 pub(super) const NONNEGATIVE: &[&str] = &NAMES;

@@ -14,6 +14,17 @@ mod rigid_links;
 mod stribeck_friction;
 mod torque_offset;
 
+// The parameter names of the fixed-size effects, spelled once in their
+// files: the parameter file's keys and the MJCF notes use them.
+pub(crate) use cogging::names as cogging_names;
+pub(crate) use coulomb_asymmetry::NAMES as COULOMB_ASYMMETRY_NAMES;
+pub(crate) use elasticity::NAMES as ELASTICITY_NAMES;
+pub(crate) use friction::NAMES as FRICTION_NAMES;
+pub(crate) use passive_joint_viscous::NAMES as PASSIVE_JOINT_VISCOUS_NAMES;
+pub(crate) use quadratic_damping::NAMES as QUADRATIC_DAMPING_NAMES;
+pub(crate) use stribeck_friction::NAMES as STRIBECK_FRICTION_NAMES;
+pub(crate) use torque_offset::NAMES as TORQUE_OFFSET_NAMES;
+
 use std::fmt;
 use std::str::FromStr;
 

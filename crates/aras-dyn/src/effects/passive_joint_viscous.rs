@@ -9,7 +9,7 @@
 use aras_kin::{KinematicSample, Scalar};
 
 /// Parameter names in column order.
-pub(super) const NAMES: [&str; 3] = ["Fpb", "Fpc", "Fpd"];
+pub(crate) const NAMES: [&str; 3] = ["Fpb", "Fpc", "Fpd"];
 
 /// Parameters that must not be negative (dissipation).
 pub(super) const NONNEGATIVE: &[&str] = &NAMES;

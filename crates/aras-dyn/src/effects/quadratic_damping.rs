@@ -7,7 +7,7 @@ use aras_kin::{KinematicSample, Scalar};
 use super::diagonal;
 
 /// Parameter names in column order.
-pub(super) const NAMES: [&str; 2] = ["Fq1", "Fq2"];
+pub(crate) const NAMES: [&str; 2] = ["Fq1", "Fq2"];
 
 /// Parameters that must not be negative (dissipation).
 pub(super) const NONNEGATIVE: &[&str] = &NAMES;

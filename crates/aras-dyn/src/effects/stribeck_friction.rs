@@ -11,7 +11,7 @@ use super::diagonal;
 use crate::{DynError, Sign};
 
 /// Parameter names in column order.
-pub(super) const NAMES: [&str; 2] = ["Fs1", "Fs2"];
+pub(crate) const NAMES: [&str; 2] = ["Fs1", "Fs2"];
 
 /// Parameters the physically consistent fit keeps non-negative.
 pub(super) const NONNEGATIVE: &[&str] = &NAMES;

@@ -6,7 +6,7 @@ use aras_kin::Scalar;
 use super::diagonal;
 
 /// Parameter names in column order.
-pub(super) const NAMES: [&str; 2] = ["tau0_1", "tau0_2"];
+pub(crate) const NAMES: [&str; 2] = ["tau0_1", "tau0_2"];
 
 /// Why the effect exists and how it shows in the data.
 pub(super) const EXPLANATION: &str = "a constant torque bias per motor: current-sensor or \
