@@ -7,7 +7,7 @@
 use anyhow::{Context, Result};
 use aras_log::read_log;
 use aras_pipeline::diagnose::residual::Profile;
-use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, diagnose};
+use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, RefinementStatus, diagnose};
 
 use crate::cli::{DiagnoseArgs, LogArgs};
 use crate::identify::process_options;
@@ -160,6 +160,26 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
             items.push(format!(
                 "indistinguishable on these data from: {}",
                 s.aliases.join(", ")
+            ));
+        }
+        if let Some(f) = &s.refinement {
+            items.push(format!(
+                "`{}` refined between the grid points: {:.5} ± {:.1e} (grid value {}, {}); \
+                 fitted at it: {}",
+                f.name,
+                f.value,
+                f.std_dev,
+                f.grid_value,
+                match f.status {
+                    RefinementStatus::Interior => "minimum inside the search interval",
+                    RefinementStatus::AtBound =>
+                        "minimum at the end of the search interval, σ unknown",
+                },
+                f.parameters
+                    .iter()
+                    .map(|p| format!("{} = {:.5} ± {:.1e}", p.name, p.value, p.std_dev))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ));
         }
         r.list(items);

@@ -74,6 +74,88 @@ impl Candidate {
     pub fn explanation(&self) -> &'static str {
         explanation(self.id())
     }
+
+    /// The continuous non-linear setting the diagnosis refines between the
+    /// grid points once the candidate is added, `(name, value)`: `v_s`
+    /// (rad/s) of Stribeck friction, `cycles_per_rev` of cogging. `None`
+    /// for the linear candidates and for the time delay (whole samples).
+    pub fn setting(&self) -> Option<(&'static str, f64)> {
+        match self {
+            Candidate::Effect {
+                effect: Effect::StribeckFriction { v_s },
+            } => Some(("v_s", *v_s)),
+            Candidate::Effect {
+                effect: Effect::Cogging { cycles_per_rev, .. },
+            } => Some(("cycles_per_rev", *cycles_per_rev)),
+            _ => None,
+        }
+    }
+
+    /// The factor either side of the grid value that the refinement
+    /// searches (on a log scale): 3 for `v_s`, whose grid steps by 2 and
+    /// whose profile is smooth over decades; 1.25 for cogging cycles, whose
+    /// grid steps by 1.2–2 and whose profile has side lobes one
+    /// `2π / (range of θ)` apart, so a wider interval could hold another
+    /// minimum. `None` where [`Self::setting`] is.
+    pub fn search_factor(&self) -> Option<f64> {
+        match self {
+            Candidate::Effect {
+                effect: Effect::StribeckFriction { .. },
+            } => Some(3.0),
+            Candidate::Effect {
+                effect: Effect::Cogging { .. },
+            } => Some(1.25),
+            _ => None,
+        }
+    }
+
+    /// The values around which the refinement searches, the grid value
+    /// first. For cogging of order `K` also its harmonic relatives
+    /// `n · h / h′` (`h, h′ ≤ K`): a fundamental whose `h`-th harmonic
+    /// meets the true `h′`-th is an alias the grid may pick instead (with
+    /// order 2 and a true 14 cycles/rev, 8 — whose second harmonic is 16 —
+    /// can beat 12 and 16); the search keeps the lowest residual.
+    pub fn search_centres(&self) -> Vec<f64> {
+        let Some((_, v)) = self.setting() else {
+            return Vec::new();
+        };
+        let mut out = vec![v];
+        if let Candidate::Effect {
+            effect: Effect::Cogging { order, .. },
+        } = self
+        {
+            for h in 1..=*order {
+                for h2 in 1..=*order {
+                    let c = v * h as f64 / h2 as f64;
+                    if !out.iter().any(|o| (o / c).ln().abs() < 1e-9) {
+                        out.push(c);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// The candidate with its [`Self::setting`] replaced by `value`
+    /// (unchanged if it has none).
+    pub fn with_setting(&self, value: f64) -> Candidate {
+        match *self {
+            Candidate::Effect {
+                effect: Effect::StribeckFriction { .. },
+            } => Candidate::Effect {
+                effect: Effect::StribeckFriction { v_s: value },
+            },
+            Candidate::Effect {
+                effect: Effect::Cogging { order, .. },
+            } => Candidate::Effect {
+                effect: Effect::Cogging {
+                    cycles_per_rev: value,
+                    order,
+                },
+            },
+            other => other,
+        }
+    }
 }
 
 /// The physical explanation of a candidate identifier (the effect's own,
