@@ -21,9 +21,14 @@ use super::data::Dataset;
 use crate::robot::filter_reach;
 use aras_ident::IdentError;
 
-/// Samples per chunk: with ≈ 170 columns the window's columns of both
-/// joints take ≈ 15 MB per lane.
-pub(crate) const CHUNK: usize = 4096;
+/// Samples per chunk, a measured trade-off (`docs/scale.md`): a chunk's
+/// window (the chunk plus the filter's reach each side, ≈ 1 700 samples at
+/// 10 Hz and 1 kHz) holds ≈ 175 columns of both joints, ≈ 18 MB per lane
+/// at 3072 samples. Against 4096, the peak memory of a 160 s diagnosis
+/// falls from 167–191 to 93–96 MiB and of a 600 s one from 220–239 to
+/// 160–168 MiB, for ≈ 8 % more time on the longer log (larger windows
+/// leave the allocator more to hold).
+pub(crate) const CHUNK: usize = 3072;
 
 /// Accuracy of a chunk's filtered rows against the whole-record filter
 /// (fraction of the impulse-response peak left at the window's edge).

@@ -51,7 +51,7 @@
 //! ## Memory and time
 //! Nothing proportional to the log's length is held but the processed
 //! samples themselves and the filtered torques: the candidate columns are
-//! computed chunk by chunk (4096 samples) on windows widened by the
+//! computed chunk by chunk (3072 samples) on windows widened by the
 //! zero-phase filter's reach to 1e-9 of its peak, so a chunk's filtered
 //! rows equal the whole-record filter's to that accuracy; the sums are
 //! `joints × width²` numbers per data set (width ≈ 170 with the default
