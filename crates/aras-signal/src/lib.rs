@@ -88,4 +88,4 @@ pub use process::{
     Bandwidth, BandwidthChoice, BandwidthMethod, FilterSpec, FilterSummary, OutputRows,
     PeriodSource, PeriodSummary, ProcessOptions, ProcessSummary, Processed, Samples, process,
 };
-pub use sos::{Sos, TransferFunction};
+pub use sos::{FILTER_LANES, Sos, TransferFunction};
