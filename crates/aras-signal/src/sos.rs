@@ -179,52 +179,10 @@ impl Sos {
 
     /// One causal pass over `x` in place, starting from the steady state for
     /// a constant input `x0` (`sosfilt(sos, x, zi=zi·x0)`); `reverse` runs
-    /// from the last sample to the first. Sections go two per sweep, so the
-    /// CPU overlaps their recurrences (each is latency-bound on its own);
-    /// the arithmetic per section is unchanged, so results are identical.
+    /// from the last sample to the first: [`Self::pass_lanes`] with one lane.
     fn pass(&self, x: &mut [f64], x0: f64, reverse: bool) {
-        let mut i = 0;
-        while i < self.sections.len() {
-            if i + 1 < self.sections.len() {
-                let (s, t) = (self.sections[i], self.sections[i + 1]);
-                let (zs, zt) = (self.zi[i], self.zi[i + 1]);
-                let (mut p0, mut p1) = (zs[0] * x0, zs[1] * x0);
-                let (mut q0, mut q1) = (zt[0] * x0, zt[1] * x0);
-                let mut step = |v: &mut f64| {
-                    let xi = *v;
-                    let y = s[0] * xi + p0;
-                    p0 = s[1] * xi - s[4] * y + p1;
-                    p1 = s[2] * xi - s[5] * y;
-                    let w = t[0] * y + q0;
-                    q0 = t[1] * y - t[4] * w + q1;
-                    q1 = t[2] * y - t[5] * w;
-                    *v = w;
-                };
-                if reverse {
-                    x.iter_mut().rev().for_each(&mut step);
-                } else {
-                    x.iter_mut().for_each(&mut step);
-                }
-                i += 2;
-            } else {
-                let [b0, b1, b2, _, a1, a2] = self.sections[i];
-                let zi = self.zi[i];
-                let (mut z0, mut z1) = (zi[0] * x0, zi[1] * x0);
-                let mut step = |v: &mut f64| {
-                    let xi = *v;
-                    let y = b0 * xi + z0;
-                    z0 = b1 * xi - a1 * y + z1;
-                    z1 = b2 * xi - a2 * y;
-                    *v = y;
-                };
-                if reverse {
-                    x.iter_mut().rev().for_each(&mut step);
-                } else {
-                    x.iter_mut().for_each(&mut step);
-                }
-                i += 1;
-            }
-        }
+        let (lanes, _) = x.as_chunks_mut::<1>();
+        self.pass_lanes(lanes, [x0], reverse);
     }
 
     /// Causal filtering in place from rest (`scipy.signal.sosfilt(sos, x)`).
@@ -385,12 +343,15 @@ impl Sos {
         Ok(())
     }
 
-    /// [`Self::pass`] on [`FILTER_LANES`] interleaved signals, each lane with the
-    /// same operations in the same order.
-    fn pass_lanes(&self, x: &mut [[f64; FILTER_LANES]], x0: [f64; FILTER_LANES], reverse: bool) {
-        let mul = |c: f64, v: &[f64; FILTER_LANES]| -> [f64; FILTER_LANES] {
-            std::array::from_fn(|l| c * v[l])
-        };
+    /// One causal pass over `L` interleaved signals in place, each starting
+    /// from the steady state for its constant input `x0[l]`
+    /// (`sosfilt(sos, x, zi=zi·x0)`); `reverse` runs from the last sample to
+    /// the first. Every lane does the same operations in the same order.
+    /// Sections go two per sweep, so the CPU overlaps their recurrences
+    /// (each is latency-bound on its own); the arithmetic per section is
+    /// unchanged, so results are identical.
+    fn pass_lanes<const L: usize>(&self, x: &mut [[f64; L]], x0: [f64; L], reverse: bool) {
+        let mul = |c: f64, v: &[f64; L]| -> [f64; L] { std::array::from_fn(|l| c * v[l]) };
         let mut i = 0;
         while i < self.sections.len() {
             if i + 1 < self.sections.len() {
@@ -398,8 +359,8 @@ impl Sos {
                 let (zs, zt) = (self.zi[i], self.zi[i + 1]);
                 let (mut p0, mut p1) = (mul(zs[0], &x0), mul(zs[1], &x0));
                 let (mut q0, mut q1) = (mul(zt[0], &x0), mul(zt[1], &x0));
-                let mut step = |v: &mut [f64; FILTER_LANES]| {
-                    for l in 0..FILTER_LANES {
+                let mut step = |v: &mut [f64; L]| {
+                    for l in 0..L {
                         let xi = v[l];
                         let y = s[0] * xi + p0[l];
                         p0[l] = s[1] * xi - s[4] * y + p1[l];
@@ -420,8 +381,8 @@ impl Sos {
                 let [b0, b1, b2, _, a1, a2] = self.sections[i];
                 let zi = self.zi[i];
                 let (mut z0, mut z1) = (mul(zi[0], &x0), mul(zi[1], &x0));
-                let mut step = |v: &mut [f64; FILTER_LANES]| {
-                    for l in 0..FILTER_LANES {
+                let mut step = |v: &mut [f64; L]| {
+                    for l in 0..L {
                         let xi = v[l];
                         let y = b0 * xi + z0[l];
                         z0[l] = b1 * xi - a1 * y + z1[l];
