@@ -13,7 +13,8 @@ use aras_signal::{Butterworth, ProcessOptions, ProcessSummary, Processed, Sos};
 use faer::{Mat, MatRef};
 
 use crate::robot::{
-    FilterMode, Stacked, filter, filter_columns, filter_reach, noise_gain, reversal_mask, stack,
+    FilterMode, Stacked, filter, filter_columns, filter_reach, noise_gain, reversal_mask,
+    stack_selected,
 };
 
 /// Which columns of the model's regressor are stacked.
@@ -111,14 +112,13 @@ pub fn prepare(
 ) -> Result<Prepared, IdentError> {
     let processed = aras_signal::process(log, opts, &aras_kin::task_motion(geometry))
         .map_err(|e| IdentError::external(format!("processing {}", log.name), e))?;
-    let mut stacked = stack(model, geometry, &processed.samples)?;
-    if let RegressorColumns::Base(base) = columns {
-        stacked = Stacked {
-            w: columns.select(stacked.w.as_ref())?,
-            names: base.base_names(),
-            ..stacked
+    let mut stacked = stack_selected(model, geometry, &processed.samples, |w| {
+        let names = match columns {
+            RegressorColumns::Standard => model.names(),
+            RegressorColumns::Base(base) => base.base_names(),
         };
-    }
+        Ok((columns.select(w)?, names))
+    })?;
     let filter_sos = processing_filter(&processed.summary)?;
     let unfiltered = (keep_unfiltered && filter_sos.is_some()).then(|| stacked.clone());
     if let Some(sos) = &filter_sos {

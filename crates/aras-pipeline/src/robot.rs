@@ -6,7 +6,7 @@
 use aras_dyn::{Effect, Model, Params};
 use aras_kin::{Geometry, Motion, Workspace};
 use aras_signal::{FILTER_LANES, Samples, Sos};
-use faer::Mat;
+use faer::{Mat, MatRef};
 use nalgebra::Vector2;
 use rayon::prelude::*;
 
@@ -43,6 +43,20 @@ fn invalid(context: &str, reason: impl Into<String>) -> IdentError {
 /// through the kinematics; `θ, θ̇` are recomputed from `X`, which is how the
 /// samples were derived) and their torques.
 pub fn stack(model: &Model, geometry: &Geometry, samples: &Samples) -> Result<Stacked, IdentError> {
+    stack_selected(model, geometry, samples, |w| {
+        Ok((w.to_owned(), model.names()))
+    })
+}
+
+/// [`stack`] keeping only the columns `select` makes of the stacked
+/// standard regressor (with their names), without an owned copy of all of
+/// them first.
+pub(crate) fn stack_selected(
+    model: &Model,
+    geometry: &Geometry,
+    samples: &Samples,
+    select: impl FnOnce(MatRef<'_, f64>) -> Result<(Mat<f64>, Vec<String>), IdentError>,
+) -> Result<Stacked, IdentError> {
     let n = samples.len();
     for (what, a) in [
         ("x", &samples.x),
@@ -74,7 +88,11 @@ pub fn stack(model: &Model, geometry: &Geometry, samples: &Samples) -> Result<St
     let w = model
         .stacked_from_states(geometry, &task)
         .map_err(|e| dyn_err("stacking the regressor", e))?;
-    let w = faer::MatRef::from_column_major_slice(w.as_slice(), 2 * n, model.columns()).to_owned();
+    let (w, names) = select(MatRef::from_column_major_slice(
+        w.as_slice(),
+        2 * n,
+        model.columns(),
+    ))?;
     let t = samples.tau[0]
         .iter()
         .chain(&samples.tau[1])
@@ -83,7 +101,7 @@ pub fn stack(model: &Model, geometry: &Geometry, samples: &Samples) -> Result<St
     Ok(Stacked {
         w,
         t,
-        names: model.names(),
+        names,
         groups: RowGroups::contiguous(&[n, n])?,
     })
 }
