@@ -61,6 +61,19 @@ pub enum FilterError {
         /// Its value.
         value: f64,
     },
+    /// Signals filtered together differ in length.
+    #[error(
+        "signal {index} has {len} samples but signal 0 has {first}: filter signals of equal \
+         length together"
+    )]
+    UnequalSignals {
+        /// Length of the first signal.
+        first: usize,
+        /// Index of the first signal of another length.
+        index: usize,
+        /// Its length.
+        len: usize,
+    },
     /// Output buffer length differs from the input length.
     #[error("output buffer has {output} samples but the input has {input}: give equal lengths")]
     LengthMismatch {

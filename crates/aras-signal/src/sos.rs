@@ -295,11 +295,12 @@ impl Sos {
         let Some(n) = signals.first().map(|s| s.len()) else {
             return Ok(());
         };
-        for s in signals.iter() {
+        for (index, s) in signals.iter().enumerate() {
             if s.len() != n {
-                return Err(FilterError::LengthMismatch {
-                    input: n,
-                    output: s.len(),
+                return Err(FilterError::UnequalSignals {
+                    first: n,
+                    index,
+                    len: s.len(),
                 });
             }
             check_finite_input(s)?;
@@ -582,6 +583,45 @@ mod tests {
             sos.filtfilt_into(&[0.0; 40], &mut out, &mut Vec::new()),
             Err(FilterError::LengthMismatch { .. })
         ));
+    }
+
+    /// Bad input to the many-signal filter is an error naming what is
+    /// wrong, and leaves every signal untouched.
+    #[test]
+    fn many_signals_reject_unequal_lengths_non_finite_values_and_short_records() {
+        let sos = crate::Butterworth::lowpass(2, 5.0, 100.0).unwrap();
+        let (mut a, mut b) = (vec![1.0; 40], vec![2.0; 39]);
+        let e = sos
+            .filtfilt_many_in_place(&mut [&mut a, &mut b], &mut Vec::new())
+            .unwrap_err();
+        assert!(
+            matches!(
+                e,
+                FilterError::UnequalSignals {
+                    first: 40,
+                    index: 1,
+                    len: 39
+                }
+            ),
+            "{e}"
+        );
+        let mut c = vec![1.0; 40];
+        c[5] = f64::NAN;
+        let mut d = vec![1.0; 40];
+        let e = sos
+            .filtfilt_many_in_place(&mut [&mut d, &mut c], &mut Vec::new())
+            .unwrap_err();
+        assert!(matches!(e, FilterError::NonFinite { index: 5, .. }), "{e}");
+        assert!(
+            d.iter().all(|v| *v == 1.0),
+            "a good signal was changed before the error"
+        );
+        let mut short = vec![1.0; sos.padlen()];
+        assert!(matches!(
+            sos.filtfilt_many_in_place(&mut [&mut short], &mut Vec::new()),
+            Err(FilterError::TooShort { .. })
+        ));
+        assert!(sos.filtfilt_many_in_place(&mut [], &mut Vec::new()).is_ok());
     }
 
     #[test]
