@@ -75,16 +75,7 @@ pub(crate) fn stack_selected(
             ));
         }
     }
-    let at = |a: &[Vec<f64>; 2], i: usize| Vector2::new(a[0][i], a[1][i]);
-    let task: Vec<Motion> = (0..n)
-        .map(|i| {
-            Motion::new(
-                at(&samples.x, i),
-                at(&samples.x_dot, i),
-                at(&samples.x_ddot, i),
-            )
-        })
-        .collect();
+    let task: Vec<Motion> = (0..n).map(|i| samples.task(i)).collect();
     let w = model
         .stacked_from_states(geometry, &task)
         .map_err(|e| dyn_err("stacking the regressor", e))?;

@@ -176,6 +176,31 @@ impl Samples {
     pub fn is_empty(&self) -> bool {
         self.t.is_empty()
     }
+
+    /// Sample `i`'s joint motion `θ, θ̇, θ̈`. Panics if `i ≥ len()`, as
+    /// indexing does.
+    pub fn joint(&self, i: usize) -> Motion {
+        Motion::new(
+            column(&self.theta, i),
+            column(&self.theta_dot, i),
+            column(&self.theta_ddot, i),
+        )
+    }
+
+    /// Sample `i`'s motion in the model's coordinates `X, Ẋ, Ẍ`. Panics if
+    /// `i ≥ len()`, as indexing does.
+    pub fn task(&self, i: usize) -> Motion {
+        Motion::new(
+            column(&self.x, i),
+            column(&self.x_dot, i),
+            column(&self.x_ddot, i),
+        )
+    }
+}
+
+/// Entry `i` of a pair of per-coordinate columns.
+fn column(v: &[Vec<f64>; 2], i: usize) -> Vector2<f64> {
+    Vector2::new(v[0][i], v[1][i])
 }
 
 /// The Butterworth filter that was applied to θ (and that a fit must apply
@@ -1089,18 +1114,11 @@ fn filter_all(
 /// Fills the model's coordinates X, Ẋ, Ẍ from θ, θ̇, θ̈ at every sample.
 fn model_coordinates(s: &mut Samples, c: &impl Coordinates) -> Result<(), ProcessError> {
     for i in 0..s.len() {
-        let col = |v: &[Vec<f64>; 2]| Vector2::new(v[0][i], v[1][i]);
-        let task = c
-            .map(Motion::new(
-                col(&s.theta),
-                col(&s.theta_dot),
-                col(&s.theta_ddot),
-            ))
-            .map_err(|e| ProcessError::Coordinates {
-                index: i,
-                t: s.t[i],
-                source: Box::new(e),
-            })?;
+        let task = c.map(s.joint(i)).map_err(|e| ProcessError::Coordinates {
+            index: i,
+            t: s.t[i],
+            source: Box::new(e),
+        })?;
         for j in 0..2 {
             s.x[j][i] = task.pos[j];
             s.x_dot[j][i] = task.vel[j];

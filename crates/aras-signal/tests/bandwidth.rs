@@ -18,7 +18,6 @@ use aras_signal::{
     Bandwidth, BandwidthMethod, FilterSpec, OutputRows, PeriodOrigin, PeriodSource, ProcessOptions,
     Processed, process,
 };
-use nalgebra::Vector2;
 
 /// Fitness (78): `100 (1 − ‖τ − τ̂‖ / ‖τ − mean τ‖)`.
 fn fitness(measured: &[f64], predicted: &[f64]) -> f64 {
@@ -52,10 +51,7 @@ fn predict(truth: &Params, p: &Processed) -> [Vec<f64>; 2] {
     let s = &p.samples;
     let mut out = [Vec::new(), Vec::new()];
     for i in 0..s.len() {
-        let v = |a: &[Vec<f64>; 2]| Vector2::new(a[0][i], a[1][i]);
-        let k = dy
-            .sample(&aras_kin::Motion::new(v(&s.x), v(&s.x_dot), v(&s.x_ddot)))
-            .unwrap();
+        let k = dy.sample(&s.task(i)).unwrap();
         // The simulator's own torque law: friction (49) with its
         // tanh(θ̇/w) sign (`SimConfig::friction_smoothing`).
         let sign = Sign::Tanh(SimConfig::default().friction_smoothing);

@@ -14,7 +14,6 @@
 //! [`crate::prepare::prepare`].
 
 use aras_kin::{Geometry, KinematicSample};
-use nalgebra::Vector2;
 use rayon::prelude::*;
 
 use super::data::Dataset;
@@ -111,15 +110,10 @@ pub(crate) fn window_kinematics(
     lo: usize,
     hi: usize,
 ) -> Result<Vec<KinematicSample>, IdentError> {
-    let s = &data.samples;
-    let v = |a: &[Vec<f64>; 2], i: usize| Vector2::new(a[0][i], a[1][i]);
     (lo..hi)
         .map(|i| {
-            aras_kin::evaluate(
-                geometry,
-                &aras_kin::Motion::new(v(&s.x, i), v(&s.x_dot, i), v(&s.x_ddot, i)),
-            )
-            .map_err(|e| IdentError::external(format!("kinematics of sample {i}"), e))
+            aras_kin::evaluate(geometry, &data.samples.task(i))
+                .map_err(|e| IdentError::external(format!("kinematics of sample {i}"), e))
         })
         .collect()
 }
