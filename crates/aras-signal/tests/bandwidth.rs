@@ -45,6 +45,16 @@ fn as_csv(log: &SimLog, times: Option<&[f64]>) -> aras_log::Log {
     read_log_from(csv.as_bytes(), "sim.csv", &ReadOptions::default()).unwrap()
 }
 
+/// `log` processed in the true robot's task coordinates.
+fn processed(truth: &Params, log: &aras_log::Log, opts: &ProcessOptions) -> Processed {
+    process(
+        log,
+        opts,
+        &aras_kin::task_motion(&truth.geometry().unwrap()),
+    )
+    .unwrap()
+}
+
 /// `Y(θ, θ̇, θ̈) β` of the true robot at every processed sample.
 fn predict(truth: &Params, p: &Processed) -> [Vec<f64>; 2] {
     let dy = Dynamics::new(truth).unwrap();
@@ -115,12 +125,7 @@ fn paper_79_predicted_at_the_noise_ceiling_from_the_angles_alone() {
         // Noise-free: no current noise, 2^30-count encoders.
         let clean = simulate(&truth, &traj, &noise_free(f, 11 + k as u64)).unwrap();
         let log = as_csv(&clean, None);
-        let p = process(
-            &log,
-            &every_row(),
-            &aras_kin::task_motion(&truth.geometry().unwrap()),
-        )
-        .unwrap();
+        let p = processed(&truth, &log, &every_row());
         let bw = &p.summary.bandwidth;
         assert_eq!(bw.method, BandwidthMethod::HarmonicSeries, "{f} Hz: {bw:?}");
         assert_eq!(bw.period_origin, Some(PeriodOrigin::Detected));
@@ -138,12 +143,7 @@ fn paper_79_predicted_at_the_noise_ceiling_from_the_angles_alone() {
         quiet.sensors.current_noise_std = [0.0; 2];
         let perfect = simulate(&truth, &traj, &quiet).unwrap();
         let log = as_csv(&noisy, None);
-        let p = process(
-            &log,
-            &every_row(),
-            &aras_kin::task_motion(&truth.geometry().unwrap()),
-        )
-        .unwrap();
+        let p = processed(&truth, &log, &every_row());
         let pred = predict(&truth, &p);
         // The fixed 10 Hz low-pass on the whole record, for comparison.
         let fixed = ProcessOptions {
@@ -151,12 +151,7 @@ fn paper_79_predicted_at_the_noise_ceiling_from_the_angles_alone() {
             period: PeriodSource::Off,
             ..every_row()
         };
-        let pf = process(
-            &log,
-            &fixed,
-            &aras_kin::task_motion(&truth.geometry().unwrap()),
-        )
-        .unwrap();
+        let pf = processed(&truth, &log, &fixed);
         let pred_fixed = predict(&truth, &pf);
         let mut fit = [0.0; 2];
         let mut fit_fixed = [0.0; 2];
@@ -231,12 +226,7 @@ fn logged_derivatives_are_used_as_given() {
         use_logged_derivatives: true,
         ..every_row()
     };
-    let p = process(
-        &log,
-        &opts,
-        &aras_kin::task_motion(&truth.geometry().unwrap()),
-    )
-    .unwrap();
+    let p = processed(&truth, &log, &opts);
     assert_eq!(
         p.summary.bandwidth.method,
         BandwidthMethod::LoggedDerivatives
@@ -289,12 +279,7 @@ fn jittered_time_steps_are_handled() {
         period: PeriodSource::Off,
         ..every_row()
     };
-    let p = process(
-        &log,
-        &opts,
-        &aras_kin::task_motion(&truth.geometry().unwrap()),
-    )
-    .unwrap();
+    let p = processed(&truth, &log, &opts);
     let bw = &p.summary.bandwidth;
     assert!(bw.resampling.is_some(), "{bw:?}");
     assert_eq!(bw.method, BandwidthMethod::Butterworth);
@@ -344,12 +329,7 @@ fn the_noise_free_shortfall_is_the_start_up_the_hold_and_friction_switching() {
             period: PeriodSource::Seconds(1.0 / f),
             ..every_row()
         };
-        let p = process(
-            &log,
-            &opts,
-            &aras_kin::task_motion(&truth.geometry().unwrap()),
-        )
-        .unwrap();
+        let p = processed(&truth, &log, &opts);
         let pred = predict(&truth, &p);
         let per = (1000.0 / f).round() as usize;
         for j in 0..2 {
