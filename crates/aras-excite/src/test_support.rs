@@ -13,7 +13,7 @@
 
 use aras_excite::{Dual, Regressor};
 use aras_ident::LinearModel;
-use aras_kin::{Geometry, KinError, Scalar, Workspace, evaluate};
+use aras_kin::{Geometry, KinError, Motion, Scalar, Workspace, evaluate};
 use nalgebra::{DMatrix, Vector2};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
@@ -59,7 +59,7 @@ impl LinearModel for StandIn {
         rows: &mut [f64],
     ) -> Result<(), KinError> {
         let v = |a: &[f64]| Vector2::new(a[0], a[1]);
-        self.rows(&v(q), &v(q_dot), &v(q_ddot), rows)
+        self.rows(&Motion::new(v(q), v(q_dot), v(q_ddot)), rows)
     }
 }
 
@@ -72,19 +72,14 @@ impl Regressor for StandIn {
         rows: &mut [Dual],
     ) -> Result<(), KinError> {
         let v = |a: &[Dual]| Vector2::new(a[0], a[1]);
-        self.rows(&v(q), &v(q_dot), &v(q_ddot), rows)
+        self.rows(&Motion::new(v(q), v(q_dot), v(q_ddot)), rows)
     }
 }
 
 impl StandIn {
-    fn rows<T: Scalar>(
-        &self,
-        x: &Vector2<T>,
-        x_dot: &Vector2<T>,
-        x_ddot: &Vector2<T>,
-        rows: &mut [T],
-    ) -> Result<(), KinError> {
-        let k = evaluate(&self.geometry, &aras_kin::Motion::new(*x, *x_dot, *x_ddot))?;
+    /// The rows at the task motion `(X, Ẋ, Ẍ)`, in any number type.
+    fn rows<T: Scalar>(&self, task: &Motion<T>, rows: &mut [T]) -> Result<(), KinError> {
+        let k = evaluate(&self.geometry, task)?;
         let (th, thd, thdd) = (k.joint.pos, k.joint.vel, k.joint.acc);
         let cd = (th[0] - th[1]).cos();
         // Column-major 2 × 12: entry (joint j, column c) at 2c + j.
