@@ -437,18 +437,10 @@ fn read_extras(x: &Obj) -> Result<Extras, ParamError> {
         };
         // Names in column order: per joint, per harmonic the sine then the
         // cosine.
-        let mut names = names.iter();
-        for j in 0..2 {
-            for h in 0..order {
-                for amplitude in [&mut c.sin[j][h], &mut c.cos[j][h]] {
-                    let name = names.next().ok_or(ParamError::Invalid {
-                        key: o.key_path("order"),
-                        value: order_v,
-                        reason: "internal: fewer cogging names than amplitudes",
-                    })?;
-                    *amplitude = o.num(name)?;
-                }
-            }
+        let slots = (0..2).flat_map(|j| (0..order).map(move |h| (j, h)));
+        for ((j, h), pair) in slots.zip(names.chunks_exact(2)) {
+            c.sin[j][h] = o.num(&pair[0])?;
+            c.cos[j][h] = o.num(&pair[1])?;
         }
         e.cogging = Some(c);
     }
