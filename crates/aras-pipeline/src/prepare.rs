@@ -153,34 +153,54 @@ impl Prepared {
         self.stacked.w.as_ref()
     }
 
-    /// Noise power gain of the filter ([`noise_gain`]; 1 unfiltered): what
+    /// Noise power gain of the filter ([`record_noise_gain`]): what
     /// `aras_ident::OlsEstimate::with_filtered_noise` corrects σ by.
     pub fn noise_gain(&self) -> Result<f64, IdentError> {
-        match &self.filter {
-            Some(sos) => noise_gain(sos, self.n(), self.periodic()),
-            None => Ok(1.0),
-        }
+        record_noise_gain(self.filter.as_ref(), self.n(), self.periodic())
     }
 
-    /// Samples the reversal exclusion widens by: the filter's reach down to
-    /// `reach_tol` of its impulse-response peak ([`filter_reach`]; 0
-    /// unfiltered).
-    pub fn reach(&self, reach_tol: f64) -> Result<usize, IdentError> {
-        match &self.filter {
-            Some(sos) => filter_reach(sos, self.n(), self.periodic(), reach_tol),
-            None => Ok(0),
-        }
-    }
-
-    /// Rows kept away from velocity reversals ([`reversal_mask`]): joint
-    /// `j`'s rows with `|θ̇_j| < min_speed`, widened by [`Self::reach`], are
-    /// dropped. Joint-major, like [`Self::stacked`].
+    /// Rows kept away from velocity reversals ([`record_keep_mask`]).
+    /// Joint-major, like [`Self::stacked`].
     pub fn keep_mask(&self, min_speed: f64, reach_tol: f64) -> Result<Vec<bool>, IdentError> {
-        reversal_mask(
+        record_keep_mask(
             &self.processed.samples.theta_dot,
-            min_speed,
-            self.reach(reach_tol)?,
+            self.filter.as_ref(),
             self.periodic(),
+            min_speed,
+            reach_tol,
         )
     }
+}
+
+/// Noise power gain of the zero-phase `filter` applied to a record of `n`
+/// samples ([`noise_gain`]; 1 when nothing was filtered).
+pub fn record_noise_gain(
+    filter: Option<&Sos>,
+    n: usize,
+    periodic: bool,
+) -> Result<f64, IdentError> {
+    match filter {
+        Some(sos) => noise_gain(sos, n, periodic),
+        None => Ok(1.0),
+    }
+}
+
+/// Rows of a record kept away from velocity reversals ([`reversal_mask`]):
+/// joint `j`'s rows with `|θ̇_j| < min_speed` are dropped, widened by the
+/// zero-phase `filter`'s reach down to `reach_tol` of its impulse-response
+/// peak ([`filter_reach`]; no widening unfiltered), because filtering
+/// spreads the misfit at a reversal in time. Joint-major.
+pub fn record_keep_mask(
+    theta_dot: &[Vec<f64>; 2],
+    filter: Option<&Sos>,
+    periodic: bool,
+    min_speed: f64,
+    reach_tol: f64,
+) -> Result<Vec<bool>, IdentError> {
+    let n = theta_dot[0].len();
+    let reach = match filter {
+        Some(sos) => filter_reach(sos, n, periodic, reach_tol)?,
+        None => 0,
+    };
+    reversal_mask(theta_dot, min_speed, reach, periodic)
 }

@@ -8,8 +8,7 @@ use aras_dyn::Model;
 use aras_kin::KinematicSample;
 use faer::Mat;
 
-use crate::prepare::{RegressorColumns, columns_on};
-use crate::robot::{filter_reach, reversal_mask};
+use crate::prepare::{RegressorColumns, columns_on, record_keep_mask, record_noise_gain};
 use aras_ident::IdentError;
 
 /// A processed data set: the samples as `aras_signal::process` produced
@@ -102,10 +101,7 @@ impl Dataset {
     /// It is the same quantity as [`Self::filter_dof`]` / len` (Parseval:
     /// `Σ h² = ∫ |H|⁴ df / f_s`), computed in the time domain.
     pub fn noise_gain(&self) -> Result<f64, IdentError> {
-        match &self.filter {
-            Some(sos) => crate::robot::noise_gain(sos, self.len(), self.periodic),
-            None => Ok(1.0),
-        }
+        record_noise_gain(self.filter.as_ref(), self.len(), self.periodic)
     }
 
     /// [`crate::prepare::columns_on`] a window's kinematics of this data
@@ -145,9 +141,9 @@ impl Dataset {
 }
 
 /// Per joint, the samples used in fits and scores: the identification's
-/// reversal exclusion ([`reversal_mask`]) — joint `j`'s rows where
+/// reversal exclusion ([`record_keep_mask`]) — joint `j`'s rows where
 /// `|θ̇_j| < min_speed`, widened by the zero-phase filter's reach down to
-/// `reach_tol` of its peak ([`filter_reach`]; no widening without a
+/// `reach_tol` of its peak ([`crate::robot::filter_reach`]; no widening without a
 /// filter). Near a velocity reversal the exact `sign` of (49) misfits real
 /// (sticking, creeping, smooth) friction far beyond the noise, and the
 /// filter spreads that misfit over its impulse response; a candidate must
@@ -158,11 +154,13 @@ pub(crate) fn moving_mask(
     reach_tol: f64,
 ) -> Result<[Vec<bool>; 2], IdentError> {
     let n = data.len();
-    let guard = match &data.filter {
-        Some(sos) => filter_reach(sos, n, data.periodic, reach_tol)?,
-        None => 0,
-    };
-    let keep = reversal_mask(&data.samples.theta_dot, min_speed, guard, data.periodic)?;
+    let keep = record_keep_mask(
+        &data.samples.theta_dot,
+        data.filter.as_ref(),
+        data.periodic,
+        min_speed,
+        reach_tol,
+    )?;
     let mask = [keep[..n].to_vec(), keep[n..].to_vec()];
     for (j, m) in mask.iter().enumerate() {
         let kept = m.iter().filter(|k| **k).count();
