@@ -148,6 +148,9 @@ pub struct SimulationConfig {
     pub torque_limit: [f64; 2],
     /// Friction smoothing width `w` of `tanh(θ̇/w)` (rad/s).
     pub friction_smoothing: f64,
+    /// LuGre friction in place of the smoothed Coulomb term (absent: none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lugre: Option<aras_dyn::sim::LuGre>,
     /// Current-sense noise standard deviation (A).
     pub current_noise_std_a: [f64; 2],
     /// Motor torque constants (N·m/A).
@@ -180,6 +183,7 @@ impl Default for SimulationConfig {
             feedforward: false,
             torque_limit: s.torque_limit,
             friction_smoothing: s.friction_smoothing,
+            lugre: None,
             current_noise_std_a: s.sensors.current_noise_std,
             torque_constants: s.sensors.torque_constants,
             gear_ratios: s.sensors.gear_ratios,

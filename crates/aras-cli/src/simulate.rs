@@ -26,6 +26,7 @@ pub fn sim_config(cfg: &Config, nominal: &Params, duration_s: f64, seed: u64) ->
         },
         torque_limit: s.torque_limit,
         friction_smoothing: s.friction_smoothing,
+        lugre: s.lugre,
         sensors: Sensors {
             counts_per_rev: s.counts_per_rev,
             gear_ratios: s.gear_ratios,

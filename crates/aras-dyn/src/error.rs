@@ -203,6 +203,18 @@ pub enum SimError {
         /// The underlying error.
         source: DynError,
     },
+    /// The LuGre bristle relaxes faster than the RK4 step can follow
+    /// (`h σ0 |θ̇| / g(θ̇)` above 2.5).
+    #[error(
+        "LuGre friction is too stiff for the integration step at t = {t:.6} s \
+         (h·σ0·|θ̇|/g = {ratio:.2} > 2.5): raise `substeps` or lower `lugre.stiffness`"
+    )]
+    StiffFriction {
+        /// Simulated time (s).
+        t: f64,
+        /// `h σ0 |θ̇| / g(θ̇)` of the step.
+        ratio: f64,
+    },
     /// The desired trajectory is not evaluable.
     #[error("the desired trajectory cannot be evaluated at t = {t:.6} s")]
     Trajectory {

@@ -21,6 +21,7 @@
 //! Defaults and why they are realistic: `docs/simulator.md`.
 
 mod log;
+mod lugre;
 
 use aras_kin::Motion;
 use aras_kin::{Geometry, evaluate};
@@ -34,6 +35,7 @@ use crate::regressor::Sign;
 use crate::{DynError, Dynamics, Params, SimError, Trajectory};
 
 pub use log::{Noise, SimLog, Truth, write_log};
+pub use lugre::LuGre;
 
 /// Motor-side sensors and drive of each joint.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -122,6 +124,11 @@ pub struct SimConfig {
     pub torque_limit: [f64; 2],
     /// Width `w` of the `tanh(θ̇/w)` friction smoothing (rad/s).
     pub friction_smoothing: f64,
+    /// LuGre friction in place of the smoothed Coulomb term of (49)
+    /// (`None`, the default: `Fc tanh(θ̇/w)`). The extra effects keep the
+    /// `tanh` smoothing.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lugre: Option<LuGre>,
     /// Sensors and drives.
     pub sensors: Sensors,
     /// Torque samples lag the angle samples by this many samples.
@@ -142,6 +149,7 @@ impl Default for SimConfig {
             controller: Controller::default(),
             torque_limit: [2.4; 2],
             friction_smoothing: 0.03,
+            lugre: None,
             sensors: Sensors::default(),
             torque_delay_samples: 0,
             seed: 1,
@@ -215,45 +223,80 @@ impl SimConfig {
     }
 }
 
-/// The plant: truth dynamics with smooth friction.
+/// The plant: truth dynamics with smooth or LuGre friction.
 struct Plant<'a> {
     dy: &'a Dynamics,
     geometry: Geometry,
     sign: Sign,
+    lugre: Option<LuGre>,
+}
+
+/// The plant's state: task-space position and rate, and the LuGre bristle
+/// deflections of the joints (zero and unused without LuGre).
+#[derive(Clone, Copy)]
+struct State {
+    x: Vector2<f64>,
+    v: Vector2<f64>,
+    z: Vector2<f64>,
+}
+
+impl State {
+    /// `self + h · d`, with `d = (ẋ, v̇, ż)`.
+    fn step(&self, d: &(Vector2<f64>, Vector2<f64>, Vector2<f64>), h: f64) -> State {
+        State {
+            x: self.x + d.0 * h,
+            v: self.v + d.1 * h,
+            z: self.z + d.2 * h,
+        }
+    }
 }
 
 impl Plant<'_> {
-    /// `Ẍ` at `(X, Ẋ)` under the motor torque `tau`.
-    fn accel(
+    /// `(Ẋ, Ẍ, ż)` at `state` under the motor torque `tau`.
+    #[allow(clippy::type_complexity)]
+    fn deriv(
         &self,
-        x: &Vector2<f64>,
-        v: &Vector2<f64>,
+        state: &State,
         tau: &Vector2<f64>,
-    ) -> Result<Vector2<f64>, DynError> {
-        let s = evaluate(&self.geometry, &Motion::new(*x, *v, Vector2::zeros()))?;
-        let other = self.dy.friction_torque(&s.joint.vel, self.sign)
-            + self.dy.elastic_torque(&s.joint.pos)
-            + self.dy.extra_torque(&s, self.sign);
-        self.dy.forward_links(&s, &(tau - other))
+    ) -> Result<(Vector2<f64>, Vector2<f64>, Vector2<f64>), DynError> {
+        let s = evaluate(
+            &self.geometry,
+            &Motion::new(state.x, state.v, Vector2::zeros()),
+        )?;
+        let (friction, z_rate) = match &self.lugre {
+            None => (
+                self.dy.friction_torque(&s.joint.vel, self.sign),
+                Vector2::zeros(),
+            ),
+            Some(l) => {
+                let f = &self.dy.params().friction;
+                let w = &s.joint.vel;
+                (
+                    Vector2::from_fn(|j, _| {
+                        l.torque(j, f.coulomb[j], f.viscous[j], w[j], state.z[j])
+                    }),
+                    Vector2::from_fn(|j, _| l.rate(j, f.coulomb[j], w[j], state.z[j])),
+                )
+            }
+        };
+        let other =
+            friction + self.dy.elastic_torque(&s.joint.pos) + self.dy.extra_torque(&s, self.sign);
+        let a = self.dy.forward_links(&s, &(tau - other))?;
+        Ok((state.v, a, z_rate))
     }
 
     /// One classical RK4 step of length `h`.
-    fn rk4(
-        &self,
-        x: &mut Vector2<f64>,
-        v: &mut Vector2<f64>,
-        tau: &Vector2<f64>,
-        h: f64,
-    ) -> Result<(), DynError> {
-        let a1 = self.accel(x, v, tau)?;
-        let (x2, v2) = (*x + *v * (0.5 * h), *v + a1 * (0.5 * h));
-        let a2 = self.accel(&x2, &v2, tau)?;
-        let (x3, v3) = (*x + v2 * (0.5 * h), *v + a2 * (0.5 * h));
-        let a3 = self.accel(&x3, &v3, tau)?;
-        let (x4, v4) = (*x + v3 * h, *v + a3 * h);
-        let a4 = self.accel(&x4, &v4, tau)?;
-        *x += (*v + (v2 + v3) * 2.0 + v4) * (h / 6.0);
-        *v += (a1 + (a2 + a3) * 2.0 + a4) * (h / 6.0);
+    fn rk4(&self, state: &mut State, tau: &Vector2<f64>, h: f64) -> Result<(), DynError> {
+        let k1 = self.deriv(state, tau)?;
+        let k2 = self.deriv(&state.step(&k1, 0.5 * h), tau)?;
+        let k3 = self.deriv(&state.step(&k2, 0.5 * h), tau)?;
+        let k4 = self.deriv(&state.step(&k3, h), tau)?;
+        let sum = (
+            k1.0 + (k2.0 + k3.0) * 2.0 + k4.0,
+            k1.1 + (k2.1 + k3.1) * 2.0 + k4.1,
+            k1.2 + (k2.2 + k3.2) * 2.0 + k4.2,
+        );
+        *state = state.step(&sum, h / 6.0);
         Ok(())
     }
 }
@@ -277,10 +320,15 @@ pub fn simulate(
         Some(p) => Some(Dynamics::new(p).map_err(at0)?),
         None => None,
     };
+    let fc = truth.friction.coulomb;
+    if let Some(l) = &cfg.lugre {
+        l.validate(fc)?;
+    }
     let plant = Plant {
         dy: &dy,
         geometry: *dy.geometry(),
         sign: Sign::Tanh(cfg.friction_smoothing),
+        lugre: cfg.lugre,
     };
     let g = plant.geometry;
     let n = (cfg.duration_s * cfg.output_rate_hz).floor() as usize;
@@ -299,7 +347,14 @@ pub fn simulate(
         })
     };
     let d0 = desired(0.0)?;
-    let (mut x, mut v) = (d0.task.pos, d0.task.vel);
+    let mut state = State {
+        x: d0.task.pos,
+        v: d0.task.vel,
+        z: match &cfg.lugre {
+            Some(l) => Vector2::from_fn(|j, _| l.steady_state(j, fc[j], d0.joint.vel[j])),
+            None => Vector2::zeros(),
+        },
+    };
     let quantise = |th: &Vector2<f64>| {
         Vector2::new(
             (th[0] / res[0]).round() * res[0],
@@ -315,7 +370,8 @@ pub fn simulate(
     for k in 0..n {
         let t = k as f64 * dt;
         let at = |source| SimError::Dynamics { t, source };
-        let s = evaluate(&g, &Motion::new(x, v, Vector2::zeros())).map_err(|e| at(e.into()))?;
+        let s = evaluate(&g, &Motion::new(state.x, state.v, Vector2::zeros()))
+            .map_err(|e| at(e.into()))?;
         let theta_meas = quantise(&s.joint.pos);
         if k > 0 {
             let raw = (theta_meas - theta_prev) / dt;
@@ -332,8 +388,8 @@ pub fn simulate(
                 + c.kd[j] * (d.joint.vel[j] - vel_est[j]);
             tau[j] = tau[j].clamp(-cfg.torque_limit[j], cfg.torque_limit[j]);
         }
-        let xdd = plant.accel(&x, &v, &tau).map_err(at)?;
-        let theta_ddot = s.jacobian.matrix() * xdd + s.jacobian_dot * v;
+        let (_, xdd, _) = plant.deriv(&state, &tau).map_err(at)?;
+        let theta_ddot = s.jacobian.matrix() * xdd + s.jacobian_dot * state.v;
         let mut measured = [0.0; 2];
         for j in 0..2 {
             let z: f64 = StandardNormal.sample(&mut rng);
@@ -352,7 +408,15 @@ pub fn simulate(
             );
         }
         for _ in 0..cfg.substeps {
-            plant.rk4(&mut x, &mut v, &tau, h).map_err(at)?;
+            if let Some(l) = &cfg.lugre {
+                let w = evaluate(&g, &Motion::new(state.x, state.v, Vector2::zeros()))
+                    .map_err(|e| at(e.into()))?
+                    .joint
+                    .vel;
+                l.check_step(fc, [w[0], w[1]], h)
+                    .map_err(|ratio| SimError::StiffFriction { t, ratio })?;
+            }
+            plant.rk4(&mut state, &tau, h).map_err(at)?;
         }
     }
     log.sidecar =
