@@ -25,7 +25,7 @@
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
-use aras_dyn::sim::{SimConfig, simulate, write_log};
+use aras_dyn::sim::{LuGre, SimConfig, simulate, write_log};
 use aras_dyn::{Cogging, Effect, Model, Params, Sinusoid, Stribeck, Trajectory};
 use aras_excite::FourierTrajectory;
 use aras_ident::{BaseParameters, OlsEstimate, ols};
@@ -59,11 +59,24 @@ fn dataset(
     seed: u64,
     tag: &str,
 ) -> Dataset {
+    dataset_with(&SimConfig::default(), truth, traj, secs, delay, seed, tag)
+}
+
+/// [`dataset`] with the other simulator settings of `base`.
+fn dataset_with(
+    base: &SimConfig,
+    truth: &Params,
+    traj: &dyn Trajectory,
+    secs: f64,
+    delay: usize,
+    seed: u64,
+    tag: &str,
+) -> Dataset {
     let cfg = SimConfig {
         duration_s: secs,
         torque_delay_samples: delay,
         seed,
-        ..SimConfig::default()
+        ..base.clone()
     };
     let log = simulate(truth, traj, &cfg).unwrap();
     let dir = std::env::temp_dir().join(format!("aras-diag-{}", std::process::id()));
@@ -93,8 +106,14 @@ struct Scenario {
 }
 
 fn scenario(truth: &Params, delay: usize, seed: u64, tag: &str) -> Scenario {
+    scenario_with(&SimConfig::default(), truth, delay, seed, tag)
+}
+
+/// [`scenario`] with the other simulator settings of `base`.
+fn scenario_with(base: &SimConfig, truth: &Params, delay: usize, seed: u64, tag: &str) -> Scenario {
     let period = excitation().period();
-    let train = dataset(
+    let train = dataset_with(
+        base,
         truth,
         excitation(),
         TRAIN_PERIODS * period,
@@ -105,7 +124,8 @@ fn scenario(truth: &Params, delay: usize, seed: u64, tag: &str) -> Scenario {
     let vals: Vec<Dataset> = [0.5, 1.0]
         .iter()
         .map(|&f| {
-            dataset(
+            dataset_with(
+                base,
                 truth,
                 &Sinusoid::paper_79(f).unwrap(),
                 10.0 / f,
@@ -460,6 +480,122 @@ fn added_effect_sigma_equals_in_memory_corrected_sigma() {
         );
         assert!((p.value - est.estimate[k]).abs() <= 1e-8 * est.std_dev[k]);
     }
+}
+
+/// The fitness on every validation row and on the fitted rows that the
+/// diagnosis reports with the rows left out near reversals
+/// (`ResidualAnalysis::left_out`) equals the in-memory prediction of the
+/// final model (paper + `torque_offset`, identified on TRAIN) on the same
+/// validation set: its stacked, parallel-filtered regressor times the
+/// in-memory estimate, all rows, and the rows of the validation reversal
+/// mask (0.2 rad/s, reach 0.5).
+#[test]
+fn all_row_fitness_equals_the_in_memory_prediction() {
+    let (s, d) = offset_case();
+    let cad = Params::aras_diamond();
+    let model = Model::paper(cad.gravity)
+        .unwrap()
+        .with_effect(Effect::TorqueOffset)
+        .unwrap();
+    let (base, est) = identify_in_memory(&model, &s.train);
+    let geometry = cad.geometry().unwrap();
+    for (v, a) in s.vals.iter().zip(&d.after) {
+        let sos = v.filter.as_ref().unwrap();
+        let mut st = stack(&model, &geometry, &v.samples).unwrap();
+        filter(&mut st, sos, FilterMode::Parallel, v.periodic).unwrap();
+        let wb = base.base_regressor(st.w.as_ref()).unwrap();
+        let pred: Vec<f64> = (0..wb.nrows())
+            .map(|r| (0..wb.ncols()).map(|c| wb[(r, c)] * est.estimate[c]).sum())
+            .collect();
+        let guard = filter_reach(sos, v.len(), v.periodic, 0.5).unwrap();
+        let keep = reversal_mask(&v.samples.theta_dot, 0.2, guard, v.periodic).unwrap();
+        let n = v.len();
+        assert_eq!(a.left_out.len(), 2);
+        for (g, l) in a.left_out.iter().enumerate() {
+            let rows = g * n..(g + 1) * n;
+            let all =
+                aras_ident::validate::fitness(&st.t[rows.clone()], &pred[rows.clone()]).unwrap();
+            let pick = |x: &[f64]| -> Vec<f64> {
+                rows.clone().filter(|&r| keep[r]).map(|r| x[r]).collect()
+            };
+            let fitted = aras_ident::validate::fitness(&pick(&st.t), &pick(&pred)).unwrap();
+            let left = rows.clone().filter(|&r| !keep[r]).count();
+            eprintln!(
+                "{} joint {}: all rows {:.4} % (in memory {all:.4}), fitted {:.4} % \
+                 (in memory {fitted:.4}), left out {} rows ({left})",
+                v.name, l.joint, l.fitness_all_rows, l.fitness_fitted_rows, l.rows
+            );
+            assert_eq!(l.rows, left, "{} joint {}", v.name, l.joint);
+            // Same model, rows and filter; the estimates agree to 1e-8
+            // relative (`added_effect_sigma_equals_in_memory_corrected_sigma`),
+            // so the fitness in percent agrees far below 1e-5 points.
+            assert!(
+                (l.fitness_all_rows - all).abs() < 1e-5,
+                "{} vs {all}",
+                l.fitness_all_rows
+            );
+            assert!(
+                (l.fitness_fitted_rows - fitted).abs() < 1e-5,
+                "{} vs {fitted}",
+                l.fitness_fitted_rows
+            );
+            assert!(l.fitness_all_rows < l.fitness_fitted_rows);
+        }
+    }
+}
+
+/// Hidden LuGre friction (`Fs = 1.3 Fc`, `v_s = 0.03 rad/s`, presliding
+/// length `Fc/σ0` = 5e-4 rad), simulated as a bristle state and not as a
+/// column: every deviation from the sign law lives below the exclusion's
+/// 0.2 rad/s. No candidate may be named for it, and the conclusion must
+/// locate the misfit on the rows left out near reversals, at low speed,
+/// with the all-row fitness below the fitted rows'.
+#[test]
+fn lugre_friction_is_located_at_reversals_and_nothing_is_named() {
+    let fc = Params::aras_diamond().friction.coulomb;
+    let base = SimConfig {
+        substeps: 4,
+        lugre: Some(LuGre {
+            static_level: [1.3 * fc[0], 1.3 * fc[1]],
+            stribeck_velocity: [0.03; 2],
+            stiffness: [fc[0] / 5e-4, fc[1] / 5e-4],
+            damping: [0.2, 0.4],
+        }),
+        ..SimConfig::default()
+    };
+    let s = scenario_with(&base, &Params::aras_diamond(), 0, 1, "lugre");
+    let d = diagnose_on(&s, false);
+    show("lugre", &d);
+    assert!(d.steps.is_empty(), "{}", d.conclusion);
+    assert!(
+        d.conclusion.contains("Near velocity reversals"),
+        "{}",
+        d.conclusion
+    );
+    let worst = d
+        .after
+        .iter()
+        .flat_map(|a| a.left_out.iter())
+        .flat_map(|l| l.findings.iter())
+        .max_by(|a, b| a.z.abs().total_cmp(&b.z.abs()))
+        .expect("no finding on the rows left out");
+    eprintln!("worst: {}", worst.text);
+    let bin = d
+        .after
+        .iter()
+        .flat_map(|a| a.left_out.iter())
+        .flat_map(|l| l.profile.bins.iter())
+        .find(|b| b.z() == worst.z)
+        .unwrap();
+    assert!(bin.lo.abs().min(bin.hi.abs()) < 0.2, "{bin:?}");
+    let parts: Vec<_> = d.after.iter().flat_map(|a| a.left_out.iter()).collect();
+    let gap: f64 = parts
+        .iter()
+        .map(|l| l.fitness_fitted_rows - l.fitness_all_rows)
+        .sum::<f64>()
+        / parts.len() as f64;
+    eprintln!("fitted − all-row fitness: {gap:.2} points");
+    assert!(gap > 1.0, "{gap}");
 }
 
 /// Hidden torque offset and quadratic damping, TRAIN only: per noise seed

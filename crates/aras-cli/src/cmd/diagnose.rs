@@ -279,6 +279,20 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
                 .take(6)
                 .map(|f| format!("after: {}", f.text)),
         );
+        for l in &a.left_out {
+            items.push(format!(
+                "after, the {} rows of joint {} left out near velocity reversals: residual RMS \
+                 {:.4} N·m (fitted rows {:.4}); validation fitness on all rows {:.2} %, on the \
+                 fitted rows {:.2} %",
+                l.rows, l.joint, l.rms, l.fitted_rms, l.fitness_all_rows, l.fitness_fitted_rows
+            ));
+            items.extend(
+                l.findings
+                    .iter()
+                    .take(3)
+                    .map(|f| format!("after: {}", f.text)),
+            );
+        }
         for (tag, x) in [("before", b), ("after", a)] {
             for w in &x.whiteness {
                 items.push(format!(
@@ -297,11 +311,17 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
             };
             let (xb, yb) = centres(pb);
             let (xa, ya) = centres(pa);
+            let (xl, yl) = a
+                .left_out
+                .iter()
+                .find(|l| l.joint == j)
+                .map_or((Vec::new(), Vec::new()), |l| centres(&l.profile));
             let file = format!("residual_{}_j{j}.svg", sanitize(&b.dataset));
             r.figure(
                 file,
                 format!(
-                    "`{}`, joint {j}: mean residual binned against velocity, before and after.",
+                    "`{}`, joint {j}: mean residual binned against velocity, before and after, \
+                     and after on the rows left out near velocity reversals.",
                     b.dataset
                 ),
                 lines(
@@ -318,6 +338,11 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
                             name: "after".into(),
                             x: &xa,
                             y: &ya,
+                        },
+                        Series {
+                            name: "after, rows left out".into(),
+                            x: &xl,
+                            y: &yl,
                         },
                     ],
                     200,

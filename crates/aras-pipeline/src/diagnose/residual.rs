@@ -129,6 +129,39 @@ pub struct ResidualAnalysis {
     pub whiteness: Vec<Whiteness>,
     /// Findings, systematic ones first.
     pub findings: Vec<Finding>,
+    /// Per joint, the same residual on the rows the fits leave out near
+    /// velocity reversals: not part of [`Self::noise_like`], which judges
+    /// the rows the candidates were fitted and scored on, but where a
+    /// low-speed friction law the model lacks shows.
+    pub left_out: Vec<LeftOut>,
+}
+
+/// The residual of one joint on the rows that the fits leave out near its
+/// velocity reversals (`DiagnoseOptions::min_speed`, widened by the
+/// filter's reach), next to the fitted rows' figures.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LeftOut {
+    /// Joint (1 or 2).
+    pub joint: usize,
+    /// Rows left out.
+    pub rows: usize,
+    /// Rows fitted.
+    pub fitted_rows: usize,
+    /// Residual RMS on the rows left out (N·m).
+    pub rms: f64,
+    /// Residual RMS on the fitted rows (N·m).
+    pub fitted_rms: f64,
+    /// Validation fitness (78) on every row of the set (%).
+    pub fitness_all_rows: f64,
+    /// Validation fitness (78) on the fitted rows (%).
+    pub fitness_fitted_rows: f64,
+    /// The residual of the rows left out binned against velocity (rest
+    /// band split by sign, quantile bins beyond), standard errors from the
+    /// fitted rows' RMS.
+    pub profile: Profile,
+    /// Bins beyond [`Z_SYSTEMATIC`] standard errors, in words, largest
+    /// first.
+    pub findings: Vec<Finding>,
 }
 
 impl ResidualAnalysis {
@@ -202,14 +235,18 @@ fn bin_by(x: &[f64], r: &[f64], edges: &[f64], sigma: f64, dof_ratio: f64) -> Ve
 }
 
 /// Velocity edges: the rest band `±REST_VELOCITY` split at zero, and four
-/// quantile bins of |θ̇| on each side.
+/// quantile bins of |θ̇| on each side, starting at the rest band's edges
+/// (the quantiles' outermost edge would leave a bin of one sample there).
 fn velocity_edges(v: &[f64]) -> Vec<f64> {
     let pos: Vec<f64> = v.iter().copied().filter(|x| *x >= REST_VELOCITY).collect();
     let neg: Vec<f64> = v.iter().copied().filter(|x| *x <= -REST_VELOCITY).collect();
     let mut e: Vec<f64> = quantile_edges(&neg, 4);
+    if e.len() > 1 {
+        e.pop();
+    }
     e.extend([-REST_VELOCITY, 0.0, REST_VELOCITY]);
-    e.extend(quantile_edges(&pos, 4));
-    let mut e: Vec<f64> = e.into_iter().collect();
+    let p = quantile_edges(&pos, 4);
+    e.extend(p.iter().skip(usize::from(p.len() > 1)));
     e.sort_by(|a, b| a.total_cmp(b));
     e.dedup();
     e
@@ -307,7 +344,80 @@ pub(crate) fn analyse(
         profiles,
         whiteness,
         findings,
+        left_out: Vec::new(),
     }
+}
+
+/// The residual of joint `joint` on the rows left out (`left`), and the
+/// fitness on all rows and on the fitted ones from `(measured, residual,
+/// fitted)` over every row of the set; `sigma` is the fitted rows' RMS.
+pub(crate) fn analyse_left_out(
+    joint: usize,
+    left: &JointData<'_>,
+    all: (&[f64], &[f64], &[bool]),
+    sigma: f64,
+    dof_ratio: f64,
+) -> Result<LeftOut, aras_ident::IdentError> {
+    let (measured, residual, fitted) = all;
+    let estimate: Vec<f64> = measured.iter().zip(residual).map(|(m, r)| m - r).collect();
+    let pick = |want: bool, x: &[f64]| -> Vec<f64> {
+        x.iter()
+            .zip(fitted)
+            .filter(|(_, f)| **f == want)
+            .map(|(v, _)| *v)
+            .collect()
+    };
+    let fitness_fitted_rows =
+        aras_ident::validate::fitness(&pick(true, measured), &pick(true, &estimate))?;
+    let fitness_all_rows = aras_ident::validate::fitness(measured, &estimate)?;
+    let rms = (left.residual.iter().fold(0.0, |s, x| s + x * x)
+        / left.residual.len().max(1) as f64)
+        .sqrt();
+    let bins = if left.theta_dot.is_empty() {
+        Vec::new()
+    } else {
+        bin_by(
+            left.theta_dot,
+            left.residual,
+            &velocity_edges(left.theta_dot),
+            sigma,
+            dof_ratio,
+        )
+    };
+    let mut findings: Vec<Finding> = bins
+        .iter()
+        .filter(|b| b.z().abs() > Z_SYSTEMATIC)
+        .map(|b| Finding {
+            joint,
+            text: format!(
+                "joint {joint}, rows left out near velocity reversals: residual mean {:+.4} N·m \
+                 for θ̇ in [{:.3}, {:.3}] rad/s ({} samples, z = {:.1})",
+                b.mean,
+                b.lo,
+                b.hi,
+                b.count,
+                b.z()
+            ),
+            systematic: true,
+            z: b.z(),
+        })
+        .collect();
+    findings.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+    Ok(LeftOut {
+        joint,
+        rows: left.residual.len(),
+        fitted_rows: fitted.iter().filter(|f| **f).count(),
+        rms,
+        fitted_rms: sigma,
+        fitness_all_rows,
+        fitness_fitted_rows,
+        profile: Profile {
+            joint,
+            axis: Axis::Velocity,
+            bins,
+        },
+        findings,
+    })
 }
 
 fn white(joint: usize, r: &[f64], dof_ratio: f64) -> Whiteness {
@@ -324,5 +434,50 @@ fn white(joint: usize, r: &[f64], dof_ratio: f64) -> Whiteness {
         p_value,
         autocorrelation_time: integrated_time(r, 2000.min(r.len() / 4)),
         rms,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Every velocity lands in exactly one bin that contains it, the
+        /// rest band is split at zero, and no bin is a sliver between the
+        /// rest band and the first quantile.
+        #[test]
+        fn velocity_bins_cover_every_sample(v in proptest::collection::vec(-3.0f64..3.0, 1..300)) {
+            let e = velocity_edges(&v);
+            prop_assert!(e.windows(2).all(|w| w[0] < w[1]));
+            for x in [-REST_VELOCITY, 0.0, REST_VELOCITY] {
+                prop_assert!(e.contains(&x));
+            }
+            let r: Vec<f64> = v.iter().map(|_| 1.0).collect();
+            let bins = bin_by(&v, &r, &e, 1.0, 1.0);
+            prop_assert_eq!(bins.iter().map(|b| b.count).sum::<usize>(), v.len());
+            for x in &v {
+                prop_assert!(bins.iter().any(|b| b.lo <= *x && *x <= b.hi));
+            }
+            let outer = |side: f64| v.iter().filter(|x| **x * side >= REST_VELOCITY).count();
+            for (side, edge) in [(1.0, REST_VELOCITY), (-1.0, -REST_VELOCITY)] {
+                // With at least two distinct speeds beyond the rest band,
+                // the bin next to it holds more than one of them.
+                let distinct = {
+                    let mut s: Vec<f64> =
+                        v.iter().copied().filter(|x| *x * side >= REST_VELOCITY).collect();
+                    s.sort_by(f64::total_cmp);
+                    s.dedup();
+                    s.len()
+                };
+                if outer(side) >= 8 && distinct >= 8 {
+                    let next = bins
+                        .iter()
+                        .find(|b| if side > 0.0 { b.lo == edge } else { b.hi == edge })
+                        .expect("a bin next to the rest band");
+                    prop_assert!(next.count > 1, "{:?}", next);
+                }
+            }
+        }
     }
 }

@@ -11,7 +11,7 @@ use serde::Serialize;
 use super::candidates::{Candidate, CandidateGrid};
 use super::chunks::{Plan, filtered_torques, in_lanes, window_kinematics};
 use super::data::{Dataset, moving_mask};
-use super::residual::{JointData, ResidualAnalysis, analyse};
+use super::residual::{JointData, ResidualAnalysis, analyse, analyse_left_out};
 use crate::prepare::RegressorColumns;
 use crate::robot::consistent_problem;
 use aras_ident::BaseParameters;
@@ -255,6 +255,42 @@ pub struct Diagnosis {
     pub elapsed_s: f64,
 }
 
+/// The conclusion's sentence on the rows left out near velocity reversals
+/// (the final model's residual there, [`ResidualAnalysis::left_out`]).
+fn left_out_sentence(after: &[ResidualAnalysis], min_speed: f64) -> String {
+    let parts: Vec<&super::residual::LeftOut> =
+        after.iter().flat_map(|a| a.left_out.iter()).collect();
+    if parts.iter().all(|l| l.rows == 0) {
+        return String::new();
+    }
+    let mean = |f: fn(&super::residual::LeftOut) -> f64| {
+        parts.iter().map(|l| f(l)).sum::<f64>() / parts.len() as f64
+    };
+    let (all, fitted) = (
+        mean(|l| l.fitness_all_rows),
+        mean(|l| l.fitness_fitted_rows),
+    );
+    let worst = parts
+        .iter()
+        .flat_map(|l| l.findings.iter())
+        .max_by(|a, b| a.z.abs().total_cmp(&b.z.abs()));
+    match worst {
+        Some(w) => format!(
+            " Near velocity reversals, on the rows the fits leave out (|θ̇| < {min_speed} rad/s \
+             and the filter's reach), the final model misses beyond noise ({}); validation \
+             fitness on all rows is {all:.1} % against {fitted:.1} % on the fitted rows: \
+             friction at low speed (sticking, presliding, a Stribeck velocity below \
+             {min_speed} rad/s) that the sign law (49) does not describe and that the \
+             candidates, fitted on moving rows, do not see.",
+            w.text
+        ),
+        None => format!(
+            " On the rows left out near velocity reversals the residual is within noise \
+             (validation fitness on all rows {all:.1} %, on the fitted rows {fitted:.1} %)."
+        ),
+    }
+}
+
 /// Per data set: the rows used (per joint), the whole-record filtered
 /// torques and the chunk plan.
 struct Prepared {
@@ -383,9 +419,23 @@ impl Context<'_> {
         Ok(acc)
     }
 
-    /// Residual per joint of the selected model `fit` on `d` (rows used,
-    /// in order) with their sample indices: only the columns of the model
-    /// are computed.
+    /// The torque shift (samples) of the model `fit`: its delay
+    /// candidate's, or 0.
+    fn fit_delay(&self, fit: &ModelFit) -> i64 {
+        (0..self.cands.len())
+            .find(|&k| self.layout.candidate_columns(k).start == fit.target)
+            .and_then(|k| match self.cands[k] {
+                Candidate::TimeDelay { samples } if fit.target != self.layout.target_column() => {
+                    Some(samples)
+                }
+                _ => None,
+            })
+            .unwrap_or(0)
+    }
+
+    /// Residual per joint of the selected model `fit` on every row of `d`
+    /// in its range, fitted or left out near a reversal (in order), with
+    /// their sample indices: only the columns of the model are computed.
     fn residual(
         &self,
         d: &Dataset,
@@ -399,15 +449,7 @@ impl Context<'_> {
         for (c, v) in fit.columns.iter().zip(&fit.estimate) {
             beta[*c] = *v;
         }
-        let delay = (0..self.cands.len())
-            .find(|&k| self.layout.candidate_columns(k).start == fit.target && k < self.cands.len())
-            .and_then(|k| match self.cands[k] {
-                Candidate::TimeDelay { samples } if fit.target != self.layout.target_column() => {
-                    Some(samples)
-                }
-                _ => None,
-            })
-            .unwrap_or(0);
+        let delay = self.fit_delay(fit);
         let used: Vec<usize> = (0..self.cands.len())
             .filter(|&k| {
                 self.effect_models[k].is_some()
@@ -432,7 +474,7 @@ impl Context<'_> {
             let mut res: [Vec<f64>; 2] = [vec![], vec![]];
             let mut ids: [Vec<usize>; 2] = [vec![], vec![]];
             for g in 0..2 {
-                for i in Self::rows(p, g, a, b) {
+                for i in a..b {
                     let row = g * nw + (i - wl);
                     let mut pred = 0.0;
                     for j in 0..pb {
@@ -740,43 +782,68 @@ pub fn diagnose(
     let stopped_clean = sel.status == SelectionStatus::NothingSignificant;
     let final_fit = sel.final_fit().clone();
 
-    // Residual analyses before and after.
+    // Residual analyses before and after: the fitted rows, and apart the
+    // rows left out near velocity reversals.
     let analyse_fit = |fit: &ModelFit| {
         validation
             .iter()
             .zip(&vals_p)
             .map(|(v, p)| -> Result<ResidualAnalysis, IdentError> {
                 let (res, idx) = ctx.residual(v, p, fit)?;
+                let delay = ctx.fit_delay(fit);
                 let sm = &v.samples;
+                // Per joint: [residual, θ, θ̇, θ̈, t] of the fitted rows
+                // (`fitted`) or of the rows left out.
+                let split = |g: usize, fitted: bool| -> [Vec<f64>; 5] {
+                    let mut out: [Vec<f64>; 5] = Default::default();
+                    for (r, &i) in res[g].iter().zip(&idx[g]) {
+                        if p.mask[g][i] == fitted {
+                            let row = [
+                                *r,
+                                sm.theta[g][i],
+                                sm.theta_dot[g][i],
+                                sm.theta_ddot[g][i],
+                                sm.t[i],
+                            ];
+                            for (o, x) in out.iter_mut().zip(row) {
+                                o.push(x);
+                            }
+                        }
+                    }
+                    out
+                };
+                fn jd(c: &[Vec<f64>; 5]) -> JointData<'_> {
+                    JointData {
+                        residual: &c[0],
+                        theta: &c[1],
+                        theta_dot: &c[2],
+                        theta_ddot: &c[3],
+                        t: &c[4],
+                    }
+                }
+                let kept = [split(0, true), split(1, true)];
                 let rms = |x: &[f64]| {
                     (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
                 };
-                let pick =
-                    |x: &[f64], g: usize| -> Vec<f64> { idx[g].iter().map(|&i| x[i]).collect() };
-                let cols: Vec<[Vec<f64>; 4]> = (0..2)
-                    .map(|g| {
-                        [
-                            pick(&sm.theta[g], g),
-                            pick(&sm.theta_dot[g], g),
-                            pick(&sm.theta_ddot[g], g),
-                            pick(&sm.t, g),
-                        ]
-                    })
-                    .collect();
-                let jd = |g: usize| JointData {
-                    residual: &res[g],
-                    theta: &cols[g][0],
-                    theta_dot: &cols[g][1],
-                    theta_ddot: &cols[g][2],
-                    t: &cols[g][3],
-                };
-                let sigma = [rms(&res[0]), rms(&res[1])];
-                Ok(analyse(
-                    &v.name,
-                    &[jd(0), jd(1)],
-                    sigma,
-                    v.filter_dof() / v.len() as f64,
-                ))
+                let sigma = [rms(&kept[0][0]), rms(&kept[1][0])];
+                let dof_ratio = v.filter_dof() / v.len() as f64;
+                let mut a = analyse(&v.name, &[jd(&kept[0]), jd(&kept[1])], sigma, dof_ratio);
+                for g in 0..2 {
+                    let measured: Vec<f64> = idx[g]
+                        .iter()
+                        .map(|&i| Context::shifted(p, g, i, delay))
+                        .collect();
+                    let fitted: Vec<bool> = idx[g].iter().map(|&i| p.mask[g][i]).collect();
+                    let left = split(g, false);
+                    a.left_out.push(analyse_left_out(
+                        g + 1,
+                        &jd(&left),
+                        (&measured, &res[g], &fitted),
+                        sigma[g],
+                        dof_ratio,
+                    )?);
+                }
+                Ok(a)
             })
             .collect::<Result<Vec<_>, _>>()
     };
@@ -825,6 +892,8 @@ pub fn diagnose(
             }
         )
     };
+
+    let conclusion = conclusion + &left_out_sentence(&after, opts.min_speed);
 
     let mut final_model = start.clone();
     for s in &steps {
