@@ -13,7 +13,7 @@ use aras_signal::{Butterworth, ProcessOptions, ProcessSummary, Processed, Sos};
 use faer::{Mat, MatRef};
 
 use crate::robot::{
-    FilterMode, Stacked, filter, filter_columns, filter_reach, noise_gain, reversal_mask,
+    FilterMode, Stacked, filter, filter_columns, filter_reach, noise_gain, reversal_mask, stack,
     stack_selected,
 };
 
@@ -112,13 +112,24 @@ pub fn prepare(
 ) -> Result<Prepared, IdentError> {
     let processed = aras_signal::process(log, opts, &aras_kin::task_motion(geometry))
         .map_err(|e| IdentError::external(format!("processing {}", log.name), e))?;
-    let mut stacked = stack_selected(model, geometry, &processed.samples, |w| {
-        let names = match columns {
-            RegressorColumns::Standard => model.names(),
-            RegressorColumns::Base(base) => base.base_names(),
-        };
-        Ok((columns.select(w)?, names))
-    })?;
+    let mut stacked = match columns {
+        RegressorColumns::Standard => stack(model, geometry, &processed.samples)?,
+        RegressorColumns::Base(base) if base.n_standard() != model.columns() => {
+            return Err(IdentError::DimensionMismatch {
+                what: "regressor columns",
+                expected: base.n_standard(),
+                found: model.columns(),
+                hint: "the base parameters must come from the same model's analysis",
+            });
+        }
+        RegressorColumns::Base(base) => stack_selected(
+            model,
+            geometry,
+            &processed.samples,
+            base.independent(),
+            base.base_names(),
+        )?,
+    };
     let filter_sos = processing_filter(&processed.summary)?;
     let unfiltered = (keep_unfiltered && filter_sos.is_some()).then(|| stacked.clone());
     if let Some(sos) = &filter_sos {

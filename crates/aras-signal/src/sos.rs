@@ -307,37 +307,49 @@ impl Sos {
         }
         self.check_len(n)?;
         let edge = self.padlen;
+        // Rows per tile of the (de)interleaving copies: 512 rows of eight
+        // lanes are 32 KiB, so each signal is read (or written) in order
+        // while the tile stays in the L1 cache.
+        const TILE: usize = 512;
         for group in signals.chunks_mut(FILTER_LANES) {
-            // Odd extension, interleaved row by row (one sweep over the
-            // buffer); unused lanes carry zeros.
-            scratch.clear();
+            // Odd extension, interleaved; every entry of the used lanes is
+            // written, so the buffer is only resized, not cleared. Unused
+            // lanes carry zeros.
             scratch.resize(n + 2 * edge, [0.0; FILTER_LANES]);
+            if group.len() < FILTER_LANES {
+                for row in scratch.iter_mut() {
+                    row[group.len()..].fill(0.0);
+                }
+            }
             let (head, rest) = scratch.split_at_mut(edge);
             let (body, tail) = rest.split_at_mut(n);
-            for (k, row) in head.iter_mut().enumerate() {
-                let i = edge - k;
-                for (r, s) in row.iter_mut().zip(group.iter()) {
-                    *r = 2.0 * s[0] - s[i];
+            for (l, s) in group.iter().enumerate() {
+                for (k, row) in head.iter_mut().enumerate() {
+                    row[l] = 2.0 * s[0] - s[edge - k];
+                }
+                for (k, row) in tail.iter_mut().enumerate() {
+                    row[l] = 2.0 * s[n - 1] - s[n - 2 - k];
                 }
             }
-            for (i, row) in body.iter_mut().enumerate() {
-                for (r, s) in row.iter_mut().zip(group.iter()) {
-                    *r = s[i];
-                }
-            }
-            for (k, row) in tail.iter_mut().enumerate() {
-                let i = k + 1;
-                for (r, s) in row.iter_mut().zip(group.iter()) {
-                    *r = 2.0 * s[n - 1] - s[n - 1 - i];
+            for (rows, start) in body.chunks_mut(TILE).zip((0..n).step_by(TILE)) {
+                for (l, s) in group.iter().enumerate() {
+                    for (row, v) in rows.iter_mut().zip(&s[start..]) {
+                        row[l] = *v;
+                    }
                 }
             }
             let first = scratch[0];
             self.pass_lanes(scratch, first, false);
             let last = scratch[scratch.len() - 1];
             self.pass_lanes(scratch, last, true);
-            for (i, row) in scratch[edge..edge + n].iter().enumerate() {
-                for (s, r) in group.iter_mut().zip(row.iter()) {
-                    s[i] = *r;
+            for (rows, start) in scratch[edge..edge + n]
+                .chunks(TILE)
+                .zip((0..n).step_by(TILE))
+            {
+                for (l, s) in group.iter_mut().enumerate() {
+                    for (v, row) in s[start..].iter_mut().zip(rows) {
+                        *v = row[l];
+                    }
                 }
             }
         }

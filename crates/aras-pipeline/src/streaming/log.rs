@@ -620,19 +620,28 @@ fn accumulate_processed(
     let st = &prepared.stacked;
     let wb = &st.w;
     for g in 0..2 {
-        let rows: Vec<usize> = (g * n + i0..g * n + i1).filter(|&i| keep[i]).collect();
-        if rows.is_empty() {
-            continue;
-        }
-        let w = faer::Mat::from_fn(rows.len(), wb.ncols(), |i, j| wb[(rows[i], j)]);
-        let t: Vec<f64> = rows.iter().map(|&i| st.t[i]).collect();
-        for v in &t {
-            out.tau[g][0] += v;
-            out.tau[g][1] += v * v;
-        }
-        match options.accumulation {
-            Accumulation::Qr => acc.push_rows(g, w.as_ref(), &t)?,
-            Accumulation::Gram => acc.push_rows_gram(g, w.as_ref(), &t)?,
+        // Runs of kept rows, pushed as views of the block's matrix (no copy).
+        let mut i = g * n + i0;
+        let end = g * n + i1;
+        while i < end {
+            if !keep[i] {
+                i += 1;
+                continue;
+            }
+            let start = i;
+            while i < end && keep[i] {
+                i += 1;
+            }
+            let w = wb.as_ref().subrows(start, i - start);
+            let t = &st.t[start..i];
+            for v in t {
+                out.tau[g][0] += v;
+                out.tau[g][1] += v * v;
+            }
+            match options.accumulation {
+                Accumulation::Qr => acc.push_rows(g, w, t)?,
+                Accumulation::Gram => acc.push_rows_gram(g, w, t)?,
+            }
         }
     }
     Ok(i1 - i0)
