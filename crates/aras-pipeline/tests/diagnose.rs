@@ -416,6 +416,38 @@ fn an_effect_outside_the_library_is_not_called_noise_like_on_five_seeds() {
             "seed {seed}: {}",
             d.conclusion
         );
+        // Located in frequency: quadratic damping τ = Fq θ̇|θ̇| lives at the
+        // motion's low harmonics, so a band there holds most of the
+        // residual's power, far above the filtered noise's flat density.
+        let band = d
+            .after
+            .iter()
+            .flat_map(|a| a.spectra.iter())
+            .filter_map(|s| s.finding.as_ref())
+            .max_by(|a, b| a.z.total_cmp(&b.z))
+            .unwrap_or_else(|| panic!("seed {seed}: no frequency band located"));
+        assert!(
+            d.conclusion.contains(&band.text),
+            "seed {seed}: {}",
+            d.conclusion
+        );
+        assert!(
+            band.text.contains("follows the motion"),
+            "seed {seed}: {}",
+            band.text
+        );
+        let spectrum = d
+            .after
+            .iter()
+            .flat_map(|a| a.spectra.iter())
+            .find(|s| s.finding.as_ref() == Some(band))
+            .unwrap();
+        let top = spectrum
+            .bands
+            .iter()
+            .max_by(|a, b| a.residual_share.total_cmp(&b.residual_share))
+            .unwrap();
+        assert!(top.hi_hz <= 2.0, "seed {seed}: {top:?}");
     }
 }
 

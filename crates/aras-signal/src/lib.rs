@@ -73,6 +73,7 @@ mod fourier;
 mod periods;
 mod process;
 mod sos;
+mod spectrum;
 
 pub use bandwidth::{
     CUTOFF_MARGIN, HARMONIC_FALSE_ALARM, HarmonicSelection, MIN_PERIOD_CORRELATION,
@@ -89,3 +90,4 @@ pub use process::{
     PeriodSource, PeriodSummary, ProcessOptions, ProcessSummary, Processed, Samples, process,
 };
 pub use sos::{FILTER_LANES, Sos, TransferFunction};
+pub use spectrum::{PowerSpectrum, SpectrumError, power_spectrum};

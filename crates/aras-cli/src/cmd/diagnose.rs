@@ -293,6 +293,12 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
                     .map(|f| format!("after: {}", f.text)),
             );
         }
+        items.extend(
+            a.spectra
+                .iter()
+                .filter_map(|sp| sp.finding.as_ref())
+                .map(|f| format!("after: {}", f.text)),
+        );
         for (tag, x) in [("before", b), ("after", a)] {
             for w in &x.whiteness {
                 items.push(format!(
@@ -346,6 +352,55 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
                         },
                     ],
                     200,
+                )?,
+            );
+        }
+    }
+
+    r.heading(2, "Residual spectra");
+    r.paragraph(
+        "Power density of the residual (every row) before and after, next to the measured \
+         torque's, on a log scale: a band where the residual stands far above its flat floor \
+         is where the model misses.",
+    );
+    for (b, a) in d.before.iter().zip(&d.after) {
+        for (sb, sa) in b.spectra.iter().zip(&a.spectra) {
+            let log = |v: &[f64]| -> Vec<f64> { v.iter().map(|x| x.max(1e-30).log10()).collect() };
+            let (yb, ya, yt) = (
+                log(&sb.residual_density),
+                log(&sa.residual_density),
+                log(&sa.torque_density),
+            );
+            let j = sa.joint;
+            r.figure(
+                format!("residual_spectrum_{}_j{j}.svg", sanitize(&b.dataset)),
+                format!(
+                    "`{}`, joint {j}: log10 power density (N²·m²/Hz) of the residual before and \
+                     after, and of the measured torque.",
+                    b.dataset
+                ),
+                lines(
+                    &format!("{} joint {j}: residual spectrum", b.dataset),
+                    "frequency (Hz)",
+                    "log10 density (N²·m²/Hz)",
+                    &[
+                        Series {
+                            name: "residual before".into(),
+                            x: &sb.frequencies_hz,
+                            y: &yb,
+                        },
+                        Series {
+                            name: "residual after".into(),
+                            x: &sa.frequencies_hz,
+                            y: &ya,
+                        },
+                        Series {
+                            name: "measured torque".into(),
+                            x: &sa.frequencies_hz,
+                            y: &yt,
+                        },
+                    ],
+                    400,
                 )?,
             );
         }

@@ -92,6 +92,27 @@ impl Dataset {
         (n * 2.0 * b / fs).clamp(1.0, n)
     }
 
+    /// Where the low-pass's pass band ends (Hz): the first frequency where
+    /// its one-way gain falls below `1/√2` (the cut-off of a Butterworth
+    /// design), found by bisection; a quarter of the sample rate without a
+    /// filter.
+    pub fn pass_band_end(&self) -> f64 {
+        let fs = self.sample_rate_hz;
+        let Some(sos) = &self.filter else {
+            return 0.25 * fs;
+        };
+        let (mut lo, mut hi) = (0.0, 0.5 * fs);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if sos.gain(mid, fs) >= std::f64::consts::FRAC_1_SQRT_2 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+
     /// Noise power gain of the zero-phase filter, `g = Σ h_k²` of its
     /// impulse response on this record ([`crate::robot::noise_gain`]; 1
     /// without a filter). White noise of variance `σ²` leaves the filter

@@ -134,7 +134,51 @@ pub struct ResidualAnalysis {
     /// the rows the candidates were fitted and scored on, but where a
     /// low-speed friction law the model lacks shows.
     pub left_out: Vec<LeftOut>,
+    /// Per joint, where in frequency the residual (every row) has its
+    /// power, next to the measured torque's.
+    pub spectra: Vec<ResidualSpectrum>,
 }
+
+/// One frequency band of a residual spectrum.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SpectrumBand {
+    /// Lower edge (Hz).
+    pub lo_hz: f64,
+    /// Upper edge (Hz).
+    pub hi_hz: f64,
+    /// Fraction of the residual's power in the band.
+    pub residual_share: f64,
+    /// Fraction of the measured torque's power in the band.
+    pub torque_share: f64,
+    /// The band's mean residual power density over the median density of
+    /// the filter's pass band (≈ 1 for filtered white noise).
+    pub density_ratio: f64,
+}
+
+/// Where in frequency one joint's residual has its power.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ResidualSpectrum {
+    /// Joint (1 or 2).
+    pub joint: usize,
+    /// Octave bands from the lowest resolved frequency to the pass band's
+    /// end, with the mean (0 Hz) as a band of its own.
+    pub bands: Vec<SpectrumBand>,
+    /// Frequencies of the plotted densities (Hz, up to twice the cut-off).
+    pub frequencies_hz: Vec<f64>,
+    /// Residual power density at those frequencies (N²·m²/Hz).
+    pub residual_density: Vec<f64>,
+    /// Measured torque's power density there (N²·m²/Hz).
+    pub torque_density: Vec<f64>,
+    /// The band holding most of the residual power, in words, when it holds
+    /// at least half of it at ≥ [`SPECTRAL_EXCESS`] times the pass band's
+    /// median density.
+    pub finding: Option<Finding>,
+}
+
+/// Density ratio above which a band's residual power counts as
+/// concentrated (filtered white noise is flat in the pass band: its bands'
+/// ratios scatter around 1 by the estimate's few-tens-of-% variance).
+pub const SPECTRAL_EXCESS: f64 = 10.0;
 
 /// The residual of one joint on the rows that the fits leave out near its
 /// velocity reversals (`DiagnoseOptions::min_speed`, widened by the
@@ -345,7 +389,124 @@ pub(crate) fn analyse(
         whiteness,
         findings,
         left_out: Vec::new(),
+        spectra: Vec::new(),
     }
+}
+
+/// The spectrum of joint `joint`'s residual `residual` next to its measured
+/// torque `measured` (every row of a set sampled at `rate_hz`; `periodic`:
+/// one averaged period), the pass band ending at `cutoff_hz`.
+pub(crate) fn analyse_spectrum(
+    joint: usize,
+    residual: &[f64],
+    measured: &[f64],
+    rate_hz: f64,
+    periodic: bool,
+    cutoff_hz: f64,
+) -> Result<ResidualSpectrum, aras_ident::IdentError> {
+    let spectrum = |x: &[f64]| {
+        aras_signal::power_spectrum(x, rate_hz, periodic)
+            .map_err(|e| aras_ident::IdentError::external("the residual's spectrum", e))
+    };
+    let r = spectrum(residual)?;
+    let t = spectrum(measured)?;
+    let df = r.resolution_hz;
+    let top = cutoff_hz.min(0.5 * rate_hz);
+    let mut pass: Vec<f64> = r
+        .frequencies_hz
+        .iter()
+        .zip(&r.density)
+        .filter(|(f, _)| **f > 0.0 && **f <= top)
+        .map(|(_, d)| *d)
+        .collect();
+    pass.sort_by(f64::total_cmp);
+    let median = pass.get(pass.len() / 2).copied().unwrap_or(0.0);
+    let (r_total, t_total) = (r.total_power().max(1e-300), t.total_power().max(1e-300));
+    // The mean, then octaves centred on the lowest resolved frequency's
+    // powers of two, up to the pass band's end.
+    let mut edges = vec![0.0, 0.5 * df];
+    let mut e = df * std::f64::consts::SQRT_2;
+    while e < top {
+        edges.push(e);
+        e *= 2.0;
+    }
+    edges.push(top.max(edges[edges.len() - 1] + df));
+    let bands: Vec<SpectrumBand> = edges
+        .windows(2)
+        .map(|w| {
+            let (lo, hi) = (w[0], w[1]);
+            let bins = r
+                .frequencies_hz
+                .iter()
+                .filter(|f| **f >= lo && **f < hi)
+                .count()
+                .max(1);
+            let p = r.band_power(lo, hi);
+            SpectrumBand {
+                lo_hz: lo,
+                hi_hz: hi,
+                residual_share: p / r_total,
+                torque_share: t.band_power(lo, hi) / t_total,
+                density_ratio: if median > 0.0 {
+                    p / (bins as f64 * df) / median
+                } else {
+                    0.0
+                },
+            }
+        })
+        .collect();
+    let finding = bands
+        .iter()
+        .filter(|b| b.residual_share >= 0.5 && b.density_ratio >= SPECTRAL_EXCESS)
+        .max_by(|a, b| a.residual_share.total_cmp(&b.residual_share))
+        .map(|b| {
+            let torque_top = bands
+                .iter()
+                .max_by(|a, c| a.torque_share.total_cmp(&c.torque_share))
+                .map_or(0.0, |c| c.lo_hz);
+            let what = if b.lo_hz == 0.0 {
+                "at 0 Hz: a constant offset".to_owned()
+            } else if b.hi_hz <= 2.0 * torque_top.max(df) {
+                format!(
+                    "where the measured torque has {:.0} % of its power: a misfit that follows \
+                     the motion (a missing term in its position, velocity or acceleration)",
+                    100.0 * b.torque_share
+                )
+            } else {
+                "above the motion's own frequencies: a fast effect (cogging, a delay, a \
+                 resonance)"
+                    .to_owned()
+            };
+            Finding {
+                joint,
+                text: format!(
+                    "joint {joint}: {:.0} % of the residual's power lies in {:.2}–{:.2} Hz \
+                     (power density {:.0}× the pass band's median), {what}",
+                    100.0 * b.residual_share,
+                    b.lo_hz,
+                    b.hi_hz,
+                    b.density_ratio
+                ),
+                systematic: true,
+                z: b.density_ratio,
+            }
+        });
+    // The plotted part: up to twice the cut-off, at most 400 points.
+    let shown = r
+        .frequencies_hz
+        .iter()
+        .take_while(|f| **f <= 2.0 * top)
+        .count();
+    let step = shown.div_ceil(400).max(1);
+    let pick = |v: &[f64]| -> Vec<f64> { v[..shown].iter().step_by(step).copied().collect() };
+    Ok(ResidualSpectrum {
+        joint,
+        bands,
+        frequencies_hz: pick(&r.frequencies_hz),
+        residual_density: pick(&r.density),
+        torque_density: pick(&t.density),
+        finding,
+    })
 }
 
 /// The residual of joint `joint` on the rows left out (`left`), and the

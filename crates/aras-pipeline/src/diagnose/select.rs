@@ -11,7 +11,7 @@ use serde::Serialize;
 use super::candidates::{Candidate, CandidateGrid};
 use super::chunks::{Plan, filtered_torques, in_lanes, window_kinematics};
 use super::data::{Dataset, moving_mask};
-use super::residual::{JointData, ResidualAnalysis, analyse, analyse_left_out};
+use super::residual::{JointData, ResidualAnalysis, analyse, analyse_left_out, analyse_spectrum};
 use crate::prepare::RegressorColumns;
 use crate::robot::consistent_problem;
 use aras_ident::BaseParameters;
@@ -253,6 +253,32 @@ pub struct Diagnosis {
     pub consistent: Option<ConsistentFit>,
     /// Wall time (s).
     pub elapsed_s: f64,
+}
+
+/// Where the final model's misfit on the fitted rows lies: its largest
+/// systematic bin (velocity, position, acceleration or time) and the
+/// frequency band holding most of the residual's power, if one does.
+fn locate(after: &[ResidualAnalysis]) -> String {
+    let bin = after
+        .iter()
+        .flat_map(|a| a.findings.iter())
+        .filter(|f| f.systematic)
+        .max_by(|a, b| a.z.abs().total_cmp(&b.z.abs()));
+    let band = after
+        .iter()
+        .flat_map(|a| a.spectra.iter())
+        .filter_map(|s| s.finding.as_ref())
+        .max_by(|a, b| a.z.total_cmp(&b.z));
+    let parts: Vec<&str> = [bin, band]
+        .into_iter()
+        .flatten()
+        .map(|f| f.text.as_str())
+        .collect();
+    if parts.is_empty() {
+        String::new()
+    } else {
+        format!(" Where it lies: {}.", parts.join("; "))
+    }
 }
 
 /// The conclusion's sentence on the rows left out near velocity reversals
@@ -842,6 +868,14 @@ pub fn diagnose(
                         sigma[g],
                         dof_ratio,
                     )?);
+                    a.spectra.push(analyse_spectrum(
+                        g + 1,
+                        &res[g],
+                        &measured,
+                        v.sample_rate_hz,
+                        v.periodic,
+                        v.pass_band_end(),
+                    )?);
                 }
                 Ok(a)
             })
@@ -893,7 +927,12 @@ pub fn diagnose(
         )
     };
 
-    let conclusion = conclusion + &left_out_sentence(&after, opts.min_speed);
+    let located = if noise_like {
+        String::new()
+    } else {
+        locate(&after)
+    };
+    let conclusion = conclusion + &located + &left_out_sentence(&after, opts.min_speed);
 
     let mut final_model = start.clone();
     for s in &steps {
