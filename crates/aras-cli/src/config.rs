@@ -161,6 +161,8 @@ pub struct SimulationConfig {
     pub counts_per_rev: [u32; 2],
     /// Torque samples lag the angles by this many samples.
     pub torque_delay_samples: usize,
+    /// And by this further fraction of a sample, in `[0, 1)`.
+    pub torque_delay_fraction: f64,
     /// Noise seed.
     pub seed: u64,
     /// The simulated robot's true parameters when they differ from
@@ -189,6 +191,7 @@ impl Default for SimulationConfig {
             gear_ratios: s.sensors.gear_ratios,
             counts_per_rev: s.sensors.counts_per_rev,
             torque_delay_samples: 0,
+            torque_delay_fraction: 0.0,
             seed: 1,
             truth: None,
         }

@@ -34,6 +34,7 @@ pub fn sim_config(cfg: &Config, nominal: &Params, duration_s: f64, seed: u64) ->
             current_noise_std: s.current_noise_std_a,
         },
         torque_delay_samples: s.torque_delay_samples,
+        torque_delay_fraction: s.torque_delay_fraction,
         seed,
     }
 }

@@ -372,6 +372,36 @@ fn torque_delay_shifts_samples() {
 /// velocity reversals), three orders below the encoder's velocity
 /// resolution at 1 kHz (0.15 rad/s). The log stays exactly consistent with
 /// the model either way (`logged_data_satisfy_the_model`).
+/// A fractional delay `d + φ` logs `(1 − φ) τ_{k−d} + φ τ_{k−d−1}` of the
+/// undelayed run's clean torques, with the noise of sample `k − d`, and
+/// drops one more row; `φ = 0` is the whole-sample delay.
+#[test]
+fn fractional_torque_delay_interpolates_between_samples() {
+    let traj = Sinusoid::paper_79(0.5).unwrap();
+    let a = simulate(&Params::aras_diamond(), &traj, &short(0.5)).unwrap();
+    let mut cfg = short(0.5);
+    cfg.torque_delay_samples = 3;
+    cfg.torque_delay_fraction = 0.4;
+    let b = simulate(&Params::aras_diamond(), &traj, &cfg).unwrap();
+    assert_eq!(b.len(), a.len() - 4);
+    for i in 0..b.len() {
+        let k = i + 4;
+        assert_eq!(b.t[i], a.t[k]);
+        assert_eq!(b.theta[i], a.theta[k]);
+        for j in 0..2 {
+            let clean = 0.6 * a.tau_clean[k - 3][j] + 0.4 * a.tau_clean[k - 4][j];
+            assert!((b.tau_clean[i][j] - clean).abs() < 1e-15, "{i}");
+            let noise = a.tau[k - 3][j] - a.tau_clean[k - 3][j];
+            assert!((b.tau[i][j] - (clean + noise)).abs() < 1e-15, "{i}");
+        }
+    }
+    cfg.torque_delay_fraction = 1.0;
+    let e = simulate(&Params::aras_diamond(), &traj, &cfg)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("torque_delay_fraction"), "{e}");
+}
+
 #[test]
 fn integration_converged() {
     let traj = Sinusoid::paper_79(1.8).unwrap();

@@ -21,6 +21,9 @@ pub struct Noise {
     pub encoder_resolution_rad: [f64; 2],
     /// Torque samples lag angle samples by this many samples.
     pub torque_delay_samples: usize,
+    /// And by this further fraction of a sample (linear interpolation).
+    #[serde(skip_serializing_if = "super::is_zero")]
+    pub torque_delay_fraction: f64,
 }
 
 /// Ground truth of a simulated log.
@@ -54,6 +57,7 @@ pub(crate) fn sidecar(
             torque_std_nm: s.torque_noise_std(),
             encoder_resolution_rad: s.resolution(),
             torque_delay_samples: cfg.torque_delay_samples,
+            torque_delay_fraction: cfg.torque_delay_fraction,
         },
         seed: cfg.seed,
         simulator: cfg.clone(),

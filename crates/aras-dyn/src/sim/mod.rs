@@ -133,6 +133,14 @@ pub struct SimConfig {
     pub sensors: Sensors,
     /// Torque samples lag the angle samples by this many samples.
     pub torque_delay_samples: usize,
+    /// A further fraction of a sample, in `[0, 1)`, by which the torque
+    /// lags (default 0): the logged torque is the torque sequence delayed
+    /// by `torque_delay_samples + torque_delay_fraction` samples,
+    /// interpolated linearly between samples, as a sensor chain whose
+    /// timing is not a whole sample (anti-alias filter, ADC or bus
+    /// latency) sees the smooth motor current.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub torque_delay_fraction: f64,
     /// Seed of the noise generator.
     pub seed: u64,
 }
@@ -152,9 +160,14 @@ impl Default for SimConfig {
             lugre: None,
             sensors: Sensors::default(),
             torque_delay_samples: 0,
+            torque_delay_fraction: 0.0,
             seed: 1,
         }
     }
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 fn positive(key: &'static str, value: f64) -> Result<(), SimError> {
@@ -193,8 +206,17 @@ impl SimConfig {
                 reason: "must be between 1 and 1000",
             });
         }
+        if !(self.torque_delay_fraction.is_finite()
+            && (0.0..1.0).contains(&self.torque_delay_fraction))
+        {
+            return Err(SimError::Config {
+                key: "torque_delay_fraction",
+                value: self.torque_delay_fraction,
+                reason: "must lie in [0, 1): whole samples go in torque_delay_samples",
+            });
+        }
         let n = (self.duration_s * self.output_rate_hz).floor();
-        if !(2.0..=1e9).contains(&n) || self.torque_delay_samples as f64 >= n {
+        if !(2.0..=1e9).contains(&n) || self.delay_rows() as f64 >= n {
             return Err(SimError::Config {
                 key: "duration_s",
                 value: self.duration_s,
@@ -220,6 +242,15 @@ impl SimConfig {
         positive("controller.velocity_cutoff_hz", c.velocity_cutoff_hz)?;
         positive("friction_smoothing", self.friction_smoothing)?;
         Ok(())
+    }
+}
+
+impl SimConfig {
+    /// Rows dropped at the start of the log for the torque delay: the
+    /// whole samples, and one more for a fraction (it interpolates towards
+    /// the sample before).
+    fn delay_rows(&self) -> usize {
+        self.torque_delay_samples + usize::from(self.torque_delay_fraction > 0.0)
     }
 }
 
@@ -396,8 +427,20 @@ pub fn simulate(
             measured[j] = tau[j] + noise[j] * z;
         }
         tau_hist.push((measured, [tau[0], tau[1]]));
-        if k >= cfg.torque_delay_samples {
-            let (measured, clean) = tau_hist[k - cfg.torque_delay_samples];
+        if k >= cfg.delay_rows() {
+            let d = cfg.torque_delay_samples;
+            let (mut measured, mut clean) = tau_hist[k - d];
+            let phi = cfg.torque_delay_fraction;
+            if phi > 0.0 {
+                // Linear interpolation towards the sample before; the
+                // noise is that sample's own draw.
+                let (_, before) = tau_hist[k - d - 1];
+                for j in 0..2 {
+                    let noise = measured[j] - clean[j];
+                    clean[j] = (1.0 - phi) * clean[j] + phi * before[j];
+                    measured[j] = clean[j] + noise;
+                }
+            }
             log.push(
                 t,
                 [theta_meas[0], theta_meas[1]],

@@ -34,11 +34,12 @@ pub enum Candidate {
         effect: Effect,
     },
     /// The torque samples lag the angle samples by `samples` (negative:
-    /// lead). Not a regressor column: the torques are shifted against the
-    /// angles and the same model is fitted again.
+    /// lead; a fraction interpolates linearly between samples). Not a
+    /// regressor column: the torques are shifted against the angles and the
+    /// same model is fitted again.
     TimeDelay {
         /// Shift in samples.
-        samples: i64,
+        samples: f64,
     },
 }
 
@@ -77,10 +78,11 @@ impl Candidate {
 
     /// The continuous non-linear setting the diagnosis refines between the
     /// grid points once the candidate is added, `(name, value)`: `v_s`
-    /// (rad/s) of Stribeck friction, `cycles_per_rev` of cogging. `None`
-    /// for the linear candidates and for the time delay (whole samples).
+    /// (rad/s) of Stribeck friction, `cycles_per_rev` of cogging,
+    /// `delay_samples` of the time delay. `None` for the linear candidates.
     pub fn setting(&self) -> Option<(&'static str, f64)> {
         match self {
+            Candidate::TimeDelay { samples } => Some(("delay_samples", *samples)),
             Candidate::Effect {
                 effect: Effect::StribeckFriction { v_s },
             } => Some(("v_s", *v_s)),
@@ -91,20 +93,26 @@ impl Candidate {
         }
     }
 
-    /// The factor either side of the grid value that the refinement
-    /// searches (on a log scale): 3 for `v_s`, whose grid steps by 2 and
-    /// whose profile is smooth over decades; 1.25 for cogging cycles, whose
-    /// grid steps by 1.2–2 and whose profile has side lobes one
+    /// Where the refinement searches around the grid value: for `v_s` a
+    /// factor 3 either side on a log scale (its grid steps by 2 and its
+    /// profile is smooth over decades); for cogging cycles a factor 1.25
+    /// (its grid steps by 1.2–2 and its profile has side lobes one
     /// `2π / (range of θ)` apart, so a wider interval could hold another
-    /// minimum. `None` where [`Self::setting`] is.
-    pub fn search_factor(&self) -> Option<f64> {
+    /// minimum); for a delay of `d` samples `max(1, |d|/2)` either side on
+    /// a linear scale, which reaches past the midpoint to each neighbour of
+    /// the default grid (±1, 2, 3, 5, 8, 12, 20). `None` where
+    /// [`Self::setting`] is.
+    pub fn search_scale(&self) -> Option<SearchScale> {
         match self {
             Candidate::Effect {
                 effect: Effect::StribeckFriction { .. },
-            } => Some(3.0),
+            } => Some(SearchScale::Log { factor: 3.0 }),
             Candidate::Effect {
                 effect: Effect::Cogging { .. },
-            } => Some(1.25),
+            } => Some(SearchScale::Log { factor: 1.25 }),
+            Candidate::TimeDelay { samples } => Some(SearchScale::Linear {
+                half_width: (0.5 * samples.abs()).max(1.0),
+            }),
             _ => None,
         }
     }
@@ -153,7 +161,52 @@ impl Candidate {
                     order,
                 },
             },
+            Candidate::TimeDelay { .. } => Candidate::TimeDelay { samples: value },
             other => other,
+        }
+    }
+}
+
+/// How a candidate's setting is searched between grid points
+/// ([`Candidate::search_scale`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum SearchScale {
+    /// On its logarithm, over `factor` either side of the grid value (a
+    /// positive scale such as a velocity or a count per revolution).
+    Log {
+        /// The factor either side.
+        factor: f64,
+    },
+    /// On the value itself, over `half_width` either side (a signed shift).
+    Linear {
+        /// The half-width.
+        half_width: f64,
+    },
+}
+
+impl SearchScale {
+    /// The setting value of a search variable.
+    pub fn setting_value(self, u: f64) -> f64 {
+        match self {
+            SearchScale::Log { .. } => u.exp(),
+            SearchScale::Linear { .. } => u,
+        }
+    }
+
+    /// The search interval around the grid value `v`, in the search
+    /// variable.
+    pub fn interval(self, v: f64) -> (f64, f64) {
+        match self {
+            SearchScale::Log { factor } => (v.ln() - factor.ln(), v.ln() + factor.ln()),
+            SearchScale::Linear { half_width } => (v - half_width, v + half_width),
+        }
+    }
+
+    /// The σ of the setting from the σ of the search variable at `u`.
+    pub fn sigma(self, u: f64, sigma_u: f64) -> f64 {
+        match self {
+            SearchScale::Log { .. } => u.exp() * sigma_u,
+            SearchScale::Linear { .. } => sigma_u,
         }
     }
 }
@@ -234,11 +287,9 @@ impl CandidateGrid {
                 })),
                 Ok(EffectId::QuadraticDamping) => out.push(eff(Effect::QuadraticDamping)),
                 Ok(EffectId::RigidLinks | EffectId::Friction | EffectId::Elasticity) => {}
-                Err(_) => out.extend(
-                    self.delays
-                        .iter()
-                        .map(|&samples| Candidate::TimeDelay { samples }),
-                ),
+                Err(_) => out.extend(self.delays.iter().map(|&samples| Candidate::TimeDelay {
+                    samples: samples as f64,
+                })),
             }
         }
         out

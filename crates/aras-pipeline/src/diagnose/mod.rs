@@ -66,7 +66,9 @@ pub mod residual;
 mod select;
 
 pub use aras_ident::stats::{chi2_sf, f_sf, integrated_time, ljung_box};
-pub use candidates::{CANDIDATE_IDS, Candidate, CandidateGrid, TIME_DELAY, explanation};
+pub use candidates::{
+    CANDIDATE_IDS, Candidate, CandidateGrid, SearchScale, TIME_DELAY, explanation,
+};
 pub use data::Dataset;
 pub use residual::{Finding, LeftOut, ResidualAnalysis, ResidualSpectrum, SpectrumBand, Whiteness};
 pub use select::{

@@ -8,7 +8,7 @@ use aras_kin::{Geometry, Workspace};
 use faer::{Mat, MatRef};
 use serde::Serialize;
 
-use super::candidates::{Candidate, CandidateGrid};
+use super::candidates::{Candidate, CandidateGrid, SearchScale};
 use super::chunks::{Plan, filtered_torques, in_lanes, window_kinematics};
 use super::data::{Dataset, moving_mask};
 use super::residual::{JointData, ResidualAnalysis, analyse, analyse_left_out, analyse_spectrum};
@@ -178,18 +178,18 @@ pub enum RefinementStatus {
 /// A nonlinear setting refined by a one-dimensional search after the grid.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Refinement {
-    /// The setting's name ([`Candidate::setting`]: `v_s` in rad/s or
-    /// `cycles_per_rev`).
+    /// The setting's name ([`Candidate::setting`]: `v_s` in rad/s,
+    /// `cycles_per_rev` or `delay_samples`).
     pub name: String,
     /// The grid value the selection chose.
     pub grid_value: f64,
-    /// The value minimising the TRAIN residual (golden-section search on
-    /// its logarithm over [`Candidate::search_factor`] either side of the
-    /// grid value: 3 for `v_s`, 1.25 for `cycles_per_rev`).
+    /// The value minimising the TRAIN residual (golden-section search over
+    /// [`Candidate::search_scale`]'s interval around the grid value).
     pub value: f64,
     /// Standard deviation from the curvature of the profile
-    /// `N_eff ln RSS(ln v)` (a drop of 1 is one σ; `N_eff` as in the F-test);
-    /// 0 if unknown.
+    /// `N_eff ln RSS(u)` in the search variable `u` (`ln v`, or `v` for a
+    /// delay; a rise of 1 is one σ; `N_eff` as in the F-test); 0 if
+    /// unknown.
     pub std_dev: f64,
     /// Interior minimum or at a bound.
     pub status: RefinementStatus,
@@ -229,7 +229,7 @@ pub struct Diagnosis {
     /// Final model (starting model + effects added, in order).
     pub final_model: Vec<Effect>,
     /// Torque-against-angle shift found (samples; 0 if none).
-    pub delay_samples: i64,
+    pub delay_samples: f64,
     /// TRAIN's rows per joint that fits and scores use (away from velocity
     /// reversals, [`DiagnoseOptions::min_speed`]).
     pub rows_fitted: [usize; 2],
@@ -361,11 +361,21 @@ impl Context<'_> {
         (a..b).filter(|&i| p.mask[g][i]).collect()
     }
 
-    /// The torque of sample `i` shifted by `delay` samples (circular for a
-    /// periodic record; the range keeps non-periodic shifts inside).
-    fn shifted(p: &Prepared, g: usize, i: usize, delay: i64) -> f64 {
+    /// The torque of sample `i` shifted by `delay` samples, linearly
+    /// interpolated between samples for a fraction (circular for a periodic
+    /// record; the range keeps non-periodic shifts inside). A whole-sample
+    /// delay reads the sample itself.
+    fn shifted(p: &Prepared, g: usize, i: usize, delay: f64) -> f64 {
         let n = p.tau[g].len() as i64;
-        p.tau[g][(i as i64 + delay).rem_euclid(n) as usize]
+        let whole = delay.floor();
+        let frac = delay - whole;
+        let k = i as i64 + whole as i64;
+        let at = |k: i64| p.tau[g][k.rem_euclid(n) as usize];
+        if frac == 0.0 {
+            at(k)
+        } else {
+            (1.0 - frac) * at(k) + frac * at(k + 1)
+        }
     }
 
     /// The selection rows of `d` chunk by chunk into one [`Accumulator`]:
@@ -447,7 +457,7 @@ impl Context<'_> {
 
     /// The torque shift (samples) of the model `fit`: its delay
     /// candidate's, or 0.
-    fn fit_delay(&self, fit: &ModelFit) -> i64 {
+    fn fit_delay(&self, fit: &ModelFit) -> f64 {
         (0..self.cands.len())
             .find(|&k| self.layout.candidate_columns(k).start == fit.target)
             .and_then(|k| match self.cands[k] {
@@ -456,7 +466,7 @@ impl Context<'_> {
                 }
                 _ => None,
             })
-            .unwrap_or(0)
+            .unwrap_or(0.0)
     }
 
     /// Residual per joint of the selected model `fit` on every row of `d`
@@ -540,7 +550,7 @@ impl Context<'_> {
         p: &Prepared,
         model: &Model,
         base: &BaseParameters,
-        delay: i64,
+        delay: f64,
         init: impl Fn() -> T + Sync,
         f: impl Fn(&mut T, usize, MatRef<'_, f64>, &[f64]) -> Result<(), IdentError> + Sync,
     ) -> Result<Vec<T>, IdentError> {
@@ -676,7 +686,15 @@ pub fn diagnose(
     let max_shift = cands
         .iter()
         .map(|c| match c {
-            Candidate::TimeDelay { samples } => samples.unsigned_abs() as usize,
+            // The refinement's reach around the grid value, and one more
+            // sample for the interpolation of a fraction.
+            Candidate::TimeDelay { samples } => {
+                let reach = match c.search_scale() {
+                    Some(SearchScale::Linear { half_width }) => half_width,
+                    _ => 0.0,
+                };
+                (samples.abs() + reach).ceil() as usize + 1
+            }
             Candidate::Effect { .. } => 0,
         })
         .max()
@@ -728,7 +746,7 @@ pub fn diagnose(
         fitness: pair_rows(&sel.initial),
     }];
     let mut steps: Vec<Step> = Vec::new();
-    let mut delay_samples = 0;
+    let mut delay_samples = 0.0;
     for st in &sel.steps {
         let c = ctx.cands[st.candidate];
         let parameters = match c {
@@ -751,7 +769,7 @@ pub fn diagnose(
                 delay_samples = samples;
                 vec![NamedValue {
                     name: "delay_samples".into(),
-                    value: samples as f64,
+                    value: samples,
                     std_dev: 0.0,
                 }]
             }
@@ -1000,9 +1018,9 @@ pub fn diagnose(
     })
 }
 
-/// Golden-section search of the logarithm of `candidate`'s continuous
-/// setting ([`Candidate::setting`]) over [`Candidate::search_factor`]
-/// either side of its grid value, the `others` added effects kept; then the
+/// Golden-section search of `candidate`'s continuous setting
+/// ([`Candidate::setting`]) over [`Candidate::search_scale`]'s interval
+/// around its grid value, the `others` added effects kept; then the
 /// profile's curvature for σ. One bounded pass over TRAIN per trial.
 fn refine_setting(
     ctx: &Context<'_>,
@@ -1012,7 +1030,7 @@ fn refine_setting(
     candidate: Candidate,
     opts: &SelectionOptions,
 ) -> Result<Refinement, IdentError> {
-    let (Some((name, v0)), Some(factor)) = (candidate.setting(), candidate.search_factor()) else {
+    let (Some((name, v0)), Some(scale)) = (candidate.setting(), candidate.search_scale()) else {
         return Err(IdentError::InvalidSetting {
             name: "refined candidate",
             value: 0.0,
@@ -1046,15 +1064,16 @@ fn refine_setting(
     // TRAIN only during the search (its own sums stand in for the
     // validation set, whose figures are not used).
     let rss = |u: f64| -> Result<f64, IdentError> {
-        let (c, m, l) = setup(u.exp())?;
+        let (c, m, l) = setup(scale.setting_value(u))?;
         let acc = ctx.accumulate_with(train.0, train.1, &c, &m, &l)?;
         let f = fit_model(&acc, std::slice::from_ref(&acc), &all(c.len()), opts)?;
         Ok(f.total_rss())
     };
-    // Golden-section search of ln v over `factor` either side of `centre`:
-    // (minimiser, its RSS, the interval).
+    // Golden-section search of the search variable (ln v, or v for a
+    // shift) over the candidate's interval around `centre`: (minimiser, its
+    // RSS, the interval).
     let search = |centre: f64| -> Result<(f64, f64, f64, f64), IdentError> {
-        let (lo, hi) = (centre.ln() - factor.ln(), centre.ln() + factor.ln());
+        let (lo, hi) = scale.interval(centre);
         let phi = 0.5 * (5f64.sqrt() - 1.0);
         let (mut a, mut b) = (lo, hi);
         let mut x1 = b - phi * (b - a);
@@ -1097,7 +1116,7 @@ fn refine_setting(
     } else {
         RefinementStatus::Interior
     };
-    let v = u.exp();
+    let v = scale.setting_value(u);
     let (c, m, l) = setup(v)?;
     let tacc = ctx.accumulate_with(train.0, train.1, &c, &m, &l)?;
     let ne = opts.effective_fraction * tacc.rows().iter().sum::<usize>() as f64;
@@ -1106,7 +1125,7 @@ fn refine_setting(
         let (fm, fp) = (rss(u - h)?, rss(u + h)?);
         let j2 = ne * (fp.ln() - 2.0 * fu.ln() + fm.ln()) / (h * h);
         if j2 > 0.0 {
-            u.exp() * (2.0 / j2).sqrt()
+            scale.sigma(u, (2.0 / j2).sqrt())
         } else {
             0.0
         }
@@ -1158,7 +1177,7 @@ fn consistent_fit(
     validation: &[Dataset],
     vals_p: &[Prepared],
     model: &Model,
-    delay: i64,
+    delay: f64,
     reference: &Params,
     base_samples: usize,
     workspace: &Workspace,
