@@ -161,28 +161,23 @@ fn lugre_friction_equals_coulomb_when_sliding_and_differs_at_reversals() {
 /// A bristle too stiff for the step is refused with the setting to change.
 #[test]
 fn too_stiff_lugre_names_substeps() {
-    let mut cfg = ideal(1.0);
+    let error = |l: LuGre| {
+        let cfg = SimConfig {
+            lugre: Some(l),
+            ..ideal(1.0)
+        };
+        let traj = Sinusoid::paper_79(0.7).unwrap();
+        simulate(&Params::aras_diamond(), &traj, &cfg)
+            .unwrap_err()
+            .to_string()
+    };
     let mut l = lugre();
     l.stiffness = [1e6; 2];
-    cfg.lugre = Some(l);
-    let e = simulate(
-        &Params::aras_diamond(),
-        &Sinusoid::paper_79(0.7).unwrap(),
-        &cfg,
-    )
-    .unwrap_err()
-    .to_string();
+    let e = error(l);
     assert!(e.contains("substeps"), "{e}");
     let mut l = lugre();
     l.static_level[0] = 0.0;
-    cfg.lugre = Some(l);
-    let e = simulate(
-        &Params::aras_diamond(),
-        &Sinusoid::paper_79(0.7).unwrap(),
-        &cfg,
-    )
-    .unwrap_err()
-    .to_string();
+    let e = error(l);
     assert!(e.contains("lugre.static_level"), "{e}");
 }
 
