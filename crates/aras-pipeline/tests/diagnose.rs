@@ -323,7 +323,7 @@ fn finds_time_delay() {
 
 /// A delay between the grid's samples, 3.4 samples (3 whole and 0.4
 /// interpolated, `SimConfig::torque_delay_fraction`): named first with the
-/// right sign on noise seeds 1–3, and refined (golden section over a
+/// right sign on noise seeds 1–5, and refined (golden section over a
 /// linearly interpolated torque shift) to within ±0.5 samples. What the
 /// refinement measures is the lag between the logged torque and the
 /// motion: the simulator holds each torque sample for one period (zero-order
@@ -336,16 +336,19 @@ fn refines_a_fractional_time_delay() {
         torque_delay_fraction: 0.4,
         ..SimConfig::default()
     };
-    for seed in 1..=3 {
-        let s = scenario_with(
-            &base,
-            &Params::aras_diamond(),
-            3,
-            seed,
-            &format!("delay34-{seed}"),
-        );
-        let d = diagnose_on(&s, false);
-        show(&format!("delay 3.4, seed {seed}"), &d);
+    let ds: Vec<Diagnosis> = SEEDS
+        .par_iter()
+        .map(|&seed| {
+            let tag = format!("delay34-{seed}");
+            let d = diagnose_on(
+                &scenario_with(&base, &Params::aras_diamond(), 3, seed, &tag),
+                false,
+            );
+            show(&format!("delay 3.4, seed {seed}"), &d);
+            d
+        })
+        .collect();
+    for (d, seed) in ds.iter().zip(SEEDS) {
         let step = d.steps.first().expect("nothing found");
         assert_eq!(step.id, "time_delay", "{}", step.label);
         let r = step.refinement.as_ref().expect("no refinement");
@@ -1038,24 +1041,29 @@ fn refines_cogging_cycles_off_the_grid() {
         sin: [vec![0.01, 0.004], vec![0.0, 0.0]],
         cos: [vec![0.0, 0.0], vec![0.01, 0.004]],
     });
-    let d = run(&p, 0, "cogging_off_grid");
-    let s = d.steps.first().expect("nothing found");
-    assert_eq!(s.id, "cogging", "{}", s.label);
-    let r = s.refinement.as_ref().expect("no refinement");
-    eprintln!("refinement: {r:?}");
-    assert_eq!(r.name, "cycles_per_rev");
-    assert_ne!(r.grid_value, 14.0, "the truth is not on the grid");
-    assert!(r.std_dev > 0.0 && r.std_dev.is_finite(), "σ {}", r.std_dev);
-    let err = (r.value - 14.0).abs();
-    assert!(
-        err <= 3.0 * r.std_dev && err <= 0.02 * 14.0,
-        "cycles {} ± {}",
-        r.value,
-        r.std_dev
-    );
-    for (name, want) in [("Cs1_1", 0.01), ("Cc2_1", 0.01)] {
-        let q = r.parameters.iter().find(|q| q.name == name).expect(name);
-        assert!((q.value - want).abs() <= 0.1 * want, "{name}: {}", q.value);
+    for (d, seed) in on_seeds(&p, "cogging_off_grid").iter().zip(SEEDS) {
+        let s = d.steps.first().expect("nothing found");
+        assert_eq!(s.id, "cogging", "seed {seed}: {}", s.label);
+        let r = s.refinement.as_ref().expect("no refinement");
+        eprintln!("seed {seed}: refinement {r:?}");
+        assert_eq!(r.name, "cycles_per_rev");
+        assert_ne!(r.grid_value, 14.0, "the truth is not on the grid");
+        assert!(r.std_dev > 0.0 && r.std_dev.is_finite(), "σ {}", r.std_dev);
+        let err = (r.value - 14.0).abs();
+        assert!(
+            err <= 3.0 * r.std_dev && err <= 0.02 * 14.0,
+            "seed {seed}: cycles {} ± {}",
+            r.value,
+            r.std_dev
+        );
+        for (name, want) in [("Cs1_1", 0.01), ("Cc2_1", 0.01)] {
+            let q = r.parameters.iter().find(|q| q.name == name).expect(name);
+            assert!(
+                (q.value - want).abs() <= 0.1 * want,
+                "seed {seed}: {name}: {}",
+                q.value
+            );
+        }
     }
 }
 
@@ -1073,19 +1081,24 @@ fn refines_stribeck_velocity_off_the_grid() {
         v_s: 0.28,
         level: [0.06, 0.12],
     });
-    let d = run(&p, 0, "stribeck_off_grid");
-    let s = d.steps.first().expect("nothing found");
-    assert_eq!(s.id, "stribeck_friction", "{}", s.label);
-    let r = s.refinement.as_ref().expect("no refinement");
-    eprintln!("refinement: {r:?}");
-    assert!((r.value - 0.28).abs() <= 0.3 * 0.28, "v_s {}", r.value);
-    assert!(r.std_dev > 0.0 && r.std_dev.is_finite(), "σ {}", r.std_dev);
-    for (q, want) in r.parameters.iter().zip([0.06, 0.12]) {
+    for (d, seed) in on_seeds(&p, "stribeck_off_grid").iter().zip(SEEDS) {
+        let s = d.steps.first().expect("nothing found");
+        assert_eq!(s.id, "stribeck_friction", "seed {seed}: {}", s.label);
+        let r = s.refinement.as_ref().expect("no refinement");
+        eprintln!("seed {seed}: refinement {r:?}");
         assert!(
-            (q.value - want).abs() <= 0.3 * want,
-            "{}: {}",
-            q.name,
-            q.value
+            (r.value - 0.28).abs() <= 0.3 * 0.28,
+            "seed {seed}: v_s {}",
+            r.value
         );
+        assert!(r.std_dev > 0.0 && r.std_dev.is_finite(), "σ {}", r.std_dev);
+        for (q, want) in r.parameters.iter().zip([0.06, 0.12]) {
+            assert!(
+                (q.value - want).abs() <= 0.3 * want,
+                "seed {seed}: {}: {}",
+                q.name,
+                q.value
+            );
+        }
     }
 }
