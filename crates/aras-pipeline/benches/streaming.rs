@@ -8,7 +8,8 @@ use aras_ident::streaming::{Accumulation, RegressorStage, States};
 use aras_kin::Motion;
 use aras_pipeline::TaskRegressor;
 use aras_pipeline::robot::stack;
-use aras_pipeline::streaming::synthetic;
+use aras_pipeline::streaming::{StreamingOptions, identify_log, synthetic};
+use aras_signal::{Bandwidth, FilterSpec, PeriodSource};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nalgebra::Vector2;
 use std::hint::black_box;
@@ -123,5 +124,57 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// The two routes of a plain log without a period, end to end (CSV
+/// parsing included) on a synthetic 2-minute log at 1 kHz written once:
+/// logged derivatives (parse, kinematics, regressor, accumulation) and the
+/// overlapping filtered blocks (θ differentiated, 10 Hz zero-phase filter on
+/// the torques and the base columns, reversal exclusion). `docs/scale.md`
+/// quotes their ratio.
+fn bench_log_routes(c: &mut Criterion) {
+    let p = Params::aras_diamond();
+    let model = p.model().unwrap();
+    let geo = p.geometry().unwrap();
+    let beta = p.standard_vector(&model).unwrap().as_slice().to_vec();
+    let n = 120_000;
+    let dir = std::env::temp_dir().join(format!("aras-bench-routes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("log.csv");
+    synthetic::write_log(&path, &model, &geo, &beta, n, 1000.0, 0.002).unwrap();
+    let rich = synthetic::states(&model, &geo, &beta, 2000, 200.0, 0.0).unwrap();
+    let samples = aras_signal::Samples {
+        t: (0..2000).map(|i| i as f64 / 200.0).collect(),
+        x: rich[0].clone(),
+        x_dot: rich[1].clone(),
+        x_ddot: rich[2].clone(),
+        tau: rich[3].clone(),
+        ..Default::default()
+    };
+    let st = stack(&model, &geo, &samples).unwrap();
+    let base = BaseParameters::from_regressor(st.w.as_ref(), &st.names, 1e-8).unwrap();
+    let mut g = c.benchmark_group("log_routes");
+    g.throughput(Throughput::Elements(n as u64));
+    g.sample_size(10);
+    for filtered in [false, true] {
+        let mut o = StreamingOptions::default();
+        o.process.period = PeriodSource::Off;
+        if filtered {
+            o.process.filter = Bandwidth::Fixed(FilterSpec::default());
+        } else {
+            o.process.filter = Bandwidth::Off;
+            o.process.use_logged_derivatives = true;
+        }
+        let name = if filtered {
+            "overlapping_filtered_blocks_120000_samples"
+        } else {
+            "logged_derivatives_120000_samples"
+        };
+        g.bench_function(name, |b| {
+            b.iter(|| black_box(identify_log(&path, &model, &base, &o).unwrap().samples_used))
+        });
+    }
+    g.finish();
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+criterion_group!(benches, bench, bench_log_routes);
 criterion_main!(benches);
