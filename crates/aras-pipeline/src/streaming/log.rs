@@ -355,6 +355,8 @@ pub fn identify_log_with_progress(
         let mut done = 0usize; // samples before this are accumulated
         let mut margin = 0usize;
         let mut eof = false;
+        // Blocks read but not yet processed, with their windows.
+        let mut pending: Vec<(Log, (usize, usize, usize))> = Vec::new();
         while !eof {
             chunk.clear();
             let want = if first {
@@ -397,25 +399,36 @@ pub fn identify_log_with_progress(
             if keep_end <= done && !eof {
                 continue;
             }
-            let log = block_log(&name, &buf, dt, reader.sidecar().clone());
-            let used = accumulate_processed(
-                &log,
-                &popts,
-                options,
-                model,
-                base,
-                &mut acc,
-                Some((buf_start, done, keep_end)),
-                &mut out,
-            )?;
-            out.used += used;
-            out.blocks += 1;
+            pending.push((
+                block_log(&name, &buf, dt, reader.sidecar().clone()),
+                (buf_start, done, keep_end),
+            ));
+            if pending.len() == BLOCKS_IN_FLIGHT || eof {
+                process_blocks(
+                    &mut pending,
+                    &popts,
+                    options,
+                    model,
+                    base,
+                    &mut acc,
+                    &mut out,
+                )?;
+            }
             done = keep_end;
             // Keep `margin` samples before `done` for the next block.
             let drop = (done.saturating_sub(margin)).saturating_sub(buf_start);
             drain_front(&mut buf, drop);
             buf_start += drop;
         }
+        process_blocks(
+            &mut pending,
+            &popts,
+            options,
+            model,
+            base,
+            &mut acc,
+            &mut out,
+        )?;
         out.overlap = margin;
     }
     if route == StreamingRoute::LoggedDerivatives {
@@ -457,6 +470,65 @@ pub fn identify_log_with_progress(
         periods: out.periods,
         log: report,
     })
+}
+
+/// Blocks of the overlapping-block route processed at once, one per core
+/// of a 2-core machine: processing a block is mostly serial (processing,
+/// stacking), so two in flight keep both cores busy; each has its own
+/// accumulator, merged in order.
+const BLOCKS_IN_FLIGHT: usize = 2;
+
+/// Processes the `pending` blocks in parallel, each into its own
+/// accumulator, and merges them into `acc` and `out` in block order.
+#[allow(clippy::too_many_arguments)]
+fn process_blocks(
+    pending: &mut Vec<(Log, (usize, usize, usize))>,
+    popts: &ProcessOptions,
+    options: &StreamingOptions,
+    model: &Model,
+    base: &BaseParameters,
+    acc: &mut QrAccumulator,
+    out: &mut Progress,
+) -> Result<(), IdentError> {
+    use rayon::prelude::*;
+    let parts = pending
+        .par_iter()
+        .map(
+            |(log, window)| -> Result<(QrAccumulator, Progress, usize), IdentError> {
+                let mut a = QrAccumulator::new(acc.names(), acc.n_groups())?;
+                let mut p = Progress {
+                    gain: out.gain,
+                    ..Progress::default()
+                };
+                let used = accumulate_processed(
+                    log,
+                    popts,
+                    options,
+                    model,
+                    base,
+                    &mut a,
+                    Some(*window),
+                    &mut p,
+                )?;
+                Ok((a, p, used))
+            },
+        )
+        .collect::<Vec<_>>();
+    pending.clear();
+    for part in parts {
+        let (a, p, used) = part?;
+        acc.merge(&a)?;
+        if out.gain.is_none() {
+            out.gain = p.gain;
+        }
+        for (t, q) in out.tau.iter_mut().zip(p.tau) {
+            t[0] += q[0];
+            t[1] += q[1];
+        }
+        out.used += used;
+        out.blocks += 1;
+    }
+    Ok(())
 }
 
 #[derive(Default)]
