@@ -42,6 +42,23 @@ fn with_extras() -> Params {
     p
 }
 
+/// The kinematic sample of logged joint angles, rates and accelerations:
+/// `X` by the forward kinematics, `Ẋ = J⁻¹ θ̇`, `Ẍ = J⁻¹ (θ̈ − J̇ Ẋ)`.
+fn logged_sample(
+    g: &aras_kin::Geometry,
+    th: Vector2<f64>,
+    td: Vector2<f64>,
+    tdd: Vector2<f64>,
+) -> aras_kin::KinematicSample {
+    let x = forward(g, &th, AssemblyMode::Plus).unwrap();
+    let s0 = evaluate(g, &Motion::new(x, Vector2::zeros(), Vector2::zeros())).unwrap();
+    let ji = s0.jacobian.inverse();
+    let xd = ji * td;
+    let s1 = evaluate(g, &Motion::new(x, xd, Vector2::zeros())).unwrap();
+    let xdd = ji * (tdd - s1.jacobian_dot * xd);
+    evaluate(g, &Motion::new(x, xd, xdd)).unwrap()
+}
+
 /// The logged data satisfy the truth model: rebuilding `(X, Ẋ, Ẍ)` from the
 /// logged angles and exact derivatives, `τ = Y β` reproduces the measured
 /// torque wherever both joints move faster than 0.5 rad/s (there
@@ -63,14 +80,7 @@ fn logged_data_satisfy_the_model() {
             if td.amin() < 0.5 {
                 continue;
             }
-            let x = forward(&g, &th, AssemblyMode::Plus).unwrap();
-            let s0 = evaluate(&g, &Motion::new(x, Vector2::zeros(), Vector2::zeros())).unwrap();
-            let ji = s0.jacobian.inverse();
-            let xd = ji * td;
-            let s1 = evaluate(&g, &Motion::new(x, xd, Vector2::zeros())).unwrap();
-            let xdd = ji * (tdd - s1.jacobian_dot * xd);
-            let s = evaluate(&g, &Motion::new(x, xd, xdd)).unwrap();
-            let tau = model.regressor(&s) * &beta;
+            let tau = model.regressor(&logged_sample(&g, th, td, tdd)) * &beta;
             let err = (tau - Vector2::from(log.tau[i])).amax();
             assert!(
                 err < 1e-8,
@@ -142,13 +152,7 @@ fn lugre_friction_equals_coulomb_when_sliding_and_differs_at_reversals() {
         }
         let th = Vector2::from(log.theta[i]);
         let tdd = Vector2::from(log.theta_ddot[i]);
-        let x = forward(&g, &th, AssemblyMode::Plus).unwrap();
-        let s0 = evaluate(&g, &Motion::new(x, Vector2::zeros(), Vector2::zeros())).unwrap();
-        let ji = s0.jacobian.inverse();
-        let xd = ji * td;
-        let s1 = evaluate(&g, &Motion::new(x, xd, Vector2::zeros())).unwrap();
-        let xdd = ji * (tdd - s1.jacobian_dot * xd);
-        let s = evaluate(&g, &Motion::new(x, xd, xdd)).unwrap();
+        let s = logged_sample(&g, th, td, tdd);
         let err = (model.regressor(&s) * &beta - Vector2::from(log.tau[i])).amax();
         assert!(err < 1e-8, "sample {i}: err {err:e}");
         checked += 1;

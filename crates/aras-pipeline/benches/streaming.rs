@@ -14,12 +14,9 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use nalgebra::Vector2;
 use std::hint::black_box;
 
-fn bench(c: &mut Criterion) {
-    let p = Params::aras_diamond();
-    let model = p.model().unwrap();
-    let geo = p.geometry().unwrap();
-    let beta = p.standard_vector(&model).unwrap().as_slice().to_vec();
-    let rich = synthetic::states(&model, &geo, &beta, 2000, 200.0, 0.0).unwrap();
+/// The numerical base of `model` from 2000 synthetic states.
+fn base_of(model: &aras_dyn::Model, geo: &aras_kin::Geometry, beta: &[f64]) -> BaseParameters {
+    let rich = synthetic::states(model, geo, beta, 2000, 200.0, 0.0).unwrap();
     let samples = aras_signal::Samples {
         t: (0..2000).map(|i| i as f64 / 200.0).collect(),
         x: rich[0].clone(),
@@ -28,8 +25,16 @@ fn bench(c: &mut Criterion) {
         tau: rich[3].clone(),
         ..Default::default()
     };
-    let st = stack(&model, &geo, &samples).unwrap();
-    let base = BaseParameters::from_regressor(st.w.as_ref(), &st.names, 1e-8).unwrap();
+    let st = stack(model, geo, &samples).unwrap();
+    BaseParameters::from_regressor(st.w.as_ref(), &st.names, 1e-8).unwrap()
+}
+
+fn bench(c: &mut Criterion) {
+    let p = Params::aras_diamond();
+    let model = p.model().unwrap();
+    let geo = p.geometry().unwrap();
+    let beta = p.standard_vector(&model).unwrap().as_slice().to_vec();
+    let base = base_of(&model, &geo, &beta);
 
     let n = 262_144;
     let s = synthetic::states(&model, &geo, &beta, n, 1000.0, 0.01).unwrap();
@@ -140,17 +145,7 @@ fn bench_log_routes(c: &mut Criterion) {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("log.csv");
     synthetic::write_log(&path, &model, &geo, &beta, n, 1000.0, 0.002).unwrap();
-    let rich = synthetic::states(&model, &geo, &beta, 2000, 200.0, 0.0).unwrap();
-    let samples = aras_signal::Samples {
-        t: (0..2000).map(|i| i as f64 / 200.0).collect(),
-        x: rich[0].clone(),
-        x_dot: rich[1].clone(),
-        x_ddot: rich[2].clone(),
-        tau: rich[3].clone(),
-        ..Default::default()
-    };
-    let st = stack(&model, &geo, &samples).unwrap();
-    let base = BaseParameters::from_regressor(st.w.as_ref(), &st.names, 1e-8).unwrap();
+    let base = base_of(&model, &geo, &beta);
     let mut g = c.benchmark_group("log_routes");
     g.throughput(Throughput::Elements(n as u64));
     g.sample_size(10);

@@ -420,15 +420,8 @@ pub fn identify_log_with_progress(
             drain_front(&mut buf, drop);
             buf_start += drop;
         }
-        process_blocks(
-            &mut pending,
-            &popts,
-            options,
-            model,
-            base,
-            &mut acc,
-            &mut out,
-        )?;
+        // The last block (at end of file) flushed the blocks in flight.
+        debug_assert!(pending.is_empty());
         out.overlap = margin;
     }
     if route == StreamingRoute::LoggedDerivatives {
