@@ -353,8 +353,7 @@ pub fn spectrum_cutoff(theta: [&[f64]; 2], dt: f64) -> SpectrumCutoff {
     }
     let hop = len / 2;
     let count = (n - 1 - len) / hop + 1;
-    let mut planner = FftPlanner::new();
-    let fft = planner.plan_fft_forward(len);
+    let mut fourier = Fourier::new(len);
     let window: Vec<f64> = (0..len)
         .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / len as f64).cos())
         .collect();
@@ -365,19 +364,16 @@ pub fn spectrum_cutoff(theta: [&[f64]; 2], dt: f64) -> SpectrumCutoff {
         noise_rms: [0.0; 2],
         segments: [len, count],
     };
-    let mut buf = vec![Complex64::new(0.0, 0.0); len];
+    let mut segment = vec![0.0; len];
     for (j, x) in theta.iter().enumerate() {
         let mut psd = vec![0.0; len / 2 + 1];
         for s in 0..count {
             let d = &x[s * hop..s * hop + len + 1];
             let mean = (d[len] - d[0]) / len as f64;
-            for (i, b) in buf.iter_mut().enumerate() {
-                *b = Complex64::new((d[i + 1] - d[i] - mean) * window[i], 0.0);
+            for (i, b) in segment.iter_mut().enumerate() {
+                *b = (d[i + 1] - d[i] - mean) * window[i];
             }
-            fft.process(&mut buf);
-            for (k, p) in psd.iter_mut().enumerate() {
-                *p += buf[k].norm_sqr();
-            }
+            fourier.add_power(&segment, &mut psd);
         }
         let shape = |k: usize| (std::f64::consts::PI * k as f64 / len as f64).sin().powi(2);
         let ratios: Vec<f64> = (len / 4 + 1..=len / 2).map(|k| psd[k] / shape(k)).collect();

@@ -69,6 +69,21 @@ impl Fourier {
         }
     }
 
+    /// Adds `|X_k|²` of the DFT of `x` (length [`len`](Self::len)) to
+    /// `power[k]` for `k < power.len()` (at most `len / 2 + 1`): one segment
+    /// of a Welch or periodogram estimate, without allocating.
+    pub fn add_power(&mut self, x: &[f64], power: &mut [f64]) {
+        debug_assert_eq!(x.len(), self.len());
+        for (b, &v) in self.buf.iter_mut().zip(x.iter()) {
+            *b = Complex64::new(v, 0.0);
+        }
+        self.forward
+            .process_with_scratch(&mut self.buf, &mut self.scratch);
+        for (p, b) in power.iter_mut().zip(&self.buf) {
+            *p += b.norm_sqr();
+        }
+    }
+
     /// The DFT of `x` (length [`len`](Self::len)).
     pub fn spectrum(&mut self, x: &[f64]) -> Vec<Complex64> {
         debug_assert_eq!(x.len(), self.len());

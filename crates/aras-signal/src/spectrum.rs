@@ -110,17 +110,14 @@ pub fn power_spectrum(
         for ((s, v), w) in segment.iter_mut().zip(&x[start..start + len]).zip(&window) {
             *s = v * w;
         }
-        let spec = fourier.spectrum(&segment);
-        for (k, d) in density.iter_mut().enumerate() {
-            // One-sided: the bins between 0 and Nyquist count twice.
-            let twice = if k == 0 || 2 * k == len { 1.0 } else { 2.0 };
-            *d += twice * spec[k].norm_sqr() / (w2 * sample_rate_hz);
-        }
+        fourier.add_power(&segment, &mut density);
         count += 1;
         start += step;
     }
-    for d in &mut density {
-        *d /= count as f64;
+    for (k, d) in density.iter_mut().enumerate() {
+        // One-sided: the bins between 0 and Nyquist count twice.
+        let twice = if k == 0 || 2 * k == len { 1.0 } else { 2.0 };
+        *d *= twice / (w2 * sample_rate_hz * count as f64);
     }
     let resolution_hz = sample_rate_hz / len as f64;
     Ok(PowerSpectrum {
