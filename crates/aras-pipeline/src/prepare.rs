@@ -110,6 +110,33 @@ pub fn prepare(
     columns: RegressorColumns<'_>,
     keep_unfiltered: bool,
 ) -> Result<Prepared, IdentError> {
+    prepare_reusing(
+        log,
+        opts,
+        model,
+        geometry,
+        mode,
+        columns,
+        keep_unfiltered,
+        None,
+    )
+}
+
+/// [`prepare`] stacking into `recycled` (a previous block's regressor of the
+/// same shape, e.g. from [`Prepared::stacked`]) instead of a fresh matrix:
+/// a long log's blocks then re-use one matrix, whose pages the kernel would
+/// otherwise map and clear again for every block.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn prepare_reusing(
+    log: &Log,
+    opts: &ProcessOptions,
+    model: &Model,
+    geometry: &Geometry,
+    mode: FilterMode,
+    columns: RegressorColumns<'_>,
+    keep_unfiltered: bool,
+    recycled: Option<Mat<f64>>,
+) -> Result<Prepared, IdentError> {
     let processed = aras_signal::process(log, opts, &aras_kin::task_motion(geometry))
         .map_err(|e| IdentError::external(format!("processing {}", log.name), e))?;
     let mut stacked = match columns {
@@ -126,8 +153,8 @@ pub fn prepare(
             model,
             geometry,
             &processed.samples,
-            base.independent(),
-            base.base_names(),
+            (base.independent(), base.base_names()),
+            recycled,
         )?,
     };
     let filter_sos = processing_filter(&processed.summary)?;

@@ -44,7 +44,7 @@ fn invalid(context: &str, reason: impl Into<String>) -> IdentError {
 /// samples were derived) and their torques.
 pub fn stack(model: &Model, geometry: &Geometry, samples: &Samples) -> Result<Stacked, IdentError> {
     let all: Vec<usize> = (0..model.columns()).collect();
-    stack_selected(model, geometry, samples, &all, model.names())
+    stack_selected(model, geometry, samples, (&all, model.names()), None)
 }
 
 /// Samples stacked at a time by [`stack_selected`]: its scratch (`2 ×
@@ -55,13 +55,14 @@ const STACK_CHUNK: usize = 2048;
 
 /// [`stack`] keeping only the standard columns `columns` (named `names`),
 /// stacked chunk by chunk straight into the selected columns, without the
-/// whole standard regressor.
+/// whole standard regressor; into `recycled` when it has the result's shape
+/// (every entry is written).
 pub(crate) fn stack_selected(
     model: &Model,
     geometry: &Geometry,
     samples: &Samples,
-    columns: &[usize],
-    names: Vec<String>,
+    (columns, names): (&[usize], Vec<String>),
+    recycled: Option<Mat<f64>>,
 ) -> Result<Stacked, IdentError> {
     let n = samples.len();
     for (what, a) in [
@@ -87,7 +88,10 @@ pub(crate) fn stack_selected(
             format!("column {c} of a model with {} columns", model.columns()),
         ));
     }
-    let mut w = Mat::<f64>::zeros(2 * n, columns.len());
+    let mut w = match recycled {
+        Some(m) if m.nrows() == 2 * n && m.ncols() == columns.len() => m,
+        _ => Mat::<f64>::zeros(2 * n, columns.len()),
+    };
     let mut task: Vec<Motion> = Vec::with_capacity(STACK_CHUNK.min(n));
     let mut scratch = nalgebra::DMatrix::<f64>::zeros(0, model.columns());
     for s in (0..n).step_by(STACK_CHUNK) {

@@ -13,7 +13,8 @@ use aras_ident::streaming::{Accumulation, GramCheck, QrAccumulator, RegressorSta
 use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 
 use crate::TaskRegressor;
-use crate::prepare::{RegressorColumns, prepare};
+use crate::prepare::{RegressorColumns, prepare_reusing};
+use faer::Mat;
 use crate::robot::{FilterMode, filter_reach, reversal_mask};
 
 /// Options of [`identify_log`]. `Default` gives the documented defaults.
@@ -344,7 +345,17 @@ pub fn identify_log_with_progress(
         popts.period = PeriodSource::Seconds(p);
         popts.settling_s = 0.0;
         let used =
-            accumulate_processed(&log, &popts, options, model, base, &mut acc, None, &mut out)?;
+            accumulate_processed(
+                &log,
+                &popts,
+                options,
+                model,
+                base,
+                &mut acc,
+                None,
+                &mut out,
+                &mut None,
+            )?;
         out.used = used;
     } else {
         route = StreamingRoute::OverlappingBlocks;
@@ -355,8 +366,10 @@ pub fn identify_log_with_progress(
         let mut done = 0usize; // samples before this are accumulated
         let mut margin = 0usize;
         let mut eof = false;
-        // Blocks read but not yet processed, with their windows.
+        // Blocks read but not yet processed, with their windows, and the
+        // matrices the blocks in flight re-use.
         let mut pending: Vec<(Log, (usize, usize, usize))> = Vec::new();
+        let mut spares: [Option<Mat<f64>>; BLOCKS_IN_FLIGHT] = Default::default();
         while !eof {
             chunk.clear();
             let want = if first {
@@ -412,6 +425,7 @@ pub fn identify_log_with_progress(
                     base,
                     &mut acc,
                     &mut out,
+                    &mut spares,
                 )?;
             }
             done = keep_end;
@@ -472,7 +486,8 @@ pub fn identify_log_with_progress(
 const BLOCKS_IN_FLIGHT: usize = 2;
 
 /// Processes the `pending` blocks in parallel, each into its own
-/// accumulator, and merges them into `acc` and `out` in block order.
+/// accumulator (stacking into its lane's spare matrix, which it hands back),
+/// and merges them into `acc` and `out` in block order.
 #[allow(clippy::too_many_arguments)]
 fn process_blocks(
     pending: &mut Vec<(Log, (usize, usize, usize))>,
@@ -482,12 +497,14 @@ fn process_blocks(
     base: &BaseParameters,
     acc: &mut QrAccumulator,
     out: &mut Progress,
+    spares: &mut [Option<Mat<f64>>; BLOCKS_IN_FLIGHT],
 ) -> Result<(), IdentError> {
     use rayon::prelude::*;
     let parts = pending
         .par_iter()
+        .zip(spares.par_iter_mut())
         .map(
-            |(log, window)| -> Result<(QrAccumulator, Progress, usize), IdentError> {
+            |((log, window), spare)| -> Result<(QrAccumulator, Progress, usize), IdentError> {
                 let mut a = QrAccumulator::new(acc.names(), acc.n_groups())?;
                 let mut p = Progress {
                     gain: out.gain,
@@ -502,6 +519,7 @@ fn process_blocks(
                     &mut a,
                     Some(*window),
                     &mut p,
+                    spare,
                 )?;
                 Ok((a, p, used))
             },
@@ -642,7 +660,9 @@ fn block_log(name: &str, c: &Columns, dt: f64, sidecar: Sidecar) -> Log {
 /// exclusion → base columns) and pushes the kept rows of the samples with
 /// global indices in `done..keep_end` (`window = (first index of log, done,
 /// keep_end)`; all rows if `None`). Returns the samples in the window;
-/// sets `gain` (the filter's noise gain) on the first call.
+/// sets `gain` (the filter's noise gain) on the first call. Stacks into
+/// `spare` when it has the block's shape and leaves the block's matrix
+/// there for the next block.
 #[allow(clippy::too_many_arguments)]
 fn accumulate_processed(
     log: &Log,
@@ -653,8 +673,9 @@ fn accumulate_processed(
     acc: &mut QrAccumulator,
     window: Option<(usize, usize, usize)>,
     out: &mut Progress,
+    spare: &mut Option<Mat<f64>>,
 ) -> Result<usize, IdentError> {
-    let prepared = prepare(
+    let prepared = prepare_reusing(
         log,
         popts,
         model,
@@ -662,6 +683,7 @@ fn accumulate_processed(
         options.filter_mode,
         RegressorColumns::Base(base),
         false,
+        spare.take(),
     )?;
     let edge = (log.len() - prepared.n()) / 2;
     let n = prepared.n();
@@ -679,6 +701,7 @@ fn accumulate_processed(
         }
     };
     if i1 == i0 {
+        *spare = Some(prepared.stacked.w);
         return Ok(0);
     }
     let keep = prepared.keep_mask(options.min_speed, options.reversal_reach)?;
@@ -709,6 +732,7 @@ fn accumulate_processed(
             }
         }
     }
+    *spare = Some(prepared.stacked.w);
     Ok(i1 - i0)
 }
 
