@@ -14,8 +14,8 @@ use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 
 use crate::TaskRegressor;
 use crate::prepare::{RegressorColumns, prepare_reusing};
-use faer::Mat;
 use crate::robot::{FilterMode, filter_reach, reversal_mask};
+use faer::Mat;
 
 /// Options of [`identify_log`]. `Default` gives the documented defaults.
 #[derive(Debug, Clone)]
@@ -344,18 +344,9 @@ pub fn identify_log_with_progress(
         let mut popts = options.process.clone();
         popts.period = PeriodSource::Seconds(p);
         popts.settling_s = 0.0;
-        let used =
-            accumulate_processed(
-                &log,
-                &popts,
-                options,
-                model,
-                base,
-                &mut acc,
-                None,
-                &mut out,
-                &mut None,
-            )?;
+        let used = accumulate_processed(
+            &log, &popts, options, model, base, &mut acc, None, &mut out, &mut None,
+        )?;
         out.used = used;
     } else {
         route = StreamingRoute::OverlappingBlocks;
