@@ -168,7 +168,7 @@ fn invalid(context: &str, reason: &str) -> IdentError {
 /// * **period averaging** (a period from the options or the sidecar): the
 ///   sum of each channel over the period is accumulated while reading
 ///   (memory: one period), then the averaged period is processed exactly as
-///   `aras_signal::process` would, stacked and filtered ([`prepare`], periodic)
+///   `aras_signal::process` would, stacked and filtered ([`prepare`](crate::prepare::prepare), periodic)
 ///   and accumulated. The period-to-period spread check of the in-memory
 ///   path is not made (it needs the average before the periods).
 /// * **overlapping blocks** (everything else): blocks of `chunk_samples`
