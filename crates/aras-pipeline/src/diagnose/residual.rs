@@ -531,9 +531,7 @@ pub(crate) fn analyse_left_out(
     let fitness_fitted_rows =
         aras_ident::validate::fitness(&pick(true, measured), &pick(true, &estimate))?;
     let fitness_all_rows = aras_ident::validate::fitness(measured, &estimate)?;
-    let rms = (left.residual.iter().fold(0.0, |s, x| s + x * x)
-        / left.residual.len().max(1) as f64)
-        .sqrt();
+    let rms = rms(left.residual);
     let bins = if left.theta_dot.is_empty() {
         Vec::new()
     } else {
@@ -581,12 +579,17 @@ pub(crate) fn analyse_left_out(
     })
 }
 
+/// Root mean square of `x` (0 for no samples).
+pub(crate) fn rms(x: &[f64]) -> f64 {
+    (x.iter().fold(0.0, |s, v| s + v * v) / x.len().max(1) as f64).sqrt()
+}
+
 fn white(joint: usize, r: &[f64], dof_ratio: f64) -> Whiteness {
     let step = ((1.0 / dof_ratio).round() as usize).max(1);
     let dec: Vec<f64> = r.iter().step_by(step).copied().collect();
     let lags = (dec.len() / 5).clamp(1, 20);
     let (q, p_value) = ljung_box(&dec, lags);
-    let rms = (r.iter().map(|x| x * x).sum::<f64>() / r.len().max(1) as f64).sqrt();
+    let rms = rms(r);
     Whiteness {
         joint,
         step,

@@ -11,7 +11,9 @@ use serde::Serialize;
 use super::candidates::{Candidate, CandidateGrid, SearchScale};
 use super::chunks::{Plan, filtered_torques, in_lanes, window_kinematics};
 use super::data::{Dataset, moving_mask};
-use super::residual::{JointData, ResidualAnalysis, analyse, analyse_left_out, analyse_spectrum};
+use super::residual::{
+    JointData, ResidualAnalysis, analyse, analyse_left_out, analyse_spectrum, rms,
+};
 use crate::prepare::RegressorColumns;
 use crate::robot::consistent_problem;
 use aras_ident::BaseParameters;
@@ -325,8 +327,13 @@ struct Prepared {
     plan: Plan,
 }
 
-/// A residual per joint with the sample index of each entry.
-type JointResidual = ([Vec<f64>; 2], [Vec<usize>; 2]);
+/// A model's residual per joint on the rows `rows` of a data set, with the
+/// (filtered, shifted) measured torque it was taken from.
+struct JointResidual {
+    rows: std::ops::Range<usize>,
+    residual: [Vec<f64>; 2],
+    measured: [Vec<f64>; 2],
+}
 
 /// Candidates, their single-effect models and their layout for one trial.
 type TrialLayout = (Vec<Candidate>, Vec<Option<Model>>, Layout);
@@ -470,8 +477,9 @@ impl Context<'_> {
     }
 
     /// Residual per joint of the selected model `fit` on every row of `d`
-    /// in its range, fitted or left out near a reversal (in order), with
-    /// their sample indices: only the columns of the model are computed.
+    /// in its range, fitted or left out near a reversal (in order), with the
+    /// measured torque of each row: only the columns of the model are
+    /// computed.
     fn residual(
         &self,
         d: &Dataset,
@@ -492,7 +500,7 @@ impl Context<'_> {
                     && self.layout.candidate_columns(k).any(|c| beta[c] != 0.0)
             })
             .collect();
-        type Piece = (usize, [Vec<f64>; 2], [Vec<usize>; 2]);
+        type Piece = (usize, [Vec<f64>; 2], [Vec<f64>; 2]);
         let lanes = in_lanes(&p.plan, lo, hi, Vec::<Piece>::new, |out, a, b| {
             let (wl, wh) = p.plan.window(a, b);
             let nw = wh - wl;
@@ -508,7 +516,7 @@ impl Context<'_> {
                 })
                 .collect::<Result<Vec<_>, _>>()?;
             let mut res: [Vec<f64>; 2] = [vec![], vec![]];
-            let mut ids: [Vec<usize>; 2] = [vec![], vec![]];
+            let mut tau: [Vec<f64>; 2] = [vec![], vec![]];
             for g in 0..2 {
                 for i in a..b {
                     let row = g * nw + (i - wl);
@@ -521,24 +529,29 @@ impl Context<'_> {
                             pred += beta[j] * bk[(row, jj)];
                         }
                     }
-                    res[g].push(Self::shifted(p, g, i, delay) - pred);
-                    ids[g].push(i);
+                    let t = Self::shifted(p, g, i, delay);
+                    res[g].push(t - pred);
+                    tau[g].push(t);
                 }
             }
-            out.push((a, res, ids));
+            out.push((a, res, tau));
             Ok(())
         })?;
         let mut pieces: Vec<Piece> = lanes.into_iter().flatten().collect();
         pieces.sort_by_key(|x| x.0);
-        let mut res: [Vec<f64>; 2] = [vec![], vec![]];
-        let mut ids: [Vec<usize>; 2] = [vec![], vec![]];
-        for (_, r, i) in pieces {
+        let mut residual: [Vec<f64>; 2] = [vec![], vec![]];
+        let mut measured: [Vec<f64>; 2] = [vec![], vec![]];
+        for (_, r, t) in pieces {
             for g in 0..2 {
-                res[g].extend(&r[g]);
-                ids[g].extend(&i[g]);
+                residual[g].extend(&r[g]);
+                measured[g].extend(&t[g]);
             }
         }
-        Ok((res, ids))
+        Ok(JointResidual {
+            rows: lo..hi,
+            residual,
+            measured,
+        })
     }
 
     /// Model `model` with base `base` on `d`: calls `f(state, g, W_b rows,
@@ -833,14 +846,17 @@ pub fn diagnose(
             .iter()
             .zip(&vals_p)
             .map(|(v, p)| -> Result<ResidualAnalysis, IdentError> {
-                let (res, idx) = ctx.residual(v, p, fit)?;
-                let delay = ctx.fit_delay(fit);
+                let JointResidual {
+                    rows,
+                    residual: res,
+                    measured,
+                } = ctx.residual(v, p, fit)?;
                 let sm = &v.samples;
                 // Per joint: [residual, θ, θ̇, θ̈, t] of the fitted rows
                 // (`fitted`) or of the rows left out.
                 let split = |g: usize, fitted: bool| -> [Vec<f64>; 5] {
                     let mut out: [Vec<f64>; 5] = Default::default();
-                    for (r, &i) in res[g].iter().zip(&idx[g]) {
+                    for (r, i) in res[g].iter().zip(rows.clone()) {
                         if p.mask[g][i] == fitted {
                             let row = [
                                 *r,
@@ -866,33 +882,27 @@ pub fn diagnose(
                     }
                 }
                 let kept = [split(0, true), split(1, true)];
-                let rms = |x: &[f64]| {
-                    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
-                };
                 let sigma = [rms(&kept[0][0]), rms(&kept[1][0])];
                 let dof_ratio = v.filter_dof() / v.len() as f64;
+                let pass_band_end = v.pass_band_end();
                 let mut a = analyse(&v.name, &[jd(&kept[0]), jd(&kept[1])], sigma, dof_ratio);
                 for g in 0..2 {
-                    let measured: Vec<f64> = idx[g]
-                        .iter()
-                        .map(|&i| Context::shifted(p, g, i, delay))
-                        .collect();
-                    let fitted: Vec<bool> = idx[g].iter().map(|&i| p.mask[g][i]).collect();
+                    let fitted = &p.mask[g][rows.clone()];
                     let left = split(g, false);
                     a.left_out.push(analyse_left_out(
                         g + 1,
                         &jd(&left),
-                        (&measured, &res[g], &fitted),
+                        (&measured[g], &res[g], fitted),
                         sigma[g],
                         dof_ratio,
                     )?);
                     a.spectra.push(analyse_spectrum(
                         g + 1,
                         &res[g],
-                        &measured,
+                        &measured[g],
                         v.sample_rate_hz,
                         v.periodic,
-                        v.pass_band_end(),
+                        pass_band_end,
                     )?);
                 }
                 Ok(a)
