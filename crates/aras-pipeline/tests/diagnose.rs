@@ -323,7 +323,7 @@ fn finds_time_delay() {
 
 /// A delay between the grid's samples, 3.4 samples (3 whole and 0.4
 /// interpolated, `SimConfig::torque_delay_fraction`): named first with the
-/// right sign on noise seeds 1–5, and refined (golden section over a
+/// right sign on noise seeds 1–5, and refined (zoomed grid search over a
 /// linearly interpolated torque shift) to within ±0.5 samples. What the
 /// refinement measures is the lag between the logged torque and the
 /// motion: the simulator holds each torque sample for one period (zero-order
