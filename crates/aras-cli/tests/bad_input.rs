@@ -16,11 +16,9 @@ fn fixture(rel: &str) -> String {
     root().join("fixtures").join(rel).display().to_string()
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-bad-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch directory, removed when the test passes.
+fn scratch(name: &str) -> aras_testkit::Scratch {
+    aras_testkit::Scratch::new(&format!("bad-{name}"))
 }
 
 fn aras(args: &[&str]) -> Output {

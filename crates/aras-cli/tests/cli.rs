@@ -1,6 +1,6 @@
 //! End-to-end tests of the `aras` binary on a short configuration.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn aras(args: &[&str]) -> Output {
@@ -10,11 +10,9 @@ fn aras(args: &[&str]) -> Output {
         .expect("the aras binary runs")
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-cli-test-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch directory, removed when the test passes.
+fn scratch(name: &str) -> aras_testkit::Scratch {
+    aras_testkit::Scratch::new(&format!("cli-test-{name}"))
 }
 
 fn json(path: &Path) -> serde_json::Value {

@@ -1,14 +1,11 @@
 //! The same seed and inputs give byte-identical outputs (
 //! "Determinism"): a short pipeline runs twice with `--reproducible`.
 
-use std::path::PathBuf;
 use std::process::Command;
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-det-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch directory, removed when the test passes.
+fn scratch(name: &str) -> aras_testkit::Scratch {
+    aras_testkit::Scratch::new(&format!("det-{name}"))
 }
 
 /// Short enough for a test (a few seconds): 1 design start, 4 periods, one

@@ -5,11 +5,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-mjcf-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch directory, removed when the test passes.
+fn scratch(name: &str) -> aras_testkit::Scratch {
+    aras_testkit::Scratch::new(&format!("mjcf-{name}"))
 }
 
 fn fixture(rel: &str) -> PathBuf {

@@ -132,9 +132,7 @@ fn fitness_is_the_identification_fitness() {
 
 #[test]
 fn command_writes_json_report_and_predictions() {
-    let dir = std::env::temp_dir().join(format!("aras-friction-cli-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = aras_testkit::Scratch::new("friction-cli");
     let sim = JointSimulation {
         duration: 20.0,
         ..JointSimulation::default()

@@ -1,14 +1,12 @@
 //! `aras identify --streaming on` gives the in-memory estimates (
 //! "Scale"): the same rows (reversal exclusion), the same OLS, σ and SDP.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-stream-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch directory, removed when the test passes.
+fn scratch(name: &str) -> aras_testkit::Scratch {
+    aras_testkit::Scratch::new(&format!("stream-{name}"))
 }
 
 const SHORT: &str = "[trajectory]\nstarts = 1\n[simulation]\nperiods = 4\n\

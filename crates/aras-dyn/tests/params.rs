@@ -205,8 +205,7 @@ fn non_finite_values_are_rejected_everywhere() {
 
 #[test]
 fn load_and_save_report_the_file() {
-    let dir = std::env::temp_dir().join(format!("aras-dyn-params-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = aras_testkit::Scratch::new("dyn-params");
     let path = dir.join("robot.json");
     with_extras().save(&path).unwrap();
     assert_eq!(Params::load(&path).unwrap(), with_extras());
@@ -220,7 +219,6 @@ fn load_and_save_report_the_file() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("absent.json"), "{e}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// The thin-arc helper against a brute-force sum over 200 000 point masses
@@ -299,8 +297,7 @@ fn pseudo_inertia_rejects_link_numbers_outside_1_to_4() {
 
 #[test]
 fn file_errors_name_the_file_and_keep_the_cause_as_source() {
-    let dir = std::env::temp_dir().join(format!("aras-dyn-chain-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = aras_testkit::Scratch::new("dyn-chain");
     let path = dir.join("robot.json");
     std::fs::write(&path, "{\"geometry\": 3}").unwrap();
     let e = Params::load(&path).unwrap_err();
@@ -325,5 +322,4 @@ fn file_errors_name_the_file_and_keep_the_cause_as_source() {
     );
     assert_eq!(io_source_kind(&e), std::io::ErrorKind::NotFound);
     assert_source_not_repeated(&e);
-    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -258,8 +258,7 @@ fn deterministic_for_a_seed_and_byte_identical_logs() {
     other.seed = 2;
     assert_ne!(simulate(&truth, &traj, &other).unwrap().tau, a.tau);
 
-    let dir = std::env::temp_dir().join(format!("aras-dyn-sim-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = aras_testkit::Scratch::new("dyn-sim");
     let (p1, p2) = (dir.join("a.csv"), dir.join("b.csv"));
     write_log(&p1, &a, true).unwrap();
     write_log(&p2, &b, true).unwrap();
@@ -317,7 +316,6 @@ fn deterministic_for_a_seed_and_byte_identical_logs() {
     assert_eq!(v["truth"]["effects"][5]["id"], "stribeck_friction");
     assert!(v["truth"]["noise"]["torque_std_nm"][0].as_f64().unwrap() > 0.0);
     assert_eq!(v["truth"]["simulator"]["output_rate_hz"], 1000.0);
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

@@ -154,8 +154,7 @@ mod tests {
     /// ragged column is an error that writes nothing.
     #[test]
     fn written_logs_read_back_exactly() {
-        let dir = std::env::temp_dir().join(format!("aras-log-writer-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = aras_testkit::Scratch::new("log-writer");
         for derivatives in [false, true] {
             let path = dir.join(format!("run{derivatives}.csv"));
             let c = columns(derivatives);
@@ -226,6 +225,5 @@ mod tests {
             })
             .count();
         assert_eq!(temps, 0);
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

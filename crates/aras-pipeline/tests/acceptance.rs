@@ -67,8 +67,7 @@ fn setup() -> &'static Setup {
 /// data would arrive.
 fn run(name: &str, traj: &dyn Trajectory, cfg: &SimConfig) -> aras_log::Log {
     let log: SimLog = simulate(&setup().truth, traj, cfg).unwrap();
-    let dir = std::env::temp_dir().join(format!("aras-accept-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = aras_testkit::Scratch::new(&format!("accept-{name}"));
     let path = dir.join(format!("{name}.csv"));
     write_log(&path, &log, true).unwrap();
     let out = read_log(&path, &ReadOptions::default()).unwrap();

@@ -79,8 +79,7 @@ fn dataset_with(
         ..base.clone()
     };
     let log = simulate(truth, traj, &cfg).unwrap();
-    let dir = std::env::temp_dir().join(format!("aras-diag-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = aras_testkit::Scratch::new(&format!("diag-{tag}"));
     let path: PathBuf = dir.join(format!("{tag}.csv"));
     write_log(&path, &log, true).unwrap();
     let raw = read_log(&path, &ReadOptions::default()).unwrap();

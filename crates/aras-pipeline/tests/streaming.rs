@@ -336,10 +336,9 @@ fn write(dir: &std::path::Path, name: &str, r: &Robot, n: usize, fs: f64) -> std
     p
 }
 
-fn tempdir(tag: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-streaming-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch directory, removed when the test passes.
+fn tempdir(tag: &str) -> aras_testkit::Scratch {
+    aras_testkit::Scratch::new(&format!("streaming-{tag}"))
 }
 
 /// What the in-memory identification gives: estimate, rows fitted per

@@ -90,3 +90,53 @@ mod tests {
         assert!(none.is_err());
     }
 }
+
+/// A fresh, empty scratch directory `aras-{tag}-{pid}` under the system's
+/// temporary directory, removed with everything in it when dropped — unless
+/// the test is panicking, so a failing test's files stay for inspection.
+/// Dereferences to its [`Path`](std::path::Path).
+#[derive(Debug)]
+pub struct Scratch {
+    path: std::path::PathBuf,
+}
+
+impl Scratch {
+    /// Creates the directory, replacing a stale one of the same name (left
+    /// by an earlier failing run of the same process id).
+    ///
+    /// # Panics
+    /// When the directory cannot be created.
+    pub fn new(tag: &str) -> Self {
+        let path = std::env::temp_dir().join(format!("aras-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&path);
+        std::fs::create_dir_all(&path)
+            .unwrap_or_else(|e| panic!("creating the scratch directory {}: {e}", path.display()));
+        Self { path }
+    }
+
+    /// The directory.
+    pub fn path(&self) -> &std::path::Path {
+        &self.path
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.path
+    }
+}
+
+impl AsRef<std::path::Path> for Scratch {
+    fn as_ref(&self) -> &std::path::Path {
+        &self.path
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.path);
+        }
+    }
+}

@@ -8,12 +8,10 @@ use std::process::{Command, Output};
 
 use aras_cli::output::OutDir;
 
-/// A fresh, empty scratch directory `aras-{suite}-{name}-{pid}`.
-pub fn scratch(suite: &str, name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aras-{suite}-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh, empty scratch directory `aras-{suite}-{name}-{pid}`, removed
+/// when the test passes.
+pub fn scratch(suite: &str, name: &str) -> aras_testkit::Scratch {
+    aras_testkit::Scratch::new(&format!("{suite}-{name}"))
 }
 
 /// A file under the repository's `fixtures/`.
