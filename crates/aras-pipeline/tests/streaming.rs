@@ -485,6 +485,34 @@ fn identify_log_matches_the_in_memory_identification_on_every_route() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Where five overlaps exceed `chunk_samples` (a low cut-off, or a high
+/// rate), a block is five overlaps long: no block re-reads more than 40 %
+/// of itself, and the result is still the in-memory identification's.
+#[test]
+fn blocks_are_at_least_five_overlaps_long() {
+    let r = robot();
+    let dir = tempdir("long-blocks");
+    let fs = 500.0;
+    let n = 40_000;
+    let path = write(&dir, "run.csv", &r, n, fs);
+    let mut o = StreamingOptions {
+        chunk_samples: 1024,
+        min_speed: 0.2,
+        ..Default::default()
+    };
+    o.process.period = PeriodSource::Off;
+    o.process.filter = Bandwidth::Fixed(FilterSpec {
+        order: 4,
+        cutoff_hz: 10.0,
+    });
+    check_route(&path, &r, &o, StreamingRoute::OverlappingBlocks);
+    let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
+    let block = 5 * s.overlap;
+    assert!(block > 1024, "the overlap ({}) must rule here", s.overlap);
+    // Every block but the last holds `block` new samples.
+    assert_eq!(s.blocks, n.div_ceil(block), "{} blocks of {block}", s.blocks);
+}
+
 #[test]
 fn identify_log_reports_bad_options_and_bad_logs() {
     let r = robot();
