@@ -510,7 +510,12 @@ fn blocks_are_at_least_five_overlaps_long() {
     let block = 5 * s.overlap;
     assert!(block > 1024, "the overlap ({}) must rule here", s.overlap);
     // Every block but the last holds `block` new samples.
-    assert_eq!(s.blocks, n.div_ceil(block), "{} blocks of {block}", s.blocks);
+    assert_eq!(
+        s.blocks,
+        n.div_ceil(block),
+        "{} blocks of {block}",
+        s.blocks
+    );
 }
 
 #[test]
