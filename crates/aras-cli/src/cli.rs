@@ -240,7 +240,8 @@ pub struct IdentifyArgs {
     /// Extra effects to identify with the paper's model, comma-separated, as
     /// `diagnose` names them: torque_offset, coulomb_asymmetry,
     /// `stribeck_friction[:V_S]`, passive_joint_viscous, `cogging:CYCLES[:ORDER]`,
-    /// quadratic_damping.
+    /// quadratic_damping, and `time_delay:D` (the torque taken D samples after
+    /// the angles, fractions interpolated; logs read in memory).
     #[arg(long, value_name = "ID[:ARG],…", value_delimiter = ',')]
     pub effects: Vec<String>,
     /// Output directory.

@@ -103,6 +103,44 @@ pub fn parse_effect(spec: &str) -> Result<Effect> {
     })
 }
 
+/// What `--effects` asks for: effects added to the model, and a torque
+/// delay removed from the log before processing.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Extras {
+    /// Effects whose columns are appended to the paper's model.
+    pub effects: Vec<Effect>,
+    /// `time_delay:D`: the torque is taken `D` samples after the angles
+    /// (`aras_signal::delay_torque`; fractions interpolated), as `diagnose`
+    /// reports a delay.
+    pub torque_delay: Option<f64>,
+}
+
+/// Parses every `--effects` entry: [`parse_effect`], except `time_delay:D`
+/// (a signed number of samples, at most once).
+pub fn parse_extras(specs: &[String]) -> Result<Extras> {
+    let mut out = Extras::default();
+    for spec in specs {
+        let mut parts = spec.trim().split(':');
+        if parts.next() != Some(aras_pipeline::diagnose::TIME_DELAY) {
+            out.effects.push(parse_effect(spec)?);
+            continue;
+        }
+        let d = match (parts.next(), parts.next()) {
+            (Some(a), None) => a.parse::<f64>().ok().filter(|v| v.is_finite()),
+            _ => None,
+        }
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "effect `{spec}`: time_delay needs the delay in samples, a signed number                  such as `time_delay:2.9` (as `diagnose` reports it)"
+            )
+        })?;
+        if out.torque_delay.replace(d).is_some() {
+            anyhow::bail!("`--effects` gives time_delay twice; give one delay");
+        }
+    }
+    Ok(out)
+}
+
 /// The paper's model with extra effects appended (their columns come last).
 pub fn model_with_effects(p: &Params, effects: &[Effect]) -> Result<Model> {
     effects.iter().try_fold(paper_model(p)?, |m, e| {

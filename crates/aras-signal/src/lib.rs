@@ -12,7 +12,9 @@
 //!    the caller's [`Coordinates`] ([`JointCoordinates`] when the model is
 //!    written in joint angles), with a serialisable [`ProcessSummary`] for
 //!    the report.
-//! 2. The same [`Sos`] filters any other column (`filtfilt`,
+//! 2. [`delay_torque`]: torque samples logged later than the angles they
+//!    belong to, shifted back (a whole or fractional number of samples).
+//! 3. The same [`Sos`] filters any other column (`filtfilt`,
 //!    `filtfilt_into`, `filtfilt_in_place`, `filtfilt_periodic`): the
 //!    identification must filter every regressor column exactly as the
 //!    torques (`docs/processing.md`, "Parallel filtering").
@@ -67,6 +69,7 @@
 mod bandwidth;
 mod butterworth;
 mod coordinates;
+mod delay;
 mod derivative;
 mod error;
 mod fourier;
@@ -82,6 +85,7 @@ pub use bandwidth::{
 };
 pub use butterworth::{Butterworth, MAX_ORDER};
 pub use coordinates::{Coordinates, JointCoordinates, Motion};
+pub use delay::{delay_torque, delayed_at};
 pub use derivative::{DerivativeMethod, Derivatives, derivatives, resolve};
 pub use error::{FilterError, ProcessError};
 pub use periods::{MAX_BLOCK_MISMATCH, MAX_DRIFT, PeriodAverage, average_periods};

@@ -10,7 +10,7 @@ use crate::cmd::fit::{self, FitInput};
 use crate::config::Config;
 use crate::identify::base_parameters;
 use crate::output::OutDir;
-use crate::robot::{model_with_effects, nominal, parse_effect};
+use crate::robot::{Extras, model_with_effects, nominal, parse_extras};
 use crate::stages::Stages;
 
 /// The truth stored by the simulator in a sidecar (`truth.params`), if any.
@@ -49,7 +49,7 @@ struct Setup {
 
 /// Config, output directory, nominal robot and the model with the
 /// requested extra effects.
-fn setup(args: &IdentifyArgs) -> Result<Setup> {
+fn setup(args: &IdentifyArgs, extras: &Extras) -> Result<Setup> {
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config.clone();
     let sidecar = args.log.sidecar_of(&args.data);
@@ -60,12 +60,7 @@ fn setup(args: &IdentifyArgs) -> Result<Setup> {
     )?;
     let stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
-    let effects = args
-        .effects
-        .iter()
-        .map(|e| parse_effect(e))
-        .collect::<Result<Vec<_>>>()?;
-    let model = model_with_effects(&nominal, &effects)?;
+    let model = model_with_effects(&nominal, &extras.effects)?;
     let geometry = nominal.geometry()?;
     Ok(Setup {
         cfg,
@@ -79,8 +74,14 @@ fn setup(args: &IdentifyArgs) -> Result<Setup> {
 
 /// Runs `identify`.
 pub fn run(args: &IdentifyArgs) -> Result<()> {
+    let extras = parse_extras(&args.effects)?;
     if streams(args)? {
-        return run_streaming(args);
+        if extras.torque_delay.is_some() {
+            anyhow::bail!(
+                "`--effects time_delay` shifts the torque of a log read in memory; this log                  is streamed (`--streaming`, logs over 256 MB): give `--streaming off`"
+            );
+        }
+        return run_streaming(args, &extras);
     }
     let Setup {
         cfg,
@@ -89,11 +90,21 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         nominal,
         model,
         geometry,
-    } = setup(args)?;
+    } = setup(args, &extras)?;
     let read = args.log.read_options()?;
-    let log = stages
+    let mut log = stages
         .run("read log", |_| read_log(&args.data, &read))
         .with_context(|| format!("reading {}", args.data.display()))?;
+    let mut shift = String::new();
+    if let Some(d) = extras.torque_delay {
+        let rows = log.len();
+        log = aras_signal::delay_torque(&log, d)
+            .with_context(|| format!("removing the time delay from {}", args.data.display()))?;
+        shift = format!(
+            "; the torque is taken {d} samples after the angles (`--effects time_delay:{d}`),              {} rows without such a torque dropped",
+            rows - log.len()
+        );
+    }
     super::print_warnings(&args.data, &log.warnings);
     // The sidecar the reader took (`--sidecar`, else LOG.json beside the log).
     let truth = sidecar_truth(&log.sidecar);
@@ -101,7 +112,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         base_parameters(&model, &geometry, &cfg)
     })?;
     let intro = format!(
-        "Identification of `{}` ({} rows, {:.1} s at {:.1} Hz){}.",
+        "Identification of `{}` ({} rows, {:.1} s at {:.1} Hz){shift}{}.",
         args.data.display(),
         log.summary.rows,
         log.summary.duration_s,
@@ -140,7 +151,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
 }
 
 /// `identify` in bounded memory (`--streaming on`, or `auto` on a large log).
-fn run_streaming(args: &IdentifyArgs) -> Result<()> {
+fn run_streaming(args: &IdentifyArgs, extras: &Extras) -> Result<()> {
     use super::identify_streaming::{fit_and_write, options, stream};
     let Setup {
         cfg,
@@ -149,7 +160,7 @@ fn run_streaming(args: &IdentifyArgs) -> Result<()> {
         nominal,
         model,
         geometry,
-    } = setup(args)?;
+    } = setup(args, extras)?;
     // The streaming reader keeps no sidecar for us: read it for its truth.
     let truth = aras_log::Sidecar::read(&args.log.sidecar_of(&args.data))
         .ok()

@@ -369,21 +369,11 @@ impl Context<'_> {
         (a..b).filter(|&i| p.mask[g][i]).collect()
     }
 
-    /// The torque of sample `i` shifted by `delay` samples, linearly
-    /// interpolated between samples for a fraction (circular for a periodic
-    /// record; the range keeps non-periodic shifts inside). A whole-sample
-    /// delay reads the sample itself.
+    /// The torque of sample `i` shifted by `delay` samples
+    /// ([`aras_signal::delayed_at`]: circular for a periodic record; the
+    /// range keeps non-periodic shifts inside).
     fn shifted(p: &Prepared, g: usize, i: usize, delay: f64) -> f64 {
-        let n = p.tau[g].len() as i64;
-        let whole = delay.floor();
-        let frac = delay - whole;
-        let k = i as i64 + whole as i64;
-        let at = |k: i64| p.tau[g][k.rem_euclid(n) as usize];
-        if frac == 0.0 {
-            at(k)
-        } else {
-            (1.0 - frac) * at(k) + frac * at(k + 1)
-        }
+        aras_signal::delayed_at(&p.tau[g], i, delay)
     }
 
     /// The selection rows of `d` chunk by chunk into one [`Accumulator`]:

@@ -1,0 +1,181 @@
+//! Torque samples that are not simultaneous with the angle samples: a
+//! current loop, a bus or a drive's filter logs the torque some samples
+//! after the motion it belongs to. A fraction of a sample is interpolated
+//! linearly between samples, the rule the diagnosis's `time_delay`
+//! candidate uses, so a delay it reports can be removed here exactly.
+
+use aras_log::Log;
+
+use crate::ProcessError;
+
+/// The value of `x` `delay` samples after sample `i`, interpolated linearly
+/// between samples for a fraction; indices wrap around the record (exact
+/// for one period of a periodic signal; a record that is not periodic keeps
+/// `i + delay` inside `[0, len − 1]`). A whole-sample delay reads the
+/// sample itself.
+///
+/// # Panics
+/// When `x` is empty.
+pub fn delayed_at(x: &[f64], i: usize, delay: f64) -> f64 {
+    let n = x.len() as i64;
+    let whole = delay.floor();
+    let frac = delay - whole;
+    let k = i as i64 + whole as i64;
+    let at = |k: i64| x[k.rem_euclid(n) as usize];
+    if frac == 0.0 {
+        at(k)
+    } else {
+        (1.0 - frac) * at(k) + frac * at(k + 1)
+    }
+}
+
+/// `log` with each torque sample replaced by the one logged `delay`
+/// samples later (`τ_i ← τ(i + delay)`, [`delayed_at`]), and the rows that
+/// have no such torque dropped: the last `⌈delay⌉` for a positive delay,
+/// the first `⌈−delay⌉` for a negative one. Every other column keeps its
+/// rows; the summary's row count, duration and torque ranges follow, and a
+/// note records the shift.
+///
+/// A positive delay is a torque that lags the motion (what the diagnosis's
+/// `time_delay(+d)` finds). The value the diagnosis refines includes the
+/// half sample a zero-order hold adds (`docs/diagnose.md`); give it as
+/// reported.
+pub fn delay_torque(log: &Log, delay: f64) -> Result<Log, ProcessError> {
+    let n = log.len();
+    let invalid = |reason: String| ProcessError::InvalidOption {
+        name: "torque delay (samples)",
+        value: delay.to_string(),
+        reason,
+    };
+    if !delay.is_finite() {
+        return Err(invalid("give a finite number of samples, e.g. 2.5".into()));
+    }
+    let whole = delay.floor() as i64;
+    let reach_after = whole + i64::from(delay != delay.floor());
+    // Rows i with i + whole ≥ 0 and i + reach_after ≤ n − 1.
+    let lo = (-whole).max(0);
+    let hi = n as i64 - reach_after.max(0);
+    if hi - lo < 2 || (hi - lo) * 2 < n as i64 {
+        return Err(invalid(format!(
+            "a shift of {delay} samples would leave {} of the log's {n} rows; the delay must \
+             be under half the log",
+            (hi - lo).max(0)
+        )));
+    }
+    let (lo, hi) = (lo as usize, hi as usize);
+    let keep = |v: &[f64]| v[lo..hi].to_vec();
+    let tau: [Vec<f64>; 2] = std::array::from_fn(|j| {
+        (lo..hi)
+            .map(|i| delayed_at(&log.tau[j], i, delay))
+            .collect()
+    });
+    let mut out = Log {
+        name: log.name.clone(),
+        t: keep(&log.t),
+        theta: [keep(&log.theta[0]), keep(&log.theta[1])],
+        tau,
+        theta_dot: log.theta_dot.as_ref().map(|v| [keep(&v[0]), keep(&v[1])]),
+        theta_ddot: log.theta_ddot.as_ref().map(|v| [keep(&v[0]), keep(&v[1])]),
+        sidecar: log.sidecar.clone(),
+        summary: log.summary.clone(),
+        notes: log.notes.clone(),
+        warnings: log.warnings.clone(),
+    };
+    out.summary.rows = out.t.len();
+    out.summary.duration_s = out.t[out.t.len() - 1] - out.t[0];
+    out.summary.tau_range = std::array::from_fn(|j| {
+        out.tau[j]
+            .iter()
+            .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], &x| {
+                [a.min(x), b.max(x)]
+            })
+    });
+    out.notes.push(format!(
+        "torque taken {delay} samples after the angles (time delay); {} row(s) without such a \
+         torque dropped",
+        n - out.t.len()
+    ));
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aras_log::{ReadOptions, read_log_from};
+
+    fn log(n: usize) -> Log {
+        let mut csv = String::from("t,theta1,theta2,tau1,tau2\n");
+        for i in 0..n {
+            let t = i as f64 * 1e-3;
+            let s = (std::f64::consts::TAU * 2.0 * t).sin();
+            csv += &format!(
+                "{t},{},{},{},{}\n",
+                2.0 + 0.1 * s,
+                0.6 - 0.1 * s,
+                i as f64,
+                s
+            );
+        }
+        read_log_from(csv.as_bytes(), "d.csv", &ReadOptions::default()).unwrap()
+    }
+
+    /// A whole-sample delay moves every torque by exactly that many rows and
+    /// drops as many rows at the end (positive) or start (negative); the
+    /// angles keep their own rows.
+    #[test]
+    fn whole_samples_shift_exactly() {
+        let l = log(1000);
+        let d = delay_torque(&l, 3.0).unwrap();
+        assert_eq!(d.len(), 997);
+        assert_eq!(d.summary.rows, 997);
+        assert_eq!(d.tau[0][0], 3.0);
+        assert_eq!(d.tau[0][996], 999.0);
+        assert_eq!(d.t[0], l.t[0]);
+        assert_eq!(d.theta[1][996], l.theta[1][996]);
+        let d = delay_torque(&l, -2.0).unwrap();
+        assert_eq!(d.len(), 998);
+        assert_eq!((d.t[0], d.tau[0][0]), (l.t[2], 0.0));
+        assert_eq!(d.tau[0][d.len() - 1], 997.0);
+    }
+
+    /// A fraction interpolates linearly: τ = i gives i + d exactly, and a
+    /// 2 Hz sine at 1 kHz shifted by 2.4 samples is the sine 2.4 ms later
+    /// to the interpolation error `ω² h² / 8 = 2e-5`.
+    #[test]
+    fn fractions_interpolate_linearly() {
+        let l = log(1000);
+        let d = delay_torque(&l, 2.4).unwrap();
+        assert_eq!(d.len(), 997);
+        for (i, v) in d.tau[0].iter().enumerate() {
+            assert!((v - (i as f64 + 2.4)).abs() < 1e-12, "{i}: {v}");
+        }
+        let w = std::f64::consts::TAU * 2.0;
+        for (i, v) in d.tau[1].iter().enumerate() {
+            let want = (w * (d.t[i] + 2.4e-3)).sin();
+            assert!((v - want).abs() < 2.1e-5, "{i}: {v} vs {want}");
+        }
+        assert!(d.notes.last().unwrap().contains("2.4 samples"));
+        let d = delay_torque(&l, -0.5).unwrap();
+        assert_eq!(d.len(), 999);
+        assert!((d.tau[0][0] - 0.5).abs() < 1e-12);
+    }
+
+    /// Wrapping indices are exact for a period: delaying one period of a
+    /// sampled sine by whole samples rotates it.
+    #[test]
+    fn delayed_at_wraps_around_a_period() {
+        let x: Vec<f64> = (0..8).map(|i| i as f64).collect();
+        assert_eq!(delayed_at(&x, 7, 1.0), 0.0);
+        assert_eq!(delayed_at(&x, 0, -1.0), 7.0);
+        assert_eq!(delayed_at(&x, 7, 0.5), 3.5);
+    }
+
+    #[test]
+    fn bad_delays_are_errors() {
+        let l = log(100);
+        for d in [f64::NAN, f64::INFINITY, 60.0, -51.0] {
+            let e = delay_torque(&l, d).unwrap_err().to_string();
+            assert!(e.contains("torque delay"), "{d}: {e}");
+        }
+    }
+}
