@@ -241,7 +241,7 @@ pub struct IdentifyArgs {
     /// `diagnose` names them: torque_offset, coulomb_asymmetry,
     /// `stribeck_friction[:V_S]`, passive_joint_viscous, `cogging:CYCLES[:ORDER]`,
     /// quadratic_damping, and `time_delay:D` (the torque taken D samples after
-    /// the angles, fractions interpolated; logs read in memory).
+    /// the angles, fractions interpolated).
     #[arg(long, value_name = "ID[:ARG],…", value_delimiter = ',')]
     pub effects: Vec<String>,
     /// Output directory.

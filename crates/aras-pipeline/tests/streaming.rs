@@ -354,7 +354,10 @@ struct Reference {
 /// stack → filter → reversal exclusion (`reversal_mask` widened by
 /// `filter_reach`) → OLS → σ corrected by `noise_gain`.
 fn in_memory(path: &std::path::Path, r: &Robot, o: &StreamingOptions) -> Reference {
-    let log = read_log(path, &o.read).unwrap();
+    let mut log = read_log(path, &o.read).unwrap();
+    if let Some(d) = o.torque_delay {
+        log = aras_signal::delay_torque(&log, d).unwrap();
+    }
     let pr = process(&log, &o.process, &aras_kin::task_motion(&r.geo)).unwrap();
     let mut st = stack(&r.model, &r.geo, &pr.samples).unwrap();
     let periodic = pr.summary.periods.is_some();
@@ -516,6 +519,51 @@ fn blocks_are_at_least_five_overlaps_long() {
         "{} blocks of {block}",
         s.blocks
     );
+}
+
+/// A torque delay removed while streaming gives what removing it from the
+/// whole log in memory gives (`aras_signal::delay_torque`), on every route,
+/// for a positive and a negative fraction of samples.
+#[test]
+fn a_torque_delay_is_removed_on_every_route_as_in_memory() {
+    let r = robot();
+    let dir = tempdir("delay");
+    let fs = 500.0;
+    let n = 40_000;
+    let path = write(&dir, "run.csv", &r, n, fs);
+    for delay in [2.4, -1.5] {
+        let base_opts = StreamingOptions {
+            chunk_samples: 4096,
+            min_speed: 0.2,
+            torque_delay: Some(delay),
+            ..Default::default()
+        };
+        let mut o = base_opts.clone();
+        o.process.use_logged_derivatives = true;
+        o.process.filter = Bandwidth::Off;
+        o.process.period = PeriodSource::Off;
+        check_route(&path, &r, &o, StreamingRoute::LoggedDerivatives);
+        let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
+        assert_eq!(s.samples_read, n - (delay.abs().ceil() as usize));
+
+        let mut o = base_opts.clone();
+        o.process.period = PeriodSource::Off;
+        o.process.filter = Bandwidth::Fixed(FilterSpec {
+            order: 4,
+            cutoff_hz: 20.0,
+        });
+        check_route(&path, &r, &o, StreamingRoute::OverlappingBlocks);
+
+        let mut o = base_opts.clone();
+        o.process.period = PeriodSource::Seconds(synthetic::PERIOD_S);
+        check_route(&path, &r, &o, StreamingRoute::PeriodAverage);
+    }
+    let o = StreamingOptions {
+        torque_delay: Some(f64::NAN),
+        ..Default::default()
+    };
+    let e = identify_log(&path, &r.model, &r.base, &o).unwrap_err();
+    assert!(e.to_string().contains("torque_delay"), "{e}");
 }
 
 #[test]

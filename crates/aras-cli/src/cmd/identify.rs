@@ -76,11 +76,6 @@ fn setup(args: &IdentifyArgs, extras: &Extras) -> Result<Setup> {
 pub fn run(args: &IdentifyArgs) -> Result<()> {
     let extras = parse_extras(&args.effects)?;
     if streams(args)? {
-        if extras.torque_delay.is_some() {
-            anyhow::bail!(
-                "`--effects time_delay` shifts the torque of a log read in memory; this log                  is streamed (`--streaming`, logs over 256 MB): give `--streaming off`"
-            );
-        }
         return run_streaming(args, &extras);
     }
     let Setup {
@@ -168,13 +163,19 @@ fn run_streaming(args: &IdentifyArgs, extras: &Extras) -> Result<()> {
     let base = stages.run("base parameters (58)", |_| {
         base_parameters(&model, &geometry, &cfg)
     })?;
-    let opts = options(args, &cfg, &nominal)?;
+    let opts = aras_pipeline::streaming::StreamingOptions {
+        torque_delay: extras.torque_delay,
+        ..options(args, &cfg, &nominal)?
+    };
     let r = stages.run("stream log → least squares", |bar| {
         stream(&args.data, &model, &base, &opts, bar)
     })?;
     super::print_warnings(&args.data, &r.log.warnings);
+    let shift = extras.torque_delay.map_or(String::new(), |d| {
+        format!("; the torque is taken {d} samples after the angles (`--effects time_delay:{d}`)")
+    });
     let intro = format!(
-        "Identification of `{}` ({} rows, streamed){}.",
+        "Identification of `{}` ({} rows, streamed){shift}{}.",
         args.data.display(),
         r.samples_read,
         if truth.is_some() {

@@ -12,6 +12,7 @@ use serde::Serialize;
 use aras_ident::streaming::{Accumulation, GramCheck, QrAccumulator, RegressorStage, States};
 use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 
+use super::delayed::TorqueShift;
 use crate::TaskRegressor;
 use crate::prepare::{RegressorColumns, prepare_reusing};
 use crate::robot::{FilterMode, filter_reach, reversal_mask};
@@ -50,6 +51,11 @@ pub struct StreamingOptions {
     /// Where the filter's impulse response counts as ended for the
     /// widening ([`crate::robot::filter_reach`]; default 1e-3).
     pub reversal_reach: f64,
+    /// A torque delay to remove, in samples (default `None`): each torque
+    /// is taken this many samples after its angles while the log streams,
+    /// exactly as [`aras_signal::delay_torque`] on the whole log (the rows
+    /// without such a torque are left out).
+    pub torque_delay: Option<f64>,
 }
 
 impl Default for StreamingOptions {
@@ -64,6 +70,7 @@ impl Default for StreamingOptions {
             accumulation: Accumulation::Gram,
             min_speed: 0.0,
             reversal_reach: 1e-3,
+            torque_delay: None,
         }
     }
 }
@@ -256,13 +263,40 @@ pub fn identify_log_with_progress(
     let mut first = true;
     let mut dt = options.read.nominal_step.unwrap_or(0.0);
     let mut rows_read = 0u64;
+    if let Some(d) = options.torque_delay.filter(|d| !d.is_finite()) {
+        return Err(IdentError::InvalidSetting {
+            name: "torque_delay",
+            value: d,
+            reason: "give a finite number of samples, e.g. 2.5",
+        });
+    }
+    let mut shift = options.torque_delay.map(TorqueShift::new);
+    let mut raw = Columns::default();
+    // Appends up to `n` rows (with the torque delay: its rows) to `chunk`;
+    // fewer only at the end of the log.
     let mut read = |reader: &mut LogReader<std::fs::File>, chunk: &mut Columns, n: usize| {
-        let k = reader
-            .read_rows(chunk, n)
-            .map_err(|e| sig(&format!("reading the log {name}"), e))?;
-        rows_read += k as u64;
-        progress(rows_read);
-        Ok::<usize, IdentError>(k)
+        let mut got = 0;
+        while got < n {
+            let into = if shift.is_some() {
+                raw.clear();
+                &mut raw
+            } else {
+                &mut *chunk
+            };
+            let k = reader
+                .read_rows(into, n - got)
+                .map_err(|e| sig(&format!("reading the log {name}"), e))?;
+            rows_read += k as u64;
+            progress(rows_read);
+            if k == 0 {
+                break;
+            }
+            got += match shift.as_mut() {
+                Some(s) => s.push(&raw, chunk),
+                None => k,
+            };
+        }
+        Ok::<usize, IdentError>(got)
     };
     let mut out = Progress::default();
     let route;
@@ -598,7 +632,7 @@ fn overlap(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> {
     Ok(2 * (tau * (1.0 / tol).ln()).ceil() as usize + STENCIL)
 }
 
-fn append(buf: &mut Columns, c: &Columns) {
+pub(super) fn append(buf: &mut Columns, c: &Columns) {
     buf.t.extend_from_slice(&c.t);
     for k in 0..2 {
         buf.theta[k].extend_from_slice(&c.theta[k]);
@@ -608,7 +642,7 @@ fn append(buf: &mut Columns, c: &Columns) {
     }
 }
 
-fn drain_front(buf: &mut Columns, n: usize) {
+pub(super) fn drain_front(buf: &mut Columns, n: usize) {
     let d = |v: &mut Vec<f64>| {
         let n = n.min(v.len());
         v.drain(..n);

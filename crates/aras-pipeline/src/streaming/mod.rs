@@ -14,6 +14,7 @@
 //! Performance and the scale study: `benches/streaming.rs`,
 //! `examples/scale_study.rs`, `docs/scale.md`.
 
+mod delayed;
 mod log;
 pub mod synthetic;
 
