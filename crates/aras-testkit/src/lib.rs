@@ -1,6 +1,7 @@
 //! Test helpers shared by the workspace's test suites, so that every crate
-//! checks its error messages the same way. A development dependency only:
-//! no library depends on it.
+//! checks its error messages the same way and leaves no scratch files
+//! behind ([`Scratch`]). A development dependency only: no library depends
+//! on it.
 
 #![warn(missing_docs)]
 
