@@ -132,7 +132,8 @@ pub struct StreamingResult {
     pub gram_check: Option<GramCheck>,
     /// The route taken.
     pub route: StreamingRoute,
-    /// Rows read from the log.
+    /// Rows read from the log (with [`StreamingOptions::torque_delay`]: the
+    /// rows that have a shifted torque).
     pub samples_read: usize,
     /// Samples that entered the least squares (before reversal exclusion).
     pub samples_used: usize,
