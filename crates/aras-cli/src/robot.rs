@@ -8,6 +8,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use aras_dyn::{Effect, EffectId, Model, Params};
+use aras_pipeline::diagnose::Candidate;
 use nalgebra::Vector3;
 
 use crate::config::RobotConfig;
@@ -141,10 +142,85 @@ pub fn parse_extras(specs: &[String]) -> Result<Extras> {
     Ok(out)
 }
 
+/// The `--effects` entry that adds what the diagnosis named as `candidate`,
+/// with its setting replaced by `refined` (a refinement's value) when
+/// given: the inverse of [`parse_extras`].
+pub fn effect_spec(candidate: &Candidate, refined: Option<f64>) -> String {
+    let c = refined.map_or(*candidate, |v| candidate.with_setting(v));
+    match c {
+        Candidate::TimeDelay { samples } => format!("{}:{samples}", c.id()),
+        Candidate::Effect { effect } => match effect {
+            Effect::StribeckFriction { v_s } => format!("{}:{v_s}", c.id()),
+            Effect::Cogging {
+                cycles_per_rev,
+                order,
+            } => format!("{}:{cycles_per_rev}:{order}", c.id()),
+            _ => c.id().to_string(),
+        },
+    }
+}
+
 /// The paper's model with extra effects appended (their columns come last).
 pub fn model_with_effects(p: &Params, effects: &[Effect]) -> Result<Model> {
     effects.iter().try_fold(paper_model(p)?, |m, e| {
         m.with_effect(*e)
             .with_context(|| format!("adding the effect `{}` to the model", e.id()))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every candidate the diagnosis can name, as an `--effects` entry,
+    /// parses back to itself (a refined setting included).
+    #[test]
+    fn effect_specs_parse_back() {
+        let effects: Vec<Effect> = EffectId::EXTRA
+            .iter()
+            .map(|id| match id {
+                EffectId::TorqueOffset => Effect::TorqueOffset,
+                EffectId::CoulombAsymmetry => Effect::CoulombAsymmetry,
+                EffectId::StribeckFriction => Effect::StribeckFriction { v_s: 0.05 },
+                EffectId::PassiveJointViscous => Effect::PassiveJointViscous,
+                EffectId::Cogging => Effect::Cogging {
+                    cycles_per_rev: 12.0,
+                    order: 2,
+                },
+                EffectId::QuadraticDamping => Effect::QuadraticDamping,
+                other => panic!("an extra effect without an --effects entry: {other}"),
+            })
+            .collect();
+        for effect in &effects {
+            let c = Candidate::Effect { effect: *effect };
+            let back = parse_extras(&[effect_spec(&c, None)]).unwrap();
+            assert_eq!(back.effects, vec![*effect]);
+            assert_eq!(back.torque_delay, None);
+        }
+        let stribeck = Candidate::Effect {
+            effect: Effect::StribeckFriction { v_s: 0.05 },
+        };
+        let back = parse_extras(&[effect_spec(&stribeck, Some(0.0734))]).unwrap();
+        assert_eq!(back.effects, vec![Effect::StribeckFriction { v_s: 0.0734 }]);
+        let cogging = Candidate::Effect {
+            effect: Effect::Cogging {
+                cycles_per_rev: 8.0,
+                order: 3,
+            },
+        };
+        let back = parse_extras(&[effect_spec(&cogging, Some(13.998))]).unwrap();
+        assert_eq!(
+            back.effects,
+            vec![Effect::Cogging {
+                cycles_per_rev: 13.998,
+                order: 3
+            }]
+        );
+        let delay = Candidate::TimeDelay { samples: 3.0 };
+        for (refined, want) in [(None, 3.0), (Some(-2.94), -2.94)] {
+            let back = parse_extras(&[effect_spec(&delay, refined)]).unwrap();
+            assert_eq!(back.torque_delay, Some(want));
+            assert!(back.effects.is_empty());
+        }
+    }
 }

@@ -69,6 +69,11 @@ fn diagnose_names_the_hidden_effect() {
     }
     let html = std::fs::read_to_string(out.join("diagnosis.html")).unwrap();
     assert!(html.contains("<svg"), "the HTML inlines its figures");
+    let md = std::fs::read_to_string(out.join("diagnosis.md")).unwrap();
+    assert!(
+        md.contains("--effects passive_joint_viscous`"),
+        "the report gives the identify command that adds the effect"
+    );
     // Without --force the same output directory is refused.
     let again = diagnose();
     assert!(!again.status.success());

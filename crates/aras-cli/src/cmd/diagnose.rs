@@ -14,7 +14,7 @@ use crate::identify::process_options;
 use crate::output::OutDir;
 use crate::report::Report;
 use crate::report::plots::{Series, lines};
-use crate::robot::{nominal, paper_model};
+use crate::robot::{effect_spec, nominal, paper_model};
 use crate::stages::Stages;
 
 /// Runs `diagnose`.
@@ -135,6 +135,17 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
     r.heading(2, "Effects added");
     if d.steps.is_empty() {
         r.paragraph("None.");
+    } else {
+        let specs: Vec<String> = d
+            .steps
+            .iter()
+            .map(|s| effect_spec(&s.candidate, s.refinement.as_ref().map(|f| f.value)))
+            .collect();
+        r.paragraph(format!(
+            "To identify the model with them (refined settings where refined): \
+             `aras identify --data {train} --effects {}`.",
+            specs.join(",")
+        ));
     }
     for (k, s) in d.steps.iter().enumerate() {
         r.heading(3, format!("{}. `{}` — {}", k + 1, s.id, s.label));
