@@ -512,8 +512,8 @@ pub fn identify_log_with_progress(
 /// re-reads stay under 40 % of it. At 1 kHz the margin is ≈ 2 600 samples
 /// and `chunk_samples` rules; at 10 kHz it is ≈ 25 600 and blocks grow to
 /// ≈ 128 000 samples: against 65 536, 1 h at 10 kHz takes ≈ 56 s instead
-/// of 67 s, for a peak memory of ≈ 280 MiB instead of 190 MiB (eight margins
-/// took 48 s and 450 MiB; `docs/scale.md`).
+/// of 67 s, for a peak memory of ≈ 280 MiB instead of 190 MiB (eight
+/// margins: 48 s and 450 MiB; `docs/scale.md`).
 const BLOCK_PER_MARGIN: usize = 5;
 
 /// Blocks of the overlapping-block route processed at once, one per core
