@@ -241,7 +241,6 @@ fn pipeline_identify_predict_end_to_end() {
     ]);
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("--force"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -267,7 +266,6 @@ fn existing_output_directory_is_refused_without_force() {
     let r = aras(&["pipeline", "--out", out.to_str().unwrap(), "-q"]);
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("already exists"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]

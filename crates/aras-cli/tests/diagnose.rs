@@ -77,7 +77,6 @@ fn diagnose_names_the_hidden_effect() {
     // Without --force the same output directory is refused.
     let again = diagnose();
     assert!(!again.status.success());
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The extended model flows into `identify --effects`: a hidden constant
@@ -303,7 +302,6 @@ fn diagnose_fits_the_rows_identify_fits() {
     // The sidecar was found: identify reports the truth's parameter errors.
     let s = json(&dir.join("id/summary.json"));
     assert!(s["parameter_errors"].is_object(), "{s}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A lab's own column names (`--columns`): the same log with its header
@@ -349,5 +347,4 @@ fn identify_reads_a_labs_own_column_names() {
     assert!(!bad.status.success());
     let msg = String::from_utf8_lossy(&bad.stderr);
     assert!(msg.contains("unknown role `time`"), "{msg}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -50,7 +50,6 @@ fn identify_force_refuses_an_out_dir_holding_its_input_log() {
         before,
         "a file in the lab directory changed"
     );
-    let _ = std::fs::remove_dir_all(&lab);
 }
 
 /// Even a file the tool wrote (a pipeline's `log.csv`, listed in the
@@ -67,7 +66,6 @@ fn an_input_listed_in_the_manifest_is_still_refused() {
     let msg = err_of(OutDir::create(&out, true, std::slice::from_ref(&out)));
     assert!(msg.contains("inside the output directory"), "{msg}");
     assert_eq!(snapshot(&out), before);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A file the manifest does not list is named, and nothing is removed.
@@ -92,7 +90,6 @@ fn force_refuses_a_directory_with_an_unlisted_file() {
     std::fs::create_dir(out.join("mine")).unwrap();
     let msg = err_of(OutDir::create(&out, true, &[]));
     assert!(msg.contains("mine"), "{msg}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A directory without a manifest (not written by aras) is refused with
@@ -112,7 +109,6 @@ fn force_refuses_a_directory_without_a_manifest() {
     let msg = err_of(OutDir::create(&out, false, &[]));
     assert!(msg.contains("--force"), "{msg}");
     assert_eq!(snapshot(&out), before);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A manifest that lists a path outside the directory (`..`, absolute) is
@@ -143,7 +139,6 @@ fn a_manifest_pointing_outside_the_directory_is_not_followed() {
     // A manifest that is not one of ours (another format) is refused too.
     std::fs::write(out.join(MANIFEST), "{\"files\": []}").unwrap();
     assert!(err_of(OutDir::create(&out, true, &[])).contains("not a manifest written by aras"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Re-running over the tool's own output replaces it: the new manifest
@@ -165,7 +160,6 @@ fn force_replaces_the_tools_own_previous_output() {
         .map(|e| e.unwrap().file_name())
         .collect();
     assert_eq!(left, ["out"]);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The real binary, twice over the same directory: the second run with
@@ -219,7 +213,6 @@ fn validate_twice_with_force_replaces_its_own_output() {
     ]);
     assert!(!r.status.success());
     assert!(stderr(&r).contains("cfg.toml"), "{}", stderr(&r));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Files that appear in the old directory while the run works are not
@@ -237,7 +230,6 @@ fn a_file_added_during_the_run_blocks_the_swap() {
     let msg = format!("{:#}", o.commit().expect_err("refused"));
     assert!(msg.contains("late.txt") && msg.contains("kept in"), "{msg}");
     assert_eq!(snapshot(&out), before);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Single files: never an input, and with `--force` only an output of the
@@ -318,5 +310,4 @@ fn single_file_force_replaces_only_its_own_kind() {
     assert!(!r.status.success());
     assert!(stderr(&r).contains("input"), "{}", stderr(&r));
     assert_eq!(std::fs::read(&data).unwrap(), before);
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -209,5 +209,4 @@ fn command_writes_json_report_and_predictions() {
     let o = run("t=time,q=q2,tau=tau_f");
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--force"));
-    let _ = std::fs::remove_dir_all(&dir);
 }

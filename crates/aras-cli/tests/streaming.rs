@@ -104,5 +104,4 @@ fn streaming_on_and_off_give_the_same_estimates() {
             assert!(dir.join(d).join(f).is_file(), "{d}/{f} missing");
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }

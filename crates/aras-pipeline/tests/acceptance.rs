@@ -70,10 +70,7 @@ fn run(name: &str, traj: &dyn Trajectory, cfg: &SimConfig) -> aras_log::Log {
     let dir = aras_testkit::Scratch::new(&format!("accept-{name}"));
     let path = dir.join(format!("{name}.csv"));
     write_log(&path, &log, true).unwrap();
-    let out = read_log(&path, &ReadOptions::default()).unwrap();
-    let _ = std::fs::remove_file(&path);
-    let _ = std::fs::remove_file(path.with_extension("json"));
-    out
+    read_log(&path, &ReadOptions::default()).unwrap()
 }
 
 fn ideal() -> SimConfig {

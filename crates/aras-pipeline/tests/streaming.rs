@@ -442,6 +442,29 @@ fn check_route(path: &std::path::Path, r: &Robot, o: &StreamingOptions, route: S
     assert!(v < 1e-6, "{route:?}: Gram σ² differs by {v:e}");
 }
 
+/// `base` set up for each route of `identify_log`: logged derivatives with
+/// no filter (the fast path); a non-periodic log filtered at 20 Hz with θ
+/// differentiated (overlapping blocks); the period average on the fly.
+fn route_options(base: &StreamingOptions) -> [(StreamingOptions, StreamingRoute); 3] {
+    let mut logged = base.clone();
+    logged.process.use_logged_derivatives = true;
+    logged.process.filter = Bandwidth::Off;
+    logged.process.period = PeriodSource::Off;
+    let mut blocks = base.clone();
+    blocks.process.period = PeriodSource::Off;
+    blocks.process.filter = Bandwidth::Fixed(FilterSpec {
+        order: 4,
+        cutoff_hz: 20.0,
+    });
+    let mut periodic = base.clone();
+    periodic.process.period = PeriodSource::Seconds(synthetic::PERIOD_S);
+    [
+        (logged, StreamingRoute::LoggedDerivatives),
+        (blocks, StreamingRoute::OverlappingBlocks),
+        (periodic, StreamingRoute::PeriodAverage),
+    ]
+}
+
 #[test]
 fn identify_log_matches_the_in_memory_identification_on_every_route() {
     let r = robot();
@@ -455,37 +478,22 @@ fn identify_log_matches_the_in_memory_identification_on_every_route() {
             min_speed,
             ..Default::default()
         };
-
-        // 1. Logged derivatives, no filter: the fast path.
-        let mut o = base_opts.clone();
-        o.process.use_logged_derivatives = true;
-        o.process.filter = Bandwidth::Off;
-        o.process.period = PeriodSource::Off;
-        check_route(&path, &r, &o, StreamingRoute::LoggedDerivatives);
-        let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
-        assert_eq!((s.samples_read, s.samples_used), (n, n));
-        assert_eq!(s.noise_gain, 1.0);
-
-        // 2. Non-periodic, filtered, θ differentiated: overlapping blocks.
-        let mut o = base_opts.clone();
-        o.process.period = PeriodSource::Off;
-        o.process.filter = Bandwidth::Fixed(FilterSpec {
-            order: 4,
-            cutoff_hz: 20.0,
-        });
-        check_route(&path, &r, &o, StreamingRoute::OverlappingBlocks);
-        let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
-        assert!(s.blocks > 5 && s.overlap > 0, "{} blocks", s.blocks);
-        assert!(s.noise_gain > 0.0 && s.noise_gain < 0.2, "{}", s.noise_gain);
-
-        // 3. Periodic: the period average on the fly.
-        let mut o = base_opts.clone();
-        o.process.period = PeriodSource::Seconds(synthetic::PERIOD_S);
-        check_route(&path, &r, &o, StreamingRoute::PeriodAverage);
-        let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
-        assert_eq!(s.periods, 8);
+        for (o, route) in route_options(&base_opts) {
+            check_route(&path, &r, &o, route);
+            let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
+            match route {
+                StreamingRoute::LoggedDerivatives => {
+                    assert_eq!((s.samples_read, s.samples_used), (n, n));
+                    assert_eq!(s.noise_gain, 1.0);
+                }
+                StreamingRoute::OverlappingBlocks => {
+                    assert!(s.blocks > 5 && s.overlap > 0, "{} blocks", s.blocks);
+                    assert!(s.noise_gain > 0.0 && s.noise_gain < 0.2, "{}", s.noise_gain);
+                }
+                StreamingRoute::PeriodAverage => assert_eq!(s.periods, 8),
+            }
+        }
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Where five overlaps exceed `chunk_samples` (a low cut-off, or a high
@@ -538,25 +546,13 @@ fn a_torque_delay_is_removed_on_every_route_as_in_memory() {
             torque_delay: Some(delay),
             ..Default::default()
         };
-        let mut o = base_opts.clone();
-        o.process.use_logged_derivatives = true;
-        o.process.filter = Bandwidth::Off;
-        o.process.period = PeriodSource::Off;
-        check_route(&path, &r, &o, StreamingRoute::LoggedDerivatives);
-        let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
-        assert_eq!(s.samples_read, n - (delay.abs().ceil() as usize));
-
-        let mut o = base_opts.clone();
-        o.process.period = PeriodSource::Off;
-        o.process.filter = Bandwidth::Fixed(FilterSpec {
-            order: 4,
-            cutoff_hz: 20.0,
-        });
-        check_route(&path, &r, &o, StreamingRoute::OverlappingBlocks);
-
-        let mut o = base_opts.clone();
-        o.process.period = PeriodSource::Seconds(synthetic::PERIOD_S);
-        check_route(&path, &r, &o, StreamingRoute::PeriodAverage);
+        for (o, route) in route_options(&base_opts) {
+            check_route(&path, &r, &o, route);
+            if route == StreamingRoute::LoggedDerivatives {
+                let s = identify_log(&path, &r.model, &r.base, &o).unwrap();
+                assert_eq!(s.samples_read, n - (delay.abs().ceil() as usize));
+            }
+        }
     }
     let o = StreamingOptions {
         torque_delay: Some(f64::NAN),
@@ -597,7 +593,6 @@ fn identify_log_reports_bad_options_and_bad_logs() {
         e.to_string().contains("deg.csv") || e.to_string().contains("degrees"),
         "{e}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
