@@ -12,12 +12,11 @@ pub(crate) struct TorqueShift {
     whole: i64,
     ahead: i64,
     /// Rows read but still needed (emitting, or as history), from global
-    /// row `start`.
+    /// row `start`: the rows read so far are `start + buf.len()`.
     buf: Columns,
     start: usize,
-    /// Next global row to emit; rows read so far.
+    /// Next global row to emit.
     next: usize,
-    read: usize,
 }
 
 impl TorqueShift {
@@ -30,7 +29,6 @@ impl TorqueShift {
             buf: Columns::default(),
             start: 0,
             next: (-whole).max(0) as usize,
-            read: 0,
         }
     }
 
@@ -38,34 +36,28 @@ impl TorqueShift {
     /// every row whose torque is now known; returns how many.
     pub(crate) fn push(&mut self, input: &Columns, out: &mut Columns) -> usize {
         super::log::append(&mut self.buf, input);
-        self.read += input.len();
         // Row i is ready when row i + ahead has been read.
-        let end = (self.read as i64 - self.ahead.max(0)).max(0) as usize;
-        let mut emitted = 0;
-        while self.next < end {
-            let i = self.next - self.start;
-            out.t.push(self.buf.t[i]);
-            for k in 0..2 {
-                out.theta[k].push(self.buf.theta[k][i]);
-                let tau = aras_signal::delayed_at(&self.buf.tau[k], i, self.delay);
-                out.tau[k].push(tau);
-                for (o, b) in [
-                    (&mut out.theta_dot[k], &self.buf.theta_dot[k]),
-                    (&mut out.theta_ddot[k], &self.buf.theta_ddot[k]),
-                ] {
-                    if let Some(v) = b.get(i) {
-                        o.push(*v);
-                    }
-                }
-            }
-            self.next += 1;
-            emitted += 1;
+        let read = self.start + self.buf.len();
+        let end = (read as i64 - self.ahead.max(0)).max(self.next as i64) as usize;
+        let rows = self.next - self.start..end - self.start;
+        if rows.is_empty() {
+            // Nothing ready (before the first rows a negative delay skips,
+            // `next` may lie past the rows read).
+            return 0;
         }
+        let at = out.len();
+        super::log::append_rows(out, &self.buf, rows.clone());
+        for k in 0..2 {
+            for (o, i) in out.tau[k][at..].iter_mut().zip(rows.clone()) {
+                *o = aras_signal::delayed_at(&self.buf.tau[k], i, self.delay);
+            }
+        }
+        self.next = end;
         // Keep the rows a later row's torque still reads (and the next
         // rows to emit).
         let keep_from = (self.next as i64 + self.whole.min(0)).max(self.start as i64) as usize;
         super::log::drain_front(&mut self.buf, keep_from - self.start);
         self.start = keep_from;
-        emitted
+        rows.len()
     }
 }

@@ -633,13 +633,25 @@ fn overlap(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> {
     Ok(2 * (tau * (1.0 / tol).ln()).ceil() as usize + STENCIL)
 }
 
+/// Appends every row of `c` to `buf`.
 pub(super) fn append(buf: &mut Columns, c: &Columns) {
-    buf.t.extend_from_slice(&c.t);
+    append_rows(buf, c, 0..c.len());
+}
+
+/// Appends rows `r` of `c` to `buf` (columns the log lacks stay empty).
+pub(super) fn append_rows(buf: &mut Columns, c: &Columns, r: std::ops::Range<usize>) {
+    buf.t.extend_from_slice(&c.t[r.clone()]);
     for k in 0..2 {
-        buf.theta[k].extend_from_slice(&c.theta[k]);
-        buf.tau[k].extend_from_slice(&c.tau[k]);
-        buf.theta_dot[k].extend_from_slice(&c.theta_dot[k]);
-        buf.theta_ddot[k].extend_from_slice(&c.theta_ddot[k]);
+        for (b, v) in [
+            (&mut buf.theta[k], &c.theta[k]),
+            (&mut buf.tau[k], &c.tau[k]),
+            (&mut buf.theta_dot[k], &c.theta_dot[k]),
+            (&mut buf.theta_ddot[k], &c.theta_ddot[k]),
+        ] {
+            if !v.is_empty() {
+                b.extend_from_slice(&v[r.clone()]);
+            }
+        }
     }
 }
 
