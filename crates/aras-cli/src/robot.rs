@@ -116,6 +116,18 @@ pub struct Extras {
     pub torque_delay: Option<f64>,
 }
 
+impl Extras {
+    /// The report's words for the torque delay, or nothing without one.
+    pub fn delay_clause(&self) -> String {
+        self.torque_delay.map_or(String::new(), |d| {
+            format!(
+                "; the torque is taken {d} samples after the angles (`--effects time_delay:{d}`), \
+                 the rows without such a torque left out"
+            )
+        })
+    }
+}
+
 /// Parses every `--effects` entry: [`parse_effect`], except `time_delay:D`
 /// (a signed number of samples, at most once).
 pub fn parse_extras(specs: &[String]) -> Result<Extras> {
@@ -132,7 +144,8 @@ pub fn parse_extras(specs: &[String]) -> Result<Extras> {
         }
         .ok_or_else(|| {
             anyhow::anyhow!(
-                "effect `{spec}`: time_delay needs the delay in samples, a signed number                  such as `time_delay:2.9` (as `diagnose` reports it)"
+                "effect `{spec}`: time_delay needs the delay in samples, a signed number \
+                 such as `time_delay:2.9` (as `diagnose` reports it)"
             )
         })?;
         if out.torque_delay.replace(d).is_some() {

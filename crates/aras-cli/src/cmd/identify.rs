@@ -90,15 +90,9 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
     let mut log = stages
         .run("read log", |_| read_log(&args.data, &read))
         .with_context(|| format!("reading {}", args.data.display()))?;
-    let mut shift = String::new();
     if let Some(d) = extras.torque_delay {
-        let rows = log.len();
         log = aras_signal::delay_torque(&log, d)
             .with_context(|| format!("removing the time delay from {}", args.data.display()))?;
-        shift = format!(
-            "; the torque is taken {d} samples after the angles (`--effects time_delay:{d}`),              {} rows without such a torque dropped",
-            rows - log.len()
-        );
     }
     super::print_warnings(&args.data, &log.warnings);
     // The sidecar the reader took (`--sidecar`, else LOG.json beside the log).
@@ -107,11 +101,12 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         base_parameters(&model, &geometry, &cfg)
     })?;
     let intro = format!(
-        "Identification of `{}` ({} rows, {:.1} s at {:.1} Hz){shift}{}.",
+        "Identification of `{}` ({} rows, {:.1} s at {:.1} Hz){}{}.",
         args.data.display(),
         log.summary.rows,
         log.summary.duration_s,
         log.summary.sample_rate_hz,
+        extras.delay_clause(),
         if truth.is_some() {
             "; the sidecar holds the simulation's truth, so parameter errors are reported"
         } else {
@@ -171,13 +166,11 @@ fn run_streaming(args: &IdentifyArgs, extras: &Extras) -> Result<()> {
         stream(&args.data, &model, &base, &opts, bar)
     })?;
     super::print_warnings(&args.data, &r.log.warnings);
-    let shift = extras.torque_delay.map_or(String::new(), |d| {
-        format!("; the torque is taken {d} samples after the angles (`--effects time_delay:{d}`)")
-    });
     let intro = format!(
-        "Identification of `{}` ({} rows, streamed){shift}{}.",
+        "Identification of `{}` ({} rows, streamed){}{}.",
         args.data.display(),
         r.samples_read,
+        extras.delay_clause(),
         if truth.is_some() {
             "; the sidecar holds the simulation's truth, so parameter errors are reported"
         } else {
