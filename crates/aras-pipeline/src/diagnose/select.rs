@@ -8,7 +8,7 @@ use aras_kin::{Geometry, Workspace};
 use faer::{Mat, MatRef};
 use serde::Serialize;
 
-use super::candidates::{Candidate, CandidateGrid, SearchScale};
+use super::candidates::{Candidate, CandidateGrid};
 use super::chunks::{Plan, filtered_torques, in_lanes, window_kinematics};
 use super::data::{Dataset, moving_mask};
 use super::residual::{
@@ -339,6 +339,37 @@ struct JointResidual {
 /// Candidates, their single-effect models and their layout for one trial.
 type TrialLayout = (Vec<Candidate>, Vec<Option<Model>>, Layout);
 
+/// `cands` with each one's single-effect model (`None` for a delay, whose
+/// column is the shifted torque) and their layout after `n_base` base
+/// columns, candidate `k` named `label(k, c)` (names must be unique).
+fn candidate_layout(
+    start: &Model,
+    n_base: usize,
+    cands: Vec<Candidate>,
+    label: impl Fn(usize, &Candidate) -> String,
+) -> Result<TrialLayout, IdentError> {
+    let models = cands
+        .iter()
+        .map(|c| match c {
+            Candidate::Effect { effect } => Model::new(vec![*effect], start.gravity())
+                .map(Some)
+                .map_err(|e| IdentError::external(format!("candidate {}", effect.id()), e)),
+            Candidate::TimeDelay { .. } => Ok(None),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let specs = cands
+        .iter()
+        .zip(&models)
+        .enumerate()
+        .map(|(k, (c, m))| match m {
+            Some(m) => CandidateSpec::columns(label(k, c), m.columns()).in_family(c.id()),
+            None => CandidateSpec::target(label(k, c)).in_family(c.id()),
+        })
+        .collect();
+    let layout = Layout::new(n_base, specs, 2)?;
+    Ok((cands, models, layout))
+}
+
 /// Everything the passes over the data share.
 struct Context<'a> {
     geometry: &'a Geometry,
@@ -667,37 +698,20 @@ pub fn diagnose(
             Candidate::TimeDelay { .. } => true,
         })
         .collect();
-    let effect_models = cands
-        .iter()
-        .map(|c| match c {
-            Candidate::Effect { effect } => Model::new(vec![*effect], start.gravity())
-                .map(Some)
-                .map_err(|e| IdentError::external(format!("candidate {}", effect.id()), e)),
-            Candidate::TimeDelay { .. } => Ok(None),
-        })
-        .collect::<Result<Vec<_>, _>>()?;
     let base =
         crate::robot::base_parameters(start, geometry, &opts.workspace, opts.base_samples.max(50))?;
-    let specs: Vec<CandidateSpec> = cands
-        .iter()
-        .zip(&effect_models)
-        .map(|(c, m)| match m {
-            Some(m) => CandidateSpec::columns(c.label(), m.columns()).in_family(c.id()),
-            None => CandidateSpec::target(c.label()).in_family(c.id()),
-        })
-        .collect();
-    let layout = Layout::new(base.n_base(), specs, 2)?;
+    let (cands, effect_models, layout) =
+        candidate_layout(start, base.n_base(), cands, |_, c| c.label())?;
     let max_shift = cands
         .iter()
         .map(|c| match c {
-            // The refinement's reach around the grid value, and one more
-            // sample for the interpolation of a fraction.
+            // The refinement's search interval around the grid value, and
+            // one more sample for the interpolation of a fraction.
             Candidate::TimeDelay { samples } => {
-                let reach = match c.search_scale() {
-                    Some(SearchScale::Linear { half_width }) => half_width,
-                    _ => 0.0,
-                };
-                (samples.abs() + reach).ceil() as usize + 1
+                let (lo, hi) = c
+                    .search_scale()
+                    .map_or((*samples, *samples), |s| s.interval(*samples));
+                lo.abs().max(hi.abs()).ceil() as usize + 1
             }
             Candidate::Effect { .. } => 0,
         })
@@ -1063,33 +1077,13 @@ fn refine_setting(
             us.iter()
                 .map(|u| candidate.with_setting(scale.setting_value(*u))),
         );
-        let models = cands
-            .iter()
-            .map(|c| match c {
-                Candidate::Effect { effect } => Model::new(vec![*effect], ctx.start.gravity())
-                    .map(Some)
-                    .map_err(|e| IdentError::external(format!("candidate {}", effect.id()), e)),
-                Candidate::TimeDelay { .. } => Ok(None),
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        let specs = cands
-            .iter()
-            .zip(&models)
-            .enumerate()
-            .map(|(k, (c, m))| {
-                let label = if k < k0 {
-                    c.label()
-                } else {
-                    format!("{} (trial {})", c.id(), k - k0)
-                };
-                match m {
-                    Some(m) => CandidateSpec::columns(label, m.columns()).in_family(c.id()),
-                    None => CandidateSpec::target(label).in_family(c.id()),
-                }
-            })
-            .collect();
-        let layout = Layout::new(ctx.base.n_base(), specs, 2)?;
-        Ok((cands, models, layout))
+        candidate_layout(ctx.start, ctx.base.n_base(), cands, |k, c| {
+            if k < k0 {
+                c.label()
+            } else {
+                format!("{} (trial {})", c.id(), k - k0)
+            }
+        })
     };
     let with_trial = |k: usize| -> Vec<usize> { (0..k0).chain([k0 + k]).collect() };
     // One pass over TRAIN: the TRAIN RSS of the model at every trial value
