@@ -32,7 +32,7 @@ use rustfft::FftPlanner;
 use rustfft::num_complex::Complex64;
 use serde::Serialize;
 
-use crate::fourier::Fourier;
+use crate::fourier::{Fourier, hann};
 
 /// False-alarm probability of the harmonic selection over all candidate
 /// harmonics: one spurious harmonic in a thousand records.
@@ -354,9 +354,7 @@ pub fn spectrum_cutoff(theta: [&[f64]; 2], dt: f64) -> SpectrumCutoff {
     let hop = len / 2;
     let count = (n - 1 - len) / hop + 1;
     let mut fourier = Fourier::new(len);
-    let window: Vec<f64> = (0..len)
-        .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / len as f64).cos())
-        .collect();
+    let window = hann(len);
     let wss: f64 = window.iter().map(|w| w * w).sum();
     let mut out = SpectrumCutoff {
         cutoff_hz: 0.0,

@@ -1,11 +1,21 @@
 //! Small wrapper around `rustfft` for operations on one period of a periodic
 //! signal: multiply the spectrum by a real or imaginary factor and transform
-//! back. Used by the circular zero-phase filter and the spectral derivative.
+//! back (the circular zero-phase filter, the spectral derivative), and the
+//! segment power and window of the Welch estimates.
 
 use std::sync::Arc;
 
 use rustfft::num_complex::Complex64;
 use rustfft::{Fft, FftPlanner};
+
+/// The periodic Hann window of `len` samples, `0.5 − 0.5 cos(2π i / len)`:
+/// the segments of both Welch estimates (the bandwidth rule's and
+/// [`crate::power_spectrum`]'s).
+pub(crate) fn hann(len: usize) -> Vec<f64> {
+    (0..len)
+        .map(|i| 0.5 - 0.5 * (std::f64::consts::TAU * i as f64 / len as f64).cos())
+        .collect()
+}
 
 /// Forward/inverse FFT plans and buffers for one record length.
 ///

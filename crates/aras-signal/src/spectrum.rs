@@ -8,7 +8,7 @@
 //! (at least 256 samples), trading resolution for a variance that falls
 //! with the number of segments.
 
-use crate::fourier::Fourier;
+use crate::fourier::{Fourier, hann};
 
 /// Why a spectrum could not be estimated.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -93,10 +93,7 @@ pub fn power_spectrum(
         while 2 * l <= x.len() / 2 {
             l *= 2;
         }
-        let w = (0..l)
-            .map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / l as f64).cos())
-            .collect();
-        (l, w)
+        (l, hann(l))
     };
     let step = if periodic { len } else { len / 2 };
     let bins = len / 2 + 1;
