@@ -101,6 +101,13 @@ pub struct DiagnoseArgs {
     /// The training log's period and sidecar.
     #[command(flatten)]
     pub log: LogArgs,
+    /// Process the training log in bounded memory (docs/scale.md): with a
+    /// period, its average is summed while reading; otherwise it is
+    /// processed in overlapping blocks into a scratch file in the output's
+    /// staging directory, which the diagnosis reads window by window.
+    /// `auto` does so for logs larger than 64 MB, `on` always, `off` never.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub streaming: StreamingMode,
     /// Output directory.
     #[arg(long, default_value = "out-diagnose", value_name = "DIR")]
     pub out: PathBuf,

@@ -33,6 +33,7 @@
 pub mod diagnose;
 pub mod prepare;
 pub mod robot;
+pub mod spool;
 pub mod streaming;
 
 pub use aras_dyn::{RegressorError, TaskRegressor};

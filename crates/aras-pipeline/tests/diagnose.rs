@@ -500,10 +500,16 @@ fn an_effect_outside_the_library_is_not_called_noise_like_on_five_seeds() {
 fn identify_in_memory(model: &Model, train: &Dataset) -> (BaseParameters, OlsEstimate) {
     let geometry = Params::aras_diamond().geometry().unwrap();
     let sos = train.filter.as_ref().unwrap();
-    let mut st = stack(model, &geometry, &train.samples).unwrap();
+    let mut st = stack(model, &geometry, train.samples().unwrap()).unwrap();
     filter(&mut st, sos, FilterMode::Parallel, train.periodic).unwrap();
     let guard = filter_reach(sos, train.len(), train.periodic, 1e-3).unwrap();
-    let keep = reversal_mask(&train.samples.theta_dot, 0.2, guard, train.periodic).unwrap();
+    let keep = reversal_mask(
+        &train.samples().unwrap().theta_dot,
+        0.2,
+        guard,
+        train.periodic,
+    )
+    .unwrap();
     let st = keep_rows(&st, &keep).unwrap();
     let base = base_parameters(model, &geometry, &Workspace::paper(), 600).unwrap();
     let wb = base.base_regressor(st.w.as_ref()).unwrap();
@@ -576,14 +582,14 @@ fn all_row_fitness_equals_the_in_memory_prediction() {
     let geometry = cad.geometry().unwrap();
     for (v, a) in s.vals.iter().zip(&d.after) {
         let sos = v.filter.as_ref().unwrap();
-        let mut st = stack(&model, &geometry, &v.samples).unwrap();
+        let mut st = stack(&model, &geometry, v.samples().unwrap()).unwrap();
         filter(&mut st, sos, FilterMode::Parallel, v.periodic).unwrap();
         let wb = base.base_regressor(st.w.as_ref()).unwrap();
         let pred: Vec<f64> = (0..wb.nrows())
             .map(|r| (0..wb.ncols()).map(|c| wb[(r, c)] * est.estimate[c]).sum())
             .collect();
         let guard = filter_reach(sos, v.len(), v.periodic, 0.5).unwrap();
-        let keep = reversal_mask(&v.samples.theta_dot, 0.2, guard, v.periodic).unwrap();
+        let keep = reversal_mask(&v.samples().unwrap().theta_dot, 0.2, guard, v.periodic).unwrap();
         let n = v.len();
         assert_eq!(a.left_out.len(), 2);
         for (g, l) in a.left_out.iter().enumerate() {

@@ -16,6 +16,13 @@ use crate::report::Report;
 use crate::report::plots::{Series, lines};
 use crate::robot::{effect_spec, nominal, paper_model};
 use crate::stages::Stages;
+use aras_pipeline::streaming::{StreamingOptions, spool_log};
+
+/// TRAIN log size above which `--streaming auto` processes it in bounded
+/// memory: 64 MB, about 7 minutes at 1 kHz, which the in-memory diagnosis
+/// holds in ≈ 130 MiB; its memory grows by ≈ 250 bytes per sample beyond
+/// (`docs/scale.md`).
+pub const STREAMING_BYTES: u64 = 64 << 20;
 
 /// Runs `diagnose`.
 pub fn run(args: &DiagnoseArgs) -> Result<()> {
@@ -57,7 +64,27 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         );
         Ok(Dataset::from_processed_owned(name, p)?)
     };
-    let train = stages.run("read + process TRAIN", |_| load(&args.data, &args.log))?;
+    let train = if super::identify::streams_log(args.streaming, &args.data, STREAMING_BYTES)? {
+        let opts = StreamingOptions {
+            read: args.log.read_options()?,
+            process: process_options(&cfg, args.log.period, false),
+            geometry,
+            ..StreamingOptions::default()
+        };
+        let total = super::identify_streaming::estimated_rows(&args.data);
+        stages.run("read + process TRAIN (streamed)", |bar| {
+            let mut progress = |rows: u64| {
+                let pct = total
+                    .map(|t| format!(" (≈ {:.0} %)", (100.0 * rows as f64 / t as f64).min(100.0)))
+                    .unwrap_or_default();
+                bar.set_message(format!("read + process TRAIN (streamed): {rows} rows{pct}"));
+            };
+            spool_log(&args.data, &opts, &out.path(""), &mut progress)
+                .with_context(|| format!("processing {}", args.data.display()))
+        })?
+    } else {
+        stages.run("read + process TRAIN", |_| load(&args.data, &args.log))?
+    };
     let vals = stages.run("read + process validation logs", |_| {
         args.validate
             .iter()
@@ -88,8 +115,13 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     let d = stages.run("diagnose (candidates × rounds)", |_| {
         diagnose(&model, &geometry, &train, &vals, &opts)
     })?;
+    let train_name = train.name.clone();
+    // The scratch file of a streamed TRAIN goes before the outputs are
+    // committed.
+    drop(train);
+    drop(vals);
     out.write_json("diagnosis.json", &d)?;
-    let report = build(&d, &train.name)?;
+    let report = build(&d, &train_name)?;
     for (file, svg) in report.figures() {
         out.write(file, svg)?;
     }

@@ -25,14 +25,20 @@ pub const STREAMING_BYTES: u64 = 256 << 20;
 
 /// Whether `identify` streams the log (`--streaming`).
 pub fn streams(args: &IdentifyArgs) -> Result<bool> {
-    Ok(match args.streaming {
+    streams_log(args.streaming, &args.data, STREAMING_BYTES)
+}
+
+/// Whether a command streams `log` in `mode`: `auto` does for files larger
+/// than `auto_bytes`.
+pub fn streams_log(mode: StreamingMode, log: &std::path::Path, auto_bytes: u64) -> Result<bool> {
+    Ok(match mode {
         StreamingMode::On => true,
         StreamingMode::Off => false,
         StreamingMode::Auto => {
-            std::fs::metadata(&args.data)
-                .with_context(|| format!("reading {}", args.data.display()))?
+            std::fs::metadata(log)
+                .with_context(|| format!("reading {}", log.display()))?
                 .len()
-                > STREAMING_BYTES
+                > auto_bytes
         }
     })
 }

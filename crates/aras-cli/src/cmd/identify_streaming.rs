@@ -97,7 +97,7 @@ pub fn stream(
 
 /// Rows of a CSV log estimated from its size and the mean length of the
 /// lines in its first 64 KiB; `None` if that cannot be read.
-fn estimated_rows(path: &Path) -> Option<u64> {
+pub fn estimated_rows(path: &Path) -> Option<u64> {
     use std::io::Read;
     let size = std::fs::metadata(path).ok()?.len();
     let mut head = vec![0u8; 64 * 1024];

@@ -1,23 +1,29 @@
-//! The data sets' filtered regressor columns, chunk by chunk: memory per
-//! chunk, not per log.
+//! The data sets chunk by chunk: their filtered regressor columns,
+//! filtered torques and reversal exclusion, with memory per chunk, not per
+//! log.
 //!
 //! Zero-phase filtering is not causal, so a chunk's filtered rows depend on
-//! samples around it. Each chunk of `CHUNK` samples is computed on a window
-//! widened by the filter's reach down to [`WINDOW_TOL`] of its impulse
-//! response peak on both sides, filtered there, and only the chunk's own
-//! rows are used: they equal the whole-record filter's rows to that
-//! tolerance (relative to the column's scale). A window touching an end of
-//! the record is padded exactly as the whole-record filter pads it. Period-averaged
-//! records (one period, short) are filtered whole with the periodic
-//! filter. A window's columns come from [`crate::prepare::columns_on`],
-//! the same regressor step a whole log goes through in
-//! [`crate::prepare::prepare`].
+//! samples around it. Each chunk of `CHUNK` samples is read
+//! ([`Dataset::read`], from memory or a scratch file) with a window
+//! widened on both sides by the filter's reach down to [`WINDOW_TOL`] of
+//! its impulse response peak (or the reversal exclusion's widening, if
+//! larger) plus the largest torque shift of the delay candidates; the
+//! window's columns and torques are filtered there and only the chunk's
+//! own rows are used: they equal the whole-record filter's rows to that
+//! tolerance (relative to the column's scale), and the chunk's exclusion
+//! equals the whole record's exactly. A window touching an end of the
+//! record is padded exactly as the whole-record filter pads it.
+//! Period-averaged records (one period, short) are filtered whole with the
+//! periodic filter. A window's columns come from
+//! [`crate::prepare::columns_on`], the same regressor step a whole log goes
+//! through in [`crate::prepare::prepare`].
 
 use aras_kin::{Geometry, KinematicSample};
+use aras_signal::Samples;
 use rayon::prelude::*;
 
 use super::data::Dataset;
-use crate::robot::filter_reach;
+use crate::robot::{filter_reach, reversal_mask};
 use aras_ident::IdentError;
 
 /// Samples per chunk, a measured trade-off (`docs/scale.md`): a chunk's
@@ -37,7 +43,7 @@ pub(crate) const WINDOW_TOL: f64 = 1e-9;
 /// thread count).
 pub(crate) const LANES: usize = 2;
 
-/// How a data set is cut.
+/// How a data set is cut, and which of its rows fits use.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Plan {
     /// Samples of the record.
@@ -46,33 +52,51 @@ pub(crate) struct Plan {
     pub reach: usize,
     /// Samples per chunk (the whole record when periodic).
     pub chunk: usize,
+    /// Joint `j`'s rows with `|θ̇_j|` below this (rad/s) are left out …
+    pub min_speed: f64,
+    /// … widened by this many samples each side (the filter's reach down
+    /// to the data set's tolerance, [`filter_reach`]; 0 unfiltered).
+    pub guard: usize,
 }
 
 impl Plan {
-    pub(crate) fn new(data: &Dataset) -> Result<Self, IdentError> {
+    /// The plan of `data` whose rows are kept away from velocity reversals
+    /// (`min_speed`, widened to `reach_tol` of the filter's peak) and whose
+    /// torques are read up to `max_shift` samples from a row.
+    pub(crate) fn new(
+        data: &Dataset,
+        min_speed: f64,
+        reach_tol: f64,
+        max_shift: usize,
+    ) -> Result<Self, IdentError> {
         let n = data.len();
-        if data.periodic || data.filter.is_none() {
-            let chunk = if data.periodic { n } else { CHUNK };
-            return Ok(Self { n, reach: 0, chunk });
+        let guard = match &data.filter {
+            Some(sos) => filter_reach(sos, n, data.periodic, reach_tol)?,
+            None => 0,
+        };
+        let whole = Self {
+            n,
+            reach: 0,
+            chunk: n,
+            min_speed,
+            guard,
+        };
+        if data.periodic {
+            return Ok(whole);
         }
-        let sos = data.filter.as_ref().ok_or(IdentError::InvalidSetting {
-            name: "filter",
-            value: 0.0,
-            reason: "internal: a filtered data set without its filter",
-        })?;
-        let reach = filter_reach(sos, n.min(200_000), false, WINDOW_TOL)?;
+        let filter_reach = match &data.filter {
+            Some(sos) => filter_reach(sos, n, false, WINDOW_TOL)?,
+            None => 0,
+        };
+        let reach = filter_reach.max(guard) + max_shift;
         // A record shorter than a few windows is filtered whole.
         if n <= 4 * (CHUNK + 2 * reach) {
-            return Ok(Self {
-                n,
-                reach: 0,
-                chunk: n,
-            });
+            return Ok(whole);
         }
         Ok(Self {
-            n,
             reach,
             chunk: CHUNK,
+            ..whole
         })
     }
 
@@ -102,53 +126,109 @@ impl Plan {
     }
 }
 
-/// The kinematics of the window `[lo, hi)` of `data`, evaluated once per
-/// window and shared by every model whose columns are built on it.
-pub(crate) fn window_kinematics(
-    geometry: &Geometry,
-    data: &Dataset,
-    lo: usize,
-    hi: usize,
-) -> Result<Vec<KinematicSample>, IdentError> {
-    (lo..hi)
-        .map(|i| {
-            aras_kin::evaluate(geometry, &data.samples.task(i))
-                .map_err(|e| IdentError::external(format!("kinematics of sample {i}"), e))
-        })
-        .collect()
+/// One chunk's window of a data set: its samples, filtered torques and
+/// reversal exclusion, indexed by the record's sample numbers.
+#[derive(Debug, Default)]
+pub(crate) struct Window {
+    /// Record index of the window's first sample.
+    pub lo: usize,
+    /// Samples `lo..lo + len`.
+    pub samples: Samples,
+    /// Torques low-passed by the data set's filter (as the columns are).
+    pub tau: [Vec<f64>; 2],
+    /// Joint-major: true where the row is used by fits and scores.
+    keep: Vec<bool>,
 }
 
-/// The whole record's filtered torques per joint (two vectors: the
-/// `time_delay` candidates look them up at shifted indices).
-pub(crate) fn filtered_torques(data: &Dataset) -> Result<[Vec<f64>; 2], IdentError> {
-    let run = |x: &[f64]| -> Result<Vec<f64>, IdentError> {
-        match &data.filter {
-            None => Ok(x.to_vec()),
-            Some(sos) => sos
-                .filtfilt_record(x, data.periodic)
-                .map_err(|e| IdentError::external("filtering the torques", e)),
+impl Window {
+    /// Samples in the window.
+    pub(crate) fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// Reads `[lo, hi)` of `data` (reusing this window's buffers) and
+    /// filters and masks it as `plan` says.
+    fn load(
+        &mut self,
+        data: &Dataset,
+        plan: &Plan,
+        lo: usize,
+        hi: usize,
+    ) -> Result<(), IdentError> {
+        data.read(lo..hi, &mut self.samples)?;
+        self.lo = lo;
+        for g in 0..2 {
+            self.tau[g] = match &data.filter {
+                None => self.samples.tau[g].clone(),
+                Some(sos) => sos
+                    .filtfilt_record(&self.samples.tau[g], data.periodic)
+                    .map_err(|e| IdentError::external("filtering the torques", e))?,
+            };
         }
-    };
-    Ok([run(&data.samples.tau[0])?, run(&data.samples.tau[1])?])
+        self.keep = reversal_mask(
+            &self.samples.theta_dot,
+            plan.min_speed,
+            plan.guard,
+            data.periodic,
+        )?;
+        Ok(())
+    }
+
+    /// Whether joint `g`'s row `i` (record index) is used.
+    pub(crate) fn kept(&self, g: usize, i: usize) -> bool {
+        self.keep[g * self.len() + i - self.lo]
+    }
+
+    /// Joint `g`'s used rows (record indices) in `[a, b)`.
+    pub(crate) fn rows(&self, g: usize, a: usize, b: usize) -> Vec<usize> {
+        (a..b).filter(|&i| self.kept(g, i)).collect()
+    }
+
+    /// Joint `g`'s filtered torque `delay` samples after row `i`
+    /// ([`aras_signal::delayed_at`]: circular for a periodic record; the
+    /// window's reach and the passes' range keep other shifts inside).
+    pub(crate) fn shifted(&self, g: usize, i: usize, delay: f64) -> f64 {
+        aras_signal::delayed_at(&self.tau[g], i - self.lo, delay)
+    }
+
+    /// The kinematics of every sample of the window, shared by every model
+    /// whose columns are built on it.
+    pub(crate) fn kinematics(
+        &self,
+        geometry: &Geometry,
+    ) -> Result<Vec<KinematicSample>, IdentError> {
+        (0..self.len())
+            .map(|i| {
+                aras_kin::evaluate(geometry, &self.samples.task(i)).map_err(|e| {
+                    IdentError::external(format!("kinematics of sample {}", self.lo + i), e)
+                })
+            })
+            .collect()
+    }
 }
 
-/// Runs `work(state, a, b)` for every chunk `[a, b)` of `[lo, hi)`, chunk
-/// `i` in lane `i % LANES` (lanes in parallel, each in order), and returns
-/// the lanes' states in lane order for a deterministic merge.
+/// Runs `work(state, window, a, b)` for every chunk `[a, b)` of `[lo, hi)`
+/// of `data`, chunk `i` in lane `i % LANES` (lanes in parallel, each in
+/// order, each reading its windows into one buffer), and returns the
+/// lanes' states in lane order for a deterministic merge.
 pub(crate) fn in_lanes<T: Send>(
+    data: &Dataset,
     plan: &Plan,
     lo: usize,
     hi: usize,
     init: impl Fn() -> T + Sync,
-    work: impl Fn(&mut T, usize, usize) -> Result<(), IdentError> + Sync,
+    work: impl Fn(&mut T, &Window, usize, usize) -> Result<(), IdentError> + Sync,
 ) -> Result<Vec<T>, IdentError> {
     let chunks = plan.chunks(lo, hi);
     (0..LANES)
         .into_par_iter()
         .map(|lane| {
             let mut st = init();
+            let mut window = Window::default();
             for &(a, b) in chunks.iter().skip(lane).step_by(LANES) {
-                work(&mut st, a, b)?;
+                let (wl, wh) = plan.window(a, b);
+                window.load(data, plan, wl, wh)?;
+                work(&mut st, &window, a, b)?;
             }
             Ok(st)
         })

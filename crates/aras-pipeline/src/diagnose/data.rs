@@ -8,18 +8,24 @@ use aras_dyn::Model;
 use aras_kin::KinematicSample;
 use faer::Mat;
 
-use crate::prepare::{RegressorColumns, columns_on, record_keep_mask, record_noise_gain};
+use std::ops::Range;
+use std::sync::Arc;
+
+use crate::prepare::{RegressorColumns, columns_on, record_noise_gain};
+use crate::spool::SpooledSamples;
 use aras_ident::IdentError;
 
 /// A processed data set: the samples as `aras_signal::process` produced
-/// them, and the zero-phase filter it applied (so every regressor column is
-/// filtered the same way, `docs/processing.md`).
+/// them, in memory or in a scratch file ([`Dataset::spooled`]), and the
+/// zero-phase filter it applied (so every regressor column is filtered the
+/// same way, `docs/processing.md`). The diagnosis reads it window by
+/// window either way.
 #[derive(Debug, Clone)]
 pub struct Dataset {
     /// Name used in findings and reports (e.g. the file name).
     pub name: String,
-    /// Processed samples.
-    pub samples: Samples,
+    /// Where the processed samples are.
+    storage: Storage,
     /// The low-pass that was applied to θ (`None`: unfiltered); the blocks
     /// apply it to the torques and every regressor column alike.
     pub filter: Option<Sos>,
@@ -28,6 +34,15 @@ pub struct Dataset {
     pub periodic: bool,
     /// Sample rate (Hz).
     pub sample_rate_hz: f64,
+}
+
+/// Where a data set's samples are.
+#[derive(Debug, Clone)]
+enum Storage {
+    Memory(Box<Samples>),
+    /// Shared: clones of the data set read the same file, removed with the
+    /// last of them.
+    Spooled(Arc<SpooledSamples>),
 }
 
 impl Dataset {
@@ -42,7 +57,7 @@ impl Dataset {
         let filter = crate::prepare::processing_filter(s)?;
         Ok(Self {
             name: name.into(),
-            samples: processed.samples.clone(),
+            storage: Storage::Memory(Box::new(processed.samples.clone())),
             filter,
             periodic: s.periods.is_some(),
             sample_rate_hz: s.sample_rate_hz,
@@ -59,18 +74,86 @@ impl Dataset {
         let mut p = processed;
         let samples = std::mem::take(&mut p.samples);
         let mut d = Self::from_processed(name, &p)?;
-        d.samples = samples;
+        d.storage = Storage::Memory(Box::new(samples));
         Ok(d)
+    }
+
+    /// A data set whose processed samples are in a scratch file (a long
+    /// log processed block by block,
+    /// [`crate::streaming::spool_log`]), filtered by `filter` (not
+    /// period-averaged).
+    pub fn spooled(
+        name: impl Into<String>,
+        samples: SpooledSamples,
+        filter: Option<Sos>,
+        sample_rate_hz: f64,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            storage: Storage::Spooled(Arc::new(samples)),
+            filter,
+            periodic: false,
+            sample_rate_hz,
+        }
+    }
+
+    /// The samples, if they are held in memory (`None` for a spooled data
+    /// set: read them with [`Self::read`]).
+    pub fn samples(&self) -> Option<&Samples> {
+        match &self.storage {
+            Storage::Memory(s) => Some(s),
+            Storage::Spooled(_) => None,
+        }
+    }
+
+    /// True if the samples are in a scratch file.
+    pub fn is_spooled(&self) -> bool {
+        matches!(self.storage, Storage::Spooled(_))
+    }
+
+    /// Samples `rows` into `out` (its channels replaced), wherever they are.
+    pub fn read(&self, rows: Range<usize>, out: &mut Samples) -> Result<(), IdentError> {
+        match &self.storage {
+            Storage::Spooled(f) => f.read(rows, out),
+            Storage::Memory(s) => {
+                if rows.start > rows.end || rows.end > s.len() {
+                    return Err(IdentError::DimensionMismatch {
+                        what: "end of a window of samples",
+                        expected: s.len(),
+                        found: rows.end,
+                        hint: "read windows inside the record",
+                    });
+                }
+                let copy = |dst: &mut Vec<f64>, src: &[f64]| {
+                    dst.clear();
+                    dst.extend_from_slice(&src[rows.clone()]);
+                };
+                copy(&mut out.t, &s.t);
+                for k in 0..2 {
+                    copy(&mut out.theta[k], &s.theta[k]);
+                    copy(&mut out.theta_dot[k], &s.theta_dot[k]);
+                    copy(&mut out.theta_ddot[k], &s.theta_ddot[k]);
+                    copy(&mut out.x[k], &s.x[k]);
+                    copy(&mut out.x_dot[k], &s.x_dot[k]);
+                    copy(&mut out.x_ddot[k], &s.x_ddot[k]);
+                    copy(&mut out.tau[k], &s.tau[k]);
+                }
+                Ok(())
+            }
+        }
     }
 
     /// Samples per joint.
     pub fn len(&self) -> usize {
-        self.samples.len()
+        match &self.storage {
+            Storage::Memory(s) => s.len(),
+            Storage::Spooled(f) => f.len(),
+        }
     }
 
     /// True if there are no samples.
     pub fn is_empty(&self) -> bool {
-        self.samples.is_empty()
+        self.len() == 0
     }
 
     /// Upper bound on independent noise samples per joint, `2 B T`: the
@@ -161,30 +244,16 @@ impl Dataset {
     }
 }
 
-/// Per joint, the samples used in fits and scores: the identification's
-/// reversal exclusion ([`record_keep_mask`]) — joint `j`'s rows where
-/// `|θ̇_j| < min_speed`, widened by the zero-phase filter's reach down to
-/// `reach_tol` of its peak ([`crate::robot::filter_reach`]; no widening without a
-/// filter). Near a velocity reversal the exact `sign` of (49) misfits real
-/// (sticking, creeping, smooth) friction far beyond the noise, and the
-/// filter spreads that misfit over its impulse response; a candidate must
-/// not be rewarded for fitting it.
-pub(crate) fn moving_mask(
-    data: &Dataset,
-    min_speed: f64,
-    reach_tol: f64,
-) -> Result<[Vec<bool>; 2], IdentError> {
-    let n = data.len();
-    let keep = record_keep_mask(
-        &data.samples.theta_dot,
-        data.filter.as_ref(),
-        data.periodic,
-        min_speed,
-        reach_tol,
-    )?;
-    let mask = [keep[..n].to_vec(), keep[n..].to_vec()];
-    for (j, m) in mask.iter().enumerate() {
-        let kept = m.iter().filter(|k| **k).count();
+/// Checks that each joint keeps enough rows after the identification's
+/// reversal exclusion (`rows` per joint, as the passes counted them): joint
+/// `j`'s rows where `|θ̇_j| < min_speed`, widened by the zero-phase
+/// filter's reach ([`crate::robot::filter_reach`]; no widening without a
+/// filter), are left out. Near a velocity reversal the exact `sign` of (49)
+/// misfits real (sticking, creeping, smooth) friction far beyond the noise,
+/// and the filter spreads that misfit over its impulse response; a
+/// candidate must not be rewarded for fitting it.
+pub(crate) fn check_rows(rows: &[usize]) -> Result<(), IdentError> {
+    for (j, &kept) in rows.iter().enumerate() {
         if kept < MIN_ROWS {
             return Err(IdentError::InvalidSetting {
                 name: if j == 0 {
@@ -199,7 +268,7 @@ pub(crate) fn moving_mask(
             });
         }
     }
-    Ok(mask)
+    Ok(())
 }
 
 /// Fewest rows per joint a diagnosis data set must keep after the exclusion.

@@ -9,8 +9,8 @@ use faer::{Mat, MatRef};
 use serde::Serialize;
 
 use super::candidates::{Candidate, CandidateGrid};
-use super::chunks::{Plan, filtered_torques, in_lanes, window_kinematics};
-use super::data::{Dataset, moving_mask};
+use super::chunks::{Plan, in_lanes};
+use super::data::{Dataset, check_rows};
 use super::residual::{
     JointData, ResidualAnalysis, analyse, analyse_left_out, analyse_spectrum, rms,
 };
@@ -320,20 +320,31 @@ fn left_out_sentence(after: &[ResidualAnalysis], min_speed: f64) -> String {
     }
 }
 
-/// Per data set: the rows used (per joint), the whole-record filtered
-/// torques and the chunk plan.
-struct Prepared {
-    mask: [Vec<bool>; 2],
-    tau: [Vec<f64>; 2],
-    plan: Plan,
+/// A model's residual per joint on every row of a data set's range, in
+/// order, with what the residual analysis bins it by.
+#[derive(Default)]
+struct JointResidual {
+    /// Residual of each row.
+    residual: [Vec<f64>; 2],
+    /// The (filtered, shifted) measured torque it was taken from.
+    measured: [Vec<f64>; 2],
+    /// `θ, θ̇, θ̈` of the joint and `t` of each row.
+    motion: [[Vec<f64>; 4]; 2],
+    /// Whether fits use the row (away from velocity reversals).
+    fitted: [Vec<bool>; 2],
 }
 
-/// A model's residual per joint on the rows `rows` of a data set, with the
-/// (filtered, shifted) measured torque it was taken from.
-struct JointResidual {
-    rows: std::ops::Range<usize>,
-    residual: [Vec<f64>; 2],
-    measured: [Vec<f64>; 2],
+impl JointResidual {
+    fn append(&mut self, other: JointResidual) {
+        for g in 0..2 {
+            self.residual[g].extend(&other.residual[g]);
+            self.measured[g].extend(&other.measured[g]);
+            self.fitted[g].extend(&other.fitted[g]);
+            for (m, o) in self.motion[g].iter_mut().zip(&other.motion[g]) {
+                m.extend(o);
+            }
+        }
+    }
 }
 
 /// Candidates, their single-effect models and their layout for one trial.
@@ -395,22 +406,10 @@ impl Context<'_> {
         }
     }
 
-    /// Rows of joint `g` in chunk `[a, b)`.
-    fn rows(p: &Prepared, g: usize, a: usize, b: usize) -> Vec<usize> {
-        (a..b).filter(|&i| p.mask[g][i]).collect()
-    }
-
-    /// The torque of sample `i` shifted by `delay` samples
-    /// ([`aras_signal::delayed_at`]: circular for a periodic record; the
-    /// range keeps non-periodic shifts inside).
-    fn shifted(p: &Prepared, g: usize, i: usize, delay: f64) -> f64 {
-        aras_signal::delayed_at(&p.tau[g], i, delay)
-    }
-
     /// The selection rows of `d` chunk by chunk into one [`Accumulator`]:
     /// `[start base regressor | every candidate's columns | τ]`, a delay
     /// candidate's column being the shifted torque.
-    fn accumulate(&self, d: &Dataset, p: &Prepared) -> Result<Accumulator, IdentError> {
+    fn accumulate(&self, d: &Dataset, p: &Plan) -> Result<Accumulator, IdentError> {
         self.accumulate_with(d, p, &self.cands, &self.effect_models, &self.layout)
     }
 
@@ -418,7 +417,7 @@ impl Context<'_> {
     fn accumulate_with(
         &self,
         d: &Dataset,
-        p: &Prepared,
+        p: &Plan,
         cands: &[Candidate],
         effect_models: &[Option<Model>],
         layout: &Layout,
@@ -428,14 +427,14 @@ impl Context<'_> {
         let target = layout.target_column();
         let pb = layout.base_columns();
         let lanes = in_lanes(
-            &p.plan,
+            d,
+            p,
             lo,
             hi,
             || Accumulator::new(layout),
-            |acc, a, b| {
-                let (wl, wh) = p.plan.window(a, b);
-                let nw = wh - wl;
-                let kin = window_kinematics(self.geometry, d, wl, wh)?;
+            |acc, w, a, b| {
+                let (wl, nw) = (w.lo, w.len());
+                let kin = w.kinematics(self.geometry)?;
                 let wb = d.columns(self.start, RegressorColumns::Base(&self.base), &kin)?;
                 let blocks = effect_models
                     .iter()
@@ -448,7 +447,7 @@ impl Context<'_> {
                 // kinematics: free them before the rows are gathered.
                 drop(kin);
                 for g in 0..2 {
-                    let idx = Self::rows(p, g, a, b);
+                    let idx = w.rows(g, a, b);
                     let mut m = Mat::<f64>::zeros(idx.len(), width);
                     for (r, &i) in idx.iter().enumerate() {
                         let row = g * nw + (i - wl);
@@ -464,12 +463,12 @@ impl Context<'_> {
                                     }
                                 }
                                 (None, Candidate::TimeDelay { samples }) => {
-                                    m[(r, cols.start)] = Self::shifted(p, g, i, *samples);
+                                    m[(r, cols.start)] = w.shifted(g, i, *samples);
                                 }
                                 (None, Candidate::Effect { .. }) => {}
                             }
                         }
-                        m[(r, target)] = p.tau[g][i];
+                        m[(r, target)] = w.tau[g][i - wl];
                     }
                     acc.push(g, m.as_ref())?;
                 }
@@ -502,12 +501,7 @@ impl Context<'_> {
     /// in its range, fitted or left out near a reversal (in order), with the
     /// measured torque of each row: only the columns of the model are
     /// computed.
-    fn residual(
-        &self,
-        d: &Dataset,
-        p: &Prepared,
-        fit: &ModelFit,
-    ) -> Result<JointResidual, IdentError> {
+    fn residual(&self, d: &Dataset, p: &Plan, fit: &ModelFit) -> Result<JointResidual, IdentError> {
         let (lo, hi) = self.range(d);
         let pb = self.layout.base_columns();
         // Coefficient of every layout column (0 if not in the model).
@@ -522,11 +516,9 @@ impl Context<'_> {
                     && self.layout.candidate_columns(k).any(|c| beta[c] != 0.0)
             })
             .collect();
-        type Piece = (usize, [Vec<f64>; 2], [Vec<f64>; 2]);
-        let lanes = in_lanes(&p.plan, lo, hi, Vec::<Piece>::new, |out, a, b| {
-            let (wl, wh) = p.plan.window(a, b);
-            let nw = wh - wl;
-            let kin = window_kinematics(self.geometry, d, wl, wh)?;
+        let lanes = in_lanes(d, p, lo, hi, Vec::new, |out, w, a, b| {
+            let (wl, nw) = (w.lo, w.len());
+            let kin = w.kinematics(self.geometry)?;
             let wb = d.columns(self.start, RegressorColumns::Base(&self.base), &kin)?;
             let blocks = used
                 .iter()
@@ -537,8 +529,8 @@ impl Context<'_> {
                     None => Ok((k, Mat::zeros(0, 0))),
                 })
                 .collect::<Result<Vec<_>, _>>()?;
-            let mut res: [Vec<f64>; 2] = [vec![], vec![]];
-            let mut tau: [Vec<f64>; 2] = [vec![], vec![]];
+            let mut piece = JointResidual::default();
+            let s = &w.samples;
             for g in 0..2 {
                 for i in a..b {
                     let row = g * nw + (i - wl);
@@ -551,29 +543,32 @@ impl Context<'_> {
                             pred += beta[j] * bk[(row, jj)];
                         }
                     }
-                    let t = Self::shifted(p, g, i, delay);
-                    res[g].push(t - pred);
-                    tau[g].push(t);
+                    let t = w.shifted(g, i, delay);
+                    piece.residual[g].push(t - pred);
+                    piece.measured[g].push(t);
+                    piece.fitted[g].push(w.kept(g, i));
+                    let at = i - wl;
+                    let motion = [
+                        s.theta[g][at],
+                        s.theta_dot[g][at],
+                        s.theta_ddot[g][at],
+                        s.t[at],
+                    ];
+                    for (m, x) in piece.motion[g].iter_mut().zip(motion) {
+                        m.push(x);
+                    }
                 }
             }
-            out.push((a, res, tau));
+            out.push((a, piece));
             Ok(())
         })?;
-        let mut pieces: Vec<Piece> = lanes.into_iter().flatten().collect();
+        let mut pieces: Vec<(usize, JointResidual)> = lanes.into_iter().flatten().collect();
         pieces.sort_by_key(|x| x.0);
-        let mut residual: [Vec<f64>; 2] = [vec![], vec![]];
-        let mut measured: [Vec<f64>; 2] = [vec![], vec![]];
-        for (_, r, t) in pieces {
-            for g in 0..2 {
-                residual[g].extend(&r[g]);
-                measured[g].extend(&t[g]);
-            }
+        let mut all = JointResidual::default();
+        for (_, piece) in pieces {
+            all.append(piece);
         }
-        Ok(JointResidual {
-            rows: lo..hi,
-            residual,
-            measured,
-        })
+        Ok(all)
     }
 
     /// Model `model` with base `base` on `d`: calls `f(state, g, W_b rows,
@@ -582,7 +577,7 @@ impl Context<'_> {
     fn model_pass<T: Send>(
         &self,
         d: &Dataset,
-        p: &Prepared,
+        p: &Plan,
         model: &Model,
         base: &BaseParameters,
         delay: f64,
@@ -590,15 +585,14 @@ impl Context<'_> {
         f: impl Fn(&mut T, usize, MatRef<'_, f64>, &[f64]) -> Result<(), IdentError> + Sync,
     ) -> Result<Vec<T>, IdentError> {
         let (lo, hi) = self.range(d);
-        in_lanes(&p.plan, lo, hi, init, |st, a, b| {
-            let (wl, wh) = p.plan.window(a, b);
-            let nw = wh - wl;
-            let kin = window_kinematics(self.geometry, d, wl, wh)?;
+        in_lanes(d, p, lo, hi, init, |st, w, a, b| {
+            let (wl, nw) = (w.lo, w.len());
+            let kin = w.kinematics(self.geometry)?;
             let wb = d.columns(model, RegressorColumns::Base(base), &kin)?;
             for g in 0..2 {
-                let idx = Self::rows(p, g, a, b);
+                let idx = w.rows(g, a, b);
                 let m = Mat::from_fn(idx.len(), wb.ncols(), |r, j| wb[(g * nw + idx[r] - wl, j)]);
-                let t: Vec<f64> = idx.iter().map(|&i| Self::shifted(p, g, i, delay)).collect();
+                let t: Vec<f64> = idx.iter().map(|&i| w.shifted(g, i, delay)).collect();
                 f(st, g, m.as_ref(), &t)?;
             }
             Ok(())
@@ -726,24 +720,22 @@ pub fn diagnose(
         layout,
         max_shift,
     };
-    let prep = |d: &Dataset, tol: f64| -> Result<Prepared, IdentError> {
-        Ok(Prepared {
-            mask: moving_mask(d, opts.min_speed, tol)?,
-            tau: filtered_torques(d)?,
-            plan: Plan::new(d)?,
-        })
-    };
-    let train_p = prep(train, opts.reach_tol)?;
-    let vals_p: Vec<Prepared> = validation
+    let train_p = Plan::new(train, opts.min_speed, opts.reach_tol, max_shift)?;
+    let vals_p: Vec<Plan> = validation
         .iter()
-        .map(|v| prep(v, opts.validation_reach_tol))
+        .map(|v| Plan::new(v, opts.min_speed, opts.validation_reach_tol, max_shift))
         .collect::<Result<_, _>>()?;
     let train_acc = ctx.accumulate(train, &train_p)?;
+    check_rows(train_acc.rows())?;
     let val_accs: Vec<Accumulator> = validation
         .iter()
         .zip(&vals_p)
-        .map(|(v, p)| ctx.accumulate(v, p))
-        .collect::<Result<_, _>>()?;
+        .map(|(v, p)| {
+            let acc = ctx.accumulate(v, p)?;
+            check_rows(acc.rows())?;
+            Ok(acc)
+        })
+        .collect::<Result<_, IdentError>>()?;
     // The filter's independent fraction of samples for the F-test and its
     // noise gain for σ: the same number (Parseval), applied once each.
     let dof_ratio = (train.filter_dof() / train.len() as f64).clamp(1e-9, 1.0);
@@ -852,26 +844,20 @@ pub fn diagnose(
             .zip(&vals_p)
             .map(|(v, p)| -> Result<ResidualAnalysis, IdentError> {
                 let JointResidual {
-                    rows,
                     residual: res,
                     measured,
+                    motion,
+                    fitted,
                 } = ctx.residual(v, p, fit)?;
-                let sm = &v.samples;
                 // Per joint: [residual, θ, θ̇, θ̈, t] of the fitted rows
                 // (`fitted`) or of the rows left out.
-                let split = |g: usize, fitted: bool| -> [Vec<f64>; 5] {
+                let split = |g: usize, used: bool| -> [Vec<f64>; 5] {
                     let mut out: [Vec<f64>; 5] = Default::default();
-                    for (r, i) in res[g].iter().zip(rows.clone()) {
-                        if p.mask[g][i] == fitted {
-                            let row = [
-                                *r,
-                                sm.theta[g][i],
-                                sm.theta_dot[g][i],
-                                sm.theta_ddot[g][i],
-                                sm.t[i],
-                            ];
-                            for (o, x) in out.iter_mut().zip(row) {
-                                o.push(x);
+                    for (r, f) in fitted[g].iter().enumerate() {
+                        if *f == used {
+                            out[0].push(res[g][r]);
+                            for (o, m) in out[1..].iter_mut().zip(&motion[g]) {
+                                o.push(m[r]);
                             }
                         }
                     }
@@ -892,12 +878,11 @@ pub fn diagnose(
                 let pass_band_end = v.pass_band_end();
                 let mut a = analyse(&v.name, &[jd(&kept[0]), jd(&kept[1])], sigma, dof_ratio);
                 for g in 0..2 {
-                    let fitted = &p.mask[g][rows.clone()];
                     let left = split(g, false);
                     a.left_out.push(analyse_left_out(
                         g + 1,
                         &jd(&left),
-                        (&measured[g], &res[g], fitted),
+                        (&measured[g], &res[g], &fitted[g]),
                         sigma[g],
                         dof_ratio,
                     )?);
@@ -1019,7 +1004,7 @@ pub fn diagnose(
         initial_model: start.effects().to_vec(),
         final_model: final_model.effects().to_vec(),
         delay_samples,
-        rows_fitted: std::array::from_fn(|j| train_p.mask[j].iter().filter(|k| **k).count()),
+        rows_fitted: std::array::from_fn(|j| train_acc.rows()[j]),
         steps,
         rounds,
         fitness: fitness_rows,
@@ -1054,8 +1039,8 @@ const ZOOM_PASSES: usize = 2;
 /// refined value and its two σ probes, whatever the log's length.
 fn refine_setting(
     ctx: &Context<'_>,
-    train: (&Dataset, &Prepared),
-    validation: (&[Dataset], &[Prepared]),
+    train: (&Dataset, &Plan),
+    validation: (&[Dataset], &[Plan]),
     others: &[Candidate],
     candidate: Candidate,
     opts: &SelectionOptions,
@@ -1213,9 +1198,9 @@ fn argmin(v: &[f64]) -> usize {
 #[allow(clippy::too_many_arguments)]
 fn consistent_fit(
     ctx: &Context<'_>,
-    train: (&Dataset, &Prepared),
+    train: (&Dataset, &Plan),
     validation: &[Dataset],
-    vals_p: &[Prepared],
+    vals_p: &[Plan],
     model: &Model,
     delay: f64,
     reference: &Params,

@@ -5,7 +5,7 @@ use std::path::Path;
 use aras_dyn::Model;
 use aras_kin::{AssemblyMode, Geometry, Motion};
 use aras_log::{Columns, Log, LogReader, LogReport, LogSummary, ReadOptions, Sidecar};
-use aras_signal::{Bandwidth, Butterworth, FilterSpec, PeriodSource, ProcessOptions};
+use aras_signal::{Bandwidth, Butterworth, FilterSpec, PeriodSource, ProcessOptions, Sos};
 use nalgebra::Vector2;
 use serde::Serialize;
 
@@ -14,8 +14,10 @@ use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 
 use super::delayed::TorqueShift;
 use crate::TaskRegressor;
-use crate::prepare::{RegressorColumns, prepare_reusing};
+use crate::diagnose::Dataset;
+use crate::prepare::{RegressorColumns, prepare_reusing, processing_filter};
 use crate::robot::{FilterMode, filter_reach, reversal_mask};
+use crate::spool::SpoolWriter;
 use faer::Mat;
 
 /// Options of [`identify_log`]. `Default` gives the documented defaults.
@@ -261,44 +263,8 @@ pub fn identify_log_with_progress(
         && reader.has_velocity()
         && reader.has_acceleration();
     let mut chunk = Columns::default();
-    let mut first = true;
-    let mut dt = options.read.nominal_step.unwrap_or(0.0);
-    let mut rows_read = 0u64;
-    if let Some(d) = options.torque_delay.filter(|d| !d.is_finite()) {
-        return Err(IdentError::InvalidSetting {
-            name: "torque_delay",
-            value: d,
-            reason: "give a finite number of samples, e.g. 2.5",
-        });
-    }
-    let mut shift = options.torque_delay.map(TorqueShift::new);
-    let mut raw = Columns::default();
-    // Appends up to `n` rows (with the torque delay: its rows) to `chunk`;
-    // fewer only at the end of the log.
-    let mut read = |reader: &mut LogReader<std::fs::File>, chunk: &mut Columns, n: usize| {
-        let mut got = 0;
-        while got < n {
-            let into = if shift.is_some() {
-                raw.clear();
-                &mut raw
-            } else {
-                &mut *chunk
-            };
-            let k = reader
-                .read_rows(into, n - got)
-                .map_err(|e| sig(&format!("reading the log {name}"), e))?;
-            rows_read += k as u64;
-            progress(rows_read);
-            if k == 0 {
-                break;
-            }
-            got += match shift.as_mut() {
-                Some(s) => s.push(&raw, chunk),
-                None => k,
-            };
-        }
-        Ok::<usize, IdentError>(got)
-    };
+    let dt = options.read.nominal_step.unwrap_or(0.0);
+    let mut read = rows_reader(&name, options.torque_delay, progress)?;
     let mut out = Progress::default();
     let route;
     if period.is_none() && logged {
@@ -356,31 +322,12 @@ pub fn identify_log_with_progress(
         }
     } else if let Some(p) = period {
         route = StreamingRoute::PeriodAverage;
-        let mut avg: Option<PeriodSums> = None;
-        loop {
-            chunk.clear();
-            let n = read(&mut reader, &mut chunk, options.chunk_samples)?;
-            if n == 0 {
-                break;
-            }
-            if first {
-                dt = nominal_step(&chunk, dt)?;
-                first = false;
-            }
-            let sums = match &mut avg {
-                Some(s) => s,
-                None => avg.insert(PeriodSums::new(p, dt, &options.process, logged)?),
-            };
-            sums.add(&chunk);
-            out.read += n;
-            out.blocks += 1;
-        }
-        let sums = avg.ok_or_else(|| invalid(&name, "the log has no data rows"))?;
-        let (log, periods) = sums.finish(&name, out.read, reader.sidecar().clone())?;
+        let averaged = period_average(&name, &mut reader, &mut read, p, options, logged)?;
+        let (log, periods) = (averaged.log, averaged.periods);
         out.periods = periods;
-        let mut popts = options.process.clone();
-        popts.period = PeriodSource::Seconds(p);
-        popts.settling_s = 0.0;
+        out.read = averaged.rows;
+        out.blocks = averaged.chunks;
+        let popts = averaged.process;
         let used = accumulate_processed(
             &log, &popts, options, model, base, &mut acc, None, &mut out, &mut None,
         )?;
@@ -388,83 +335,36 @@ pub fn identify_log_with_progress(
     } else {
         route = StreamingRoute::OverlappingBlocks;
         let mut popts = options.process.clone();
-        popts.period = PeriodSource::Off;
-        let mut buf = Columns::default();
-        let mut buf_start = 0usize; // global index of buf's first sample
-        let mut done = 0usize; // samples before this are accumulated
-        let mut margin = 0usize;
-        // Samples per block: `chunk_samples`, or more where the overlap
-        // would otherwise be a large share of each block (high rates).
-        let mut block = options.chunk_samples;
-        let mut eof = false;
-        // Blocks read but not yet processed, with their windows, and the
-        // matrices the blocks in flight re-use.
-        let mut pending: Vec<(Log, (usize, usize, usize))> = Vec::new();
         let mut spares: [Option<Mat<f64>>; BLOCKS_IN_FLIGHT] = Default::default();
-        while !eof {
-            chunk.clear();
-            let want = if first { block } else { block + 2 * margin };
-            let n = read(&mut reader, &mut chunk, want.saturating_sub(buf.len()))?;
-            eof = n == 0 || buf.len() + n < want;
-            append(&mut buf, &chunk);
-            out.read += n;
-            if first {
-                if buf.is_empty() {
-                    return Err(invalid(&name, "the log has no data rows"));
-                }
-                dt = nominal_step(&buf, dt)?;
-                if popts.filter == Bandwidth::Auto && !logged {
-                    // One cut-off for every block: the first block's spectrum.
-                    let c = aras_signal::spectrum_cutoff([&buf.theta[0], &buf.theta[1]], dt);
-                    popts.filter = Bandwidth::Fixed(FilterSpec {
-                        cutoff_hz: c.cutoff_hz,
-                        ..FilterSpec::default()
-                    });
-                }
-                margin = overlap(&popts, dt, options.overlap_tolerance)?
-                    + reach_of(&popts, dt, options.reversal_reach)?;
-                block = block.max(BLOCK_PER_MARGIN * margin);
-                first = false;
-                if !eof {
-                    // Read the rest of the first block with its margin.
-                    chunk.clear();
-                    let want = block + 2 * margin;
-                    let n = read(&mut reader, &mut chunk, want - buf.len())?;
-                    eof = buf.len() + n < want;
-                    append(&mut buf, &chunk);
-                    out.read += n;
-                }
-            }
-            let end = buf_start + buf.len();
-            let keep_end = if eof { end } else { end - margin };
-            if keep_end <= done && !eof {
-                continue;
-            }
-            pending.push((
-                block_log(&name, &buf, dt, reader.sidecar().clone()),
-                (buf_start, done, keep_end),
-            ));
-            if pending.len() == BLOCKS_IN_FLIGHT || eof {
+        let (margin, rows) = overlapping_blocks(
+            &name,
+            &mut reader,
+            &mut read,
+            &mut popts,
+            BlockSizes {
+                chunk: options.chunk_samples,
+                dt,
+                logged,
+            },
+            |p, dt| {
+                Ok(overlap(p, dt, options.overlap_tolerance)?
+                    + reach_of(p, dt, options.reversal_reach)?)
+            },
+            |pending, popts| {
                 process_blocks(
-                    &mut pending,
-                    &popts,
+                    pending,
+                    popts,
                     options,
                     model,
                     base,
                     &mut acc,
                     &mut out,
                     &mut spares,
-                )?;
-            }
-            done = keep_end;
-            // Keep `margin` samples before `done` for the next block.
-            let drop = (done.saturating_sub(margin)).saturating_sub(buf_start);
-            drain_front(&mut buf, drop);
-            buf_start += drop;
-        }
-        // The last block (at end of file) flushed the blocks in flight.
-        debug_assert!(pending.is_empty());
+                )
+            },
+        )?;
         out.overlap = margin;
+        out.read = rows;
     }
     if route == StreamingRoute::LoggedDerivatives {
         acc = stage.accumulator();
@@ -505,6 +405,318 @@ pub fn identify_log_with_progress(
         periods: out.periods,
         log: report,
     })
+}
+
+/// Appends up to `n` rows of the log to a buffer: `read(reader, into, n)`
+/// (fewer only at the end of the log), returns how many.
+type ReadRows<'a> =
+    dyn FnMut(&mut LogReader<std::fs::File>, &mut Columns, usize) -> Result<usize, IdentError> + 'a;
+
+/// The rows of a log, `n` at a time: `read(reader, into, n)` appends up to
+/// `n` rows to `into` (fewer only at the end of the log), each torque taken
+/// `torque_delay` samples after its angles if one is given (the rows
+/// without such a torque dropped), and calls `progress` with the rows read
+/// so far.
+#[allow(clippy::type_complexity)]
+fn rows_reader<'a>(
+    name: &'a str,
+    torque_delay: Option<f64>,
+    progress: &'a mut dyn FnMut(u64),
+) -> Result<
+    impl FnMut(&mut LogReader<std::fs::File>, &mut Columns, usize) -> Result<usize, IdentError> + 'a,
+    IdentError,
+> {
+    if let Some(d) = torque_delay.filter(|d| !d.is_finite()) {
+        return Err(IdentError::InvalidSetting {
+            name: "torque_delay",
+            value: d,
+            reason: "give a finite number of samples, e.g. 2.5",
+        });
+    }
+    let mut shift = torque_delay.map(TorqueShift::new);
+    let mut raw = Columns::default();
+    let mut rows_read = 0u64;
+    Ok(
+        move |reader: &mut LogReader<std::fs::File>, chunk: &mut Columns, n: usize| {
+            let mut got = 0;
+            while got < n {
+                let into = if shift.is_some() {
+                    raw.clear();
+                    &mut raw
+                } else {
+                    &mut *chunk
+                };
+                let k = reader
+                    .read_rows(into, n - got)
+                    .map_err(|e| sig(&format!("reading the log {name}"), e))?;
+                rows_read += k as u64;
+                progress(rows_read);
+                if k == 0 {
+                    break;
+                }
+                got += match shift.as_mut() {
+                    Some(s) => s.push(&raw, chunk),
+                    None => k,
+                };
+            }
+            Ok(got)
+        },
+    )
+}
+
+/// The period average of a log read chunk by chunk ([`period_average`]).
+struct PeriodAverage {
+    /// One block of averaged periods, as a log.
+    log: Log,
+    /// Whole periods averaged.
+    periods: usize,
+    /// Rows read.
+    rows: usize,
+    /// Chunks read.
+    chunks: usize,
+    /// The processing options for the averaged log (its period, no
+    /// settling: the sums skipped it).
+    process: ProcessOptions,
+}
+
+/// Sums each channel over the period `period_s` while reading the log
+/// with `read(reader, into, n)` (memory: one period), and returns the
+/// averaged period as a log to process as in memory.
+fn period_average(
+    name: &str,
+    reader: &mut LogReader<std::fs::File>,
+    read: &mut ReadRows<'_>,
+    period_s: f64,
+    options: &StreamingOptions,
+    logged: bool,
+) -> Result<PeriodAverage, IdentError> {
+    let mut avg: Option<PeriodSums> = None;
+    let mut chunk = Columns::default();
+    let mut dt = options.read.nominal_step.unwrap_or(0.0);
+    let (mut rows, mut chunks) = (0, 0);
+    loop {
+        chunk.clear();
+        let n = read(reader, &mut chunk, options.chunk_samples)?;
+        if n == 0 {
+            break;
+        }
+        let sums = match &mut avg {
+            Some(s) => s,
+            None => {
+                dt = nominal_step(&chunk, dt)?;
+                avg.insert(PeriodSums::new(period_s, dt, &options.process, logged)?)
+            }
+        };
+        sums.add(&chunk);
+        rows += n;
+        chunks += 1;
+    }
+    let sums = avg.ok_or_else(|| invalid(name, "the log has no data rows"))?;
+    let (log, periods) = sums.finish(name, rows, reader.sidecar().clone())?;
+    let mut process = options.process.clone();
+    process.period = PeriodSource::Seconds(period_s);
+    process.settling_s = 0.0;
+    Ok(PeriodAverage {
+        log,
+        periods,
+        rows,
+        chunks,
+        process,
+    })
+}
+
+/// Processes the log at `path` as [`aras_signal::process`] would, without
+/// holding it in memory, into a diagnosis [`Dataset`]:
+/// * with a period (from the options or the sidecar), the period average
+///   is accumulated while reading (memory: one period) and processed in
+///   memory, as [`identify_log`]'s period route does;
+/// * otherwise the log is processed in overlapping blocks (as
+///   [`identify_log`]'s overlapping-block route does: an automatic
+///   bandwidth takes its cut-off from the first block) and the blocks'
+///   interior samples are written to a scratch file in `dir`
+///   ([`crate::spool`]), which the diagnosis reads window by window; the
+///   file is removed with the last clone of the data set.
+///
+/// Of `options`, the reading, processing, geometry, `chunk_samples`,
+/// `overlap_tolerance` and `torque_delay` apply. `progress(rows)` is called
+/// with the rows read so far.
+pub fn spool_log(
+    path: &Path,
+    options: &StreamingOptions,
+    dir: &Path,
+    progress: &mut dyn FnMut(u64),
+) -> Result<Dataset, IdentError> {
+    let name = path.file_name().map_or_else(
+        || path.display().to_string(),
+        |f| f.to_string_lossy().into(),
+    );
+    let mut reader = LogReader::open(path, &options.read)
+        .map_err(|e| sig(&format!("opening the log {}", path.display()), e))?;
+    let period = match options.process.period {
+        PeriodSource::FromSidecar => reader.sidecar().excitation.period_s,
+        PeriodSource::Seconds(p) => Some(p),
+        PeriodSource::Off => None,
+    };
+    let logged = options.process.use_logged_derivatives
+        && reader.has_velocity()
+        && reader.has_acceleration();
+    let mut read = rows_reader(&name, options.torque_delay, progress)?;
+    let task = aras_kin::task_motion(&options.geometry);
+    let process = |log: &Log, popts: &ProcessOptions| {
+        aras_signal::process(log, popts, &task).map_err(|e| sig(&format!("processing {name}"), e))
+    };
+    let dataset = if let Some(p) = period {
+        let averaged = period_average(&name, &mut reader, &mut read, p, options, logged)?;
+        Dataset::from_processed_owned(name.clone(), process(&averaged.log, &averaged.process)?)?
+    } else {
+        let mut spool = SpoolWriter::create_in(dir)?;
+        let mut popts = options.process.clone();
+        let mut filter: Option<(Option<Sos>, f64)> = None;
+        overlapping_blocks(
+            &name,
+            &mut reader,
+            &mut read,
+            &mut popts,
+            BlockSizes {
+                chunk: options.chunk_samples,
+                dt: options.read.nominal_step.unwrap_or(0.0),
+                logged,
+            },
+            |p, dt| overlap(p, dt, options.overlap_tolerance),
+            |pending, popts| {
+                use rayon::prelude::*;
+                let done = pending
+                    .par_iter()
+                    .map(|(log, window)| process(log, popts).map(|p| (p, log.len(), *window)))
+                    .collect::<Vec<_>>();
+                for part in done {
+                    let (p, len, (start, from, to)) = part?;
+                    if filter.is_none() {
+                        let sm = &p.summary;
+                        filter = Some((processing_filter(sm)?, sm.sample_rate_hz));
+                    }
+                    // Processed sample i is the block's sample edge + i.
+                    let n = p.samples.len();
+                    let first = start + (len - n) / 2;
+                    let i0 = from.saturating_sub(first).min(n);
+                    let i1 = to.saturating_sub(first).min(n).max(i0);
+                    spool.append(&p.samples, i0..i1)?;
+                }
+                Ok(())
+            },
+        )?;
+        let (filter, rate) = filter.ok_or_else(|| invalid(&name, "the log has no data rows"))?;
+        Dataset::spooled(name.clone(), spool.finish()?, filter, rate)
+    };
+    reader
+        .finish()
+        .map_err(|e| sig(&format!("checking the log {name}"), e))?;
+    Ok(dataset)
+}
+
+/// What [`overlapping_blocks`] needs to size its blocks.
+#[derive(Debug, Clone, Copy)]
+struct BlockSizes {
+    /// Samples per block at least (`StreamingOptions::chunk_samples`).
+    chunk: usize,
+    /// The log's sample step if known (> 0), else estimated from the first
+    /// block.
+    dt: f64,
+    /// Logged derivatives are used (no automatic cut-off then).
+    logged: bool,
+}
+
+/// A block read: its rows as a [`Log`], and `(index of its first sample,
+/// first sample to keep, end of the samples to keep)`.
+type Block = (Log, (usize, usize, usize));
+
+/// The overlapping-block reading shared by streaming identification and
+/// [`spool_log`]: blocks of at least `sizes.chunk` rows (and
+/// [`BLOCK_PER_MARGIN`] margins) with `margin_of(popts, dt)` rows of
+/// overlap each side are read with `read(reader, into, n)` and handed to
+/// `flush(blocks, popts)` [`BLOCKS_IN_FLIGHT`] at a time, in order (the
+/// caller keeps only each block's samples in its keep range). An automatic
+/// bandwidth is fixed from the first block's angle spectrum
+/// (`aras_signal::spectrum_cutoff`), so every block uses the same filter;
+/// `popts` holds it afterwards. Returns the margin and the rows read.
+#[allow(clippy::too_many_arguments)]
+fn overlapping_blocks(
+    name: &str,
+    reader: &mut LogReader<std::fs::File>,
+    read: &mut ReadRows<'_>,
+    popts: &mut ProcessOptions,
+    sizes: BlockSizes,
+    margin_of: impl Fn(&ProcessOptions, f64) -> Result<usize, IdentError>,
+    mut flush: impl FnMut(&mut Vec<Block>, &ProcessOptions) -> Result<(), IdentError>,
+) -> Result<(usize, usize), IdentError> {
+    popts.period = PeriodSource::Off;
+    let mut rows = 0usize;
+    let mut chunk = Columns::default();
+    let mut buf = Columns::default();
+    let mut buf_start = 0usize; // global index of buf's first sample
+    let mut done = 0usize; // samples before this are handed over
+    let mut margin = 0usize;
+    let mut dt = sizes.dt;
+    let mut first = true;
+    // Samples per block: `sizes.chunk`, or more where the overlap would
+    // otherwise be a large share of each block (high rates).
+    let mut block = sizes.chunk;
+    let mut eof = false;
+    // Blocks read but not yet handed over.
+    let mut pending: Vec<Block> = Vec::new();
+    while !eof {
+        chunk.clear();
+        let want = if first { block } else { block + 2 * margin };
+        let n = read(reader, &mut chunk, want.saturating_sub(buf.len()))?;
+        eof = n == 0 || buf.len() + n < want;
+        append(&mut buf, &chunk);
+        rows += n;
+        if first {
+            if buf.is_empty() {
+                return Err(invalid(name, "the log has no data rows"));
+            }
+            dt = nominal_step(&buf, dt)?;
+            if popts.filter == Bandwidth::Auto && !sizes.logged {
+                // One cut-off for every block: the first block's spectrum.
+                let c = aras_signal::spectrum_cutoff([&buf.theta[0], &buf.theta[1]], dt);
+                popts.filter = Bandwidth::Fixed(FilterSpec {
+                    cutoff_hz: c.cutoff_hz,
+                    ..FilterSpec::default()
+                });
+            }
+            margin = margin_of(popts, dt)?;
+            block = block.max(BLOCK_PER_MARGIN * margin);
+            first = false;
+            if !eof {
+                // Read the rest of the first block with its margin.
+                chunk.clear();
+                let want = block + 2 * margin;
+                let n = read(reader, &mut chunk, want - buf.len())?;
+                eof = buf.len() + n < want;
+                append(&mut buf, &chunk);
+                rows += n;
+            }
+        }
+        let end = buf_start + buf.len();
+        let keep_end = if eof { end } else { end - margin };
+        if keep_end <= done && !eof {
+            continue;
+        }
+        pending.push((
+            block_log(name, &buf, dt, reader.sidecar().clone()),
+            (buf_start, done, keep_end),
+        ));
+        if pending.len() == BLOCKS_IN_FLIGHT || eof {
+            flush(&mut pending, popts)?;
+            pending.clear();
+        }
+        done = keep_end;
+        // Keep `margin` samples before `done` for the next block.
+        let drop = (done.saturating_sub(margin)).saturating_sub(buf_start);
+        drain_front(&mut buf, drop);
+        buf_start += drop;
+    }
+    Ok((margin, rows))
 }
 
 /// Least block length of the overlapping-block route, in margins (filter

@@ -20,4 +20,5 @@ pub mod synthetic;
 
 pub use log::{
     StreamingOptions, StreamingResult, StreamingRoute, identify_log, identify_log_with_progress,
+    spool_log,
 };
