@@ -235,7 +235,10 @@ pub fn filter_columns(
     }
     if !periodic {
         // Every column's two joint blocks as slices, filtered
-        // `FILTER_LANES` at a time (bit-identical to one at a time).
+        // `FILTER_LANES` at a time (bit-identical to one at a time). A
+        // block of zeros stays zeros (a per-joint effect's column in the
+        // other joint's rows: most of a diagnosis's candidate columns), so
+        // it is left out.
         let mut blocks: Vec<&mut [f64]> = Vec::with_capacity(2 * w.ncols());
         for col in w.col_iter_mut() {
             let col = col
@@ -243,8 +246,7 @@ pub fn filter_columns(
                 .ok_or_else(|| invalid("filtering", "a regressor column is not contiguous"))?
                 .as_slice_mut();
             let (a, b) = col.split_at_mut(n);
-            blocks.push(a);
-            blocks.push(b);
+            blocks.extend([a, b].into_iter().filter(|x| x.iter().any(|v| *v != 0.0)));
         }
         return blocks.par_chunks_mut(FILTER_LANES).try_for_each_init(
             Vec::new,
@@ -362,25 +364,8 @@ pub fn reversal_mask(
 /// `tol` of its peak, on a record of `n` samples (circular when
 /// `periodic`): how far filtering spreads a local model error.
 pub fn filter_reach(sos: &Sos, n: usize, periodic: bool, tol: f64) -> Result<usize, IdentError> {
-    // Away from the ends of a long record the response does not depend on
-    // its length: a record of 4096 samples (doubled until the response has
-    // died out to 1e-9 of its peak at its ends) gives the same reach as the
-    // whole record at a fraction of the cost. A period is circular: its
-    // length is part of the answer.
-    let mut m = if periodic { n } else { n.min(4096) };
-    let (impulse, centre) = loop {
-        let (h, c) = impulse_response(sos, m, periodic)?;
-        let peak = h.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
-        let ends = h
-            .first()
-            .map_or(0.0, |v| v.abs())
-            .max(h.last().map_or(0.0, |v| v.abs()));
-        if m == n || ends <= 1e-9 * peak {
-            break (h, c);
-        }
-        m = (2 * m).min(n);
-    };
-    let n = m;
+    let (impulse, centre) = settled_impulse(sos, n, periodic)?;
+    let n = impulse.len();
     let peak = impulse.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
     let reach = impulse
         .iter()
@@ -399,11 +384,34 @@ pub fn filter_reach(sos: &Sos, n: usize, periodic: bool, tol: f64) -> Result<usi
 /// response): white noise of variance `σ²` leaves the filter with variance
 /// `g σ²`, strongly correlated over about `1/g` samples.
 pub fn noise_gain(sos: &Sos, n: usize, periodic: bool) -> Result<f64, IdentError> {
-    Ok(impulse_response(sos, n, periodic)?
+    Ok(settled_impulse(sos, n, periodic)?
         .0
         .iter()
         .map(|v| v * v)
         .sum())
+}
+
+/// The filter's impulse response at the centre of a record of `n` samples
+/// (circular when `periodic`), with the index of its centre. Away from the
+/// ends of a long record the response does not depend on its length: a
+/// record of 4096 samples (doubled until the response has died out to 1e-9
+/// of its peak at its ends) gives the same values as the whole record at a
+/// fraction of the cost and memory. A period is circular: its length is
+/// part of the answer.
+fn settled_impulse(sos: &Sos, n: usize, periodic: bool) -> Result<(Vec<f64>, usize), IdentError> {
+    let mut m = if periodic { n } else { n.min(4096) };
+    loop {
+        let (h, c) = impulse_response(sos, m, periodic)?;
+        let peak = h.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+        let ends = h
+            .first()
+            .map_or(0.0, |v| v.abs())
+            .max(h.last().map_or(0.0, |v| v.abs()));
+        if m == n || ends <= 1e-9 * peak {
+            return Ok((h, c));
+        }
+        m = (2 * m).min(n);
+    }
 }
 
 fn impulse_response(sos: &Sos, n: usize, periodic: bool) -> Result<(Vec<f64>, usize), IdentError> {

@@ -63,13 +63,18 @@ pub(super) fn fill<T: Scalar>(
     let (z, th) = (T::zero(), s.joint.pos);
     let mut c = 0;
     for j in 0..2 {
-        for h in 1..=order {
-            let (sn, cs) = (th[j] * T::lift(h as f64 * cycles_per_rev)).sin_cos();
+        // Harmonic h + 1 from h by the angle-addition formulas: one sin_cos
+        // per joint instead of one per harmonic (rounding grows by about
+        // one ulp per harmonic, ≤ 16).
+        let (s1, c1) = (th[j] * T::lift(cycles_per_rev)).sin_cos();
+        let (mut sn, mut cs) = (s1, c1);
+        for _ in 1..=order {
             out[2 * c + j] = sn;
             out[2 * c + 1 - j] = z;
             out[2 * c + 2 + j] = cs;
             out[2 * c + 3 - j] = z;
             c += 2;
+            (sn, cs) = (sn * c1 + cs * s1, cs * c1 - sn * s1);
         }
     }
 }

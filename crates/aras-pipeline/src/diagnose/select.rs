@@ -347,6 +347,34 @@ impl JointResidual {
     }
 }
 
+/// Rows `rows` of column `j` of an owned matrix (an owned faer matrix
+/// stores each column contiguously).
+fn column(m: &Mat<f64>, j: usize, rows: std::ops::Range<usize>) -> &[f64] {
+    m.col(j)
+        .try_as_col_major()
+        .map_or(&[][..], |c| &c.as_slice()[rows])
+}
+
+/// Column `j` of an owned matrix, to write.
+fn column_mut(m: &mut Mat<f64>, j: usize) -> &mut [f64] {
+    m.col_mut(j)
+        .try_as_col_major_mut()
+        .map_or(&mut [][..], |c| c.as_slice_mut())
+}
+
+/// Where a column of the selection's rows comes from.
+#[derive(Debug, Clone, Copy)]
+enum Source {
+    /// Base column `j` of the starting model.
+    Base(usize),
+    /// Column `jj` of candidate `k`'s single-effect model.
+    Block(usize, usize),
+    /// The filtered torque shifted by this many samples (0: the target).
+    Torque(f64),
+    /// Nothing (a candidate without columns of its own).
+    Zero,
+}
+
 /// Candidates, their single-effect models and their layout for one trial.
 type TrialLayout = (Vec<Candidate>, Vec<Option<Model>>, Layout);
 
@@ -429,8 +457,7 @@ impl Context<'_> {
         let lanes = in_lanes(
             d,
             p,
-            lo,
-            hi,
+            (lo, hi),
             || Accumulator::new(layout),
             |acc, w, a, b| {
                 let (wl, nw) = (w.lo, w.len());
@@ -446,29 +473,56 @@ impl Context<'_> {
                 // The columns hold what the chunk needs from the window's
                 // kinematics: free them before the rows are gathered.
                 drop(kin);
+                // Where each layout column comes from, so the rows are
+                // gathered column by column.
+                let source: Vec<Source> = (0..width)
+                    .map(|j| {
+                        if j < pb {
+                            return Source::Base(j);
+                        }
+                        if j == target {
+                            // A shift of 0 reads the sample itself.
+                            return Source::Torque(0.0);
+                        }
+                        (0..cands.len())
+                            .find_map(|k| {
+                                let cols = layout.candidate_columns(k);
+                                let jj = j.checked_sub(cols.start).filter(|_| cols.contains(&j))?;
+                                Some(match (&blocks[k], cands[k]) {
+                                    (Some(_), _) => Source::Block(k, jj),
+                                    (None, Candidate::TimeDelay { samples }) => {
+                                        Source::Torque(samples)
+                                    }
+                                    (None, Candidate::Effect { .. }) => Source::Zero,
+                                })
+                            })
+                            .unwrap_or(Source::Zero)
+                    })
+                    .collect();
                 for g in 0..2 {
                     let idx = w.rows(g, a, b);
+                    // Joint g's rows of the window's columns.
+                    let rows = g * nw..(g + 1) * nw;
                     let mut m = Mat::<f64>::zeros(idx.len(), width);
-                    for (r, &i) in idx.iter().enumerate() {
-                        let row = g * nw + (i - wl);
-                        for j in 0..pb {
-                            m[(r, j)] = wb[(row, j)];
-                        }
-                        for (k, c) in cands.iter().enumerate() {
-                            let cols = layout.candidate_columns(k);
-                            match (&blocks[k], c) {
-                                (Some(bk), _) => {
-                                    for (jj, j) in cols.enumerate() {
-                                        m[(r, j)] = bk[(row, jj)];
-                                    }
+                    for (j, src) in source.iter().enumerate() {
+                        let out = column_mut(&mut m, j);
+                        let from = match *src {
+                            Source::Base(c) => column(&wb, c, rows.clone()),
+                            Source::Block(k, c) => match &blocks[k] {
+                                Some(bk) => column(bk, c, rows.clone()),
+                                None => continue,
+                            },
+                            Source::Torque(d) => {
+                                for (o, &i) in out.iter_mut().zip(&idx) {
+                                    *o = w.shifted(g, i, d);
                                 }
-                                (None, Candidate::TimeDelay { samples }) => {
-                                    m[(r, cols.start)] = w.shifted(g, i, *samples);
-                                }
-                                (None, Candidate::Effect { .. }) => {}
+                                continue;
                             }
+                            Source::Zero => continue,
+                        };
+                        for (o, &i) in out.iter_mut().zip(&idx) {
+                            *o = from[i - wl];
                         }
-                        m[(r, target)] = w.tau[g][i - wl];
                     }
                     acc.push(g, m.as_ref())?;
                 }
@@ -516,7 +570,7 @@ impl Context<'_> {
                     && self.layout.candidate_columns(k).any(|c| beta[c] != 0.0)
             })
             .collect();
-        let lanes = in_lanes(d, p, lo, hi, Vec::new, |out, w, a, b| {
+        let lanes = in_lanes(d, p, (lo, hi), Vec::new, |out, w, a, b| {
             let (wl, nw) = (w.lo, w.len());
             let kin = w.kinematics(self.geometry)?;
             let wb = d.columns(self.start, RegressorColumns::Base(&self.base), &kin)?;
@@ -585,7 +639,7 @@ impl Context<'_> {
         f: impl Fn(&mut T, usize, MatRef<'_, f64>, &[f64]) -> Result<(), IdentError> + Sync,
     ) -> Result<Vec<T>, IdentError> {
         let (lo, hi) = self.range(d);
-        in_lanes(d, p, lo, hi, init, |st, w, a, b| {
+        in_lanes(d, p, (lo, hi), init, |st, w, a, b| {
             let (wl, nw) = (w.lo, w.len());
             let kin = w.kinematics(self.geometry)?;
             let wb = d.columns(model, RegressorColumns::Base(base), &kin)?;
