@@ -269,6 +269,60 @@ impl Accumulator {
     }
 
     /// The per-group Grams and column sums, as plain matrices.
+    /// The sums of rows whose values are linear combinations of this
+    /// accumulator's: column `j` of `layout` is `Σ w · (column i)` over the
+    /// pairs `(i, w)` of `combination[j]`. The Gram becomes `Mᵀ G M`, the
+    /// column sums `Mᵀ s`, so no pass over the data is needed; e.g. a
+    /// candidate at a setting between trial settings, its columns
+    /// interpolated from theirs.
+    pub fn combined(
+        &self,
+        layout: &Layout,
+        combination: &[Vec<(usize, f64)>],
+    ) -> Result<Accumulator, IdentError> {
+        let (w, w2) = (self.layout.width(), layout.width());
+        if combination.len() != w2 || layout.groups != self.layout.groups {
+            return Err(IdentError::DimensionMismatch {
+                what: "columns of a combined selection layout",
+                expected: w2,
+                found: combination.len(),
+                hint: "give one combination per column of the new layout, for as many groups",
+            });
+        }
+        if let Some(&(i, _)) = combination.iter().flatten().find(|(i, _)| *i >= w) {
+            return Err(IdentError::InvalidSelection {
+                reason: format!("column {i} does not exist (the sums have {w} columns)"),
+            });
+        }
+        let m = Mat::<f64>::from_fn(w, w2, |i, j| {
+            combination[j]
+                .iter()
+                .filter(|(c, _)| *c == i)
+                .map(|(_, x)| x)
+                .sum()
+        });
+        let grams = self
+            .grams
+            .iter()
+            .map(|g| GramSum::from_value((m.transpose() * g.value() * &m).as_ref()))
+            .collect();
+        let sums = self
+            .sums
+            .iter()
+            .map(|s| {
+                (0..w2)
+                    .map(|j| combination[j].iter().map(|&(i, x)| x * s[i]).sum())
+                    .collect()
+            })
+            .collect();
+        Ok(Accumulator {
+            layout: layout.clone(),
+            grams,
+            sums,
+            rows: self.rows.clone(),
+        })
+    }
+
     pub(crate) fn snapshot(&self) -> Sums {
         Sums {
             grams: self.grams.iter().map(|g| g.value()).collect(),

@@ -116,6 +116,16 @@ impl GramSum {
         }
     }
 
+    /// A running Gram starting from the symmetric `g` (its lower triangle).
+    pub(crate) fn from_value(g: MatRef<'_, f64>) -> Self {
+        let c = g.ncols();
+        Self {
+            sum: Mat::from_fn(c, c, |i, j| if i >= j { g[(i, j)] } else { 0.0 }),
+            comp: Mat::zeros(c, c),
+            block: Mat::zeros(c, c),
+        }
+    }
+
     /// `G += AᵀA` for a block `a` (`rows × c`): one matrix product (faer), then a compensated addition, so the error of the sum
     /// over any number of blocks stays that of a single block's product.
     pub(crate) fn add(&mut self, a: MatRef<'_, f64>) {

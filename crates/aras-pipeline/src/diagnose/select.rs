@@ -191,12 +191,14 @@ pub struct Refinement {
     pub value: f64,
     /// Standard deviation from the curvature of the profile
     /// `N_eff ln RSS(u)` in the search variable `u` (`ln v`, or `v` for a
-    /// delay; a rise of 1 is one σ; `N_eff` as in the F-test); 0 if
-    /// unknown.
+    /// delay; a rise of 1 is one σ; `N_eff` as in the F-test), its second
+    /// difference over the last zoom pass's three trial values around the
+    /// minimum; 0 if unknown.
     pub std_dev: f64,
     /// Interior minimum or at a bound.
     pub status: RefinementStatus,
-    /// The effect's parameters refitted at the refined value.
+    /// The effect's parameters refitted at the refined value (its columns
+    /// interpolated by a cubic from the four nearest trial values').
     pub parameters: Vec<NamedValue>,
     /// Validation fitness per set and joint at the refined value (%).
     pub fitness: Vec<[f64; 2]>,
@@ -1089,8 +1091,10 @@ const ZOOM_PASSES: usize = 2;
 /// around each search centre, the `others` added effects kept; σ from the
 /// profile's curvature. Every trial value of a zoom pass is a candidate of
 /// one layout, so one bounded pass over TRAIN scores them all (the
-/// selection's own scheme): [`ZOOM_PASSES`] passes and a last one at the
-/// refined value and its two σ probes, whatever the log's length.
+/// selection's own scheme): [`ZOOM_PASSES`] passes, whatever the log's
+/// length. The fit at the refined value needs no pass of its own: its
+/// columns are the cubic interpolation of the four nearest trial values'
+/// columns, whose sums the last pass holds ([`Accumulator::combined`]).
 fn refine_setting(
     ctx: &Context<'_>,
     train: (&Dataset, &Plan),
@@ -1154,7 +1158,7 @@ fn refine_setting(
         .iter()
         .flat_map(|&(lo, hi)| spaced(lo, hi))
         .collect();
-    let (mut rss, _, _) = profile(&us)?;
+    let (mut rss, mut acc, mut trials) = profile(&us)?;
     let mut best = argmin(&rss);
     let (lo, hi) = intervals[best / ZOOM_POINTS];
     let mut points = us;
@@ -1164,7 +1168,7 @@ fn refine_setting(
         let u = points[best];
         let (a, b) = ((u - step).max(lo), (u + step).min(hi));
         points = spaced(a, b);
-        rss = profile(&points)?.0;
+        (rss, acc, trials) = profile(&points)?;
         best = argmin(&rss);
         step = (b - a) / (ZOOM_POINTS - 1) as f64;
     }
@@ -1183,14 +1187,13 @@ fn refine_setting(
     } else {
         RefinementStatus::Interior
     };
-    // Last pass: the refined value (trial 0) and its σ probes u ± h.
-    let h = 0.05;
-    let (probe, tacc, (c, m, l)) = profile(&[u, u - h, u + h])?;
-    let v = scale.setting_value(u);
-    let fu = probe[0];
-    let ne = opts.effective_fraction * tacc.rows().iter().sum::<usize>() as f64;
-    let std_dev = if status == RefinementStatus::Interior && fu > 0.0 {
-        let j2 = ne * (probe[2].ln() - 2.0 * fu.ln() + probe[1].ln()) / (h * h);
+    // σ from the curvature of the profile at the three trial values around
+    // its minimum.
+    let i0 = best.clamp(1, points.len().saturating_sub(2).max(1));
+    let ne = opts.effective_fraction * acc.rows().iter().sum::<usize>() as f64;
+    let (fm, f0, fp) = (rss[i0 - 1], rss[i0], rss[i0 + 1]);
+    let std_dev = if status == RefinementStatus::Interior && fm.min(f0).min(fp) > 0.0 {
+        let j2 = ne * (fp.ln() - 2.0 * f0.ln() + fm.ln()) / (step * step);
         if j2 > 0.0 {
             scale.sigma(u, (2.0 / j2).sqrt())
         } else {
@@ -1199,18 +1202,53 @@ fn refine_setting(
     } else {
         0.0
     };
+    let v = scale.setting_value(u);
+    // The candidate's columns at u: the cubic through the four trial values
+    // around it (u between the middle two where the grid allows).
+    let below = if u >= points[best] {
+        best
+    } else {
+        best.saturating_sub(1)
+    };
+    let first = below
+        .saturating_sub(1)
+        .min(points.len().saturating_sub(INTERPOLATION_NODES));
+    let nodes: [usize; INTERPOLATION_NODES] = std::array::from_fn(|i| first + i);
+    let weights = lagrange(nodes.map(|i| points[i]), u);
+    let (c, m, l) = trials;
+    let (_, _, last) = setup(&[u])?;
+    let start = last.candidate_columns(k0).start;
+    let combination: Vec<Vec<(usize, f64)>> = (0..last.width())
+        .map(|j| {
+            if j < start {
+                vec![(j, 1.0)]
+            } else if j == last.target_column() {
+                vec![(l.target_column(), 1.0)]
+            } else {
+                nodes
+                    .iter()
+                    .zip(weights)
+                    .map(|(&i, w)| (l.candidate_columns(k0 + i).start + j - start, w))
+                    .collect()
+            }
+        })
+        .collect();
+    let tacc = acc.combined(&last, &combination)?;
     let vaccs = validation
         .0
         .iter()
         .zip(validation.1)
-        .map(|(d, p)| ctx.accumulate_with(d, p, &c, &m, &l))
+        .map(|(d, p)| {
+            ctx.accumulate_with(d, p, &c, &m, &l)?
+                .combined(&last, &combination)
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let f = fit_model(&tacc, &vaccs, &with_trial(0), opts)?;
     let names = match candidate.with_setting(v) {
         Candidate::Effect { effect } => effect.names(),
         Candidate::TimeDelay { .. } => Vec::new(),
     };
-    let parameters = l
+    let parameters = last
         .candidate_columns(k0)
         .zip(&names)
         .filter_map(|(col, name)| {
@@ -1230,6 +1268,22 @@ fn refine_setting(
         status,
         parameters,
         fitness: f.fitness.iter().map(|x| fitness_pair(x)).collect(),
+    })
+}
+
+/// Trial values a refined setting's columns are interpolated from: a
+/// cubic, whose error is fourth order in the last zoom pass's spacing.
+const INTERPOLATION_NODES: usize = 4;
+
+/// Lagrange weights at `u` of the nodes `x` (distinct): a smooth function's
+/// value at `u` is `Σ w_i f(x_i)` up to a term of order `N` in the
+/// spacing.
+fn lagrange<const N: usize>(x: [f64; N], u: f64) -> [f64; N] {
+    std::array::from_fn(|i| {
+        (0..N)
+            .filter(|&k| k != i)
+            .map(|k| (u - x[k]) / (x[i] - x[k]))
+            .product()
     })
 }
 
