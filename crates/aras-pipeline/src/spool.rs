@@ -27,6 +27,10 @@ const RECORD: usize = CHANNELS * 8;
 /// Distinguishes the scratch files one process creates.
 static NEXT: AtomicUsize = AtomicUsize::new(0);
 
+/// Names tried before giving up when files with the scratch files' names
+/// exist already.
+const MAX_TRIES: usize = 1000;
+
 /// The channels of `s` in record order.
 fn channels(s: &Samples) -> [&Vec<f64>; CHANNELS] {
     [
@@ -79,28 +83,38 @@ pub struct SpoolWriter {
 }
 
 impl SpoolWriter {
-    /// A new, empty scratch file in `dir` (which must exist).
+    /// A new, empty scratch file in `dir` (which must exist), under the
+    /// first name of the form `.aras-samples-PID-K.bin` that no file has.
     pub fn create_in(dir: &Path) -> Result<Self, IdentError> {
-        let path = dir.join(format!(
-            ".aras-samples-{}-{}.bin",
-            std::process::id(),
-            NEXT.fetch_add(1, Ordering::Relaxed)
-        ));
-        let file = File::options()
-            .read(true)
-            .write(true)
-            .create_new(true)
-            .open(&path)
-            .map_err(|e| {
-                io(
-                    format!(
-                        "creating the scratch file {} (choose a writable directory with free \
-                         space for about {RECORD} bytes per sample)",
-                        path.display()
-                    ),
-                    e,
-                )
-            })?;
+        let mut tries = 0;
+        let (file, path) = loop {
+            let path = dir.join(format!(
+                ".aras-samples-{}-{}.bin",
+                std::process::id(),
+                NEXT.fetch_add(1, Ordering::Relaxed)
+            ));
+            match File::options()
+                .read(true)
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(f) => break (f, path),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && tries < MAX_TRIES => {
+                    tries += 1;
+                }
+                Err(e) => {
+                    return Err(io(
+                        format!(
+                            "creating the scratch file {} (choose a writable directory with \
+                             free space for about {RECORD} bytes per sample)",
+                            path.display()
+                        ),
+                        e,
+                    ));
+                }
+            }
+        };
         Ok(Self {
             file: Some(BufWriter::with_capacity(1 << 20, file)),
             path,
