@@ -348,3 +348,87 @@ fn identify_reads_a_labs_own_column_names() {
     let msg = String::from_utf8_lossy(&bad.stderr);
     assert!(msg.contains("unknown role `time`"), "{msg}");
 }
+
+/// `--streaming on` (TRAIN processed in overlapping blocks into a scratch
+/// file) and `--streaming off` (in memory) name the same effect with the
+/// same validation figures on a plain log (no period, the default fixed
+/// 10 Hz low-pass), and the scratch file is gone from the outputs.
+#[test]
+fn diagnose_streams_a_long_log_as_in_memory() {
+    let dir = scratch("diagnose", "streaming");
+    let mut truth = Params::aras_diamond();
+    truth.extra.passive_joint_viscous = Some([0.005; 3]);
+    let (train, val) = (dir.join("train.csv"), dir.join("val.csv"));
+    log(&truth, &default_excitation(), 40.0, &train);
+    log(&truth, &Sinusoid::paper_79(0.5).unwrap(), 10.0, &val);
+    let run = |mode: &str| {
+        let out = dir.join(format!("out-{mode}"));
+        let r = Command::new(env!("CARGO_BIN_EXE_aras"))
+            .args(["diagnose", "--data"])
+            .arg(&train)
+            .arg("--validate")
+            .arg(&val)
+            .args(["--streaming", mode, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        (out, String::from_utf8_lossy(&r.stderr).into_owned())
+    };
+    let (on, log_on) = run("on");
+    let (off, log_off) = run("off");
+    assert!(
+        log_on.contains("read + process TRAIN (streamed)"),
+        "{log_on}"
+    );
+    assert!(!log_off.contains("(streamed)"), "{log_off}");
+    let (a, b) = (
+        json(&on.join("diagnosis.json")),
+        json(&off.join("diagnosis.json")),
+    );
+    let ids = |j: &serde_json::Value| -> Vec<String> {
+        j["steps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s["id"].as_str().unwrap().to_owned())
+            .collect()
+    };
+    assert_eq!(ids(&a), ids(&b));
+    assert_eq!(ids(&a)[0], "passive_joint_viscous", "{}", a["conclusion"]);
+    assert_eq!(a["rows_fitted"], b["rows_fitted"]);
+    let rows = |j: &serde_json::Value| -> Vec<f64> {
+        j["fitness"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|r| r["fitness"].as_array().unwrap().clone())
+            .flat_map(|p| p.as_array().unwrap().clone())
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    let (fa, fb) = (rows(&a), rows(&b));
+    assert_eq!(fa.len(), fb.len());
+    for (x, y) in fa.iter().zip(&fb) {
+        assert!((x - y).abs() < 1e-6, "fitness {x} vs {y}");
+    }
+    let left: Vec<String> = std::fs::read_dir(&on)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains("aras-samples"))
+        .collect();
+    assert!(left.is_empty(), "scratch files left: {left:?}");
+    assert_eq!(
+        std::fs::read_dir(&dir)
+            .unwrap()
+            .filter(|e| e
+                .as_ref()
+                .unwrap()
+                .file_name()
+                .to_string_lossy()
+                .contains("staging"))
+            .count(),
+        0,
+        "no staging directory stays"
+    );
+}
