@@ -197,6 +197,43 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// Rows whose columns 4 and 5 are zero, pushed as their other columns
+    /// ([`Accumulator::push_columns`]), give the sums of the full rows.
+    #[test]
+    fn pushing_the_nonzero_columns_equals_pushing_the_rows(seed in 0u64..1000, chunk in 1usize..97) {
+        let truth = [0.5, -1.0, 2.0, 0.3, 0.4, -0.7];
+        let mut tr = vec![rows(seed, 150, &truth, 0.1), rows(seed + 9, 110, &truth, 0.1)];
+        for r in tr.iter_mut().flatten() {
+            r[4] = 0.0;
+            r[5] = 0.0;
+        }
+        let l = layout();
+        let full = accumulate(&l, &tr, chunk);
+        let cols = [0, 1, 2, 3, 6];
+        let mut part = Accumulator::new(&l);
+        for (g, rs) in tr.iter().enumerate() {
+            for c in rs.chunks(chunk) {
+                let m = faer::Mat::<f64>::from_fn(c.len(), cols.len(), |i, q| c[i][cols[q]]);
+                part.push_columns(g, m.as_ref(), &cols).unwrap();
+            }
+        }
+        prop_assert_eq!(part.rows(), full.rows());
+        let o = SelectionOptions::default();
+        let a = fit_model(&part, std::slice::from_ref(&part), &[0], &o).unwrap();
+        let b = fit_model(&full, std::slice::from_ref(&full), &[0], &o).unwrap();
+        for (x, y) in a.rss.iter().zip(&b.rss) {
+            prop_assert!((x - y).abs() <= 1e-12 * y, "rss {} vs {}", x, y);
+        }
+        let m = faer::Mat::<f64>::zeros(3, 2);
+        prop_assert!(part.push_columns(0, m.as_ref(), &[3, 1]).is_err(), "not increasing");
+        prop_assert!(part.push_columns(0, m.as_ref(), &[3, 7]).is_err(), "outside the layout");
+        prop_assert!(part.push_columns(0, m.as_ref(), &[3]).is_err(), "count");
+    }
+}
+
 /// The hidden candidate `a` (two columns) is added with its values, `b`
 /// (absent) is not; on data without any candidate nothing is added on any
 /// of 10 seeds.

@@ -220,6 +220,61 @@ impl Accumulator {
         Ok(())
     }
 
+    /// [`Self::push`] for a chunk whose columns other than `cols` are zero
+    /// (e.g. a per-joint effect's columns in another joint's rows): `chunk`
+    /// holds columns `cols` (strictly increasing, within the layout), so
+    /// the Gram costs `cols.len()²` per row instead of `width²`.
+    pub fn push_columns(
+        &mut self,
+        group: usize,
+        chunk: MatRef<'_, f64>,
+        cols: &[usize],
+    ) -> Result<(), IdentError> {
+        let w = self.layout.width();
+        if chunk.ncols() != cols.len()
+            || cols.windows(2).any(|p| p[0] >= p[1])
+            || cols.last().is_some_and(|&c| c >= w)
+        {
+            return Err(IdentError::InvalidSelection {
+                reason: format!(
+                    "a chunk of {} columns given as columns {cols:?} of a layout of width {w}: \
+                     name each chunk column once, increasing, inside the layout",
+                    chunk.ncols()
+                ),
+            });
+        }
+        if group >= self.layout.groups {
+            return Err(IdentError::InvalidSelection {
+                reason: format!(
+                    "output group {group} does not exist (the layout has {} groups, 0-based)",
+                    self.layout.groups
+                ),
+            });
+        }
+        for (q, &j) in cols.iter().enumerate() {
+            let mut s = 0.0;
+            for i in 0..chunk.nrows() {
+                let v = chunk[(i, q)];
+                if !v.is_finite() {
+                    return Err(IdentError::NonFinite {
+                        what: "selection chunk",
+                        row: i,
+                        column: j,
+                        name: self.column_name(j),
+                        value: v,
+                    });
+                }
+                s += v;
+            }
+            self.sums[group][j] += s;
+        }
+        if chunk.nrows() > 0 {
+            self.grams[group].add_columns(chunk, cols);
+        }
+        self.rows[group] += chunk.nrows();
+        Ok(())
+    }
+
     /// Adds rows of `group` given row-major (`values.len()` a multiple of
     /// the layout's width).
     pub fn push_rows(&mut self, group: usize, values: &[f64]) -> Result<(), IdentError> {

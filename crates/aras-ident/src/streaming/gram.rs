@@ -149,6 +149,27 @@ impl GramSum {
         }
     }
 
+    /// `G += AᵀA` for a block whose other columns are zero: `a` holds
+    /// columns `cols` (increasing) of it, so only their products are
+    /// formed.
+    pub(crate) fn add_columns(&mut self, a: MatRef<'_, f64>, cols: &[usize]) {
+        let k = cols.len();
+        crate::linalg::gram_into(self.block.as_mut().submatrix_mut(0, 0, k, k), a);
+        for (q, &j) in cols.iter().enumerate() {
+            for (p, &i) in cols.iter().enumerate().skip(q) {
+                let x = self.block[(p, q)];
+                let s = self.sum[(i, j)];
+                let t = s + x;
+                self.comp[(i, j)] += if s.abs() >= x.abs() {
+                    (s - t) + x
+                } else {
+                    (x - t) + s
+                };
+                self.sum[(i, j)] = t;
+            }
+        }
+    }
+
     /// `G += AᵀA` for a block given transposed (`at`: `c × rows`).
     pub(crate) fn add_transposed(&mut self, at: MatRef<'_, f64>) {
         self.add(at.transpose());

@@ -503,30 +503,45 @@ impl Context<'_> {
                     .collect();
                 for g in 0..2 {
                     let idx = w.rows(g, a, b);
-                    // Joint g's rows of the window's columns.
+                    // Joint g's rows of the window's columns; only the
+                    // columns not zero on them are gathered (a per-joint
+                    // effect's columns are zero in the other joint's rows:
+                    // most candidates' columns).
                     let rows = g * nw..(g + 1) * nw;
-                    let mut m = Mat::<f64>::zeros(idx.len(), width);
-                    for (j, src) in source.iter().enumerate() {
-                        let out = column_mut(&mut m, j);
-                        let from = match *src {
-                            Source::Base(c) => column(&wb, c, rows.clone()),
-                            Source::Block(k, c) => match &blocks[k] {
-                                Some(bk) => column(bk, c, rows.clone()),
-                                None => continue,
-                            },
-                            Source::Torque(d) => {
+                    let from = |src: Source| -> Option<&[f64]> {
+                        match src {
+                            Source::Base(c) => Some(column(&wb, c, rows.clone())),
+                            Source::Block(k, c) => {
+                                blocks[k].as_ref().map(|bk| column(bk, c, rows.clone()))
+                            }
+                            Source::Torque(_) | Source::Zero => None,
+                        }
+                    };
+                    let cols: Vec<usize> = (0..width)
+                        .filter(|&j| match source[j] {
+                            Source::Torque(_) => true,
+                            Source::Zero => false,
+                            src => from(src).is_some_and(|v| v.iter().any(|x| *x != 0.0)),
+                        })
+                        .collect();
+                    let mut m = Mat::<f64>::zeros(idx.len(), cols.len());
+                    for (q, &j) in cols.iter().enumerate() {
+                        let out = column_mut(&mut m, q);
+                        match (source[j], from(source[j])) {
+                            (Source::Torque(d), _) => {
                                 for (o, &i) in out.iter_mut().zip(&idx) {
                                     *o = w.shifted(g, i, d);
                                 }
-                                continue;
                             }
-                            Source::Zero => continue,
-                        };
-                        for (o, &i) in out.iter_mut().zip(&idx) {
-                            *o = from[i - wl];
+                            (_, Some(v)) => {
+                                for (o, &i) in out.iter_mut().zip(&idx) {
+                                    *o = v[i - wl];
+                                }
+                            }
+                            (_, None) => {}
                         }
                     }
-                    acc.push(g, m.as_ref())?;
+                    acc.push_columns(g, m.as_ref(), &cols)?;
                 }
                 Ok(())
             },
