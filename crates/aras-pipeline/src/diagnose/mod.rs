@@ -49,15 +49,22 @@
 //! bins use `σ_rms / √(g n)`.
 //!
 //! ## Memory and time
-//! Nothing proportional to the log's length is held but the processed
-//! samples themselves and the filtered torques: the candidate columns are
-//! computed chunk by chunk (3072 samples) on windows widened by the
-//! zero-phase filter's reach to 1e-9 of its peak, so a chunk's filtered
-//! rows equal the whole-record filter's to that accuracy; the sums are
-//! `joints × width²` numbers per data set (width ≈ 170 with the default
-//! grid). The residual analysis keeps each validation set's residual per
-//! joint (8 bytes per row). Deterministic: fixed accumulation lanes, no
-//! randomness (the base parameters use a Halton set).
+//! Every pass reads its data sets window by window ([`Dataset::read`]):
+//! each chunk of 3072 samples with the zero-phase filter's reach to 1e-9
+//! of its peak on both sides, where the window's candidate columns and
+//! torques are filtered and its reversal exclusion is computed, so a
+//! chunk's rows equal the whole record's to that accuracy. A data set's
+//! samples are in memory or, for a long training log, in a scratch file
+//! written while the log is processed in overlapping blocks
+//! ([`crate::streaming::spool_log`]): then nothing proportional to the
+//! training log is held. The sums are `joints × width²` numbers per data
+//! set (width ≈ 170 with the default grid; each joint's rows carry only the
+//! columns that are not zero on them). The residual analysis keeps each
+//! validation set's residual and motion per joint (48 bytes per row).
+//! Passes over the training log: one for the selection, two per refined
+//! setting, one for the physically consistent fit. Deterministic: fixed
+//! accumulation lanes, no randomness (the base parameters use a Halton
+//! set).
 
 mod candidates;
 mod chunks;
