@@ -179,14 +179,6 @@ impl Accumulator {
     /// layout as [`Layout`]). Non-finite values are refused with their
     /// position (row within the chunk, column) so they can be repaired.
     pub fn push(&mut self, group: usize, chunk: MatRef<'_, f64>) -> Result<(), IdentError> {
-        if group >= self.layout.groups {
-            return Err(IdentError::InvalidSelection {
-                reason: format!(
-                    "output group {group} does not exist (the layout has {} groups, 0-based)",
-                    self.layout.groups
-                ),
-            });
-        }
         let w = self.layout.width();
         if chunk.ncols() != w {
             return Err(IdentError::DimensionMismatch {
@@ -196,28 +188,7 @@ impl Accumulator {
                 hint: "a row is [base columns | every candidate's columns | target]",
             });
         }
-        for j in 0..w {
-            let mut s = 0.0;
-            for i in 0..chunk.nrows() {
-                let v = chunk[(i, j)];
-                if !v.is_finite() {
-                    return Err(IdentError::NonFinite {
-                        what: "selection chunk",
-                        row: i,
-                        column: j,
-                        name: self.column_name(j),
-                        value: v,
-                    });
-                }
-                s += v;
-            }
-            self.sums[group][j] += s;
-        }
-        if chunk.nrows() > 0 {
-            self.grams[group].add(chunk);
-        }
-        self.rows[group] += chunk.nrows();
-        Ok(())
+        self.add_chunk(group, chunk, None)
     }
 
     /// [`Self::push`] for a chunk whose columns other than `cols` are zero
@@ -243,6 +214,17 @@ impl Accumulator {
                 ),
             });
         }
+        self.add_chunk(group, chunk, Some(cols))
+    }
+
+    /// Adds `chunk`'s rows to `group`: its column `q` is the layout's
+    /// `cols[q]` (all columns in order if `None`), the others zero.
+    fn add_chunk(
+        &mut self,
+        group: usize,
+        chunk: MatRef<'_, f64>,
+        cols: Option<&[usize]>,
+    ) -> Result<(), IdentError> {
         if group >= self.layout.groups {
             return Err(IdentError::InvalidSelection {
                 reason: format!(
@@ -251,7 +233,8 @@ impl Accumulator {
                 ),
             });
         }
-        for (q, &j) in cols.iter().enumerate() {
+        for q in 0..chunk.ncols() {
+            let j = cols.map_or(q, |c| c[q]);
             let mut s = 0.0;
             for i in 0..chunk.nrows() {
                 let v = chunk[(i, q)];
@@ -269,7 +252,10 @@ impl Accumulator {
             self.sums[group][j] += s;
         }
         if chunk.nrows() > 0 {
-            self.grams[group].add_columns(chunk, cols);
+            match cols {
+                None => self.grams[group].add(chunk),
+                Some(c) => self.grams[group].add_columns(chunk, c),
+            }
         }
         self.rows[group] += chunk.nrows();
         Ok(())

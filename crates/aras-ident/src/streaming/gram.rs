@@ -136,17 +136,21 @@ impl GramSum {
         let c = self.sum.ncols();
         for j in 0..c {
             for i in j..c {
-                let x = self.block[(i, j)];
-                let s = self.sum[(i, j)];
-                let t = s + x;
-                self.comp[(i, j)] += if s.abs() >= x.abs() {
-                    (s - t) + x
-                } else {
-                    (x - t) + s
-                };
-                self.sum[(i, j)] = t;
+                self.add_entry(i, j, self.block[(i, j)]);
             }
         }
+    }
+
+    /// `G[i, j] += x` with Neumaier compensation.
+    fn add_entry(&mut self, i: usize, j: usize, x: f64) {
+        let s = self.sum[(i, j)];
+        let t = s + x;
+        self.comp[(i, j)] += if s.abs() >= x.abs() {
+            (s - t) + x
+        } else {
+            (x - t) + s
+        };
+        self.sum[(i, j)] = t;
     }
 
     /// `G += AᵀA` for a block whose other columns are zero: `a` holds
@@ -157,15 +161,7 @@ impl GramSum {
         crate::linalg::gram_into(self.block.as_mut().submatrix_mut(0, 0, k, k), a);
         for (q, &j) in cols.iter().enumerate() {
             for (p, &i) in cols.iter().enumerate().skip(q) {
-                let x = self.block[(p, q)];
-                let s = self.sum[(i, j)];
-                let t = s + x;
-                self.comp[(i, j)] += if s.abs() >= x.abs() {
-                    (s - t) + x
-                } else {
-                    (x - t) + s
-                };
-                self.sum[(i, j)] = t;
+                self.add_entry(i, j, self.block[(p, q)]);
             }
         }
     }
@@ -182,14 +178,7 @@ impl GramSum {
         for j in 0..c {
             for i in j..c {
                 for x in [other.sum[(i, j)], other.comp[(i, j)]] {
-                    let s = self.sum[(i, j)];
-                    let t = s + x;
-                    self.comp[(i, j)] += if s.abs() >= x.abs() {
-                        (s - t) + x
-                    } else {
-                        (x - t) + s
-                    };
-                    self.sum[(i, j)] = t;
+                    self.add_entry(i, j, x);
                 }
             }
         }

@@ -254,16 +254,8 @@ pub fn identify_log_with_progress(
         options.accumulation,
     )?;
     let mut acc = QrAccumulator::new(stage.names(), 2)?;
-    let period = match options.process.period {
-        PeriodSource::FromSidecar => reader.sidecar().excitation.period_s,
-        PeriodSource::Seconds(p) => Some(p),
-        PeriodSource::Off => None,
-    };
-    let logged = options.process.use_logged_derivatives
-        && reader.has_velocity()
-        && reader.has_acceleration();
+    let (period, logged) = period_and_derivatives(&reader, options);
     let mut chunk = Columns::default();
-    let dt = options.read.nominal_step.unwrap_or(0.0);
     let mut read = rows_reader(&name, options.torque_delay, progress)?;
     let mut out = Progress::default();
     let route;
@@ -341,11 +333,7 @@ pub fn identify_log_with_progress(
             &mut reader,
             &mut read,
             &mut popts,
-            BlockSizes {
-                chunk: options.chunk_samples,
-                dt,
-                logged,
-            },
+            BlockSizes::new(options, logged),
             |p, dt| {
                 Ok(overlap(p, dt, options.overlap_tolerance)?
                     + reach_of(p, dt, options.reversal_reach)?)
@@ -405,6 +393,24 @@ pub fn identify_log_with_progress(
         periods: out.periods,
         log: report,
     })
+}
+
+/// The period a log is averaged over (the options', else the sidecar's;
+/// never detected while streaming) and whether its logged derivatives are
+/// used (asked for, and the log has both).
+fn period_and_derivatives(
+    reader: &LogReader<std::fs::File>,
+    options: &StreamingOptions,
+) -> (Option<f64>, bool) {
+    let period = match options.process.period {
+        PeriodSource::FromSidecar => reader.sidecar().excitation.period_s,
+        PeriodSource::Seconds(p) => Some(p),
+        PeriodSource::Off => None,
+    };
+    let logged = options.process.use_logged_derivatives
+        && reader.has_velocity()
+        && reader.has_acceleration();
+    (period, logged)
 }
 
 /// Appends up to `n` rows of the log to a buffer: `read(reader, into, n)`
@@ -552,14 +558,7 @@ pub fn spool_log(
     );
     let mut reader = LogReader::open(path, &options.read)
         .map_err(|e| sig(&format!("opening the log {}", path.display()), e))?;
-    let period = match options.process.period {
-        PeriodSource::FromSidecar => reader.sidecar().excitation.period_s,
-        PeriodSource::Seconds(p) => Some(p),
-        PeriodSource::Off => None,
-    };
-    let logged = options.process.use_logged_derivatives
-        && reader.has_velocity()
-        && reader.has_acceleration();
+    let (period, logged) = period_and_derivatives(&reader, options);
     let mut read = rows_reader(&name, options.torque_delay, progress)?;
     let task = aras_kin::task_motion(&options.geometry);
     let process = |log: &Log, popts: &ProcessOptions| {
@@ -577,11 +576,7 @@ pub fn spool_log(
             &mut reader,
             &mut read,
             &mut popts,
-            BlockSizes {
-                chunk: options.chunk_samples,
-                dt: options.read.nominal_step.unwrap_or(0.0),
-                logged,
-            },
+            BlockSizes::new(options, logged),
             |p, dt| overlap(p, dt, options.overlap_tolerance),
             |pending, popts| {
                 use rayon::prelude::*;
@@ -624,6 +619,18 @@ struct BlockSizes {
     dt: f64,
     /// Logged derivatives are used (no automatic cut-off then).
     logged: bool,
+}
+
+impl BlockSizes {
+    /// The sizes `options` ask for, on a log whose logged derivatives are
+    /// used or not.
+    fn new(options: &StreamingOptions, logged: bool) -> Self {
+        Self {
+            chunk: options.chunk_samples,
+            dt: options.read.nominal_step.unwrap_or(0.0),
+            logged,
+        }
+    }
 }
 
 /// A block read: its rows as a [`Log`], and `(index of its first sample,
