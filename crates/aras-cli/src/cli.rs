@@ -101,11 +101,11 @@ pub struct DiagnoseArgs {
     /// The training log's period and sidecar.
     #[command(flatten)]
     pub log: LogArgs,
-    /// Process the training log in bounded memory (docs/scale.md): with a
-    /// period, its average is summed while reading; otherwise it is
-    /// processed in overlapping blocks into a scratch file in the output's
-    /// staging directory, which the diagnosis reads window by window.
-    /// `auto` does so for logs larger than 64 MB, `on` always, `off` never.
+    /// Process the logs in bounded memory (docs/scale.md): with a period,
+    /// a log's average is summed while reading; otherwise it is processed
+    /// in overlapping blocks into a scratch file in the output's staging
+    /// directory, which the diagnosis reads window by window. `auto` does
+    /// so for each log larger than 64 MB, `on` for every log, `off` never.
     #[arg(long, value_enum, default_value = "auto")]
     pub streaming: StreamingMode,
     /// Output directory.

@@ -349,8 +349,8 @@ fn identify_reads_a_labs_own_column_names() {
     assert!(msg.contains("unknown role `time`"), "{msg}");
 }
 
-/// `--streaming on` (TRAIN processed in overlapping blocks into a scratch
-/// file) and `--streaming off` (in memory) name the same effect with the
+/// `--streaming on` (every log processed in overlapping blocks into a
+/// scratch file) and `--streaming off` (in memory) name the same effect with the
 /// same validation figures on a plain log (no period, the default fixed
 /// 10 Hz low-pass), and the scratch file is gone from the outputs.
 #[test]

@@ -17,8 +17,10 @@ use crate::report::plots::{Series, lines};
 use crate::robot::{effect_spec, nominal, paper_model};
 use crate::stages::Stages;
 use aras_pipeline::streaming::{StreamingOptions, spool_log};
+use indicatif::ProgressBar;
+use std::path::Path;
 
-/// TRAIN log size above which `--streaming auto` processes it in bounded
+/// Log size above which `--streaming auto` processes it in bounded
 /// memory: 64 MB, about 7 minutes at 1 kHz, which the in-memory diagnosis
 /// holds in ≈ 130 MiB; its memory grows by ≈ 250 bytes per sample beyond
 /// (`docs/scale.md`).
@@ -48,8 +50,34 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     let model = paper_model(&nominal)?;
     let geometry = nominal.geometry()?;
     // TRAIN with the command line's period and sidecar, each validation log
-    // with its own sidecar: the processing of `identify`.
-    let load = |path: &std::path::Path, log_args: &LogArgs| -> Result<Dataset> {
+    // with its own sidecar: the processing of `identify`. A log larger than
+    // `STREAMING_BYTES` (or every log with `--streaming on`) is processed in
+    // bounded memory into a scratch file in the staging directory.
+    let streams = |path: &Path| super::identify::streams_log(args.streaming, path, STREAMING_BYTES);
+    let load = |path: &Path, log_args: &LogArgs, bar: &ProgressBar| -> Result<Dataset> {
+        let name = path.file_name().map_or_else(
+            || path.display().to_string(),
+            |f| f.to_string_lossy().into(),
+        );
+        if streams(path)? {
+            let opts = StreamingOptions {
+                read: log_args.read_options()?,
+                process: process_options(&cfg, log_args.period, false),
+                geometry,
+                ..StreamingOptions::default()
+            };
+            let total = super::identify_streaming::estimated_rows(path);
+            let mut progress = |rows: u64| {
+                let pct = total
+                    .map(|t| format!(" (≈ {:.0} %)", (100.0 * rows as f64 / t as f64).min(100.0)))
+                    .unwrap_or_default();
+                bar.set_message(format!(
+                    "read + process {name} (streamed): {rows} rows{pct}"
+                ));
+            };
+            return spool_log(path, &opts, &out.path(""), &mut progress)
+                .with_context(|| format!("processing {}", path.display()));
+        }
         let log = read_log(path, &log_args.read_options()?)
             .with_context(|| format!("reading {}", path.display()))?;
         let p = aras_signal::process(
@@ -58,47 +86,36 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
             &aras_kin::task_motion(&geometry),
         )
         .with_context(|| format!("processing {}", path.display()))?;
-        let name = path.file_name().map_or_else(
-            || path.display().to_string(),
-            |f| f.to_string_lossy().into(),
-        );
         Ok(Dataset::from_processed_owned(name, p)?)
     };
-    let train = if super::identify::streams_log(args.streaming, &args.data, STREAMING_BYTES)? {
-        let opts = StreamingOptions {
-            read: args.log.read_options()?,
-            process: process_options(&cfg, args.log.period, false),
-            geometry,
-            ..StreamingOptions::default()
-        };
-        let total = super::identify_streaming::estimated_rows(&args.data);
-        stages.run("read + process TRAIN (streamed)", |bar| {
-            let mut progress = |rows: u64| {
-                let pct = total
-                    .map(|t| format!(" (≈ {:.0} %)", (100.0 * rows as f64 / t as f64).min(100.0)))
-                    .unwrap_or_default();
-                bar.set_message(format!("read + process TRAIN (streamed): {rows} rows{pct}"));
-            };
-            spool_log(&args.data, &opts, &out.path(""), &mut progress)
-                .with_context(|| format!("processing {}", args.data.display()))
-        })?
-    } else {
-        stages.run("read + process TRAIN", |_| load(&args.data, &args.log))?
-    };
-    let vals = stages.run("read + process validation logs", |_| {
-        args.validate
-            .iter()
-            .map(|p| {
-                // The lab's column names hold for every log; period and
-                // sidecar are TRAIN's.
-                let own = LogArgs {
-                    columns: args.log.columns.clone(),
-                    ..LogArgs::default()
-                };
-                load(p, &own)
-            })
-            .collect::<Result<Vec<_>>>()
-    })?;
+    let streamed = |any: bool| if any { " (streamed)" } else { "" };
+    let train = stages.run(
+        &format!("read + process TRAIN{}", streamed(streams(&args.data)?)),
+        |bar| load(&args.data, &args.log, bar),
+    )?;
+    let any_val = args
+        .validate
+        .iter()
+        .map(|p| streams(p))
+        .collect::<Result<Vec<_>>>()?
+        .contains(&true);
+    let vals = stages.run(
+        &format!("read + process validation logs{}", streamed(any_val)),
+        |bar| {
+            args.validate
+                .iter()
+                .map(|p| {
+                    // The lab's column names hold for every log; period and
+                    // sidecar are TRAIN's.
+                    let own = LogArgs {
+                        columns: args.log.columns.clone(),
+                        ..LogArgs::default()
+                    };
+                    load(p, &own, bar)
+                })
+                .collect::<Result<Vec<_>>>()
+        },
+    )?;
     // The rows identification fits: the same reversal exclusion and base
     // parameter sampling (`[identification]`), and cross-validation's
     // exclusion for the validation logs (`validation.reversal_reach`).
