@@ -225,7 +225,20 @@ pub fn filter_columns(
     sos: &Sos,
     periodic: bool,
 ) -> Result<(), IdentError> {
-    if w.nrows() != 2 * n {
+    filter_many_columns(&mut [w], n, sos, periodic)
+}
+
+/// [`filter_columns`] on several joint-major matrices of the same `n`
+/// samples at once (e.g. the columns of several models on one window): the
+/// joint blocks of all of them share the filter's `FILTER_LANES` lanes, so
+/// narrow matrices (a model of two columns) do not leave lanes idle.
+pub fn filter_many_columns(
+    ws: &mut [&mut Mat<f64>],
+    n: usize,
+    sos: &Sos,
+    periodic: bool,
+) -> Result<(), IdentError> {
+    if let Some(w) = ws.iter().find(|w| w.nrows() != 2 * n) {
         return Err(IdentError::DimensionMismatch {
             what: "joint-major regressor rows",
             expected: 2 * n,
@@ -233,13 +246,17 @@ pub fn filter_columns(
             hint: "give both joints' blocks of n rows",
         });
     }
-    if !periodic {
-        // Every column's two joint blocks as slices, filtered
-        // `FILTER_LANES` at a time (bit-identical to one at a time). A
-        // block of zeros stays zeros (a per-joint effect's column in the
-        // other joint's rows: most of a diagnosis's candidate columns), so
-        // it is left out.
-        let mut blocks: Vec<&mut [f64]> = Vec::with_capacity(2 * w.ncols());
+    if periodic {
+        return ws
+            .iter_mut()
+            .try_for_each(|w| filter_columns_periodic(w, n, sos));
+    }
+    // Every column's two joint blocks as slices, filtered `FILTER_LANES`
+    // at a time (bit-identical to one at a time). A block of zeros stays
+    // zeros (a per-joint effect's column in the other joint's rows: most of
+    // a diagnosis's candidate columns), so it is left out.
+    let mut blocks: Vec<&mut [f64]> = Vec::new();
+    for w in ws.iter_mut() {
         for col in w.col_iter_mut() {
             let col = col
                 .try_as_col_major_mut()
@@ -248,14 +265,18 @@ pub fn filter_columns(
             let (a, b) = col.split_at_mut(n);
             blocks.extend([a, b].into_iter().filter(|x| x.iter().any(|v| *v != 0.0)));
         }
-        return blocks.par_chunks_mut(FILTER_LANES).try_for_each_init(
-            Vec::new,
-            |scratch, group| {
-                sos.filtfilt_many_in_place(group, scratch)
-                    .map_err(|e| dyn_err("filtering", e))
-            },
-        );
     }
+    blocks
+        .par_chunks_mut(FILTER_LANES)
+        .try_for_each_init(Vec::new, |scratch, group| {
+            sos.filtfilt_many_in_place(group, scratch)
+                .map_err(|e| dyn_err("filtering", e))
+        })
+}
+
+/// [`filter_columns`] of one period, circularly.
+fn filter_columns_periodic(w: &mut Mat<f64>, n: usize, sos: &Sos) -> Result<(), IdentError> {
+    let periodic = true;
     let src = &*w;
     let filtered: Vec<Result<Vec<f64>, IdentError>> = (0..2 * src.ncols())
         .into_par_iter()

@@ -354,3 +354,68 @@ fn filter_reach_equals_the_whole_record_reach() {
         }
     }
 }
+
+mod filtering_together {
+    use super::*;
+    use aras_pipeline::robot::{filter_columns, filter_many_columns};
+    use proptest::prelude::*;
+    use rand::SeedableRng;
+
+    /// A `2n × k` joint-major matrix: random, with column `zero` (if any)
+    /// zero in joint 2's rows (a per-joint effect's column).
+    fn matrix(n: usize, k: usize, seed: u64, zero: Option<usize>) -> Mat<f64> {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        Mat::from_fn(2 * n, k, |i, j| {
+            let v: f64 = rng.random_range(-1.0..1.0);
+            if Some(j) == zero && i >= n { 0.0 } else { v }
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+
+        /// Several matrices filtered together (their joint blocks sharing
+        /// the filter's lanes) equal each filtered on its own, zero blocks
+        /// staying zero; the periodic filter too. The lanes run the same
+        /// arithmetic, but a signal may take the single-lane or the
+        /// eight-lane loop, which may contract to FMA differently: 1e-13
+        /// of the column's scale.
+        #[test]
+        fn together_equals_one_by_one(
+            n in 80usize..400,
+            widths in proptest::collection::vec(1usize..6, 1..6),
+            seed in 0u64..1000,
+            periodic: bool,
+        ) {
+            let sos = Butterworth::lowpass(4, 10.0, 1000.0).unwrap();
+            let mats: Vec<Mat<f64>> = widths
+                .iter()
+                .enumerate()
+                .map(|(i, &k)| matrix(n, k, seed + i as u64, (i % 2 == 0).then_some(0)))
+                .collect();
+            let mut alone = mats.clone();
+            for m in &mut alone {
+                filter_columns(m, n, &sos, periodic).unwrap();
+            }
+            let mut together = mats.clone();
+            let mut refs: Vec<&mut Mat<f64>> = together.iter_mut().collect();
+            filter_many_columns(&mut refs, n, &sos, periodic).unwrap();
+            for (a, b) in alone.iter().zip(&together) {
+                for j in 0..a.ncols() {
+                    for i in 0..a.nrows() {
+                        prop_assert!((a[(i, j)] - b[(i, j)]).abs() <= 1e-13, "({i}, {j})");
+                    }
+                }
+            }
+            for (m, t) in mats.iter().zip(&together).step_by(2) {
+                for i in n..2 * n {
+                    prop_assert_eq!(m[(i, 0)], 0.0);
+                    prop_assert_eq!(t[(i, 0)], 0.0);
+                }
+            }
+            // A matrix of the wrong height is refused.
+            let mut bad = Mat::<f64>::zeros(2 * n + 1, 1);
+            prop_assert!(filter_many_columns(&mut [&mut bad], n, &sos, periodic).is_err());
+        }
+    }
+}

@@ -224,6 +224,24 @@ impl Dataset {
         )
     }
 
+    /// [`Self::columns`] of several models on one window's kinematics,
+    /// filtered together ([`crate::robot::filter_many_columns`]).
+    pub(crate) fn columns_of_many(
+        &self,
+        models: &[(&Model, RegressorColumns<'_>)],
+        kinematics: &[KinematicSample],
+    ) -> Result<Vec<Mat<f64>>, IdentError> {
+        let mut out = models
+            .iter()
+            .map(|(m, c)| columns_on(m, *c, kinematics, None))
+            .collect::<Result<Vec<_>, _>>()?;
+        if let Some(sos) = &self.filter {
+            let mut refs: Vec<&mut Mat<f64>> = out.iter_mut().collect();
+            crate::robot::filter_many_columns(&mut refs, kinematics.len(), sos, self.periodic)?;
+        }
+        Ok(out)
+    }
+
     pub(crate) fn check(&self) -> Result<(), IdentError> {
         if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
             return Err(IdentError::InvalidSetting {

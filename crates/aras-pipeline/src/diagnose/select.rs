@@ -464,14 +464,25 @@ impl Context<'_> {
             |acc, w, a, b| {
                 let (wl, nw) = (w.lo, w.len());
                 let kin = w.kinematics(self.geometry)?;
-                let wb = d.columns(self.start, RegressorColumns::Base(&self.base), &kin)?;
-                let blocks = effect_models
+                // The base model's and every candidate's columns, filtered
+                // together.
+                let mut models = vec![(self.start, RegressorColumns::Base(&self.base))];
+                models.extend(
+                    effect_models
+                        .iter()
+                        .flatten()
+                        .map(|m| (m, RegressorColumns::Standard)),
+                );
+                let mut filtered = d.columns_of_many(&models, &kin)?.into_iter();
+                let wb = filtered.next().ok_or(IdentError::InvalidSetting {
+                    name: "window columns",
+                    value: 0.0,
+                    reason: "internal: the base model's columns are missing",
+                })?;
+                let blocks: Vec<Option<Mat<f64>>> = effect_models
                     .iter()
-                    .map(|m| match m {
-                        Some(m) => d.columns(m, RegressorColumns::Standard, &kin).map(Some),
-                        None => Ok(None),
-                    })
-                    .collect::<Result<Vec<_>, _>>()?;
+                    .map(|m| m.as_ref().and_then(|_| filtered.next()))
+                    .collect();
                 // The columns hold what the chunk needs from the window's
                 // kinematics: free them before the rows are gathered.
                 drop(kin);
