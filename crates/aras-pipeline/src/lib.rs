@@ -17,7 +17,9 @@
 //!    memory (chunked reading, filtering with overlap, reversal exclusion,
 //!    `aras_ident`'s accumulators).
 //! 4. [`diagnose`]: where model and measurement disagree, which missing
-//!    effect explains it, and how much the gap shrinks once it is added.
+//!    effect explains it, and how much the gap shrinks once it is added;
+//!    [`spool`] holds a long log's processed samples in a scratch file that
+//!    its passes read window by window ([`streaming::spool_log`]).
 //!
 //! ## Dependencies, and why
 //! * `aras-kin`, `aras-dyn`, `aras-signal`, `aras-ident`: the robot's
