@@ -26,13 +26,13 @@ use super::data::Dataset;
 use crate::robot::{filter_reach, reversal_mask};
 use aras_ident::IdentError;
 
-/// Samples per chunk, a measured trade-off (`docs/scale.md`): a chunk's window (the chunk plus
-/// the filter's reach each side, ≈ 1 700 samples at 10 Hz and 1 kHz) holds
-/// ≈ 175 columns of both joints, ≈ 18 MB per lane at 3072 samples. Against
-/// 4096, the peak memory of a 160 s diagnosis falls from 167–191 to
-/// 93–96 MiB and of a 600 s one from 220–239 to 160–168 MiB, for ≈ 8 %
-/// more time on the longer log (larger windows leave the allocator more to
-/// hold). Narrow passes (a refinement's) are no faster with longer chunks
+/// Samples per chunk, a measured trade-off (`docs/scale.md`): a chunk's
+/// window (the chunk plus the filter's reach each side, ≈ 1 700 samples at
+/// 10 Hz and 1 kHz) holds ≈ 175 columns of both joints, ≈ 18 MB per lane
+/// at 3072 samples. Against 4096, the peak memory of a 160 s diagnosis
+/// falls from 167–191 to 93–96 MiB and of a 600 s one from 220–239 to
+/// 160–168 MiB, for ≈ 8 % more time on the longer log (larger windows
+/// leave the allocator more to hold). Narrow passes (a refinement's) are no faster with longer chunks
 /// (9 216–16 384 samples: 1 h at 1 kHz, no gain within the machine's
 /// noise).
 pub(crate) const CHUNK: usize = 3072;
@@ -106,14 +106,13 @@ impl Plan {
     /// a chunk is joined to the one before, so every window is longer than
     /// the filter's edge padding.
     pub(crate) fn chunks(&self, lo: usize, hi: usize) -> Vec<(usize, usize)> {
-        let chunk = self.chunk;
         let mut out: Vec<(usize, usize)> = (lo..hi)
-            .step_by(chunk.max(1))
-            .map(|a| (a, (a + chunk).min(hi)))
+            .step_by(self.chunk.max(1))
+            .map(|a| (a, (a + self.chunk).min(hi)))
             .collect();
         if out.len() >= 2 {
             let (a, b) = out[out.len() - 1];
-            if b - a < chunk / 2 {
+            if b - a < self.chunk / 2 {
                 out.pop();
                 if let Some(last) = out.last_mut() {
                     last.1 = b;

@@ -456,6 +456,30 @@ impl Context<'_> {
         let width = layout.width();
         let target = layout.target_column();
         let pb = layout.base_columns();
+        // Where each layout column comes from, so the rows are gathered
+        // column by column.
+        let source: Vec<Source> = (0..width)
+            .map(|j| {
+                if j < pb {
+                    return Source::Base(j);
+                }
+                if j == target {
+                    // A shift of 0 reads the sample itself.
+                    return Source::Torque(0.0);
+                }
+                (0..cands.len())
+                    .find_map(|k| {
+                        let cols = layout.candidate_columns(k);
+                        let jj = j.checked_sub(cols.start).filter(|_| cols.contains(&j))?;
+                        Some(match (&effect_models[k], cands[k]) {
+                            (Some(_), _) => Source::Block(k, jj),
+                            (None, Candidate::TimeDelay { samples }) => Source::Torque(samples),
+                            (None, Candidate::Effect { .. }) => Source::Zero,
+                        })
+                    })
+                    .unwrap_or(Source::Zero)
+            })
+            .collect();
         let lanes = in_lanes(
             d,
             p,
@@ -486,32 +510,6 @@ impl Context<'_> {
                 // The columns hold what the chunk needs from the window's
                 // kinematics: free them before the rows are gathered.
                 drop(kin);
-                // Where each layout column comes from, so the rows are
-                // gathered column by column.
-                let source: Vec<Source> = (0..width)
-                    .map(|j| {
-                        if j < pb {
-                            return Source::Base(j);
-                        }
-                        if j == target {
-                            // A shift of 0 reads the sample itself.
-                            return Source::Torque(0.0);
-                        }
-                        (0..cands.len())
-                            .find_map(|k| {
-                                let cols = layout.candidate_columns(k);
-                                let jj = j.checked_sub(cols.start).filter(|_| cols.contains(&j))?;
-                                Some(match (&blocks[k], cands[k]) {
-                                    (Some(_), _) => Source::Block(k, jj),
-                                    (None, Candidate::TimeDelay { samples }) => {
-                                        Source::Torque(samples)
-                                    }
-                                    (None, Candidate::Effect { .. }) => Source::Zero,
-                                })
-                            })
-                            .unwrap_or(Source::Zero)
-                    })
-                    .collect();
                 for g in 0..2 {
                     let idx = w.rows(g, a, b);
                     // Joint g's rows of the window's columns; only the
