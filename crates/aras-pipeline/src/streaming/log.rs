@@ -1,5 +1,6 @@
 //! End-to-end streaming identification from a CSV log in bounded memory.
 
+use std::ops::Range;
 use std::path::Path;
 
 use aras_dyn::Model;
@@ -585,17 +586,12 @@ pub fn spool_log(
                     .map(|(log, window)| process(log, popts).map(|p| (p, log.len(), *window)))
                     .collect::<Vec<_>>();
                 for part in done {
-                    let (p, len, (start, from, to)) = part?;
+                    let (p, len, window) = part?;
                     if filter.is_none() {
                         let sm = &p.summary;
                         filter = Some((processing_filter(sm)?, sm.sample_rate_hz));
                     }
-                    // Processed sample i is the block's sample edge + i.
-                    let n = p.samples.len();
-                    let first = start + (len - n) / 2;
-                    let i0 = from.saturating_sub(first).min(n);
-                    let i1 = to.saturating_sub(first).min(n).max(i0);
-                    spool.append(&p.samples, i0..i1)?;
+                    spool.append(&p.samples, kept_range(window, len, p.samples.len()))?;
                 }
                 Ok(())
             },
@@ -631,6 +627,16 @@ impl BlockSizes {
             logged,
         }
     }
+}
+
+/// The processed samples of a block to keep: `window` as [`Block`] gives
+/// it, `len` rows read, `n` samples out of the processing, which trims the
+/// same number of rows at each end (processed sample `i` is the block's
+/// row `(len − n) / 2 + i`).
+fn kept_range((start, from, to): (usize, usize, usize), len: usize, n: usize) -> Range<usize> {
+    let first = start + (len - n) / 2;
+    let i0 = from.saturating_sub(first).min(n);
+    i0..to.saturating_sub(first).min(n).max(i0)
 }
 
 /// A block read: its rows as a [`Log`], and `(index of its first sample,
@@ -953,21 +959,11 @@ fn accumulate_processed(
         false,
         spare.take(),
     )?;
-    let edge = (log.len() - prepared.n()) / 2;
     let n = prepared.n();
     if prepared.filter.is_some() && out.gain.is_none() {
         out.gain = Some(prepared.noise_gain()?);
     }
-    let (i0, i1) = match window {
-        None => (0, n),
-        Some((start, done, keep_end)) => {
-            // Output sample i is global index start + edge + i.
-            let first = start + edge;
-            let i0 = done.saturating_sub(first).min(n);
-            let i1 = keep_end.saturating_sub(first).min(n);
-            (i0, i1.max(i0))
-        }
-    };
+    let Range { start: i0, end: i1 } = window.map_or(0..n, |w| kept_range(w, log.len(), n));
     if i1 == i0 {
         *spare = Some(prepared.stacked.w);
         return Ok(0);
