@@ -31,8 +31,9 @@ static NEXT: AtomicUsize = AtomicUsize::new(0);
 /// exist already.
 const MAX_TRIES: usize = 1000;
 
-/// The channels of `s` in record order.
-fn channels(s: &Samples) -> [&Vec<f64>; CHANNELS] {
+/// The channels of `s` in record order (every channel of
+/// [`aras_signal::Samples`]).
+pub(crate) fn channels(s: &Samples) -> [&Vec<f64>; CHANNELS] {
     [
         &s.t,
         &s.theta[0],
@@ -52,7 +53,8 @@ fn channels(s: &Samples) -> [&Vec<f64>; CHANNELS] {
     ]
 }
 
-fn channels_mut(s: &mut Samples) -> [&mut Vec<f64>; CHANNELS] {
+/// [`channels`], to write.
+pub(crate) fn channels_mut(s: &mut Samples) -> [&mut Vec<f64>; CHANNELS] {
     let Samples {
         t,
         theta: [th1, th2],

@@ -12,7 +12,7 @@ use std::ops::Range;
 use std::sync::Arc;
 
 use crate::prepare::{RegressorColumns, columns_on, record_noise_gain};
-use crate::spool::SpooledSamples;
+use crate::spool::{SpooledSamples, channels, channels_mut};
 use aras_ident::IdentError;
 
 /// A processed data set: the samples as `aras_signal::process` produced
@@ -124,19 +124,9 @@ impl Dataset {
                         hint: "read windows inside the record",
                     });
                 }
-                let copy = |dst: &mut Vec<f64>, src: &[f64]| {
+                for (dst, src) in channels_mut(out).into_iter().zip(channels(s)) {
                     dst.clear();
                     dst.extend_from_slice(&src[rows.clone()]);
-                };
-                copy(&mut out.t, &s.t);
-                for k in 0..2 {
-                    copy(&mut out.theta[k], &s.theta[k]);
-                    copy(&mut out.theta_dot[k], &s.theta_dot[k]);
-                    copy(&mut out.theta_ddot[k], &s.theta_ddot[k]);
-                    copy(&mut out.x[k], &s.x[k]);
-                    copy(&mut out.x_dot[k], &s.x_dot[k]);
-                    copy(&mut out.x_ddot[k], &s.x_ddot[k]);
-                    copy(&mut out.tau[k], &s.tau[k]);
                 }
                 Ok(())
             }
