@@ -54,26 +54,21 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     // `STREAMING_BYTES` (or every log with `--streaming on`) is processed in
     // bounded memory into a scratch file in the staging directory.
     let streams = |path: &Path| super::identify::streams_log(args.streaming, path, STREAMING_BYTES);
-    let load = |path: &Path, log_args: &LogArgs, bar: &ProgressBar| -> Result<Dataset> {
+    let load = |path: &Path, log_args: &LogArgs, streamed: bool, bar: &ProgressBar| {
         let name = path.file_name().map_or_else(
             || path.display().to_string(),
             |f| f.to_string_lossy().into(),
         );
-        if streams(path)? {
+        if streamed {
             let opts = StreamingOptions {
                 read: log_args.read_options()?,
                 process: process_options(&cfg, log_args.period, false),
                 geometry,
                 ..StreamingOptions::default()
             };
-            let total = super::identify_streaming::estimated_rows(path);
+            let read = super::identify_streaming::rows_read(path);
             let mut progress = |rows: u64| {
-                let pct = total
-                    .map(|t| format!(" (≈ {:.0} %)", (100.0 * rows as f64 / t as f64).min(100.0)))
-                    .unwrap_or_default();
-                bar.set_message(format!(
-                    "read + process {name} (streamed): {rows} rows{pct}"
-                ));
+                bar.set_message(format!("read + process {name} (streamed): {}", read(rows)));
             };
             return spool_log(path, &opts, &out.path(""), &mut progress)
                 .with_context(|| format!("processing {}", path.display()));
@@ -88,30 +83,34 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         .with_context(|| format!("processing {}", path.display()))?;
         Ok(Dataset::from_processed_owned(name, p)?)
     };
-    let streamed = |any: bool| if any { " (streamed)" } else { "" };
+    let label = |any: bool| if any { " (streamed)" } else { "" };
+    let train_streams = streams(&args.data)?;
     let train = stages.run(
-        &format!("read + process TRAIN{}", streamed(streams(&args.data)?)),
-        |bar| load(&args.data, &args.log, bar),
+        &format!("read + process TRAIN{}", label(train_streams)),
+        |bar| load(&args.data, &args.log, train_streams, bar),
     )?;
-    let any_val = args
+    let val_streams = args
         .validate
         .iter()
         .map(|p| streams(p))
-        .collect::<Result<Vec<_>>>()?
-        .contains(&true);
+        .collect::<Result<Vec<_>>>()?;
     let vals = stages.run(
-        &format!("read + process validation logs{}", streamed(any_val)),
+        &format!(
+            "read + process validation logs{}",
+            label(val_streams.contains(&true))
+        ),
         |bar| {
             args.validate
                 .iter()
-                .map(|p| {
+                .zip(&val_streams)
+                .map(|(p, &streamed)| {
                     // The lab's column names hold for every log; period and
                     // sidecar are TRAIN's.
                     let own = LogArgs {
                         columns: args.log.columns.clone(),
                         ..LogArgs::default()
                     };
-                    load(p, &own, bar)
+                    load(p, &own, streamed, bar)
                 })
                 .collect::<Result<Vec<_>>>()
         },

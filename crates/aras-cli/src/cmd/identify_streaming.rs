@@ -62,17 +62,12 @@ pub fn stream(
     opts: &StreamingOptions,
     bar: &ProgressBar,
 ) -> Result<StreamingResult> {
-    let total = estimated_rows(data);
+    let read = rows_read(data);
     let show = |pass: &str| {
         let bar = bar.clone();
         let pass = pass.to_string();
         move |rows: u64| {
-            let pct = total
-                .map(|t| format!(" (≈ {:.0} %)", (100.0 * rows as f64 / t as f64).min(100.0)))
-                .unwrap_or_default();
-            bar.set_message(format!(
-                "stream log → least squares{pass}: {rows} rows{pct}"
-            ));
+            bar.set_message(format!("stream log → least squares{pass}: {}", read(rows)));
         }
     };
     let r = identify_log_with_progress(data, model, base, opts, &mut show(""))
@@ -95,9 +90,22 @@ pub fn stream(
     }
 }
 
+/// "`rows` rows (≈ P %)" for a progress message while the log at `path`
+/// streams, the share from the rows it is estimated to hold (left out if
+/// they cannot be estimated).
+pub fn rows_read(path: &Path) -> impl Fn(u64) -> String + Copy {
+    let total = estimated_rows(path);
+    move |rows| {
+        let pct = total
+            .map(|t| format!(" (≈ {:.0} %)", (100.0 * rows as f64 / t as f64).min(100.0)))
+            .unwrap_or_default();
+        format!("{rows} rows{pct}")
+    }
+}
+
 /// Rows of a CSV log estimated from its size and the mean length of the
 /// lines in its first 64 KiB; `None` if that cannot be read.
-pub fn estimated_rows(path: &Path) -> Option<u64> {
+fn estimated_rows(path: &Path) -> Option<u64> {
     use std::io::Read;
     let size = std::fs::metadata(path).ok()?.len();
     let mut head = vec![0u8; 64 * 1024];
