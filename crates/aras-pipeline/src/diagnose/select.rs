@@ -436,6 +436,26 @@ impl Context<'_> {
         }
     }
 
+    /// The starting model's base columns and each of `models`' columns on
+    /// a window's kinematics of `d`, filtered together
+    /// ([`Dataset::columns_of_many`]).
+    fn window_columns<'m>(
+        &self,
+        d: &Dataset,
+        kin: &[aras_kin::KinematicSample],
+        models: impl IntoIterator<Item = &'m Model>,
+    ) -> Result<(Mat<f64>, Vec<Mat<f64>>), IdentError> {
+        let mut all = vec![(self.start, RegressorColumns::Base(&self.base))];
+        all.extend(models.into_iter().map(|m| (m, RegressorColumns::Standard)));
+        let mut filtered = d.columns_of_many(&all, kin)?.into_iter();
+        let wb = filtered.next().ok_or(IdentError::InvalidSetting {
+            name: "window columns",
+            value: 0.0,
+            reason: "internal: the base model's columns are missing",
+        })?;
+        Ok((wb, filtered.collect()))
+    }
+
     /// The selection rows of `d` chunk by chunk into one [`Accumulator`]:
     /// `[start base regressor | every candidate's columns | τ]`, a delay
     /// candidate's column being the shifted torque.
@@ -488,21 +508,9 @@ impl Context<'_> {
             |acc, w, a, b| {
                 let (wl, nw) = (w.lo, w.len());
                 let kin = w.kinematics(self.geometry)?;
-                // The base model's and every candidate's columns, filtered
-                // together.
-                let mut models = vec![(self.start, RegressorColumns::Base(&self.base))];
-                models.extend(
-                    effect_models
-                        .iter()
-                        .flatten()
-                        .map(|m| (m, RegressorColumns::Standard)),
-                );
-                let mut filtered = d.columns_of_many(&models, &kin)?.into_iter();
-                let wb = filtered.next().ok_or(IdentError::InvalidSetting {
-                    name: "window columns",
-                    value: 0.0,
-                    reason: "internal: the base model's columns are missing",
-                })?;
+                let (wb, filtered) =
+                    self.window_columns(d, &kin, effect_models.iter().flatten())?;
+                let mut filtered = filtered.into_iter();
                 let blocks: Vec<Option<Mat<f64>>> = effect_models
                     .iter()
                     .map(|m| m.as_ref().and_then(|_| filtered.next()))
@@ -599,16 +607,12 @@ impl Context<'_> {
         let lanes = in_lanes(d, p, (lo, hi), Vec::new, |out, w, a, b| {
             let (wl, nw) = (w.lo, w.len());
             let kin = w.kinematics(self.geometry)?;
-            let wb = d.columns(self.start, RegressorColumns::Base(&self.base), &kin)?;
-            let blocks = used
-                .iter()
-                .map(|&k| match &self.effect_models[k] {
-                    Some(m) => d
-                        .columns(m, RegressorColumns::Standard, &kin)
-                        .map(|w| (k, w)),
-                    None => Ok((k, Mat::zeros(0, 0))),
-                })
-                .collect::<Result<Vec<_>, _>>()?;
+            let (wb, filtered) = self.window_columns(
+                d,
+                &kin,
+                used.iter().filter_map(|&k| self.effect_models[k].as_ref()),
+            )?;
+            let blocks: Vec<(usize, Mat<f64>)> = used.iter().copied().zip(filtered).collect();
             let mut piece = JointResidual::default();
             let s = &w.samples;
             for g in 0..2 {
