@@ -36,7 +36,7 @@ pub use error::LogError;
 pub use header::ColumnNames;
 pub use reader::{Columns, LogReader, LogReport, LogSummary};
 pub use sidecar::{Excitation, FORMAT, Sensors, Sidecar};
-pub use writer::{sidecar_path, write_atomic, write_log};
+pub use writer::{new_temp_file, sidecar_path, write_atomic, write_log};
 
 /// Where to find the JSON sidecar.
 #[derive(Debug, Clone, Default, PartialEq)]

@@ -109,14 +109,18 @@ pub fn write_atomic(
     written
 }
 
-/// A temporary file beside `path` that did not exist before.
-fn new_temp_file(path: &Path) -> std::io::Result<(PathBuf, std::fs::File)> {
+/// A new file beside `path`, `.NAME.PID-N.tmp` for the first `N` no file
+/// has (opened with `create_new`, for reading and writing), so no existing
+/// file is ever opened: the temporary file of [`write_atomic`], or a
+/// scratch file its caller removes.
+pub fn new_temp_file(path: &Path) -> std::io::Result<(PathBuf, std::fs::File)> {
     static COUNTER: AtomicUsize = AtomicUsize::new(0);
     let name = path.file_name().unwrap_or_default().to_string_lossy();
     loop {
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
         let tmp = path.with_file_name(format!(".{name}.{}-{n}.tmp", std::process::id()));
         match std::fs::OpenOptions::new()
+            .read(true)
             .write(true)
             .create_new(true)
             .open(&tmp)

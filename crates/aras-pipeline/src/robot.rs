@@ -276,14 +276,13 @@ pub fn filter_many_columns(
 
 /// [`filter_columns`] of one period, circularly.
 fn filter_columns_periodic(w: &mut Mat<f64>, n: usize, sos: &Sos) -> Result<(), IdentError> {
-    let periodic = true;
     let src = &*w;
     let filtered: Vec<Result<Vec<f64>, IdentError>> = (0..2 * src.ncols())
         .into_par_iter()
         .map(|k| {
             let (j, g) = (k / 2, k % 2);
             let x: Vec<f64> = (g * n..(g + 1) * n).map(|i| src[(i, j)]).collect();
-            run_filter(sos, &x, periodic)
+            run_filter(sos, &x, true)
         })
         .collect();
     for (k, f) in filtered.into_iter().enumerate() {

@@ -4,17 +4,16 @@
 //!
 //! The file is created in a directory the caller chooses (the command line
 //! uses its output's staging directory), under a name no other file has
-//! (`create_new`: an existing file is never opened, let alone overwritten),
-//! and removed when the last handle to it is dropped. Records are sample by
-//! sample, [`CHANNELS`] little-endian `f64` each, in the order of
-//! [`aras_signal::Samples`]' fields.
+//! (`aras_log::new_temp_file`, `create_new`: an existing file is never
+//! opened, let alone overwritten), and removed when the last handle to it
+//! is dropped. Records are sample by sample, [`CHANNELS`] little-endian
+//! `f64` each, in the order of [`aras_signal::Samples`]' fields.
 
 use std::fs::File;
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use aras_ident::IdentError;
 use aras_signal::Samples;
@@ -23,13 +22,6 @@ use aras_signal::Samples;
 pub const CHANNELS: usize = 15;
 
 const RECORD: usize = CHANNELS * 8;
-
-/// Distinguishes the scratch files one process creates.
-static NEXT: AtomicUsize = AtomicUsize::new(0);
-
-/// Names tried before giving up when files with the scratch files' names
-/// exist already.
-const MAX_TRIES: usize = 1000;
 
 /// The channels of `s` in record order (every channel of
 /// [`aras_signal::Samples`]).
@@ -85,38 +77,20 @@ pub struct SpoolWriter {
 }
 
 impl SpoolWriter {
-    /// A new, empty scratch file in `dir` (which must exist), under the
-    /// first name of the form `.aras-samples-PID-K.bin` that no file has.
+    /// A new, empty scratch file in `dir` (which must exist), named
+    /// `.aras-samples.PID-N.tmp` for the first `N` no file has
+    /// ([`aras_log::new_temp_file`]).
     pub fn create_in(dir: &Path) -> Result<Self, IdentError> {
-        let mut tries = 0;
-        let (file, path) = loop {
-            let path = dir.join(format!(
-                ".aras-samples-{}-{}.bin",
-                std::process::id(),
-                NEXT.fetch_add(1, Ordering::Relaxed)
-            ));
-            match File::options()
-                .read(true)
-                .write(true)
-                .create_new(true)
-                .open(&path)
-            {
-                Ok(f) => break (f, path),
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && tries < MAX_TRIES => {
-                    tries += 1;
-                }
-                Err(e) => {
-                    return Err(io(
-                        format!(
-                            "creating the scratch file {} (choose a writable directory with \
-                             free space for about {RECORD} bytes per sample)",
-                            path.display()
-                        ),
-                        e,
-                    ));
-                }
-            }
-        };
+        let (path, file) = aras_log::new_temp_file(&dir.join("aras-samples")).map_err(|e| {
+            io(
+                format!(
+                    "creating a scratch file in {} (choose a writable directory with free \
+                     space for about {RECORD} bytes per sample)",
+                    dir.display()
+                ),
+                e,
+            )
+        })?;
         Ok(Self {
             file: Some(BufWriter::with_capacity(1 << 20, file)),
             path,

@@ -208,7 +208,7 @@ fn scratch_files_never_replace_a_file_and_go_on_error() {
     let pid = std::process::id();
     for k in 0..64 {
         std::fs::write(
-            dir.join(format!(".aras-samples-{pid}-{k}.bin")),
+            dir.join(format!(".aras-samples.{pid}-{k}.tmp")),
             format!("user {k}"),
         )
         .unwrap();
@@ -249,7 +249,7 @@ fn scratch_files_never_replace_a_file_and_go_on_error() {
     drop(spooled);
     for k in 0..64 {
         let text =
-            std::fs::read_to_string(dir.join(format!(".aras-samples-{pid}-{k}.bin"))).unwrap();
+            std::fs::read_to_string(dir.join(format!(".aras-samples.{pid}-{k}.tmp"))).unwrap();
         assert_eq!(text, format!("user {k}"));
     }
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 64);
