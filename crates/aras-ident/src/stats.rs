@@ -181,28 +181,35 @@ pub fn integrated_time(x: &[f64], max_lag: usize) -> f64 {
     if c0 == 0.0 {
         return 1.0;
     }
-    let mut tau = 1.0;
     // Lag by lag, stopping at the first non-positive one: O(n τ), not O(n max_lag).
-    for k in 1..max_lag.min(n) {
-        let s: f64 = x[..n - k]
+    let rho = (1..max_lag.min(n)).map(|k| {
+        x[..n - k]
             .iter()
             .zip(&x[k..])
             .map(|(a, b)| (a - mean) * (b - mean))
-            .sum();
-        let r = s / c0;
-        if r <= 0.0 {
-            break;
-        }
-        tau += 2.0 * r;
-    }
-    tau
+            .sum::<f64>()
+            / c0
+    });
+    integrated_time_of(rho)
+}
+
+/// [`integrated_time`] from the autocorrelations `ρ_1, ρ_2, …` (e.g. of a
+/// record too long to hold, from `aras_signal::Autocorrelation`), summed
+/// up to the first non-positive one.
+pub fn integrated_time_of(rho: impl IntoIterator<Item = f64>) -> f64 {
+    1.0 + 2.0 * rho.into_iter().take_while(|r| *r > 0.0).sum::<f64>()
 }
 
 /// Ljung–Box statistic of `x` over `lags` lags and its p-value under the
 /// white-noise hypothesis (`χ²_lags`).
 pub fn ljung_box(x: &[f64], lags: usize) -> (f64, f64) {
-    let n = x.len() as f64;
-    let rho = autocorrelation(x, lags);
+    ljung_box_of(&autocorrelation(x, lags), x.len())
+}
+
+/// [`ljung_box`] from the autocorrelations `ρ_1..=ρ_lags` of a record of
+/// `n` samples.
+pub fn ljung_box_of(rho: &[f64], n: usize) -> (f64, f64) {
+    let n = n as f64;
     let q: f64 = rho
         .iter()
         .enumerate()
@@ -210,7 +217,7 @@ pub fn ljung_box(x: &[f64], lags: usize) -> (f64, f64) {
         .sum::<f64>()
         * n
         * (n + 2.0);
-    (q, chi2_sf(q, lags as f64))
+    (q, chi2_sf(q, rho.len() as f64))
 }
 
 #[cfg(test)]

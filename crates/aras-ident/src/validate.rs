@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::dense::symmetric_eigenvalues;
-use crate::error::{IdentError, check_finite_vec};
+use crate::error::IdentError;
 use crate::groups::RowGroups;
 
 /// Predicted torques `W β`.
@@ -42,25 +42,80 @@ fn fitness_group(measured: &[f64], estimated: &[f64], group: usize) -> Result<f6
             hint: "compare torques sample by sample",
         });
     }
-    check_finite_vec("measured torques", measured)?;
-    check_finite_vec("estimated torques", estimated)?;
-    let n = measured.len();
-    let mean = measured.iter().sum::<f64>() / n.max(1) as f64;
-    let den: f64 = measured
-        .iter()
-        .map(|m| (m - mean) * (m - mean))
-        .sum::<f64>()
-        .sqrt();
-    if n == 0 || den == 0.0 {
-        return Err(IdentError::ConstantSignal { group, len: n });
+    let mut sums = FitnessSums::default();
+    for (m, e) in measured.iter().zip(estimated) {
+        sums.push(*m, *e);
     }
-    let num: f64 = measured
-        .iter()
-        .zip(estimated)
-        .map(|(m, e)| (m - e) * (m - e))
-        .sum::<f64>()
-        .sqrt();
-    Ok(100.0 * (1.0 - num / den))
+    sums.fitness(group)
+}
+
+/// The sums behind [`fitness`], added sample by sample: the fitness of a
+/// record read in pieces, in constant memory.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FitnessSums {
+    n: usize,
+    /// The first measured value: the sums are of `τ_meas − shift`, so the
+    /// variance does not cancel against a large mean.
+    shift: Option<f64>,
+    sum: f64,
+    sum_sq: f64,
+    error_sq: f64,
+    /// The first non-finite sample: (index, is it the measured one, value).
+    non_finite: Option<(usize, bool, f64)>,
+}
+
+impl FitnessSums {
+    /// Adds one measured torque and its estimate.
+    pub fn push(&mut self, measured: f64, estimated: f64) {
+        if self.non_finite.is_none() {
+            if !measured.is_finite() {
+                self.non_finite = Some((self.n, true, measured));
+            } else if !estimated.is_finite() {
+                self.non_finite = Some((self.n, false, estimated));
+            }
+        }
+        let y = measured - *self.shift.get_or_insert(measured);
+        self.sum += y;
+        self.sum_sq += y * y;
+        self.error_sq += (measured - estimated) * (measured - estimated);
+        self.n += 1;
+    }
+
+    /// Samples added.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// True before the first sample.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Fitness (78) in percent of the samples added; `group` names the row
+    /// group (joint) in the error for a constant signal.
+    pub fn fitness(&self, group: usize) -> Result<f64, IdentError> {
+        if let Some((row, is_measured, value)) = self.non_finite {
+            return Err(IdentError::NonFinite {
+                what: if is_measured {
+                    "measured torques"
+                } else {
+                    "estimated torques"
+                },
+                row,
+                column: 0,
+                name: String::new(),
+                value,
+            });
+        }
+        let n = self.n as f64;
+        let den = (self.sum_sq - self.sum * self.sum / n.max(1.0))
+            .max(0.0)
+            .sqrt();
+        if self.n == 0 || den == 0.0 {
+            return Err(IdentError::ConstantSignal { group, len: self.n });
+        }
+        Ok(100.0 * (1.0 - self.error_sq.sqrt() / den))
+    }
 }
 
 /// Fitness (78) for each row group (joint) of stacked torques.

@@ -2,7 +2,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use aras_ident::validate::{
-    PdRegion, check_positive_definite, fitness, fitness_per_group, parameter_errors, predict,
+    FitnessSums, PdRegion, check_positive_definite, fitness, fitness_per_group, parameter_errors,
+    predict,
 };
 use aras_ident::{IdentError, RowGroups, symmetric_eigenvalues};
 use faer::Mat;
@@ -109,6 +110,32 @@ fn parameter_errors_in_sigma() {
 }
 
 proptest! {
+    /// The one-pass sums give the two-pass definition of (78), with a
+    /// mean a thousand times the spread (the sums are taken about the
+    /// first sample, so the variance does not cancel: 1e-9 points is
+    /// rounding of 10³ terms, amplified by at most 10⁶ / 10⁶).
+    #[test]
+    fn fitness_sums_equal_the_two_pass_definition(
+        v in proptest::collection::vec((-1.0f64..1.0, -0.3f64..0.3), 2..1000),
+        offset in -1000.0f64..1000.0,
+    ) {
+        let m: Vec<f64> = v.iter().map(|(a, _)| offset + a).collect();
+        let e: Vec<f64> = v.iter().map(|(a, d)| offset + a + d).collect();
+        let mean = m.iter().sum::<f64>() / m.len() as f64;
+        let den = m.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>().sqrt();
+        prop_assume!(den > 1e-3);
+        let num = m.iter().zip(&e).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
+        let want = 100.0 * (1.0 - num / den);
+        let mut sums = FitnessSums::default();
+        for (a, b) in m.iter().zip(&e) {
+            sums.push(*a, *b);
+        }
+        prop_assert_eq!(sums.len(), m.len());
+        let got = sums.fitness(0).unwrap();
+        prop_assert!((got - want).abs() < 1e-9, "{} vs {}", got, want);
+        prop_assert_eq!(fitness(&m, &e).unwrap(), got);
+    }
+
     /// Jacobi eigenvalues of a symmetric 4×4: trace and determinant-free
     /// invariants (sum = trace, sum of squares = Frobenius²) to 1e-12 relative.
     #[test]

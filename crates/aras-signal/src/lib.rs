@@ -66,6 +66,7 @@
 
 #![warn(missing_docs)]
 
+mod autocorrelation;
 mod bandwidth;
 mod butterworth;
 mod coordinates;
@@ -78,6 +79,7 @@ mod process;
 mod sos;
 mod spectrum;
 
+pub use autocorrelation::Autocorrelation;
 pub use bandwidth::{
     CUTOFF_MARGIN, HARMONIC_FALSE_ALARM, HarmonicSelection, MIN_PERIOD_CORRELATION,
     PeriodDetection, PeriodOrigin, SPECTRUM_THRESHOLD, SpectrumCutoff, detect_period,
@@ -94,4 +96,6 @@ pub use process::{
     PeriodSource, PeriodSummary, ProcessOptions, ProcessSummary, Processed, Samples, process,
 };
 pub use sos::{FILTER_LANES, Sos, TransferFunction};
-pub use spectrum::{PowerSpectrum, SpectrumError, power_spectrum};
+pub use spectrum::{
+    MAX_SEGMENT, PowerSpectrum, SpectrumAccumulator, SpectrumError, power_spectrum,
+};
