@@ -235,3 +235,33 @@ pub(crate) fn in_lanes<T: Send>(
         })
         .collect()
 }
+
+/// Runs `work(window, a, b)` for every chunk `[a, b)` of `[lo, hi)` of
+/// `data`, [`LANES`] chunks at a time in parallel, and hands the results to
+/// `consume` in record order: for summaries that need the rows in order (a
+/// spectrum, lagged products), with at most [`LANES`] chunks' results held.
+pub(crate) fn in_order<P: Send>(
+    data: &Dataset,
+    plan: &Plan,
+    (lo, hi): (usize, usize),
+    work: impl Fn(&Window, usize, usize) -> Result<P, IdentError> + Sync,
+    mut consume: impl FnMut(P) -> Result<(), IdentError>,
+) -> Result<(), IdentError> {
+    let chunks = plan.chunks(lo, hi);
+    let mut windows: Vec<Window> = (0..LANES).map(|_| Window::default()).collect();
+    for batch in chunks.chunks(LANES) {
+        let pieces: Vec<P> = windows
+            .par_iter_mut()
+            .zip(batch)
+            .map(|(window, &(a, b))| {
+                let (wl, wh) = plan.window(a, b);
+                window.load(data, plan, wl, wh)?;
+                work(window, a, b)
+            })
+            .collect::<Result<_, _>>()?;
+        for p in pieces {
+            consume(p)?;
+        }
+    }
+    Ok(())
+}

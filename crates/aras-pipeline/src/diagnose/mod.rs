@@ -69,6 +69,7 @@
 mod candidates;
 mod chunks;
 mod data;
+mod histogram;
 pub mod residual;
 mod select;
 

@@ -5,7 +5,11 @@
 
 use serde::Serialize;
 
-use aras_ident::stats::{integrated_time, ljung_box};
+use aras_ident::stats::{integrated_time_of, ljung_box_of};
+use aras_ident::validate::FitnessSums;
+use aras_signal::{Autocorrelation, PowerSpectrum, SpectrumAccumulator};
+
+use super::histogram::{Coarse, Histogram};
 
 /// What a residual is binned against.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -229,187 +233,364 @@ pub const REST_VELOCITY: f64 = 0.05;
 /// joint, 4 keeps the chance of a false call under 0.2 % per analysis.
 pub const Z_SYSTEMATIC: f64 = 4.0;
 
-/// Per-joint inputs of the analysis.
-pub(crate) struct JointData<'a> {
-    pub residual: &'a [f64],
-    pub theta: &'a [f64],
-    pub theta_dot: &'a [f64],
-    pub theta_ddot: &'a [f64],
-    pub t: &'a [f64],
+/// Lags of the integrated autocorrelation time (Geyer's sum stops at the
+/// first non-positive one; a quarter of the record at most).
+const MAX_CORRELATION_LAG: usize = 2000;
+/// Lags of the Ljung–Box test (a fifth of the decimated record at most).
+const MAX_WHITENESS_LAG: usize = 20;
+
+/// A joint's rate profile: quantile bins of `θ̇ ≤ −REST_VELOCITY` and of
+/// `θ̇ ≥ REST_VELOCITY` (four each), and the rest band split at zero.
+#[derive(Default)]
+struct VelocityBins {
+    below: Histogram,
+    /// `(count, sum)` of `−REST_VELOCITY < θ̇ < 0` and `0 ≤ θ̇ < REST_VELOCITY`.
+    rest: [(u64, f64); 2],
+    above: Histogram,
 }
 
-fn quantile_edges(x: &[f64], bins: usize) -> Vec<f64> {
-    let mut v: Vec<f64> = x.to_vec();
-    v.sort_by(|a, b| a.total_cmp(b));
-    if v.is_empty() {
-        return vec![];
-    }
-    let mut e: Vec<f64> = (0..=bins).map(|i| v[((v.len() - 1) * i) / bins]).collect();
-    e.dedup();
-    e
-}
-
-fn bin_by(x: &[f64], r: &[f64], edges: &[f64], sigma: f64, dof_ratio: f64) -> Vec<Bin> {
-    let nb = edges.len().saturating_sub(1);
-    let mut sum = vec![0.0; nb];
-    let mut cnt = vec![0usize; nb];
-    for (xi, ri) in x.iter().zip(r) {
-        // Upper edge of the last bin is inclusive.
-        let k = edges[1..]
-            .partition_point(|e| e < xi)
-            .min(nb.saturating_sub(1));
-        if nb > 0 && *xi >= edges[0] {
-            sum[k] += ri;
-            cnt[k] += 1;
+impl VelocityBins {
+    fn push(&mut self, v: f64, r: f64) {
+        if v <= -REST_VELOCITY {
+            self.below.push(v, r);
+        } else if v >= REST_VELOCITY {
+            self.above.push(v, r);
+        } else {
+            let k = usize::from(v >= 0.0);
+            self.rest[k].0 += 1;
+            self.rest[k].1 += r;
         }
     }
-    (0..nb)
-        .filter(|&k| cnt[k] > 0)
-        .map(|k| {
-            let neff = (cnt[k] as f64 * dof_ratio).max(1.0);
-            Bin {
-                lo: edges[k],
-                hi: edges[k + 1],
-                count: cnt[k],
-                mean: sum[k] / cnt[k] as f64,
-                std_error: sigma / neff.sqrt(),
-            }
-        })
-        .collect()
-}
 
-/// Velocity edges: the rest band `±REST_VELOCITY` split at zero, and four
-/// quantile bins of |θ̇| on each side, starting at the rest band's edges
-/// (the quantiles' outermost edge would leave a bin of one sample there).
-fn velocity_edges(v: &[f64]) -> Vec<f64> {
-    let pos: Vec<f64> = v.iter().copied().filter(|x| *x >= REST_VELOCITY).collect();
-    let neg: Vec<f64> = v.iter().copied().filter(|x| *x <= -REST_VELOCITY).collect();
-    let mut e: Vec<f64> = quantile_edges(&neg, 4);
-    if e.len() > 1 {
-        e.pop();
+    fn bins(&self) -> Vec<Coarse> {
+        let mut below = self.below.quantile_bins(4);
+        if let Some(last) = below.last_mut() {
+            last.hi = -REST_VELOCITY;
+        }
+        let mut above = self.above.quantile_bins(4);
+        if let Some(first) = above.first_mut() {
+            first.lo = REST_VELOCITY;
+        }
+        let rest = [(-REST_VELOCITY, 0.0), (0.0, REST_VELOCITY)]
+            .into_iter()
+            .zip(self.rest)
+            .filter(|(_, (count, _))| *count > 0)
+            .map(|((lo, hi), (count, sum))| Coarse { lo, hi, count, sum });
+        below.into_iter().chain(rest).chain(above).collect()
     }
-    e.extend([-REST_VELOCITY, 0.0, REST_VELOCITY]);
-    let p = quantile_edges(&pos, 4);
-    e.extend(p.iter().skip(usize::from(p.len() > 1)));
-    e.sort_by(|a, b| a.total_cmp(b));
-    e.dedup();
-    e
 }
 
-/// Analyses the residuals of both joints. `sigma` is each joint's noise
-/// level per sample (N·m), `dof_ratio` the fraction of samples that are
-/// independent (see [`super::Dataset::filter_dof`]).
-pub(crate) fn analyse(
-    dataset: &str,
-    joints: &[JointData<'_>; 2],
-    sigma: [f64; 2],
+/// What the analysis keeps of one joint's residual: fixed-size
+/// histograms, sums and accumulators, whatever the data set's length.
+struct JointSummary {
+    velocity: VelocityBins,
+    position: Histogram,
+    acceleration: Histogram,
+    time: Histogram,
+    left_velocity: VelocityBins,
+    /// `Σ r²` of the fitted rows and of the rows left out.
+    square: [f64; 2],
+    all_rows: FitnessSums,
+    fitted_rows: FitnessSums,
+    /// The fitted rows' residual, and every `step`-th of them.
+    correlation: Autocorrelation,
+    decimated: Autocorrelation,
+    residual_spectrum: SpectrumAccumulator,
+    torque_spectrum: SpectrumAccumulator,
+}
+
+/// One data set's residual analysis, built row by row in record order
+/// (every joint's rows, fitted or left out near a velocity reversal): a
+/// data set of any length in fixed memory.
+pub(crate) struct ResidualSummary {
+    dataset: String,
+    joints: [JointSummary; 2],
+    /// Independent fraction of the samples.
     dof_ratio: f64,
-) -> ResidualAnalysis {
-    let mut profiles = Vec::new();
-    let mut whiteness = Vec::new();
-    let mut findings = Vec::new();
-    for (j, d) in joints.iter().enumerate() {
-        let joint = j + 1;
-        for (axis, x) in [
-            (Axis::Velocity, d.theta_dot),
-            (Axis::Position, d.theta),
-            (Axis::Acceleration, d.theta_ddot),
-            (Axis::Time, d.t),
-        ] {
-            if x.is_empty() {
-                continue;
-            }
-            let edges = match axis {
-                Axis::Velocity => velocity_edges(x),
-                Axis::Time => {
-                    let (a, b) = (x[0], x[x.len() - 1]);
-                    (0..=8).map(|i| a + (b - a) * i as f64 / 8.0).collect()
-                }
-                _ => quantile_edges(x, 8),
-            };
-            let bins = bin_by(x, d.residual, &edges, sigma[j], dof_ratio);
-            for b in &bins {
-                let z = b.z();
-                if z.abs() > Z_SYSTEMATIC {
-                    findings.push(Finding {
-                        joint,
-                        text: format!(
-                            "joint {joint}: residual mean {:+.4} N·m for {} in [{:.3}, {:.3}] {} \
-                             ({} samples, z = {:.1})",
-                            b.mean,
-                            axis.symbol(),
-                            b.lo,
-                            b.hi,
-                            axis.unit(),
-                            b.count,
-                            z
-                        ),
-                        systematic: true,
-                        z,
-                    });
-                }
-            }
-            if axis == Axis::Velocity {
-                // The jump across the velocity reversal: the slowest bins on
-                // either side of zero.
-                let below = bins.iter().rfind(|b| b.hi <= 0.0);
-                let above = bins.iter().find(|b| b.lo >= 0.0);
-                if let (Some(a), Some(b)) = (below, above) {
-                    let jump = b.mean - a.mean;
-                    let se = (a.std_error * a.std_error + b.std_error * b.std_error).sqrt();
-                    let z = if se > 0.0 { jump / se } else { 0.0 };
-                    findings.push(Finding {
-                        joint,
-                        text: format!(
-                            "joint {joint}: residual jumps by {jump:+.4} N·m at velocity \
-                             reversal (z = {z:.1}){}",
-                            if z.abs() > Z_SYSTEMATIC {
-                                ""
-                            } else {
-                                ", within noise"
-                            }
-                        ),
-                        systematic: z.abs() > Z_SYSTEMATIC,
-                        z,
-                    });
-                }
-            }
-            profiles.push(Profile { joint, axis, bins });
-        }
-        whiteness.push(white(joint, d.residual, dof_ratio));
+    /// Decimation of the Ljung–Box test: the filter's independent-sample
+    /// spacing.
+    step: usize,
+    rate_hz: f64,
+    pass_band_end_hz: f64,
+}
+
+/// One row of one joint for [`ResidualSummary::push`].
+pub(crate) struct Row {
+    /// Model residual (N·m).
+    pub residual: f64,
+    /// The measured torque it was taken from (N·m).
+    pub measured: f64,
+    /// Whether fits use the row.
+    pub fitted: bool,
+    /// `θ, θ̇, θ̈` of the joint and `t`.
+    pub motion: [f64; 4],
+}
+
+impl ResidualSummary {
+    /// A summary of data set `dataset` of `rows` rows per joint sampled at
+    /// `rate_hz` (`periodic`: one averaged period), of which `dof_ratio`
+    /// are independent, its filter's pass band ending at
+    /// `pass_band_end_hz`.
+    pub fn new(
+        dataset: &str,
+        rows: usize,
+        rate_hz: f64,
+        periodic: bool,
+        dof_ratio: f64,
+        pass_band_end_hz: f64,
+    ) -> Result<Self, aras_ident::IdentError> {
+        let spectrum = || {
+            SpectrumAccumulator::new(rows, rate_hz, periodic)
+                .map_err(|e| aras_ident::IdentError::external("the residual's spectrum", e))
+        };
+        let joint = || -> Result<JointSummary, aras_ident::IdentError> {
+            Ok(JointSummary {
+                velocity: VelocityBins::default(),
+                position: Histogram::default(),
+                acceleration: Histogram::default(),
+                time: Histogram::default(),
+                left_velocity: VelocityBins::default(),
+                square: [0.0; 2],
+                all_rows: FitnessSums::default(),
+                fitted_rows: FitnessSums::default(),
+                correlation: Autocorrelation::new(MAX_CORRELATION_LAG),
+                decimated: Autocorrelation::new(MAX_WHITENESS_LAG),
+                residual_spectrum: spectrum()?,
+                torque_spectrum: spectrum()?,
+            })
+        };
+        Ok(Self {
+            dataset: dataset.to_owned(),
+            joints: [joint()?, joint()?],
+            dof_ratio,
+            step: ((1.0 / dof_ratio).round() as usize).max(1),
+            rate_hz,
+            pass_band_end_hz,
+        })
     }
-    findings.sort_by(|a, b| {
-        b.systematic
-            .cmp(&a.systematic)
-            .then(b.z.abs().total_cmp(&a.z.abs()))
-    });
-    ResidualAnalysis {
-        dataset: dataset.to_owned(),
-        profiles,
-        whiteness,
-        findings,
-        left_out: Vec::new(),
-        spectra: Vec::new(),
+
+    /// Adds joint `g`'s next row (rows in record order).
+    pub fn push(&mut self, g: usize, row: &Row) -> Result<(), aras_ident::IdentError> {
+        let j = &mut self.joints[g];
+        let r = row.residual;
+        if !r.is_finite() {
+            return Err(aras_ident::IdentError::NonFinite {
+                what: "model residual",
+                row: j.all_rows.len(),
+                column: g,
+                name: format!("joint {}", g + 1),
+                value: r,
+            });
+        }
+        let spectrum = |e| aras_ident::IdentError::external("the residual's spectrum", e);
+        j.residual_spectrum.push(r).map_err(spectrum)?;
+        j.torque_spectrum.push(row.measured).map_err(spectrum)?;
+        j.all_rows.push(row.measured, row.measured - r);
+        let [theta, theta_dot, theta_ddot, t] = row.motion;
+        if row.fitted {
+            if j.correlation.len().is_multiple_of(self.step) {
+                j.decimated.push(r);
+            }
+            j.correlation.push(r);
+            j.fitted_rows.push(row.measured, row.measured - r);
+            j.square[0] += r * r;
+            j.velocity.push(theta_dot, r);
+            j.position.push(theta, r);
+            j.acceleration.push(theta_ddot, r);
+            j.time.push(t, r);
+        } else {
+            j.square[1] += r * r;
+            j.left_velocity.push(theta_dot, r);
+        }
+        Ok(())
+    }
+
+    /// The analysis of the rows pushed.
+    pub fn finish(self) -> Result<ResidualAnalysis, aras_ident::IdentError> {
+        let mut a = ResidualAnalysis {
+            dataset: self.dataset,
+            profiles: Vec::new(),
+            whiteness: Vec::new(),
+            findings: Vec::new(),
+            left_out: Vec::new(),
+            spectra: Vec::new(),
+        };
+        let dof_ratio = self.dof_ratio;
+        for (g, j) in self.joints.into_iter().enumerate() {
+            let joint = g + 1;
+            let fitted = j.correlation.len();
+            let left = j.all_rows.len() - fitted;
+            let sigma = (j.square[0] / fitted.max(1) as f64).sqrt();
+            let bins = |c: Vec<Coarse>| -> Vec<Bin> {
+                c.into_iter()
+                    .map(|c| {
+                        let neff = (c.count as f64 * dof_ratio).max(1.0);
+                        Bin {
+                            lo: c.lo,
+                            hi: c.hi,
+                            count: c.count as usize,
+                            mean: c.sum / c.count as f64,
+                            std_error: sigma / neff.sqrt(),
+                        }
+                    })
+                    .collect()
+            };
+            for (axis, c) in [
+                (Axis::Velocity, j.velocity.bins()),
+                (Axis::Position, j.position.quantile_bins(8)),
+                (Axis::Acceleration, j.acceleration.quantile_bins(8)),
+                (Axis::Time, j.time.uniform_bins(8)),
+            ] {
+                if fitted == 0 {
+                    continue;
+                }
+                let profile = Profile {
+                    joint,
+                    axis,
+                    bins: bins(c),
+                };
+                a.findings.extend(profile_findings(&profile));
+                a.profiles.push(profile);
+            }
+            let rms = |sq: f64, n: usize| (sq / n.max(1) as f64).sqrt();
+            let dec_n = j.decimated.len();
+            let lags = (dec_n / 5).clamp(1, MAX_WHITENESS_LAG);
+            let dec_rho = j.decimated.finish();
+            let (q, p_value) = ljung_box_of(&dec_rho[..lags], dec_n);
+            let max_lag = MAX_CORRELATION_LAG.min(fitted / 4);
+            let rho = j.correlation.finish();
+            a.whiteness.push(Whiteness {
+                joint,
+                step: self.step,
+                lags,
+                q,
+                p_value,
+                autocorrelation_time: integrated_time_of(
+                    rho[..max_lag.saturating_sub(1)].iter().copied(),
+                ),
+                rms: sigma,
+            });
+            let profile = Profile {
+                joint,
+                axis: Axis::Velocity,
+                bins: bins(j.left_velocity.bins()),
+            };
+            let mut findings: Vec<Finding> = profile
+                .bins
+                .iter()
+                .filter(|b| b.z().abs() > Z_SYSTEMATIC)
+                .map(|b| Finding {
+                    joint,
+                    text: format!(
+                        "joint {joint}, rows left out near velocity reversals: residual mean \
+                         {:+.4} N·m for θ̇ in [{:.3}, {:.3}] rad/s ({} samples, z = {:.1})",
+                        b.mean,
+                        b.lo,
+                        b.hi,
+                        b.count,
+                        b.z()
+                    ),
+                    systematic: true,
+                    z: b.z(),
+                })
+                .collect();
+            findings.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+            a.left_out.push(LeftOut {
+                joint,
+                rows: left,
+                fitted_rows: fitted,
+                rms: rms(j.square[1], left),
+                fitted_rms: sigma,
+                fitness_all_rows: j.all_rows.fitness(g)?,
+                fitness_fitted_rows: j.fitted_rows.fitness(g)?,
+                profile,
+                findings,
+            });
+            let spectrum =
+                |acc: SpectrumAccumulator| -> Result<PowerSpectrum, aras_ident::IdentError> {
+                    acc.finish()
+                        .map_err(|e| aras_ident::IdentError::external("the residual's spectrum", e))
+                };
+            a.spectra.push(spectrum_analysis(
+                joint,
+                &spectrum(j.residual_spectrum)?,
+                &spectrum(j.torque_spectrum)?,
+                self.rate_hz,
+                self.pass_band_end_hz,
+            ));
+        }
+        a.findings.sort_by(|a, b| {
+            b.systematic
+                .cmp(&a.systematic)
+                .then(b.z.abs().total_cmp(&a.z.abs()))
+        });
+        Ok(a)
     }
 }
 
-/// The spectrum of joint `joint`'s residual `residual` next to its measured
-/// torque `measured` (every row of a set sampled at `rate_hz`; `periodic`:
-/// one averaged period), the pass band ending at `cutoff_hz`.
-pub(crate) fn analyse_spectrum(
+/// The bins of `p` beyond [`Z_SYSTEMATIC`] standard errors, and for a
+/// velocity profile the jump across the reversal, in words.
+fn profile_findings(p: &Profile) -> Vec<Finding> {
+    let (joint, axis) = (p.joint, p.axis);
+    let mut findings: Vec<Finding> = p
+        .bins
+        .iter()
+        .filter(|b| b.z().abs() > Z_SYSTEMATIC)
+        .map(|b| Finding {
+            joint,
+            text: format!(
+                "joint {joint}: residual mean {:+.4} N·m for {} in [{:.3}, {:.3}] {} \
+                 ({} samples, z = {:.1})",
+                b.mean,
+                axis.symbol(),
+                b.lo,
+                b.hi,
+                axis.unit(),
+                b.count,
+                b.z()
+            ),
+            systematic: true,
+            z: b.z(),
+        })
+        .collect();
+    if axis == Axis::Velocity {
+        // The jump across the velocity reversal: the slowest bins on
+        // either side of zero.
+        let below = p.bins.iter().rfind(|b| b.hi <= 0.0);
+        let above = p.bins.iter().find(|b| b.lo >= 0.0);
+        if let (Some(a), Some(b)) = (below, above) {
+            let jump = b.mean - a.mean;
+            let se = (a.std_error * a.std_error + b.std_error * b.std_error).sqrt();
+            let z = if se > 0.0 { jump / se } else { 0.0 };
+            findings.push(Finding {
+                joint,
+                text: format!(
+                    "joint {joint}: residual jumps by {jump:+.4} N·m at velocity reversal \
+                     (z = {z:.1}){}",
+                    if z.abs() > Z_SYSTEMATIC {
+                        ""
+                    } else {
+                        ", within noise"
+                    }
+                ),
+                systematic: z.abs() > Z_SYSTEMATIC,
+                z,
+            });
+        }
+    }
+    findings
+}
+
+/// Where joint `joint`'s residual spectrum `r` has its power, next to the
+/// measured torque's `t` (sampled at `rate_hz`, the pass band ending at
+/// `cutoff_hz`).
+fn spectrum_analysis(
     joint: usize,
-    residual: &[f64],
-    measured: &[f64],
+    r: &PowerSpectrum,
+    t: &PowerSpectrum,
     rate_hz: f64,
-    periodic: bool,
     cutoff_hz: f64,
-) -> Result<ResidualSpectrum, aras_ident::IdentError> {
-    let spectrum = |x: &[f64]| {
-        aras_signal::power_spectrum(x, rate_hz, periodic)
-            .map_err(|e| aras_ident::IdentError::external("the residual's spectrum", e))
-    };
-    let r = spectrum(residual)?;
-    let t = spectrum(measured)?;
+) -> ResidualSpectrum {
     let df = r.resolution_hz;
     let top = cutoff_hz.min(0.5 * rate_hz);
     let mut pass: Vec<f64> = r
@@ -499,105 +680,13 @@ pub(crate) fn analyse_spectrum(
         .count();
     let step = shown.div_ceil(400).max(1);
     let pick = |v: &[f64]| -> Vec<f64> { v[..shown].iter().step_by(step).copied().collect() };
-    Ok(ResidualSpectrum {
+    ResidualSpectrum {
         joint,
         bands,
         frequencies_hz: pick(&r.frequencies_hz),
         residual_density: pick(&r.density),
         torque_density: pick(&t.density),
         finding,
-    })
-}
-
-/// The residual of joint `joint` on the rows left out (`left`), and the
-/// fitness on all rows and on the fitted ones from `(measured, residual,
-/// fitted)` over every row of the set; `sigma` is the fitted rows' RMS.
-pub(crate) fn analyse_left_out(
-    joint: usize,
-    left: &JointData<'_>,
-    all: (&[f64], &[f64], &[bool]),
-    sigma: f64,
-    dof_ratio: f64,
-) -> Result<LeftOut, aras_ident::IdentError> {
-    let (measured, residual, fitted) = all;
-    let estimate: Vec<f64> = measured.iter().zip(residual).map(|(m, r)| m - r).collect();
-    let pick = |want: bool, x: &[f64]| -> Vec<f64> {
-        x.iter()
-            .zip(fitted)
-            .filter(|(_, f)| **f == want)
-            .map(|(v, _)| *v)
-            .collect()
-    };
-    let fitness_fitted_rows =
-        aras_ident::validate::fitness(&pick(true, measured), &pick(true, &estimate))?;
-    let fitness_all_rows = aras_ident::validate::fitness(measured, &estimate)?;
-    let rms = rms(left.residual);
-    let bins = if left.theta_dot.is_empty() {
-        Vec::new()
-    } else {
-        bin_by(
-            left.theta_dot,
-            left.residual,
-            &velocity_edges(left.theta_dot),
-            sigma,
-            dof_ratio,
-        )
-    };
-    let mut findings: Vec<Finding> = bins
-        .iter()
-        .filter(|b| b.z().abs() > Z_SYSTEMATIC)
-        .map(|b| Finding {
-            joint,
-            text: format!(
-                "joint {joint}, rows left out near velocity reversals: residual mean {:+.4} N·m \
-                 for θ̇ in [{:.3}, {:.3}] rad/s ({} samples, z = {:.1})",
-                b.mean,
-                b.lo,
-                b.hi,
-                b.count,
-                b.z()
-            ),
-            systematic: true,
-            z: b.z(),
-        })
-        .collect();
-    findings.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
-    Ok(LeftOut {
-        joint,
-        rows: left.residual.len(),
-        fitted_rows: fitted.iter().filter(|f| **f).count(),
-        rms,
-        fitted_rms: sigma,
-        fitness_all_rows,
-        fitness_fitted_rows,
-        profile: Profile {
-            joint,
-            axis: Axis::Velocity,
-            bins,
-        },
-        findings,
-    })
-}
-
-/// Root mean square of `x` (0 for no samples).
-pub(crate) fn rms(x: &[f64]) -> f64 {
-    (x.iter().fold(0.0, |s, v| s + v * v) / x.len().max(1) as f64).sqrt()
-}
-
-fn white(joint: usize, r: &[f64], dof_ratio: f64) -> Whiteness {
-    let step = ((1.0 / dof_ratio).round() as usize).max(1);
-    let dec: Vec<f64> = r.iter().step_by(step).copied().collect();
-    let lags = (dec.len() / 5).clamp(1, 20);
-    let (q, p_value) = ljung_box(&dec, lags);
-    let rms = rms(r);
-    Whiteness {
-        joint,
-        step,
-        lags,
-        q,
-        p_value,
-        autocorrelation_time: integrated_time(r, 2000.min(r.len() / 4)),
-        rms,
     }
 }
 
@@ -607,39 +696,148 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
-        /// Every velocity lands in exactly one bin that contains it, the
-        /// rest band is split at zero, and no bin is a sliver between the
-        /// rest band and the first quantile.
+        /// Every velocity lands in one bin whose edges hold it, the rest
+        /// band is split at zero with exact counts and sums, and the bins
+        /// beyond it start and end at its edges.
         #[test]
         fn velocity_bins_cover_every_sample(v in proptest::collection::vec(-3.0f64..3.0, 1..300)) {
-            let e = velocity_edges(&v);
-            prop_assert!(e.windows(2).all(|w| w[0] < w[1]));
-            for x in [-REST_VELOCITY, 0.0, REST_VELOCITY] {
-                prop_assert!(e.contains(&x));
+            let mut bins = VelocityBins::default();
+            for (i, x) in v.iter().enumerate() {
+                bins.push(*x, i as f64);
             }
-            let r: Vec<f64> = v.iter().map(|_| 1.0).collect();
-            let bins = bin_by(&v, &r, &e, 1.0, 1.0);
-            prop_assert_eq!(bins.iter().map(|b| b.count).sum::<usize>(), v.len());
+            let b = bins.bins();
+            prop_assert!(b.windows(2).all(|w| w[0].hi <= w[1].lo));
+            prop_assert_eq!(b.iter().map(|b| b.count).sum::<u64>(), v.len() as u64);
             for x in &v {
-                prop_assert!(bins.iter().any(|b| b.lo <= *x && *x <= b.hi));
+                prop_assert!(b.iter().any(|b| b.lo <= *x && *x <= b.hi), "{} outside", x);
             }
-            let outer = |side: f64| v.iter().filter(|x| **x * side >= REST_VELOCITY).count();
-            for (side, edge) in [(1.0, REST_VELOCITY), (-1.0, -REST_VELOCITY)] {
-                // With at least two distinct speeds beyond the rest band,
-                // the bin next to it holds more than one of them.
-                let distinct = {
-                    let mut s: Vec<f64> =
-                        v.iter().copied().filter(|x| *x * side >= REST_VELOCITY).collect();
-                    s.sort_by(f64::total_cmp);
-                    s.dedup();
-                    s.len()
+            for (lo, hi) in [(-REST_VELOCITY, 0.0), (0.0, REST_VELOCITY)] {
+                let inside: Vec<usize> =
+                    (0..v.len()).filter(|&i| v[i] > -REST_VELOCITY && v[i] < REST_VELOCITY
+                        && (v[i] >= 0.0) == (lo == 0.0)).collect();
+                let bin = b.iter().find(|c| c.lo == lo && c.hi == hi);
+                prop_assert_eq!(bin.map_or(0, |c| c.count), inside.len() as u64);
+                let sum: f64 = inside.iter().map(|&i| i as f64).sum();
+                prop_assert_eq!(bin.map_or(0.0, |c| c.sum), sum);
+            }
+            if v.iter().any(|x| *x >= REST_VELOCITY) {
+                prop_assert!(b.iter().any(|c| c.lo == REST_VELOCITY));
+            }
+            if v.iter().any(|x| *x <= -REST_VELOCITY) {
+                prop_assert!(b.iter().any(|c| c.hi == -REST_VELOCITY));
+            }
+        }
+    }
+
+    /// The summary, fed row by row, gives what the whole arrays give:
+    /// RMS, fitness (78) on all and on the fitted rows, Ljung–Box on the
+    /// decimated fitted residual, the integrated autocorrelation time, the
+    /// spectra, and bin means equal to the means of the samples inside
+    /// each bin's edges. A correlated residual with a velocity-dependent
+    /// bias, an offset torque and a slow drift, as a misfit leaves.
+    #[test]
+    fn summary_equals_the_whole_record_statistics() {
+        let (n, rate) = (20_000, 1000.0);
+        let mut s = 0x9E37_79B9_7F4A_7C15_u64;
+        let mut noise = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let mut rows: [Vec<Row>; 2] = Default::default();
+        let mut ar = [0.0; 2];
+        for i in 0..n {
+            let t = i as f64 / rate;
+            for g in 0..2 {
+                let w = 1.0 + g as f64;
+                let v = 1.5 * (w * t).cos();
+                ar[g] = 0.8 * ar[g] + 0.01 * noise();
+                let residual = ar[g] + 0.02 * v.signum() * (-v.abs() / 0.1).exp() + 1e-4 * t;
+                rows[g].push(Row {
+                    residual,
+                    measured: 3.0 + (w * t).sin() + residual,
+                    fitted: v.abs() > 0.1,
+                    motion: [1.5 * (w * t).sin() / w, v, -1.5 * w * (w * t).sin(), t],
+                });
+            }
+        }
+        let dof_ratio = 0.1;
+        let mut sum = ResidualSummary::new("set", n, rate, false, dof_ratio, 20.0).unwrap();
+        for i in 0..n {
+            for g in 0..2 {
+                sum.push(g, &rows[g][i]).unwrap();
+            }
+        }
+        let a = sum.finish().unwrap();
+        let close = |x: f64, y: f64, tol: f64| (x - y).abs() <= tol * y.abs().max(1e-300);
+        for g in 0..2 {
+            let pick = |f: bool, x: fn(&Row) -> f64| -> Vec<f64> {
+                rows[g].iter().filter(|r| r.fitted == f).map(x).collect()
+            };
+            let kept = pick(true, |r| r.residual);
+            let left = pick(false, |r| r.residual);
+            let rms = |x: &[f64]| (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt();
+            let w = &a.whiteness[g];
+            assert!(close(w.rms, rms(&kept), 1e-12));
+            let dec: Vec<f64> = kept.iter().step_by(10).copied().collect();
+            let (q, p) = aras_ident::stats::ljung_box(&dec, 20);
+            assert_eq!((w.step, w.lags), (10, 20));
+            assert!(
+                close(w.q, q, 1e-9) && close(w.p_value, p, 1e-9),
+                "{w:?} vs {q} {p}"
+            );
+            let tau = aras_ident::stats::integrated_time(&kept, 2000.min(kept.len() / 4));
+            assert!(
+                close(w.autocorrelation_time, tau, 1e-9),
+                "{} vs {tau}",
+                w.autocorrelation_time
+            );
+            let l = &a.left_out[g];
+            assert_eq!((l.rows, l.fitted_rows), (left.len(), kept.len()));
+            assert!(close(l.rms, rms(&left), 1e-12));
+            let meas: Vec<f64> = rows[g].iter().map(|r| r.measured).collect();
+            let est: Vec<f64> = rows[g].iter().map(|r| r.measured - r.residual).collect();
+            let fit_all = aras_ident::validate::fitness(&meas, &est).unwrap();
+            assert!((l.fitness_all_rows - fit_all).abs() < 1e-9);
+            let fit_kept = aras_ident::validate::fitness(
+                &pick(true, |r| r.measured),
+                &pick(true, |r| r.measured - r.residual),
+            )
+            .unwrap();
+            assert!((l.fitness_fitted_rows - fit_kept).abs() < 1e-9);
+            let resid: Vec<f64> = rows[g].iter().map(|r| r.residual).collect();
+            let ps = aras_signal::power_spectrum(&resid, rate, false).unwrap();
+            let sp = &a.spectra[g];
+            for (f, d) in sp.frequencies_hz.iter().zip(&sp.residual_density) {
+                let k = (f / ps.resolution_hz).round() as usize;
+                assert!(close(*d, ps.density[k], 1e-12));
+            }
+            // Profiles: each bin's mean is that of the fitted samples it
+            // holds (the samples strictly inside its edges, and at most a
+            // few on an edge).
+            for p in a.profiles.iter().filter(|p| p.joint == g + 1) {
+                let axis = match p.axis {
+                    Axis::Position => 0,
+                    Axis::Velocity => 1,
+                    Axis::Acceleration => 2,
+                    Axis::Time => 3,
                 };
-                if outer(side) >= 8 && distinct >= 8 {
-                    let next = bins
+                assert_eq!(p.bins.iter().map(|b| b.count).sum::<usize>(), kept.len());
+                for b in &p.bins {
+                    let inside: Vec<f64> = rows[g]
                         .iter()
-                        .find(|b| if side > 0.0 { b.lo == edge } else { b.hi == edge })
-                        .expect("a bin next to the rest band");
-                    prop_assert!(next.count > 1, "{:?}", next);
+                        .filter(|r| r.fitted && r.motion[axis] > b.lo && r.motion[axis] < b.hi)
+                        .map(|r| r.residual)
+                        .collect();
+                    assert!(
+                        b.count >= inside.len() && b.count <= inside.len() + 2,
+                        "{b:?}"
+                    );
+                    if b.count == inside.len() {
+                        let mean = inside.iter().sum::<f64>() / inside.len() as f64;
+                        assert!((b.mean - mean).abs() < 1e-12, "{b:?} vs {mean}");
+                    }
                 }
             }
         }

@@ -9,11 +9,9 @@ use faer::{Mat, MatRef};
 use serde::Serialize;
 
 use super::candidates::{Candidate, CandidateGrid};
-use super::chunks::{Plan, in_lanes};
+use super::chunks::{Plan, in_lanes, in_order};
 use super::data::{Dataset, check_rows};
-use super::residual::{
-    JointData, ResidualAnalysis, analyse, analyse_left_out, analyse_spectrum, rms,
-};
+use super::residual::{ResidualAnalysis, ResidualSummary, Row};
 use crate::prepare::RegressorColumns;
 use crate::robot::consistent_problem;
 use aras_ident::BaseParameters;
@@ -322,33 +320,6 @@ fn left_out_sentence(after: &[ResidualAnalysis], min_speed: f64) -> String {
     }
 }
 
-/// A model's residual per joint on every row of a data set's range, in
-/// order, with what the residual analysis bins it by.
-#[derive(Default)]
-struct JointResidual {
-    /// Residual of each row.
-    residual: [Vec<f64>; 2],
-    /// The (filtered, shifted) measured torque it was taken from.
-    measured: [Vec<f64>; 2],
-    /// `θ, θ̇, θ̈` of the joint and `t` of each row.
-    motion: [[Vec<f64>; 4]; 2],
-    /// Whether fits use the row (away from velocity reversals).
-    fitted: [Vec<bool>; 2],
-}
-
-impl JointResidual {
-    fn append(&mut self, other: JointResidual) {
-        for g in 0..2 {
-            self.residual[g].extend(&other.residual[g]);
-            self.measured[g].extend(&other.measured[g]);
-            self.fitted[g].extend(&other.fitted[g]);
-            for (m, o) in self.motion[g].iter_mut().zip(&other.motion[g]) {
-                m.extend(o);
-            }
-        }
-    }
-}
-
 /// Rows `rows` of column `j` of an owned matrix (an owned faer matrix
 /// stores each column contiguously).
 fn column(m: &Mat<f64>, j: usize, rows: std::ops::Range<usize>) -> &[f64] {
@@ -585,11 +556,16 @@ impl Context<'_> {
             .unwrap_or(0.0)
     }
 
-    /// Residual per joint of the selected model `fit` on every row of `d`
-    /// in its range, fitted or left out near a reversal (in order), with the
-    /// measured torque of each row: only the columns of the model are
-    /// computed.
-    fn residual(&self, d: &Dataset, p: &Plan, fit: &ModelFit) -> Result<JointResidual, IdentError> {
+    /// The residual analysis of the selected model `fit` on every row of
+    /// `d` in its range, fitted or left out near a reversal, summarised in
+    /// record order as the rows are computed: only the model's columns
+    /// are built, and nothing proportional to the data set is held.
+    fn residual_analysis(
+        &self,
+        d: &Dataset,
+        p: &Plan,
+        fit: &ModelFit,
+    ) -> Result<ResidualAnalysis, IdentError> {
         let (lo, hi) = self.range(d);
         let pb = self.layout.base_columns();
         // Coefficient of every layout column (0 if not in the model).
@@ -604,55 +580,69 @@ impl Context<'_> {
                     && self.layout.candidate_columns(k).any(|c| beta[c] != 0.0)
             })
             .collect();
-        let lanes = in_lanes(d, p, (lo, hi), Vec::new, |out, w, a, b| {
-            let (wl, nw) = (w.lo, w.len());
-            let kin = w.kinematics(self.geometry)?;
-            let (wb, filtered) = self.window_columns(
-                d,
-                &kin,
-                used.iter().filter_map(|&k| self.effect_models[k].as_ref()),
-            )?;
-            let blocks: Vec<(usize, Mat<f64>)> = used.iter().copied().zip(filtered).collect();
-            let mut piece = JointResidual::default();
-            let s = &w.samples;
-            for g in 0..2 {
-                for i in a..b {
-                    let row = g * nw + (i - wl);
-                    let mut pred = 0.0;
-                    for j in 0..pb {
-                        pred += beta[j] * wb[(row, j)];
-                    }
-                    for (k, bk) in &blocks {
-                        for (jj, j) in self.layout.candidate_columns(*k).enumerate() {
-                            pred += beta[j] * bk[(row, jj)];
-                        }
-                    }
-                    let t = w.shifted(g, i, delay);
-                    piece.residual[g].push(t - pred);
-                    piece.measured[g].push(t);
-                    piece.fitted[g].push(w.kept(g, i));
-                    let at = i - wl;
-                    let motion = [
-                        s.theta[g][at],
-                        s.theta_dot[g][at],
-                        s.theta_ddot[g][at],
-                        s.t[at],
-                    ];
-                    for (m, x) in piece.motion[g].iter_mut().zip(motion) {
-                        m.push(x);
+        let mut summary = ResidualSummary::new(
+            &d.name,
+            hi - lo,
+            d.sample_rate_hz,
+            d.periodic,
+            d.filter_dof() / d.len() as f64,
+            d.pass_band_end(),
+        )?;
+        in_order(
+            d,
+            p,
+            (lo, hi),
+            |w, a, b| {
+                let (wl, nw) = (w.lo, w.len());
+                let kin = w.kinematics(self.geometry)?;
+                let (wb, filtered) = self.window_columns(
+                    d,
+                    &kin,
+                    used.iter().filter_map(|&k| self.effect_models[k].as_ref()),
+                )?;
+                let blocks: Vec<(usize, Mat<f64>)> = used.iter().copied().zip(filtered).collect();
+                let s = &w.samples;
+                let rows: [Vec<Row>; 2] = std::array::from_fn(|g| {
+                    (a..b)
+                        .map(|i| {
+                            let row = g * nw + (i - wl);
+                            let mut pred = 0.0;
+                            for j in 0..pb {
+                                pred += beta[j] * wb[(row, j)];
+                            }
+                            for (k, bk) in &blocks {
+                                for (jj, j) in self.layout.candidate_columns(*k).enumerate() {
+                                    pred += beta[j] * bk[(row, jj)];
+                                }
+                            }
+                            let t = w.shifted(g, i, delay);
+                            let at = i - wl;
+                            Row {
+                                residual: t - pred,
+                                measured: t,
+                                fitted: w.kept(g, i),
+                                motion: [
+                                    s.theta[g][at],
+                                    s.theta_dot[g][at],
+                                    s.theta_ddot[g][at],
+                                    s.t[at],
+                                ],
+                            }
+                        })
+                        .collect()
+                });
+                Ok(rows)
+            },
+            |rows| {
+                for (g, rows) in rows.iter().enumerate() {
+                    for row in rows {
+                        summary.push(g, row)?;
                     }
                 }
-            }
-            out.push((a, piece));
-            Ok(())
-        })?;
-        let mut pieces: Vec<(usize, JointResidual)> = lanes.into_iter().flatten().collect();
-        pieces.sort_by_key(|x| x.0);
-        let mut all = JointResidual::default();
-        for (_, piece) in pieces {
-            all.append(piece);
-        }
-        Ok(all)
+                Ok(())
+            },
+        )?;
+        summary.finish()
     }
 
     /// Model `model` with base `base` on `d`: calls `f(state, g, W_b rows,
@@ -926,61 +916,7 @@ pub fn diagnose(
         validation
             .iter()
             .zip(&vals_p)
-            .map(|(v, p)| -> Result<ResidualAnalysis, IdentError> {
-                let JointResidual {
-                    residual: res,
-                    measured,
-                    motion,
-                    fitted,
-                } = ctx.residual(v, p, fit)?;
-                // Per joint: [residual, θ, θ̇, θ̈, t] of the fitted rows
-                // (`fitted`) or of the rows left out.
-                let split = |g: usize, used: bool| -> [Vec<f64>; 5] {
-                    let mut out: [Vec<f64>; 5] = Default::default();
-                    for (r, f) in fitted[g].iter().enumerate() {
-                        if *f == used {
-                            out[0].push(res[g][r]);
-                            for (o, m) in out[1..].iter_mut().zip(&motion[g]) {
-                                o.push(m[r]);
-                            }
-                        }
-                    }
-                    out
-                };
-                fn jd(c: &[Vec<f64>; 5]) -> JointData<'_> {
-                    JointData {
-                        residual: &c[0],
-                        theta: &c[1],
-                        theta_dot: &c[2],
-                        theta_ddot: &c[3],
-                        t: &c[4],
-                    }
-                }
-                let kept = [split(0, true), split(1, true)];
-                let sigma = [rms(&kept[0][0]), rms(&kept[1][0])];
-                let dof_ratio = v.filter_dof() / v.len() as f64;
-                let pass_band_end = v.pass_band_end();
-                let mut a = analyse(&v.name, &[jd(&kept[0]), jd(&kept[1])], sigma, dof_ratio);
-                for g in 0..2 {
-                    let left = split(g, false);
-                    a.left_out.push(analyse_left_out(
-                        g + 1,
-                        &jd(&left),
-                        (&measured[g], &res[g], &fitted[g]),
-                        sigma[g],
-                        dof_ratio,
-                    )?);
-                    a.spectra.push(analyse_spectrum(
-                        g + 1,
-                        &res[g],
-                        &measured[g],
-                        v.sample_rate_hz,
-                        v.periodic,
-                        pass_band_end,
-                    )?);
-                }
-                Ok(a)
-            })
+            .map(|(v, p)| ctx.residual_analysis(v, p, fit))
             .collect::<Result<Vec<_>, _>>()
     };
     let before = analyse_fit(&sel.initial)?;
