@@ -67,6 +67,25 @@ fn diagnose_names_the_hidden_effect() {
     for name in ["diagnosis.md", "diagnosis.html", "fitness_steps.svg"] {
         assert!(out.join(name).exists(), "{name} missing");
     }
+    // The residual against time: a decimated trace per joint, plotted.
+    let traces = j["after"][0]["traces"].as_array().unwrap();
+    assert_eq!(traces.len(), 2);
+    for t in traces {
+        let n = t["t"].as_array().unwrap().len();
+        assert!(n > 100 && n <= 1000, "{n} points");
+    }
+    let figures: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    for jn in [1, 2] {
+        assert!(
+            figures
+                .iter()
+                .any(|f| f.starts_with("residual_trace_") && f.ends_with(&format!("_j{jn}.svg"))),
+            "no trace figure for joint {jn}: {figures:?}"
+        );
+    }
     let html = std::fs::read_to_string(out.join("diagnosis.html")).unwrap();
     assert!(html.contains("<svg"), "the HTML inlines its figures");
     let md = std::fs::read_to_string(out.join("diagnosis.md")).unwrap();

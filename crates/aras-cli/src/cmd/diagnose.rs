@@ -416,6 +416,55 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
         }
     }
 
+    r.heading(2, "Residual against time");
+    r.paragraph(
+        "The residual (every row) against time, decimated to at most a thousand points: each \
+         point is the mean of a run of consecutive rows, with the run's smallest and largest \
+         residual after the final model. A drift, a jump or a burst that the profiles average \
+         away shows here.",
+    );
+    for (b, a) in d.before.iter().zip(&d.after) {
+        for (tb, ta) in b.traces.iter().zip(&a.traces) {
+            let j = ta.joint;
+            r.figure(
+                format!("residual_trace_{}_j{j}.svg", sanitize(&b.dataset)),
+                format!(
+                    "`{}`, joint {j}: residual against time, before and after ({} rows per \
+                     point).",
+                    b.dataset, ta.rows_per_point
+                ),
+                lines(
+                    &format!("{} joint {j}: residual against time", b.dataset),
+                    "t (s)",
+                    "residual (N·m)",
+                    &[
+                        Series {
+                            name: "before, mean".into(),
+                            x: &tb.t,
+                            y: &tb.mean,
+                        },
+                        Series {
+                            name: "after, mean".into(),
+                            x: &ta.t,
+                            y: &ta.mean,
+                        },
+                        Series {
+                            name: "after, smallest".into(),
+                            x: &ta.t,
+                            y: &ta.min,
+                        },
+                        Series {
+                            name: "after, largest".into(),
+                            x: &ta.t,
+                            y: &ta.max,
+                        },
+                    ],
+                    aras_pipeline::diagnose::TRACE_POINTS,
+                )?,
+            );
+        }
+    }
+
     r.heading(2, "Residual spectra");
     r.paragraph(
         "Power density of the residual (every row) before and after, next to the measured \

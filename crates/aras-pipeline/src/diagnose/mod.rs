@@ -78,7 +78,10 @@ pub use candidates::{
     CANDIDATE_IDS, Candidate, CandidateGrid, SearchScale, TIME_DELAY, explanation,
 };
 pub use data::Dataset;
-pub use residual::{Finding, LeftOut, ResidualAnalysis, ResidualSpectrum, SpectrumBand, Whiteness};
+pub use residual::{
+    Finding, LeftOut, ResidualAnalysis, ResidualSpectrum, SpectrumBand, TRACE_POINTS, Trace,
+    Whiteness,
+};
 pub use select::{
     CandidateScore, ConsistentFit, DiagnoseOptions, Diagnosis, FitnessRow, NamedValue, Refinement,
     RefinementStatus, Step, diagnose,

@@ -141,6 +141,86 @@ pub struct ResidualAnalysis {
     /// Per joint, where in frequency the residual (every row) has its
     /// power, next to the measured torque's.
     pub spectra: Vec<ResidualSpectrum>,
+    /// Per joint, the residual (every row) against time, decimated.
+    pub traces: Vec<Trace>,
+}
+
+/// A joint's residual against time, decimated to at most [`TRACE_POINTS`]
+/// buckets of consecutive rows (every row, fitted or left out): mean,
+/// smallest and largest residual per bucket, so a drift, a jump or a
+/// burst shows however long the record.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct Trace {
+    /// Joint (1 or 2).
+    pub joint: usize,
+    /// Rows per bucket (the last bucket may hold fewer).
+    pub rows_per_point: usize,
+    /// Mean time of each bucket (s).
+    pub t: Vec<f64>,
+    /// Mean residual (N·m).
+    pub mean: Vec<f64>,
+    /// Smallest residual (N·m).
+    pub min: Vec<f64>,
+    /// Largest residual (N·m).
+    pub max: Vec<f64>,
+}
+
+/// Most points of a [`Trace`]: buckets double in size when the record
+/// fills this many, so a record of more rows gets between half and all of
+/// them.
+pub const TRACE_POINTS: usize = 1000;
+
+/// Builds a [`Trace`] row by row in bounded memory.
+#[derive(Debug, Default)]
+struct TraceBuilder {
+    size: usize,
+    /// `(Σt, Σr, min, max, rows)` per complete or open bucket.
+    buckets: Vec<(f64, f64, f64, f64, usize)>,
+}
+
+impl TraceBuilder {
+    fn push(&mut self, t: f64, r: f64) {
+        if self.size == 0 {
+            self.size = 1;
+        }
+        match self.buckets.last_mut() {
+            Some(b) if b.4 < self.size => {
+                b.0 += t;
+                b.1 += r;
+                b.2 = b.2.min(r);
+                b.3 = b.3.max(r);
+                b.4 += 1;
+            }
+            _ => {
+                if self.buckets.len() == TRACE_POINTS {
+                    let merged = self
+                        .buckets
+                        .chunks(2)
+                        .map(|p| {
+                            p.iter().skip(1).fold(p[0], |a, b| {
+                                (a.0 + b.0, a.1 + b.1, a.2.min(b.2), a.3.max(b.3), a.4 + b.4)
+                            })
+                        })
+                        .collect();
+                    self.buckets = merged;
+                    self.size *= 2;
+                }
+                self.buckets.push((t, r, r, r, 1));
+            }
+        }
+    }
+
+    fn finish(self, joint: usize) -> Trace {
+        let n = |b: &(f64, f64, f64, f64, usize)| b.4 as f64;
+        Trace {
+            joint,
+            rows_per_point: self.size,
+            t: self.buckets.iter().map(|b| b.0 / n(b)).collect(),
+            mean: self.buckets.iter().map(|b| b.1 / n(b)).collect(),
+            min: self.buckets.iter().map(|b| b.2).collect(),
+            max: self.buckets.iter().map(|b| b.3).collect(),
+        }
+    }
 }
 
 /// One frequency band of a residual spectrum.
@@ -297,6 +377,7 @@ struct JointSummary {
     decimated: Autocorrelation,
     residual_spectrum: SpectrumAccumulator,
     torque_spectrum: SpectrumAccumulator,
+    trace: TraceBuilder,
 }
 
 /// One data set's residual analysis, built row by row in record order
@@ -357,6 +438,7 @@ impl ResidualSummary {
                 decimated: Autocorrelation::new(MAX_WHITENESS_LAG),
                 residual_spectrum: spectrum()?,
                 torque_spectrum: spectrum()?,
+                trace: TraceBuilder::default(),
             })
         };
         Ok(Self {
@@ -387,6 +469,7 @@ impl ResidualSummary {
         j.torque_spectrum.push(row.measured).map_err(spectrum)?;
         j.all_rows.push(row.measured, row.measured - r);
         let [theta, theta_dot, theta_ddot, t] = row.motion;
+        j.trace.push(t, r);
         if row.fitted {
             if j.correlation.len().is_multiple_of(self.step) {
                 j.decimated.push(r);
@@ -414,6 +497,7 @@ impl ResidualSummary {
             findings: Vec::new(),
             left_out: Vec::new(),
             spectra: Vec::new(),
+            traces: Vec::new(),
         };
         let dof_ratio = self.dof_ratio;
         for (g, j) in self.joints.into_iter().enumerate() {
@@ -511,6 +595,7 @@ impl ResidualSummary {
                     acc.finish()
                         .map_err(|e| aras_ident::IdentError::external("the residual's spectrum", e))
                 };
+            a.traces.push(j.trace.finish(joint));
             a.spectra.push(spectrum_analysis(
                 joint,
                 &spectrum(j.residual_spectrum)?,
@@ -812,6 +897,29 @@ mod tests {
             for (f, d) in sp.frequencies_hz.iter().zip(&sp.residual_density) {
                 let k = (f / ps.resolution_hz).round() as usize;
                 assert!(close(*d, ps.density[k], 1e-12));
+            }
+            // The trace: buckets of consecutive rows, their means and
+            // extremes those of the rows they hold.
+            let tr = &a.traces[g];
+            assert!(
+                tr.t.len() <= TRACE_POINTS && tr.t.len() > TRACE_POINTS / 2,
+                "{}",
+                tr.t.len()
+            );
+            for (k, chunk) in resid.chunks(tr.rows_per_point).enumerate() {
+                let mean = chunk.iter().sum::<f64>() / chunk.len() as f64;
+                assert!((tr.mean[k] - mean).abs() < 1e-12);
+                assert_eq!(
+                    tr.min[k],
+                    chunk.iter().copied().fold(f64::INFINITY, f64::min)
+                );
+                assert_eq!(
+                    tr.max[k],
+                    chunk.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                );
+                let t0 = (k * tr.rows_per_point) as f64 / rate;
+                let t1 = ((k * tr.rows_per_point + chunk.len() - 1) as f64) / rate;
+                assert!((tr.t[k] - 0.5 * (t0 + t1)).abs() < 1e-9);
             }
             // Profiles: each bin's mean is that of the fitted samples it
             // holds (the samples strictly inside its edges, and at most a
