@@ -48,6 +48,20 @@ pub struct TransferFunction {
 }
 
 fn check_finite_input(x: &[f64]) -> Result<(), FilterError> {
+    // `v · 0` is 0 for a finite `v` and NaN otherwise: eight independent
+    // sums sweep the record in SIMD lanes, and only a non-finite record is
+    // searched for its first bad sample.
+    let mut acc = [0.0f64; 8];
+    let chunks = x.chunks_exact(8);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for (a, v) in acc.iter_mut().zip(c) {
+            *a += v * 0.0;
+        }
+    }
+    if acc.iter().chain(rest).all(|v| v.is_finite()) {
+        return Ok(());
+    }
     match x.iter().position(|v| !v.is_finite()) {
         Some(index) => Err(FilterError::NonFinite {
             index,
@@ -559,6 +573,37 @@ impl TransferFunction {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The lane sweep finds the first non-finite sample wherever it is
+        /// (in the eight-sample chunks or the remainder) and passes every
+        /// finite record, extreme magnitudes included.
+        #[test]
+        fn the_finiteness_sweep_finds_the_first_bad_sample(
+            x in proptest::collection::vec(prop_oneof![
+                -1e308f64..1e308,
+                Just(f64::MAX),
+                Just(f64::MIN_POSITIVE),
+                Just(-0.0),
+            ], 0..100),
+            bad in proptest::option::of((any::<prop::sample::Index>(), prop_oneof![
+                Just(f64::NAN), Just(f64::INFINITY), Just(f64::NEG_INFINITY)
+            ])),
+        ) {
+            let mut x = x;
+            match bad {
+                Some((at, v)) if !x.is_empty() => {
+                    let i = at.index(x.len());
+                    x[i] = v;
+                    let e = check_finite_input(&x).unwrap_err();
+                    let found = matches!(e, FilterError::NonFinite { index, .. } if index == i);
+                    prop_assert!(found, "{:?} for a bad sample at {}", e, i);
+                }
+                _ => prop_assert!(check_finite_input(&x).is_ok()),
+            }
+        }
+    }
 
     #[test]
     fn rejects_bad_sections_with_reasons() {
