@@ -137,9 +137,89 @@ pub(crate) fn prepare_reusing(
     keep_unfiltered: bool,
     recycled: Option<Mat<f64>>,
 ) -> Result<Prepared, IdentError> {
+    let (processed, mut stacked) =
+        process_and_stack(log, opts, model, geometry, columns, recycled)?;
+    let filter_sos = processing_filter(&processed.summary)?;
+    let unfiltered = (keep_unfiltered && filter_sos.is_some()).then(|| stacked.clone());
+    if let Some(sos) = &filter_sos {
+        filter(&mut stacked, sos, mode, processed.summary.periods.is_some())?;
+    }
+    Ok(Prepared {
+        processed,
+        stacked,
+        filter: filter_sos,
+        unfiltered,
+    })
+}
+
+/// What accumulating a block needs: its filtered regressor and torques,
+/// the rows kept away from velocity reversals, and the filter.
+pub(crate) struct BlockRows {
+    /// Stacked regressor and torques, filtered.
+    pub stacked: Stacked,
+    /// Rows kept ([`Prepared::keep_mask`]), joint-major.
+    pub keep: Vec<bool>,
+    /// The filter applied ([`Prepared::filter`]).
+    pub filter: Option<Sos>,
+    /// Samples per joint.
+    pub n: usize,
+    /// True when the block is one averaged period.
+    pub periodic: bool,
+}
+
+/// [`prepare_reusing`] for accumulation: the reversal mask is taken from the
+/// processed samples, which are then dropped before the regressor is
+/// filtered, so a block's peak memory holds the regressor but not the
+/// samples (15 channels) as well.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn prepare_block_rows(
+    log: &Log,
+    opts: &ProcessOptions,
+    model: &Model,
+    geometry: &Geometry,
+    mode: FilterMode,
+    columns: RegressorColumns<'_>,
+    (min_speed, reach_tol): (f64, f64),
+    recycled: Option<Mat<f64>>,
+) -> Result<BlockRows, IdentError> {
+    let (processed, mut stacked) =
+        process_and_stack(log, opts, model, geometry, columns, recycled)?;
+    let filter_sos = processing_filter(&processed.summary)?;
+    let periodic = processed.summary.periods.is_some();
+    let n = processed.samples.len();
+    let keep = record_keep_mask(
+        &processed.samples.theta_dot,
+        filter_sos.as_ref(),
+        periodic,
+        min_speed,
+        reach_tol,
+    )?;
+    drop(processed);
+    if let Some(sos) = &filter_sos {
+        filter(&mut stacked, sos, mode, periodic)?;
+    }
+    Ok(BlockRows {
+        stacked,
+        keep,
+        filter: filter_sos,
+        n,
+        periodic,
+    })
+}
+
+/// Processes `log` and stacks `model`'s `columns` on its samples (into
+/// `recycled` when it has the shape), unfiltered.
+fn process_and_stack(
+    log: &Log,
+    opts: &ProcessOptions,
+    model: &Model,
+    geometry: &Geometry,
+    columns: RegressorColumns<'_>,
+    recycled: Option<Mat<f64>>,
+) -> Result<(Processed, Stacked), IdentError> {
     let processed = aras_signal::process(log, opts, &aras_kin::task_motion(geometry))
         .map_err(|e| IdentError::external(format!("processing {}", log.name), e))?;
-    let mut stacked = match columns {
+    let stacked = match columns {
         RegressorColumns::Standard => stack(model, geometry, &processed.samples)?,
         RegressorColumns::Base(base) if base.n_standard() != model.columns() => {
             return Err(IdentError::DimensionMismatch {
@@ -157,17 +237,7 @@ pub(crate) fn prepare_reusing(
             recycled,
         )?,
     };
-    let filter_sos = processing_filter(&processed.summary)?;
-    let unfiltered = (keep_unfiltered && filter_sos.is_some()).then(|| stacked.clone());
-    if let Some(sos) = &filter_sos {
-        filter(&mut stacked, sos, mode, processed.summary.periods.is_some())?;
-    }
-    Ok(Prepared {
-        processed,
-        stacked,
-        filter: filter_sos,
-        unfiltered,
-    })
+    Ok((processed, stacked))
 }
 
 impl Prepared {

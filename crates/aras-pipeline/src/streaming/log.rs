@@ -16,7 +16,7 @@ use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 use super::delayed::TorqueShift;
 use crate::TaskRegressor;
 use crate::diagnose::Dataset;
-use crate::prepare::{RegressorColumns, prepare_reusing, processing_filter};
+use crate::prepare::{RegressorColumns, prepare_block_rows, processing_filter, record_noise_gain};
 use crate::robot::{FilterMode, filter_reach, reversal_mask};
 use crate::spool::SpoolWriter;
 use faer::Mat;
@@ -647,8 +647,9 @@ type Block = (Log, (usize, usize, usize));
 /// [`spool_log`]: blocks of at least `sizes.chunk` rows (and
 /// [`BLOCK_PER_MARGIN`] margins) with `margin_of(popts, dt)` rows of
 /// overlap each side are read with `read(reader, into, n)` and handed to
-/// `flush(blocks, popts)` [`BLOCKS_IN_FLIGHT`] at a time, in order (the
-/// caller keeps only each block's samples in its keep range). An automatic
+/// `flush(blocks, popts)` [`BLOCKS_IN_FLIGHT`] at a time, in order, on a
+/// worker thread while the next blocks are read (the caller keeps only each
+/// block's samples in its keep range). An automatic
 /// bandwidth is fixed from the first block's angle spectrum
 /// (`aras_signal::spectrum_cutoff`), so every block uses the same filter;
 /// `popts` holds it afterwards. Returns the margin and the rows read.
@@ -660,7 +661,44 @@ fn overlapping_blocks(
     popts: &mut ProcessOptions,
     sizes: BlockSizes,
     margin_of: impl Fn(&ProcessOptions, f64) -> Result<usize, IdentError>,
-    mut flush: impl FnMut(&mut Vec<Block>, &ProcessOptions) -> Result<(), IdentError>,
+    mut flush: impl FnMut(&mut Vec<Block>, &ProcessOptions) -> Result<(), IdentError> + Send,
+) -> Result<(usize, usize), IdentError> {
+    // The blocks are processed on a worker while the next ones are read:
+    // reading is serial and a quarter of the time at 10 kHz. The rendezvous
+    // channel holds nothing, so at most one batch waits while one is
+    // processed.
+    std::thread::scope(|scope| {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<(Vec<Block>, ProcessOptions)>(0);
+        let worker = scope.spawn(move || -> Result<(), IdentError> {
+            for (mut batch, p) in rx {
+                flush(&mut batch, &p)?;
+            }
+            Ok(())
+        });
+        let read = read_blocks(name, reader, read, popts, sizes, margin_of, |batch, p| {
+            // A closed channel means the worker stopped on an error, which
+            // the join below returns.
+            tx.send((batch, p.clone())).is_ok()
+        });
+        drop(tx);
+        worker
+            .join()
+            .map_err(|_| invalid(name, "the block worker stopped unexpectedly"))??;
+        read
+    })
+}
+
+/// The reading half of [`overlapping_blocks`]: hands each batch of blocks to
+/// `send`, which says whether to go on.
+#[allow(clippy::too_many_arguments)]
+fn read_blocks(
+    name: &str,
+    reader: &mut LogReader<std::fs::File>,
+    read: &mut ReadRows<'_>,
+    popts: &mut ProcessOptions,
+    sizes: BlockSizes,
+    margin_of: impl Fn(&ProcessOptions, f64) -> Result<usize, IdentError>,
+    mut send: impl FnMut(Vec<Block>, &ProcessOptions) -> bool,
 ) -> Result<(usize, usize), IdentError> {
     popts.period = PeriodSource::Off;
     let mut rows = 0usize;
@@ -719,9 +757,9 @@ fn overlapping_blocks(
             block_log(name, &buf, dt, reader.sidecar().clone()),
             (buf_start, done, keep_end),
         ));
-        if pending.len() == BLOCKS_IN_FLIGHT || eof {
-            flush(&mut pending, popts)?;
-            pending.clear();
+        if (pending.len() == BLOCKS_IN_FLIGHT || eof) && !send(std::mem::take(&mut pending), popts)
+        {
+            break;
         }
         done = keep_end;
         // Keep `margin` samples before `done` for the next block.
@@ -949,27 +987,27 @@ fn accumulate_processed(
     out: &mut Progress,
     spare: &mut Option<Mat<f64>>,
 ) -> Result<usize, IdentError> {
-    let prepared = prepare_reusing(
+    let block = prepare_block_rows(
         log,
         popts,
         model,
         &options.geometry,
         options.filter_mode,
         RegressorColumns::Base(base),
-        false,
+        (options.min_speed, options.reversal_reach),
         spare.take(),
     )?;
-    let n = prepared.n();
-    if prepared.filter.is_some() && out.gain.is_none() {
-        out.gain = Some(prepared.noise_gain()?);
+    let n = block.n;
+    if block.filter.is_some() && out.gain.is_none() {
+        out.gain = Some(record_noise_gain(block.filter.as_ref(), n, block.periodic)?);
     }
     let Range { start: i0, end: i1 } = window.map_or(0..n, |w| kept_range(w, log.len(), n));
     if i1 == i0 {
-        *spare = Some(prepared.stacked.w);
+        *spare = Some(block.stacked.w);
         return Ok(0);
     }
-    let keep = prepared.keep_mask(options.min_speed, options.reversal_reach)?;
-    let st = &prepared.stacked;
+    let keep = &block.keep;
+    let st = &block.stacked;
     let wb = &st.w;
     for g in 0..2 {
         // Runs of kept rows, pushed as views of the block's matrix (no copy).
@@ -996,7 +1034,7 @@ fn accumulate_processed(
             }
         }
     }
-    *spare = Some(prepared.stacked.w);
+    *spare = Some(block.stacked.w);
     Ok(i1 - i0)
 }
 
