@@ -559,25 +559,10 @@ impl ResidualSummary {
                 axis: Axis::Velocity,
                 bins: bins(j.left_velocity.bins()),
             };
-            let mut findings: Vec<Finding> = profile
-                .bins
-                .iter()
-                .filter(|b| b.z().abs() > Z_SYSTEMATIC)
-                .map(|b| Finding {
-                    joint,
-                    text: format!(
-                        "joint {joint}, rows left out near velocity reversals: residual mean \
-                         {:+.4} N·m for θ̇ in [{:.3}, {:.3}] rad/s ({} samples, z = {:.1})",
-                        b.mean,
-                        b.lo,
-                        b.hi,
-                        b.count,
-                        b.z()
-                    ),
-                    systematic: true,
-                    z: b.z(),
-                })
-                .collect();
+            let mut findings = bin_findings(
+                &profile,
+                &format!("joint {joint}, rows left out near velocity reversals"),
+            );
             findings.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
             a.left_out.push(LeftOut {
                 joint,
@@ -613,31 +598,36 @@ impl ResidualSummary {
     }
 }
 
-/// The bins of `p` beyond [`Z_SYSTEMATIC`] standard errors, and for a
-/// velocity profile the jump across the reversal, in words.
-fn profile_findings(p: &Profile) -> Vec<Finding> {
-    let (joint, axis) = (p.joint, p.axis);
-    let mut findings: Vec<Finding> = p
-        .bins
+/// The bins of `p` beyond [`Z_SYSTEMATIC`] standard errors, in words
+/// about `subject` (e.g. "joint 2").
+fn bin_findings(p: &Profile, subject: &str) -> Vec<Finding> {
+    p.bins
         .iter()
         .filter(|b| b.z().abs() > Z_SYSTEMATIC)
         .map(|b| Finding {
-            joint,
+            joint: p.joint,
             text: format!(
-                "joint {joint}: residual mean {:+.4} N·m for {} in [{:.3}, {:.3}] {} \
-                 ({} samples, z = {:.1})",
+                "{subject}: residual mean {:+.4} N·m for {} in [{:.3}, {:.3}] {} ({} samples, \
+                 z = {:.1})",
                 b.mean,
-                axis.symbol(),
+                p.axis.symbol(),
                 b.lo,
                 b.hi,
-                axis.unit(),
+                p.axis.unit(),
                 b.count,
                 b.z()
             ),
             systematic: true,
             z: b.z(),
         })
-        .collect();
+        .collect()
+}
+
+/// [`bin_findings`] of `p`, and for a velocity profile the jump across the
+/// reversal, in words.
+fn profile_findings(p: &Profile) -> Vec<Finding> {
+    let (joint, axis) = (p.joint, p.axis);
+    let mut findings = bin_findings(p, &format!("joint {joint}"));
     if axis == Axis::Velocity {
         // The jump across the velocity reversal: the slowest bins on
         // either side of zero.
