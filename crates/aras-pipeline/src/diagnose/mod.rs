@@ -59,8 +59,10 @@
 //! ([`crate::streaming::spool_log`]): then nothing proportional to the
 //! training log is held. The sums are `joints × width²` numbers per data
 //! set (width ≈ 170 with the default grid; each joint's rows carry only the
-//! columns that are not zero on them). The residual analysis keeps each
-//! validation set's residual and motion per joint (48 bytes per row).
+//! columns that are not zero on them). The residual analysis summarises
+//! each validation set row by row in record order into fixed-size
+//! histograms, lag sums, Welch spectra and a decimated trace (at most
+//! ≈ 8 MB per joint, whatever the set's length).
 //! Passes over the training log: one for the selection, two per refined
 //! setting, one for the physically consistent fit. Deterministic: fixed
 //! accumulation lanes, no randomness (the base parameters use a Halton

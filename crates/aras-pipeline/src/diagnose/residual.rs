@@ -1,7 +1,9 @@
 //! Where model and measurement disagree: the validation residual per joint,
 //! binned against velocity (with bins at rest and split by sign), position,
-//! acceleration and time, its whiteness, and the bins whose mean is beyond
-//! what noise explains.
+//! acceleration and time, its whiteness, its spectrum, its trace against
+//! time, and the bins whose mean is beyond what noise explains. Everything
+//! comes from a summary fed row by row: fixed memory for a set
+//! of any length.
 
 use serde::Serialize;
 
