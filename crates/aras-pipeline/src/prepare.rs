@@ -110,35 +110,7 @@ pub fn prepare(
     columns: RegressorColumns<'_>,
     keep_unfiltered: bool,
 ) -> Result<Prepared, IdentError> {
-    prepare_reusing(
-        log,
-        opts,
-        model,
-        geometry,
-        mode,
-        columns,
-        keep_unfiltered,
-        None,
-    )
-}
-
-/// [`prepare`] stacking into `recycled` (a previous block's regressor of the
-/// same shape, e.g. from [`Prepared::stacked`]) instead of a fresh matrix:
-/// a long log's blocks then re-use one matrix, whose pages the kernel would
-/// otherwise map and clear again for every block.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn prepare_reusing(
-    log: &Log,
-    opts: &ProcessOptions,
-    model: &Model,
-    geometry: &Geometry,
-    mode: FilterMode,
-    columns: RegressorColumns<'_>,
-    keep_unfiltered: bool,
-    recycled: Option<Mat<f64>>,
-) -> Result<Prepared, IdentError> {
-    let (processed, mut stacked) =
-        process_and_stack(log, opts, model, geometry, columns, recycled)?;
+    let (processed, mut stacked) = process_and_stack(log, opts, model, geometry, columns, None)?;
     let filter_sos = processing_filter(&processed.summary)?;
     let unfiltered = (keep_unfiltered && filter_sos.is_some()).then(|| stacked.clone());
     if let Some(sos) = &filter_sos {
@@ -167,8 +139,10 @@ pub(crate) struct BlockRows {
     pub periodic: bool,
 }
 
-/// [`prepare_reusing`] for accumulation: the reversal mask is taken from the
-/// processed samples, which are then dropped before the regressor is
+/// [`prepare`] for accumulating a block: stacks into `recycled` (a previous
+/// block's regressor of the same shape, whose pages the kernel would
+/// otherwise map and clear again for every block), takes the reversal mask
+/// from the processed samples and drops them before the regressor is
 /// filtered, so a block's peak memory holds the regressor but not the
 /// samples (15 channels) as well.
 #[allow(clippy::too_many_arguments)]
