@@ -10,14 +10,17 @@
 //! in `_deg` and report labels; torques are motor (joint) torques; stacked
 //! data put joint 1's rows first. Outputs are written atomically into a
 //! staged directory that replaces the target only at the end; `--force`
-//! replaces only files a previous run listed in its manifest ([`output`]).
+//! replaces only files a previous run recorded in its manifest and that are
+//! unchanged since; one run at a time writes an output ([`output`]).
 //! See `docs/architecture.md` (data flow, module map) and `docs/config.md`.
 //!
 //! Dependencies beyond the workspace crates: `clap` (command line),
 //! `toml`/`serde_json` (config files), `plotters` (SVG plots), `indicatif`
 //! (progress bars), `anyhow` (error context across the many file and stage
 //! boundaries of an application; the libraries use `thiserror`), `faer`
-//! (views of the stacked regressor for `aras-ident`).
+//! (views of the stacked regressor for `aras-ident`), `ctrlc` (the binary's
+//! Ctrl-C / `SIGTERM` handler that removes an interrupted run's staging
+//! directory: signal handling is per-OS code better not written by hand).
 
 #![warn(missing_docs)]
 

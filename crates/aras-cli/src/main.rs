@@ -8,6 +8,13 @@ use clap::Parser;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // Ctrl-C / SIGTERM: remove this run's staging directories and locks
+    // (finished outputs are untouched), then exit as interrupted.
+    let _ = ctrlc::set_handler(|| {
+        aras_cli::output::clean_up_interrupted();
+        eprintln!("interrupted: nothing was replaced");
+        std::process::exit(130);
+    });
     let result = match &cli.command {
         Command::Pipeline(a) => cmd::pipeline::run(a),
         Command::Excite(a) => cmd::excite::run(a),

@@ -4,7 +4,7 @@ use anyhow::Result;
 
 use crate::cli::ExciteArgs;
 use crate::identify::base_parameters;
-use crate::output::{FileKind, check_new_file, write_atomic};
+use crate::output::{FileKind, NewFile};
 use crate::robot::{nominal, paper_model};
 use crate::stages::Stages;
 
@@ -15,7 +15,7 @@ pub fn run(args: &ExciteArgs) -> Result<()> {
     if let Some(s) = args.seed {
         cfg.trajectory.seed = s;
     }
-    check_new_file(
+    let out = NewFile::create(
         &args.out,
         args.common.force,
         FileKind::Trajectory,
@@ -30,7 +30,8 @@ pub fn run(args: &ExciteArgs) -> Result<()> {
     let d = stages.run("excitation design (74)–(77)", |bar| {
         crate::excite::design(&cfg, &nominal, &base, bar)
     })?;
-    write_atomic(&args.out, (d.trajectory.to_json() + "\n").as_bytes())?;
+    out.write((d.trajectory.to_json() + "\n").as_bytes())?;
+    out.commit()?;
     println!(
         "{}: condition number {:.3} ({} base parameters), worst relative limit margin {:.4}",
         args.out.display(),

@@ -6,14 +6,14 @@ use aras_dyn::Params;
 use aras_dyn::mjcf::{MjcfOptions, to_mjcf, unrepresented};
 
 use crate::cli::ExportMjcfArgs;
-use crate::output::{FileKind, check_new_file, write_atomic};
+use crate::output::{FileKind, NewFile};
 
 /// Runs `export-mjcf`: refuses an existing `--out` unless `--force` and it
 /// is an MJCF this command wrote (never the parameter file itself), writes
 /// the MJCF atomically and names the effects MuJoCo cannot express.
 pub fn run(args: &ExportMjcfArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
-    check_new_file(
+    let out = NewFile::create(
         &args.out,
         args.common.force,
         FileKind::Mjcf,
@@ -23,7 +23,8 @@ pub fn run(args: &ExportMjcfArgs) -> Result<()> {
         Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
     let xml = to_mjcf(&params, &MjcfOptions::default())
         .with_context(|| format!("exporting {} to MJCF", args.params.display()))?;
-    write_atomic(&args.out, xml.as_bytes())?;
+    out.write(xml.as_bytes())?;
+    out.commit()?;
     println!(
         "{}: MuJoCo model (MJCF) of {}",
         args.out.display(),

@@ -9,7 +9,7 @@ use aras_signal::OutputRows;
 
 use crate::cli::PredictArgs;
 use crate::identify::{fitness_per_joint, process_options};
-use crate::output::{FileKind, check_new_file, write_atomic};
+use crate::output::{FileKind, NewFile};
 
 /// Runs `predict`: writes `t,tau1,tau2`, the model torque `Y(θ, θ̇, θ̈) β`
 /// on every row of the log (θ̇, θ̈ from the log's derivative columns as
@@ -20,7 +20,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config.clone();
     let sidecar = args.log.sidecar_of(&args.data);
-    check_new_file(
+    let out = NewFile::create(
         &args.out,
         args.common.force,
         FileKind::Prediction,
@@ -52,7 +52,8 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     for i in 0..n {
         let _ = writeln!(csv, "{},{},{}", samples.t[i], tau[i], tau[n + i]);
     }
-    write_atomic(&args.out, csv.as_bytes())?;
+    out.write(csv.as_bytes())?;
+    out.commit()?;
     let rows = if n == log.len() {
         format!("all {n} rows")
     } else {

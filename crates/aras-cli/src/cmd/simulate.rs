@@ -7,7 +7,7 @@ use aras_dyn::Sinusoid;
 use aras_excite::FourierTrajectory;
 
 use crate::cli::SimulateArgs;
-use crate::output::{FileKind, check_new_file};
+use crate::output::{FileKind, NewFile};
 use crate::robot::nominal;
 use crate::simulate::{run_and_write, sim_config, truth};
 use crate::stages::Stages;
@@ -20,7 +20,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         cfg.simulation.seed = s;
     }
     let trajectory: Vec<&Path> = args.trajectory.iter().map(|p| p.as_path()).collect();
-    check_new_file(
+    let out = NewFile::create(
         &args.out,
         args.common.force,
         FileKind::SimulatedLog,
@@ -37,20 +37,21 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
             check_in_box(&tr, &cfg, path)?;
             let sim = sim_config(&cfg, &nominal, periods * tr.period(), cfg.simulation.seed);
             stages.run("simulate robot", |_| {
-                run_and_write(&truth, &tr, &sim, &args.out)
+                run_and_write(&truth, &tr, &sim, &out.path())
             })?
         }
         (None, Some(f)) => {
             let tr = Sinusoid::paper_79(f).context("option --frequency")?;
             let sim = sim_config(&cfg, &nominal, periods / f, cfg.simulation.seed);
             stages.run("simulate robot", |_| {
-                run_and_write(&truth, &tr, &sim, &args.out)
+                run_and_write(&truth, &tr, &sim, &out.path())
             })?
         }
         (None, None) => {
             bail!("give --trajectory FILE (from `aras excite`) or --frequency HZ (trajectory (79))")
         }
     };
+    out.commit()?;
     println!(
         "{} ({} rows) and {}",
         args.out.display(),
