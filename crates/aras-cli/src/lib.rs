@@ -33,6 +33,7 @@ pub mod friction;
 pub mod identify;
 pub mod output;
 pub mod paper;
+pub mod plausibility;
 pub mod report;
 pub mod robot;
 pub mod simulate;

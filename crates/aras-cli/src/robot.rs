@@ -35,6 +35,39 @@ pub fn nominal(cfg: &RobotConfig, dir: &Path) -> Result<Params> {
     Ok(p)
 }
 
+/// What a parameter file given on the command line is read for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParamsUse {
+    /// A model of real bodies (`validate`, `export-mjcf`): a file that is
+    /// not physically consistent ([`Params::check_physical`]: masses,
+    /// pseudo-inertias, signs of friction and stiffness) is refused, with
+    /// why it is needed.
+    Physical(&'static str),
+    /// An estimate to predict with (`predict`): an OLS estimate may break
+    /// physical consistency, so the file is accepted with a note saying so.
+    Estimate,
+}
+
+/// Reads the parameter file `path` with the one check every command
+/// applies: the format's own ([`Params::load`]: keys, types, finite
+/// values, geometry) and, for `use_`, physical consistency.
+pub fn read_params(path: &Path, use_: ParamsUse) -> Result<Params> {
+    let p = Params::load(path).with_context(|| format!("reading {}", path.display()))?;
+    if let Err(e) = p.check_physical() {
+        match use_ {
+            ParamsUse::Physical(why) => {
+                return Err(anyhow::Error::from(e).context(format!("{}: {why}", path.display())));
+            }
+            ParamsUse::Estimate => eprintln!(
+                "note: {} is not physically consistent ({e}); predicting with it as an \
+                 estimate",
+                path.display()
+            ),
+        }
+    }
+    Ok(p)
+}
+
 /// `"default"` → the embedded ARAS-Diamond (`docs/model.md`); anything else is a
 /// parameter-file path, relative to `dir`.
 pub fn load_params(spec: &str, dir: &Path) -> Result<Params> {

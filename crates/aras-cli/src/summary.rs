@@ -141,6 +141,9 @@ pub struct Summary {
     pub parameter_errors: Option<BTreeMap<String, ErrorSummary>>,
     /// The SDP solve.
     pub sdp: SdpReport,
+    /// Findings that make the result implausible (`crate::plausibility`);
+    /// empty when it is believable.
+    pub implausible: Vec<crate::plausibility::Implausible>,
     /// Wall-clock seconds per stage (absent with `--reproducible`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings_s: Option<BTreeMap<String, f64>>,

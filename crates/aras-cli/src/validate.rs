@@ -70,13 +70,13 @@ fn fitness_standard(st: &Stacked, beta: &[f64]) -> Result<[f64; 2]> {
 pub fn cross_validate(
     truth: &Params,
     nominal: &Params,
+    geometry: &aras_kin::Geometry,
     model: &Model,
     candidates: &[Vec<f64>],
     cfg: &Config,
     dir: &Path,
     progress: &indicatif::ProgressBar,
 ) -> Result<Vec<CrossValidation>> {
-    let geometry = nominal.geometry()?;
     let mut out = Vec::new();
     for (i, &f) in cfg.validation.frequencies_hz.iter().enumerate() {
         let traj = Sinusoid::paper_79(f)?;

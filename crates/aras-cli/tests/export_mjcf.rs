@@ -72,7 +72,7 @@ fn exports_refuses_foreign_files_and_inconsistent_links() {
     ]);
     assert!(!r.status.success());
     assert!(
-        stderr(&r).contains("not an MJCF file written by"),
+        stderr(&r).contains("no record that aras wrote it"),
         "{}",
         stderr(&r)
     );

@@ -84,6 +84,19 @@ pub enum ParamError {
         /// What is wrong, with the offending numbers.
         reason: String,
     },
+    /// A friction, damping or stiffness coefficient below zero: such a
+    /// term feeds energy into the robot, which no real joint does.
+    #[error(
+        "`{key}` = {value} is negative: friction, damping and stiffness coefficients must be \
+         ≥ 0 (a negative one feeds energy into the robot); fix the file, or use the physically \
+         consistent estimate (params.json of `identify`, whose fit enforces the sign)"
+    )]
+    NegativeCoefficient {
+        /// Path of the value, e.g. `friction.Fc1`.
+        key: String,
+        /// The offending value.
+        value: f64,
+    },
     /// The file could not be read or written.
     #[error("cannot access parameter file {}", path.display())]
     Io {

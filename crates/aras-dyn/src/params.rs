@@ -170,7 +170,9 @@ impl Params {
 
     /// Physical consistency of every link, (67)–(69): a positive mass
     /// and a positive-definite pseudo-inertia (positive-definite inertia
-    /// about the COM satisfying the triangle inequality). [`Params::validate`]
+    /// about the COM satisfying the triangle inequality); and the signs of
+    /// the friction, damping and stiffness coefficients
+    /// ([`Params::check_signs`]). [`Params::validate`]
     /// does not ask this, because an OLS estimate may legitimately violate
     /// it; call this where the parameters must describe real bodies.
     ///
@@ -201,6 +203,41 @@ impl Params {
                     ),
                 });
             }
+        }
+        self.check_signs()
+    }
+
+    /// Checks the signs physics requires of the dissipative and elastic
+    /// coefficients of every effect in the file ([`Effect::nonnegative`]:
+    /// viscous and Coulomb friction, stiffness, Stribeck, passive-joint and
+    /// quadratic damping ≥ 0). Part of [`Params::check_physical`].
+    pub fn check_signs(&self) -> Result<(), ParamError> {
+        let model = self.model().map_err(|_| ParamError::Invalid {
+            key: "extra".into(),
+            value: f64::NAN,
+            reason: "the extra effects do not form a model",
+        })?;
+        let values = self
+            .standard_vector(&model)
+            .map_err(|_| ParamError::Invalid {
+                key: "extra".into(),
+                value: f64::NAN,
+                reason: "the extra effects do not form a model",
+            })?;
+        let mut column = 0;
+        for effect in model.effects() {
+            let names = effect.names();
+            let nonnegative = effect.nonnegative();
+            for (k, name) in names.iter().enumerate() {
+                let value = values[column + k];
+                if nonnegative.contains(&name.as_str()) && value < 0.0 {
+                    return Err(ParamError::NegativeCoefficient {
+                        key: format!("{}.{name}", effect.id()),
+                        value,
+                    });
+                }
+            }
+            column += names.len();
         }
         Ok(())
     }

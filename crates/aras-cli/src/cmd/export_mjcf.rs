@@ -7,6 +7,7 @@ use aras_dyn::mjcf::{MjcfOptions, to_mjcf, unrepresented};
 
 use crate::cli::ExportMjcfArgs;
 use crate::output::{FileKind, NewFile};
+use crate::robot::{ParamsUse, read_params};
 
 /// Runs `export-mjcf`: refuses an existing `--out` unless `--force` and it
 /// is an MJCF this command wrote (never the parameter file itself), writes
@@ -19,8 +20,10 @@ pub fn run(args: &ExportMjcfArgs) -> Result<()> {
         FileKind::Mjcf,
         &super::input_files(&args.common, &loaded, &[&args.params]),
     )?;
-    let params =
-        Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
+    let params = read_params(
+        &args.params,
+        ParamsUse::Physical("MuJoCo simulates real bodies"),
+    )?;
     let xml = to_mjcf(&params, &MjcfOptions::default())
         .with_context(|| format!("exporting {} to MJCF", args.params.display()))?;
     out.write(xml.as_bytes())?;

@@ -13,6 +13,7 @@ use aras_log::Log;
 use crate::config::Config;
 use crate::identify::{identify, prepare, process_options};
 use crate::output::OutDir;
+use crate::plausibility;
 use crate::report::run::{RunData, build};
 use crate::stages::Stages;
 use crate::summary::{PseudoInertia, SdpReport, Summary, base_file, fitness_list};
@@ -88,6 +89,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
                 cross_validate(
                     truth,
                     input.nominal,
+                    &geometry,
                     model,
                     &[ols_std.clone(), sdp_std.clone()],
                     cfg,
@@ -101,11 +103,12 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         _ => Vec::new(),
     };
 
-    let (pd, heat) = stages.run("workspace PD check (80)", |_| -> Result<_> {
+    let (pd, heat, nominal_pd) = stages.run("workspace PD check (80)", |_| -> Result<_> {
         let mut pd = BTreeMap::new();
         pd.insert("ols".to_string(), pd_check(&id.ols_params, cfg)?);
         pd.insert("sdp".to_string(), pd_check(&id.sdp_params, cfg)?);
-        Ok((pd, min_eigen_grid(&id.sdp_params, cfg)?))
+        let nominal_pd = pd_check(input.nominal, cfg)?;
+        Ok((pd, min_eigen_grid(&id.sdp_params, cfg)?, nominal_pd))
     })?;
     let pseudo = PseudoInertia {
         ols: pseudo_inertia_min(&id.ols_params),
@@ -151,6 +154,16 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         None => None,
     };
     let fitness = fitness_list(&id, &xv, input.design.is_some(), ceiling);
+    let implausible = plausibility::check(&plausibility::Evidence {
+        fitness: &fitness,
+        status: id.sdp.status,
+        sdp: &id.sdp_params,
+        nominal: input.nominal,
+        pd: (&pd["sdp"], &nominal_pd),
+        torque_limit: cfg.simulation.torque_limit,
+        torque_peak: plausibility::torque_peak(&input.log.tau),
+    });
+    plausibility::print(&implausible);
 
     out.write("params.json", id.sdp_params.to_json_string() + "\n")?;
     crate::cmd::export_mjcf::write_beside(out, &id.sdp_params)?;
@@ -172,6 +185,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         pseudo_inertia_min_eigenvalue: pseudo.clone(),
         parameter_errors: errors.clone(),
         sdp: SdpReport::new(&id.sdp),
+        implausible: implausible.clone(),
         timings_s: None,
     };
     if !input.reproducible {
@@ -198,6 +212,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         pseudo: &pseudo,
         errors: errors.as_ref(),
         truth_base: truth_base.as_deref(),
+        implausible: &implausible,
     };
     let report = build(&data)?;
     for (file, svg) in report.figures() {

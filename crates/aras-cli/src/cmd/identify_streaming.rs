@@ -167,6 +167,22 @@ pub fn fit_and_write(
     let mut pd = BTreeMap::new();
     pd.insert("ols".to_string(), pd_check(&ols_params, cfg)?);
     pd.insert("sdp".to_string(), pd_check(&sdp_params, cfg)?);
+    // The streamed log keeps no samples: the RMS of the fitted torques is a
+    // lower bound of their peak, enough to see a unit 1000× off.
+    let torque_rms = [0, 1].map(|j| {
+        let n = r.rows_fitted[j].max(1) as f64;
+        (r.torque_sums[j][1] / n).max(0.0).sqrt()
+    });
+    let implausible = crate::plausibility::check(&crate::plausibility::Evidence {
+        fitness: &fitness,
+        status: sdp.status,
+        sdp: &sdp_params,
+        nominal,
+        pd: (&pd["sdp"], &pd_check(nominal, cfg)?),
+        torque_limit: cfg.simulation.torque_limit,
+        torque_peak: torque_rms,
+    });
+    crate::plausibility::print(&implausible);
     let truth_std: Option<Vec<f64>> =
         truth.and_then(|t| t.standard_vector(model).ok().map(|v| v.as_slice().to_vec()));
     let truth_base = match &truth_std {
@@ -240,6 +256,7 @@ pub fn fit_and_write(
         },
         parameter_errors: errors,
         sdp: SdpReport::new(&sdp),
+        implausible: implausible.clone(),
         timings_s: None,
     };
     if !reproducible {
@@ -253,10 +270,23 @@ pub fn fit_and_write(
         ),
         None => "incremental QR".into(),
     };
+    let warning = if implausible.is_empty() {
+        String::new()
+    } else {
+        let items: String = implausible
+            .iter()
+            .map(|i| format!("- {}\n", i.message))
+            .collect();
+        format!(
+            "## WARNING: implausible result\n\nThe checks below failed (`summary.json`, key \
+             `implausible`): the figures that follow should not be used before the cause is \
+             found.\n\n{items}\n"
+        )
+    };
     out.write(
         "report.md",
         format!(
-            "# ARAS-Diamond identification report (`aras identify --streaming`)\n\n{intro}\n\n\
+            "# ARAS-Diamond identification report (`aras identify --streaming`)\n\n{intro}\n\n{warning}\
              Streaming identification in bounded memory (docs/scale.md): route {:?}, \
              {} rows read, {} samples used, rows fitted away from velocity reversals \
              {} / {} (joint 1 / 2), accumulation: {check}; filter noise gain {:.4}.\n\n\

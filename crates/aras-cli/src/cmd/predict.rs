@@ -3,13 +3,13 @@
 use std::fmt::Write as _;
 
 use anyhow::{Context, Result};
-use aras_dyn::Params;
 use aras_log::read_log;
 use aras_signal::OutputRows;
 
 use crate::cli::PredictArgs;
-use crate::identify::{fitness_per_joint, process_options};
+use crate::identify::process_options;
 use crate::output::{FileKind, NewFile};
+use crate::robot::{ParamsUse, read_params};
 
 /// Runs `predict`: writes `t,tau1,tau2`, the model torque `Y(θ, θ̇, θ̈) β`
 /// on every row of the log (θ̇, θ̈ from the log's derivative columns as
@@ -26,8 +26,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         FileKind::Prediction,
         &super::input_files(&args.common, &loaded, &[&args.params, &args.data, &sidecar]),
     )?;
-    let params =
-        Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
+    let params = read_params(&args.params, ParamsUse::Estimate)?;
     // The parameter file's own model: extra effects in it are predicted too.
     let model = params.model()?;
     let beta = params.standard_vector(&model)?.as_slice().to_vec();
@@ -44,9 +43,14 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let w = aras_pipeline::robot::stack(&model, &geometry, samples)?;
     let tau = aras_ident::validate::predict(w.w.as_ref(), &beta)?;
     let n = samples.len();
-    let mut measured = samples.tau[0].clone();
-    measured.extend_from_slice(&samples.tau[1]);
-    let fit = fitness_per_joint(&measured, &tau)?;
+    // The log's raw torques on the rows written (the processed samples'
+    // torques are band-limited with the motion: not what the file is
+    // compared with).
+    let [(m1, p1), (m2, p2)] = processed.on_log_rows([&tau[..n], &tau[n..]]);
+    let fit = [
+        aras_ident::validate::fitness(&m1, &p1)?,
+        aras_ident::validate::fitness(&m2, &p2)?,
+    ];
     let mut csv = String::with_capacity(n * 48);
     csv.push_str("t,tau1,tau2\n");
     for i in 0..n {

@@ -4,15 +4,14 @@
 
 use std::collections::BTreeMap;
 
-use anyhow::{Context, Result};
-use aras_dyn::Params;
+use anyhow::Result;
 use serde::Serialize;
 
 use crate::cli::ValidateArgs;
 use crate::output::OutDir;
 use crate::paper;
 use crate::report::Report;
-use crate::robot::{nominal, paper_model};
+use crate::robot::{ParamsUse, nominal, read_params};
 use crate::simulate::truth;
 use crate::stages::Stages;
 use crate::validate::{PdSummary, cross_validate, pd_check, pseudo_inertia_min};
@@ -51,21 +50,20 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
         &super::input_files(&args.common, &loaded, &[&args.params]),
     )?;
     let mut stages = Stages::new(args.common.quiet);
-    let params =
-        Params::load(&args.params).with_context(|| format!("reading {}", args.params.display()))?;
-    params.check_physical().with_context(|| {
-        format!(
-            "{}: `validate` checks a model for control, which needs physically consistent \
+    let params = read_params(
+        &args.params,
+        ParamsUse::Physical(
+            "`validate` checks a model for control, which needs physically consistent \
              parameters (an OLS estimate such as params_ols.json may not be; `predict` accepts it)",
-            args.params.display()
-        )
-    })?;
+        ),
+    )?;
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
     let truth = truth(&cfg, &loaded.dir, &nominal)?;
-    let model = paper_model(&nominal)?;
-    let mut paper_part = params.clone();
-    paper_part.extra = Default::default();
-    let beta = paper_part.standard_vector(&model)?.as_slice().to_vec();
+    // The file's whole model: its geometry, gravity and extra effects are
+    // what is validated, against the configured simulated robot.
+    let model = params.model()?;
+    let geometry = params.geometry()?;
+    let beta = params.standard_vector(&model)?.as_slice().to_vec();
     let bar = stages.bar(
         cfg.validation.frequencies_hz.len() as u64,
         "cross-validation",
@@ -74,6 +72,7 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
         cross_validate(
             &truth,
             &nominal,
+            &geometry,
             &model,
             &[beta],
             &cfg,

@@ -47,6 +47,8 @@ pub struct RunData<'a> {
     pub errors: Option<&'a BTreeMap<String, ErrorSummary>>,
     /// True base parameters, when known.
     pub truth_base: Option<&'a [f64]>,
+    /// What makes the result implausible (`crate::plausibility`).
+    pub implausible: &'a [crate::plausibility::Implausible],
 }
 
 fn f(v: f64, digits: usize) -> String {
@@ -67,6 +69,14 @@ fn g(v: f64) -> String {
 pub fn build(d: &RunData) -> Result<Report> {
     let mut r = Report::new(&d.title);
     r.paragraph(&d.intro);
+    if !d.implausible.is_empty() {
+        r.heading(1, "WARNING: implausible result");
+        r.paragraph(
+            "The checks below failed (`summary.json`, key `implausible`): the figures that \
+             follow were computed, but should not be used before the cause is found.",
+        );
+        r.list(d.implausible.iter().map(|i| i.message.clone()).collect());
+    }
 
     let simulated = d
         .fitness
