@@ -58,15 +58,17 @@ T0_NS = 1_704_067_200 * 1_000_000_000
 STEP_NS = 10_000_000  # 100 Hz
 N = 240
 NAMES = ["motor_left", "motor_right"]
-OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "fixtures", "bags")
+OUT = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "fixtures", "bags"))
 
 
 def sample(i):
     """θ, θ̇, τ of sample i: two sines in rad, rad/s and N·m."""
     t = i * STEP_NS / 1e9
     w1, w2 = 2 * math.pi * 0.7, 2 * math.pi * 1.3
-    th = [0.4 * math.sin(w1 * t) + 0.1, -0.3 * math.cos(w2 * t)]
-    dth = [0.4 * w1 * math.cos(w1 * t), 0.3 * w2 * math.sin(w2 * t)]
+    # Within the ARAS-Diamond's workspace (θ1 ≈ 2.5, θ2 ≈ 1.0 rad), so that
+    # every command can run the robot's model on these angles.
+    th = [2.5 + 0.3 * math.sin(w1 * t), 1.0 - 0.2 * math.cos(w2 * t)]
+    dth = [0.3 * w1 * math.cos(w1 * t), 0.2 * w2 * math.sin(w2 * t)]
     tau = [0.8 * math.sin(w1 * t + 0.3) + 0.05, 0.5 * math.cos(w2 * t - 0.2)]
     return th, dth, tau
 

@@ -302,10 +302,133 @@ fn ms(ns: i64) -> String {
     format!("{}", crate::error::sig(ns as f64 * 1e-6))
 }
 
+/// Which joints a reading takes.
+pub(crate) struct Wanted<'a> {
+    /// Their roles, for messages (`θ1`, `θ2`; `q`).
+    pub roles: &'a [&'a str],
+    /// Their names; `None`: the first message's joints, if it names exactly
+    /// as many.
+    pub names: Option<Vec<String>>,
+    /// "are θ1 and θ2", for messages.
+    pub which: &'a str,
+    /// The option that names them, with its form.
+    pub flag: &'a str,
+}
+
+/// The chosen joints of a topic's messages, one vector per joint.
+pub(crate) struct JointRows {
+    pub t: Vec<f64>,
+    pub position: Vec<Vec<f64>>,
+    /// If every message has the joints' velocity.
+    pub velocity: Option<Vec<Vec<f64>>>,
+    pub effort: Vec<Vec<f64>>,
+    pub topic: String,
+    /// The joints' names.
+    pub joints: Vec<String>,
+    pub notes: Vec<String>,
+}
+
 #[cfg(feature = "bags")]
-/// Reads `topic`'s `JointState` messages of the MCAP file `bytes` into log
-/// rows; `file` names it in messages, `label` (file and topic) the rows.
+/// Reads the two log joints of the MCAP file `bytes` into log rows; `file`
+/// names it in messages.
 pub(crate) fn read(bytes: &[u8], file: &str, opts: &BagOptions) -> Result<BagRows, LogError> {
+    let wanted = Wanted {
+        roles: &["θ1", "θ2"],
+        names: opts
+            .joints
+            .theta1
+            .clone()
+            .zip(opts.joints.theta2.clone())
+            .map(|(a, b)| vec![a, b]),
+        which: "are θ1 and θ2",
+        flag: "--joints theta1=JOINT,theta2=JOINT (BagOptions::joints)",
+    };
+    let r = read_joints(bytes, file, opts.topic.as_deref(), opts.stamps, wanted)?;
+    let pair = |mut v: Vec<Vec<f64>>| {
+        let b = v.pop().unwrap_or_default();
+        let a = v.pop().unwrap_or_default();
+        [a, b]
+    };
+    let has_velocity = r.velocity.is_some();
+    Ok(BagRows {
+        cols: Columns {
+            t: r.t,
+            theta: pair(r.position),
+            tau: pair(r.effort),
+            theta_dot: r.velocity.map(pair).unwrap_or_default(),
+            theta_ddot: Default::default(),
+        },
+        has_velocity,
+        topic: r.topic,
+        notes: r.notes,
+    })
+}
+
+/// One joint of a ROS 2 bag's `JointState` topic ([`read_bag_joint`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointSamples {
+    /// `BAG#TOPIC`: the file and topic, for messages.
+    pub label: String,
+    /// The joint's name.
+    pub joint: String,
+    /// Time (s) from the first message (header stamps or log time).
+    pub t: Vec<f64>,
+    /// Position (rad).
+    pub position: Vec<f64>,
+    /// Velocity (rad/s), if every message has it.
+    pub velocity: Option<Vec<f64>>,
+    /// Effort (N·m).
+    pub effort: Vec<f64>,
+    /// What was read and how (topic, joint, times, rates).
+    pub notes: Vec<String>,
+}
+
+/// Reads one joint of a ROS 2 bag (for single-joint tools such as the
+/// friction analysis): `topic` as [`BagOptions::topic`], `joint` by name
+/// (`None`: the only joint of a one-joint topic). The same checks as a log's
+/// bag reading apply, except the sampling checks, which belong to the user
+/// of the samples.
+#[cfg(feature = "bags")]
+pub fn read_bag_joint(
+    path: &Path,
+    topic: Option<&str>,
+    joint: Option<&str>,
+    stamps: Stamps,
+) -> Result<JointSamples, LogError> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| LogError::Io {
+        file: file.clone(),
+        source,
+    })?;
+    let wanted = Wanted {
+        roles: &["q"],
+        names: joint.map(|j| vec![j.to_string()]),
+        which: "is the joint",
+        flag: "--joint NAME",
+    };
+    let mut r = read_joints(&bytes, &file, topic, stamps, wanted)?;
+    let first = |v: &mut Vec<Vec<f64>>| v.pop().unwrap_or_default();
+    Ok(JointSamples {
+        label: format!("{file}#{}", r.topic),
+        joint: r.joints.pop().unwrap_or_default(),
+        t: r.t,
+        position: first(&mut r.position),
+        velocity: r.velocity.as_mut().map(first),
+        effort: first(&mut r.effort),
+        notes: r.notes,
+    })
+}
+
+#[cfg(feature = "bags")]
+/// Reads the `wanted` joints of a `JointState` topic of the MCAP file
+/// `bytes`; `file` names it in messages.
+pub(crate) fn read_joints(
+    bytes: &[u8],
+    file: &str,
+    topic: Option<&str>,
+    stamps: Stamps,
+    wanted: Wanted<'_>,
+) -> Result<JointRows, LogError> {
     let bag_err = |e: mcap::McapError| LogError::Bag {
         file: file.into(),
         reason: e.to_string(),
@@ -332,7 +455,7 @@ pub(crate) fn read(bytes: &[u8], file: &str, opts: &BagOptions) -> Result<BagRow
         problem,
         topics: topic_list(&topics, false),
     };
-    let topic = match &opts.topic {
+    let topic = match topic {
         Some(t) => match topics.get(t) {
             None => return Err(topic_err(format!("the bag has no topic `{t}`"))),
             Some(i) if i.schema != JOINT_STATE => {
@@ -341,7 +464,7 @@ pub(crate) fn read(bytes: &[u8], file: &str, opts: &BagOptions) -> Result<BagRow
                     i.schema
                 )));
             }
-            Some(_) => t.clone(),
+            Some(_) => t.to_string(),
         },
         None => {
             let js: Vec<&String> = topics
@@ -374,15 +497,14 @@ pub(crate) fn read(bytes: &[u8], file: &str, opts: &BagOptions) -> Result<BagRow
         )));
     }
     // Pass 2: decode the topic's messages.
-    let mut cols = Columns::default();
+    let count = wanted.roles.len();
+    let mut t_out = Vec::new();
+    let mut pos_out = vec![Vec::new(); count];
+    let mut vel_out = vec![Vec::new(); count];
+    let mut eff_out = vec![Vec::new(); count];
     let mut has_velocity = true;
     let mut notes = Vec::new();
-    let mut joints: Option<[String; 2]> = opts
-        .joints
-        .theta1
-        .clone()
-        .zip(opts.joints.theta2.clone())
-        .map(|(a, b)| [a, b]);
+    let mut joints = wanted.names.clone();
     let mut first_ns: Option<i64> = None;
     let mut prev_ns = 0i64;
     let mut steps: Vec<i64> = Vec::new();
@@ -405,48 +527,61 @@ pub(crate) fn read(bytes: &[u8], file: &str, opts: &BagOptions) -> Result<BagRow
         decode(&msg.data, &mut state).map_err(&at)?;
         let stamp_ns = i64::from(state.sec) * 1_000_000_000 + i64::from(state.nanosec);
         let log_ns = i64::try_from(msg.log_time).unwrap_or(i64::MAX);
-        let ns = match opts.stamps {
+        let ns = match stamps {
             Stamps::Header => stamp_ns,
             Stamps::Log => log_ns,
         };
         let names = &state.names;
         if joints.is_none() {
-            if names.len() != 2 {
+            if names.len() != count {
                 return Err(LogError::BagJoints {
                     file: file.into(),
                     topic: topic.clone(),
                     problem: format!(
-                        "the first message names {} joints ({}): say which are θ1 and θ2 with \
-                         --joints theta1=JOINT,theta2=JOINT (BagOptions::joints)",
+                        "the first message names {} joints ({}): say which {} with {}",
                         names.len(),
-                        names.join(", ")
+                        names.join(", "),
+                        wanted.which,
+                        wanted.flag
                     ),
                 });
             }
+            let roles: Vec<String> = wanted
+                .roles
+                .iter()
+                .zip(names)
+                .map(|(r, n)| format!("{r} = joint `{n}`"))
+                .collect();
             notes.push(format!(
-                "θ1 = joint `{}`, θ2 = joint `{}`: the two joints in the order of the first \
-                 message (choose with --joints theta1=JOINT,theta2=JOINT)",
-                names[0], names[1]
+                "{}: {} (choose with {})",
+                roles.join(", "),
+                match count {
+                    1 => "the only joint of the first message".to_string(),
+                    2 => "the two joints in the order of the first message".to_string(),
+                    n => format!("the {n} joints in the order of the first message"),
+                },
+                wanted.flag
             ));
-            joints = Some([names[0].to_string(), names[1].to_string()]);
+            joints = Some(names.iter().map(|n| n.to_string()).collect());
         }
-        let [j1, j2] = joints.as_ref().expect("set above");
-        let mut index = [0usize; 2];
-        for (k, j) in [j1, j2].into_iter().enumerate() {
+        let chosen = joints.as_ref().expect("set above");
+        let mut index = vec![0usize; count];
+        for (k, j) in chosen.iter().enumerate() {
             index[k] = names.iter().position(|n| *n == j.as_str()).ok_or_else(|| {
                 at(format!(
-                    "joint `{j}` (θ{}) is not in the message, which names: {}; check --joints",
-                    k + 1,
+                    "joint `{j}` ({}) is not in the message, which names: {}; check {}",
+                    wanted.roles[k],
                     if names.is_empty() {
                         "no joints".to_string()
                     } else {
                         names.join(", ")
-                    }
+                    },
+                    wanted.flag
                 ))
             })?;
         }
         for n in names {
-            if *n != j1.as_str() && *n != j2.as_str() && !extra.iter().any(|e| e == n) {
+            if !chosen.iter().any(|c| c == n) && !extra.iter().any(|e| e == n) {
                 extra.push(n.to_string());
             }
         }
@@ -487,7 +622,7 @@ pub(crate) fn read(bytes: &[u8], file: &str, opts: &BagOptions) -> Result<BagRow
             }
             Some(ns0) => {
                 if ns <= prev_ns {
-                    let hint = match opts.stamps {
+                    let hint = match stamps {
                         Stamps::Header if stamp_ns == 0 => {
                             "header.stamp is zero: the driver does not fill it; read the bag's \
                              log time instead with --stamps log (BagOptions::stamps)"
@@ -509,7 +644,7 @@ pub(crate) fn read(bytes: &[u8], file: &str, opts: &BagOptions) -> Result<BagRow
             }
         };
         prev_ns = ns;
-        if opts.stamps == Stamps::Header {
+        if stamps == Stamps::Header {
             let d = log_ns.saturating_sub(stamp_ns);
             latency = Some(latency.map_or([d, d], |[lo, hi]| [lo.min(d), hi.max(d)]));
         }
@@ -521,28 +656,20 @@ pub(crate) fn read(bytes: &[u8], file: &str, opts: &BagOptions) -> Result<BagRow
                 Err(at(format!(
                     "{field} of joint `{}` is {x}: logs must hold finite numbers only (drop the \
                      message or repair the recording)",
-                    [j1, j2][k]
+                    chosen[k]
                 )))
             }
         };
-        cols.t.push(t);
-        for k in 0..2 {
-            let th = value(&state.position, k, "position")?;
-            let tau = value(&state.effort, k, "effort")?;
-            cols.theta[k].push(th);
-            cols.tau[k].push(tau);
+        t_out.push(t);
+        for k in 0..count {
+            pos_out[k].push(value(&state.position, k, "position")?);
+            eff_out[k].push(value(&state.effort, k, "effort")?);
             if has_velocity {
-                let v = value(&state.velocity, k, "velocity")?;
-                cols.theta_dot[k].push(v);
+                vel_out[k].push(value(&state.velocity, k, "velocity")?);
             }
         }
     }
-    if !has_velocity {
-        for v in &mut cols.theta_dot {
-            v.clear();
-        }
-    }
-    let time = match opts.stamps {
+    let time = match stamps {
         Stamps::Header => format!(
             "t = 0 at the first message's header.stamp ({} s)",
             first_ns.map_or(0.0, |n| n as f64 / 1e9)
@@ -599,10 +726,13 @@ pub(crate) fn read(bytes: &[u8], file: &str, opts: &BagOptions) -> Result<BagRow
                 .join(", ")
         ));
     }
-    Ok(BagRows {
-        cols,
-        has_velocity,
+    Ok(JointRows {
+        t: t_out,
+        position: pos_out,
+        velocity: has_velocity.then_some(vel_out),
+        effort: eff_out,
         topic,
+        joints: joints.unwrap_or_default(),
         notes,
     })
 }

@@ -43,7 +43,9 @@ mod writer;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-pub use bag::{BagOptions, JOINT_STATE, JointNames, MCAP_MAGIC, Stamps, is_bag};
+#[cfg(feature = "bags")]
+pub use bag::read_bag_joint;
+pub use bag::{BagOptions, JOINT_STATE, JointNames, JointSamples, MCAP_MAGIC, Stamps, is_bag};
 pub use checks::{Extreme, NOMINAL_WINDOW, Span, StepDeviation, Warning};
 pub use error::LogError;
 pub use header::ColumnNames;
