@@ -799,6 +799,23 @@ mod tests {
         assert!(decode(&pl, &mut m).unwrap_err().contains("not plain CDR"));
     }
 
+    proptest::proptest! {
+        /// Any bytes decode or fail with a message: no panic, no huge
+        /// allocation from a corrupt length.
+        #[test]
+        fn cdr_decoder_never_panics(
+            mut bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..200),
+            header in 0u8..3,
+        ) {
+            if bytes.len() >= 2 {
+                bytes[0] = 0;
+                bytes[1] = header;
+            }
+            let mut m = JointState::default();
+            let _ = decode(&bytes, &mut m);
+        }
+    }
+
     #[test]
     fn joint_names_parse() {
         let j = JointNames::parse("theta1=motor_left, theta2=Motor_Right").unwrap();

@@ -403,3 +403,28 @@ fn a_bag_takes_the_declared_sidecar_beside_it() {
         Some(dir.join("run.json").display().to_string())
     );
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+
+    /// A damaged bag (bytes changed, or cut) reads or fails with an error:
+    /// never a panic.
+    #[test]
+    fn damaged_bags_never_panic(
+        flips in proptest::collection::vec((0.0f64..1.0, proptest::prelude::any::<u8>()), 1..6),
+        keep in 0.05f64..1.0,
+    ) {
+        let dir = Scratch::new("bags-fuzz");
+        let mut bytes = std::fs::read(bag("clean.mcap")).unwrap();
+        for (at, b) in flips {
+            let i = ((bytes.len() - 1) as f64 * at) as usize;
+            bytes[i] = b;
+        }
+        bytes.truncate(((bytes.len() as f64) * keep) as usize);
+        let path = dir.join("fuzz.mcap");
+        std::fs::write(&path, &bytes).unwrap();
+        if let Ok(log) = read_log(&path, &ReadOptions::default()) {
+            proptest::prop_assert!(log.t.iter().chain(&log.tau[0]).all(|x| x.is_finite()));
+        }
+    }
+}
