@@ -63,8 +63,9 @@ pub struct ExportMjcfArgs {
 pub struct FrictionArgs {
     /// The training log: CSV with a header and columns t (s), q (rad),
     /// dq (rad/s, computed from q when absent), tau (N·m, the friction
-    /// torque), optional ddq (rad/s²); other columns are ignored.
-    #[arg(long, value_name = "TRAIN.csv")]
+    /// torque), optional ddq (rad/s²); other columns are ignored. Or a ROS
+    /// 2 bag (.mcap): one joint of its JointState messages (`--joint`).
+    #[arg(long, value_name = "TRAIN.csv|BAG.mcap")]
     pub data: PathBuf,
     /// A validation log, same format (repeat for several).
     #[arg(long, value_name = "VAL.csv")]
@@ -76,6 +77,18 @@ pub struct FrictionArgs {
     /// dq, tau, ddq; roles not given keep their default names).
     #[arg(long, value_name = "ROLE=NAME,…")]
     pub columns: Option<String>,
+    /// ROS 2 bag (.mcap) only: the sensor_msgs/msg/JointState topic (needed
+    /// when the bag has several).
+    #[arg(long, value_name = "TOPIC")]
+    pub topic: Option<String>,
+    /// ROS 2 bag only: the joint to analyse, by name (default: the only
+    /// joint of a one-joint topic); its position is q, velocity dq, effort tau.
+    #[arg(long, value_name = "NAME")]
+    pub joint: Option<String>,
+    /// ROS 2 bag only: the samples' time, `header` (header.stamp) or `log`
+    /// (the bag's receive time).
+    #[arg(long, value_enum, default_value = "header")]
+    pub stamps: StampsArg,
     /// Hold the Stribeck shape exponent δ of the Stribeck and LuGre models
     /// at this value (2 is the classical LuGre shape) instead of fitting it.
     #[arg(long, value_name = "DELTA", value_parser = positive, allow_hyphen_values = true)]
@@ -125,8 +138,10 @@ pub struct LogArgs {
     /// angles).
     #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub period: Option<f64>,
-    /// Sidecar file (default: LOG.json next to the log, if present).
-    #[arg(long, value_name = "JSON")]
+    /// Sidecar file, or `none` to read no sidecar (default: LOG.json next
+    /// to the log, if it declares `"format": "aras-log/1"`; a file of that
+    /// name without the declaration is not read, with a note).
+    #[arg(long, value_name = "JSON|none")]
     pub sidecar: Option<PathBuf>,
     /// Your column names, e.g. `t=time,theta1=q1,theta2=q2,tau1=torque_a,tau2=torque_b`
     /// (roles: t, theta1, theta2, tau1, tau2, i1, i2, enc1, enc2, dtheta1,
@@ -134,28 +149,74 @@ pub struct LogArgs {
     /// names; docs/log-format.md).
     #[arg(long, value_name = "ROLE=NAME,…")]
     pub columns: Option<String>,
+    /// ROS 2 bag (.mcap) only: the sensor_msgs/msg/JointState topic to read
+    /// (needed when the bag has several).
+    #[arg(long, value_name = "TOPIC")]
+    pub topic: Option<String>,
+    /// ROS 2 bag only: which joints are θ1 and θ2, e.g.
+    /// `theta1=motor_left,theta2=motor_right` (default: the two joints of a
+    /// two-joint message, in its order).
+    #[arg(long, value_name = "theta1=JOINT,theta2=JOINT")]
+    pub joints: Option<String>,
+    /// ROS 2 bag only: the samples' time, `header` (header.stamp) or `log`
+    /// (the bag's receive time, for drivers that leave the stamp unset).
+    #[arg(long, value_enum, default_value = "header")]
+    pub stamps: StampsArg,
+}
+
+/// `--stamps`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum StampsArg {
+    /// header.stamp of each message.
+    #[default]
+    Header,
+    /// The bag's log time.
+    Log,
 }
 
 impl LogArgs {
-    /// The sidecar of `log`: `--sidecar`, else LOG.json beside it.
-    pub fn sidecar_of(&self, log: &std::path::Path) -> PathBuf {
-        self.sidecar
-            .clone()
-            .unwrap_or_else(|| aras_log::sidecar_path(log))
+    /// True if `--sidecar none`.
+    fn no_sidecar(&self) -> bool {
+        self.sidecar.as_deref() == Some(std::path::Path::new("none"))
     }
 
-    /// The log reader's options: `--sidecar` and `--columns`.
+    /// The sidecar file `log` may be read with, which outputs must never
+    /// replace: `--sidecar FILE`, else LOG.json beside it (with `--sidecar
+    /// none` too: it is still the lab's file).
+    pub fn sidecar_of(&self, log: &std::path::Path) -> PathBuf {
+        match &self.sidecar {
+            Some(p) if !self.no_sidecar() => p.clone(),
+            _ => aras_log::sidecar_path(log),
+        }
+    }
+
+    /// The log reader's options: `--sidecar`, `--columns` and, for bags,
+    /// `--topic`, `--joints`, `--stamps`.
     pub fn read_options(&self) -> anyhow::Result<aras_log::ReadOptions> {
         use anyhow::Context;
-        use aras_log::{ColumnNames, ReadOptions, SidecarSource};
+        use aras_log::{BagOptions, ColumnNames, JointNames, ReadOptions, SidecarSource, Stamps};
         Ok(ReadOptions {
-            sidecar: self
-                .sidecar
-                .as_ref()
-                .map_or(SidecarSource::Auto, |p| SidecarSource::Path(p.clone())),
+            sidecar: if self.no_sidecar() {
+                SidecarSource::None
+            } else {
+                self.sidecar
+                    .as_ref()
+                    .map_or(SidecarSource::Auto, |p| SidecarSource::Path(p.clone()))
+            },
             columns: match &self.columns {
                 Some(spec) => ColumnNames::parse(spec).context("option --columns")?,
                 None => ColumnNames::default(),
+            },
+            bag: BagOptions {
+                topic: self.topic.clone(),
+                joints: match &self.joints {
+                    Some(spec) => JointNames::parse(spec).context("option --joints")?,
+                    None => JointNames::default(),
+                },
+                stamps: match self.stamps {
+                    StampsArg::Header => Stamps::Header,
+                    StampsArg::Log => Stamps::Log,
+                },
             },
             ..ReadOptions::default()
         })
@@ -238,8 +299,9 @@ pub struct SimulateArgs {
 /// `aras identify`.
 #[derive(Debug, Args)]
 pub struct IdentifyArgs {
-    /// The log (docs/log-format.md).
-    #[arg(long, value_name = "LOG.csv")]
+    /// The log (docs/log-format.md): a CSV, or a ROS 2 bag (.mcap) of
+    /// sensor_msgs/msg/JointState.
+    #[arg(long, value_name = "LOG.csv|BAG.mcap")]
     pub data: PathBuf,
     /// The log's period and sidecar.
     #[command(flatten)]

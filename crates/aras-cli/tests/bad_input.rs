@@ -352,14 +352,6 @@ fn logs_and_sidecars() {
             &["time_backwards.csv:12:1: time does not increase"],
         ),
         (
-            "bad/sidecar/empty_sidecar.csv",
-            &["empty_sidecar.json:1:1: the file is empty; the sidecar must be one JSON object"],
-        ),
-        (
-            "bad/sidecar/sidecar_array.csv",
-            &["sidecar_array.json:1:1: it starts with '['"],
-        ),
-        (
             "bad/sidecar/nan_torque_constant.csv",
             &["nan_torque_constant.json:1:59", "JSON has no NaN"],
         ),
@@ -375,6 +367,43 @@ fn logs_and_sidecars() {
         let args = predict_log(&fixture(file), &dir);
         fails_with(&strs(&args), expected);
         assert!(!dir.join("p.csv").exists());
+    }
+    // An empty file or a JSON array declares no format: beside the log it is
+    // not read (a note says so); given with --sidecar it is an error.
+    for (file, expected) in [
+        (
+            "bad/sidecar/empty_sidecar",
+            "empty_sidecar.json:1:1: the file is empty; the sidecar must be one JSON object",
+        ),
+        (
+            "bad/sidecar/sidecar_array",
+            "sidecar_array.json:1:1: it starts with '['",
+        ),
+    ] {
+        let mut args = predict_log(&fixture(&format!("{file}.csv")), &dir);
+        let ok = aras(&strs(&args));
+        let stderr = String::from_utf8_lossy(&ok.stderr);
+        assert!(ok.status.success(), "{file}: {stderr}");
+        assert!(
+            stderr.contains(&format!(
+                "{}.json does not declare the aras-log/1 format",
+                fixture(file)
+            )) && stderr.contains("not read as a sidecar"),
+            "{file}: {stderr}"
+        );
+        let _ = std::fs::remove_file(dir.join("p.csv"));
+        args.extend(["--sidecar".into(), fixture(&format!("{file}.json"))]);
+        fails_with(&strs(&args), &[expected]);
+        // `--sidecar none` reads none: no note either.
+        let n = args.len();
+        args[n - 1] = "none".into();
+        let _ = std::fs::remove_file(dir.join("p.csv"));
+        let ok = aras(&strs(&args));
+        let stderr = String::from_utf8_lossy(&ok.stderr);
+        assert!(
+            ok.status.success() && !stderr.contains("sidecar"),
+            "{file}: {stderr}"
+        );
     }
     // Every log of the reader's own corpus fails through the CLI too, naming its file.
     let bad = root().join("fixtures/logs/bad");

@@ -298,6 +298,59 @@ pub enum LogError {
         #[source]
         source: std::io::Error,
     },
+    /// A sidecar given explicitly does not declare the format.
+    #[error(
+        "{file} does not declare the sidecar format: add \"format\": \"aras-log/1\" to it \
+         (docs/log-format.md), or read the log without a sidecar (--sidecar none, \
+         SidecarSource::None)"
+    )]
+    SidecarUndeclared {
+        /// Sidecar file name.
+        file: String,
+    },
+    /// The file is not a readable MCAP bag.
+    #[error(
+        "{file}: not a readable ROS 2 bag (MCAP): {reason}; a bag still being recorded or cut \
+         short has no end: re-index it (`mcap recover`) or record it again"
+    )]
+    Bag {
+        /// Bag file name.
+        file: String,
+        /// What the MCAP reader found.
+        reason: String,
+    },
+    /// The bag's topic to read is missing or ambiguous.
+    #[error("{file}: {problem}; the bag's topics: {topics}")]
+    BagTopic {
+        /// Bag file name.
+        file: String,
+        /// What is wrong and how to fix it.
+        problem: String,
+        /// The topics, with message types and counts.
+        topics: String,
+    },
+    /// The bag's joints cannot be mapped to θ1 and θ2.
+    #[error("{file}: topic {topic}: {problem}")]
+    BagJoints {
+        /// Bag file name.
+        file: String,
+        /// The topic read.
+        topic: String,
+        /// What is wrong and how to fix it.
+        problem: String,
+    },
+    /// A message of the bag is malformed or lacks what a log needs.
+    #[error("{file}: topic {topic}, message {message}: {problem}")]
+    BagMessage {
+        /// Bag file name.
+        file: String,
+        /// The topic read.
+        topic: String,
+        /// 1-based number of the message on its topic.
+        message: u64,
+        /// What is wrong and how to fix it.
+        problem: String,
+    },
     /// A log or sidecar file could not be written.
     #[error("{path} cannot be written")]
     Write {

@@ -3,7 +3,13 @@
 //! paper's experiment), optional logged derivatives, and an optional JSON
 //! sidecar with sensor constants and the excitation period. Its one reader
 //! (whole-file [`read_log`], streaming [`LogReader`]) and its one writer
-//! ([`write_log`]).
+//! ([`write_log`]). The reader also takes a ROS 2 bag (an MCAP file, known
+//! by [`is_bag`]): the `sensor_msgs/msg/JointState` messages of one topic
+//! become the log's rows ([`BagOptions`]: topic, joint names, stamps).
+//!
+//! A JSON file beside the log is its sidecar only if it declares the format
+//! (`"format": "aras-log/1"`, [`find_sidecar`]): a lab's own `run.json`
+//! beside `run.csv` is left alone, with a note.
 //!
 //! The reader validates everything a log can get wrong: every defect is a
 //! [`LogError`] naming file, line, column and value, with the fix. No robot
@@ -13,6 +19,11 @@
 //!
 //! * `serde`, `serde_json`: the sidecar and the serialisable summaries.
 //! * `thiserror`: the error enum.
+//! * `mcap` (feature `bags`, on by default): Foxglove's reference reader of
+//!   the MCAP container that `ros2 bag record` writes (chunks, zstd and lz4
+//!   compression, channels, schemas). The `JointState` messages inside are
+//!   CDR-encoded; that fixed layout is decoded here (a few dozen lines),
+//!   which names the message and field of any defect.
 //!
 //! The CSV is parsed by a small purpose-built scanner rather than the `csv`
 //! crate: the format is plain numeric, and the scanner gives exact line and
@@ -20,6 +31,7 @@
 
 #![warn(missing_docs)]
 
+mod bag;
 mod checks;
 mod error;
 mod header;
@@ -31,11 +43,14 @@ mod writer;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
+#[cfg(feature = "bags")]
+pub use bag::read_bag_joint;
+pub use bag::{BagOptions, JOINT_STATE, JointNames, JointSamples, MCAP_MAGIC, Stamps, is_bag};
 pub use checks::{Extreme, NOMINAL_WINDOW, Span, StepDeviation, Warning};
 pub use error::LogError;
 pub use header::ColumnNames;
 pub use reader::{Columns, LogReader, LogReport, LogSummary};
-pub use sidecar::{Excitation, FORMAT, Sensors, Sidecar};
+pub use sidecar::{Excitation, FORMAT, FoundSidecar, Sensors, Sidecar, find_sidecar};
 pub use writer::{new_temp_file, sidecar_path, write_atomic, write_log};
 
 /// Where to find the JSON sidecar.
@@ -80,8 +95,11 @@ pub struct ReadOptions {
     pub saturation_samples: usize,
     /// Reject angle columns that look like degrees (default true).
     pub check_degrees: bool,
-    /// The lab's own column names (default: the standard names).
+    /// The lab's own column names (default: the standard names; CSV logs
+    /// only).
     pub columns: ColumnNames,
+    /// How a ROS 2 bag is read (topic, joints, stamps; bags only).
+    pub bag: BagOptions,
 }
 
 impl Default for ReadOptions {
@@ -95,6 +113,7 @@ impl Default for ReadOptions {
             saturation_samples: 50,
             check_degrees: true,
             columns: ColumnNames::default(),
+            bag: BagOptions::default(),
         }
     }
 }

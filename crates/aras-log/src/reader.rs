@@ -8,13 +8,13 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use super::ReadOptions;
 use super::checks::{Checks, StepDeviation, Warning};
 use super::header::{
     AngleSource, CURRENT, DDTHETA, DTHETA, ENC, Layout, NAMES, SLOTS, T, TAU_, THETA, TorqueSource,
 };
 use super::number::parse_f64;
 use super::sidecar::Sidecar;
-use super::{ReadOptions, SidecarSource};
 use crate::error::LogError;
 
 /// Rows of a log in SI units, structure-of-arrays.
@@ -173,6 +173,12 @@ impl<R: Read> Lines<R> {
     }
 }
 
+/// Where the rows come from: CSV text, or a ROS 2 bag decoded on opening.
+enum Source<R> {
+    Csv(Lines<R>),
+    Bag { rows: Columns, next: usize },
+}
+
 /// Streaming reader of one log.
 ///
 /// ```no_run
@@ -193,7 +199,7 @@ impl<R: Read> Lines<R> {
 /// log (irregular sampling against the nominal step, degrees, too few rows,
 /// saturation warnings) by [`finish`](Self::finish).
 pub struct LogReader<R> {
-    lines: Lines<R>,
+    source: Source<R>,
     name: String,
     layout: Layout,
     sidecar: Sidecar,
@@ -204,58 +210,119 @@ pub struct LogReader<R> {
 }
 
 impl LogReader<File> {
-    /// Opens a log file. With [`SidecarSource::Auto`] the sidecar is the
-    /// file of the same name with extension `.json`, if it exists.
+    /// Opens a log file: a CSV, or a ROS 2 bag ([`is_bag`](crate::is_bag):
+    /// extension `.mcap` or the MCAP magic bytes), whose topic is decoded
+    /// into memory here and then served in chunks like a CSV's rows. With
+    /// [`SidecarSource::Auto`](crate::SidecarSource::Auto) the sidecar is
+    /// the file of the same name with extension `.json`, if it exists and
+    /// declares the format ([`find_sidecar`](crate::find_sidecar)).
     pub fn open(path: &Path, opts: &ReadOptions) -> Result<Self, LogError> {
         let name = path.display().to_string();
+        let found = crate::find_sidecar(Some(path), &opts.sidecar)?;
+        if crate::is_bag(path) {
+            return Self::open_bag(path, name, opts, found);
+        }
+        if !opts.bag.is_default() {
+            return Err(LogError::InvalidOption {
+                name: "bag",
+                value: format!("{:?}", opts.bag),
+                reason: format!(
+                    "{name} is a CSV log: --topic, --joints and --stamps apply to ROS 2 bags \
+                     (.mcap) only; name a CSV's columns with --columns"
+                ),
+            });
+        }
         let file = File::open(path).map_err(|source| LogError::Io {
             file: name.clone(),
             source,
         })?;
-        let sidecar = match &opts.sidecar {
-            SidecarSource::Auto => {
-                let candidate = crate::sidecar_path(path);
-                if candidate.is_file() {
-                    Some((Sidecar::read(&candidate)?, candidate.display().to_string()))
-                } else {
-                    None
-                }
-            }
-            other => load_sidecar(other)?,
-        };
-        Self::with_sidecar(file, name, opts, sidecar)
+        Self::with_sidecar(file, name, opts, found)
     }
-}
 
-fn load_sidecar(src: &SidecarSource) -> Result<Option<(Sidecar, String)>, LogError> {
-    Ok(match src {
-        SidecarSource::Auto | SidecarSource::None => None,
-        SidecarSource::Path(p) => Some((Sidecar::read(p)?, p.display().to_string())),
-        SidecarSource::Text { name, json } => Some((Sidecar::parse(json, name)?, name.clone())),
-    })
+    #[cfg(feature = "bags")]
+    fn open_bag(
+        path: &Path,
+        name: String,
+        opts: &ReadOptions,
+        found: crate::FoundSidecar,
+    ) -> Result<Self, LogError> {
+        if opts.columns != Default::default() {
+            return Err(LogError::InvalidOption {
+                name: "columns",
+                value: format!("{:?}", opts.columns),
+                reason: format!(
+                    "{name} is a ROS 2 bag: its joints are mapped by name with --joints \
+                     theta1=JOINT,theta2=JOINT, not with --columns"
+                ),
+            });
+        }
+        let bytes = std::fs::read(path).map_err(|source| LogError::Io {
+            file: name.clone(),
+            source,
+        })?;
+        let bag = crate::bag::read(&bytes, &name, &opts.bag)?;
+        drop(bytes);
+        let header: &[u8] = if bag.has_velocity {
+            b"t,theta1,theta2,tau1,tau2,dtheta1,dtheta2"
+        } else {
+            b"t,theta1,theta2,tau1,tau2"
+        };
+        // Messages are numbered on their topic: the "line" of a row.
+        let label = format!("{name}#{}", bag.topic);
+        let r = LogReader::with_sidecar(header, label, opts, found)?;
+        let mut layout = r.layout;
+        layout.notes.splice(0..0, bag.notes);
+        Ok(LogReader {
+            source: Source::Bag {
+                rows: bag.cols,
+                next: 0,
+            },
+            name: r.name,
+            layout,
+            sidecar: r.sidecar,
+            sidecar_name: r.sidecar_name,
+            checks: r.checks,
+            opts: r.opts,
+            done: false,
+        })
+    }
+
+    #[cfg(not(feature = "bags"))]
+    fn open_bag(
+        _path: &Path,
+        name: String,
+        _opts: &ReadOptions,
+        _found: crate::FoundSidecar,
+    ) -> Result<Self, LogError> {
+        Err(LogError::Bag {
+            file: name,
+            reason: "this build of aras-log reads no bags (feature `bags` is off)".into(),
+        })
+    }
 }
 
 impl<R: Read> LogReader<R> {
     /// Reader over any byte source; `name` labels messages.
-    /// [`SidecarSource::Auto`] means no sidecar here (there is no path to
+    /// [`SidecarSource::Auto`](crate::SidecarSource::Auto) means no sidecar here (there is no path to
     /// look next to).
     pub fn new(src: R, name: &str, opts: &ReadOptions) -> Result<Self, LogError> {
-        let sidecar = load_sidecar(&opts.sidecar)?;
-        Self::with_sidecar(src, name.to_string(), opts, sidecar)
+        let found = crate::find_sidecar(None, &opts.sidecar)?;
+        Self::with_sidecar(src, name.to_string(), opts, found)
     }
 
     fn with_sidecar(
         src: R,
         name: String,
         opts: &ReadOptions,
-        sidecar: Option<(Sidecar, String)>,
+        found: crate::FoundSidecar,
     ) -> Result<Self, LogError> {
         opts.validate()?;
         opts.sensors.validate("ReadOptions::sensors")?;
-        let (sidecar, sidecar_name) = match sidecar {
-            Some((s, n)) => (s, Some(n)),
-            None => (Sidecar::default(), None),
-        };
+        let crate::FoundSidecar {
+            sidecar,
+            name: sidecar_name,
+            note: sidecar_note,
+        } = found;
         let sensors = sidecar.sensors.overridden_by(&opts.sensors);
         let mut lines = Lines::new(src);
         let io = |source| LogError::Io {
@@ -291,6 +358,7 @@ impl<R: Read> LogReader<R> {
             )?;
         };
         let mut notes = layout.notes.clone();
+        notes.extend(sidecar_note);
         if opts.sensors != Default::default() {
             notes.push("sensor constants from ReadOptions override the sidecar".into());
         }
@@ -298,7 +366,7 @@ impl<R: Read> LogReader<R> {
         let mut layout = layout;
         layout.notes = notes;
         Ok(Self {
-            lines,
+            source: Source::Csv(lines),
             name,
             layout,
             sidecar,
@@ -342,10 +410,13 @@ impl<R: Read> LogReader<R> {
     /// Appends up to `max_rows` rows to `out`; returns how many (0 at the
     /// end of the log). Stops at the first defective row with its error.
     pub fn read_rows(&mut self, out: &mut Columns, max_rows: usize) -> Result<usize, LogError> {
+        let Source::Csv(lines) = &mut self.source else {
+            return self.read_bag_rows(out, max_rows);
+        };
         let mut count = 0;
         let mut vals = [0.0f64; SLOTS];
         while count < max_rows && !self.done {
-            let Some(r) = self.lines.next().map_err(|source| LogError::Io {
+            let Some(r) = lines.next().map_err(|source| LogError::Io {
                 file: self.name.clone(),
                 source,
             })?
@@ -353,8 +424,8 @@ impl<R: Read> LogReader<R> {
                 self.done = true;
                 break;
             };
-            let line = self.lines.line;
-            let bytes = trim(&self.lines.buf[r]);
+            let line = lines.line;
+            let bytes = trim(&lines.buf[r]);
             if bytes.is_empty() || bytes[0] == b'#' {
                 continue;
             }
@@ -388,6 +459,35 @@ impl<R: Read> LogReader<R> {
             count += 1;
         }
         Ok(count)
+    }
+
+    /// [`read_rows`](Self::read_rows) of a bag's decoded rows: a row's
+    /// "line" is its message's number on the topic.
+    fn read_bag_rows(&mut self, out: &mut Columns, max_rows: usize) -> Result<usize, LogError> {
+        let Source::Bag { rows, next } = &mut self.source else {
+            return Ok(0);
+        };
+        let start = *next;
+        let end = rows.len().min(start.saturating_add(max_rows));
+        for i in start..end {
+            let theta = [rows.theta[0][i], rows.theta[1][i]];
+            let tau = [rows.tau[0][i], rows.tau[1][i]];
+            self.checks
+                .row(&self.name, i as u64 + 1, 1, rows.t[i], theta, tau)?;
+            out.t.push(rows.t[i]);
+            for c in 0..2 {
+                out.theta[c].push(theta[c]);
+                out.tau[c].push(tau[c]);
+                if self.layout.has_velocity {
+                    out.theta_dot[c].push(rows.theta_dot[c][i]);
+                }
+            }
+            *next = i + 1;
+        }
+        if *next == rows.len() {
+            self.done = true;
+        }
+        Ok(end - start)
     }
 
     /// Runs the end-of-log checks (reading any rows not yet read, without

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use crate::SidecarSource;
 use crate::error::LogError;
 
 /// The format tag this reader understands.
@@ -158,6 +159,99 @@ impl Sidecar {
             });
         }
         Ok(())
+    }
+}
+
+/// What the sidecar lookup of a log found ([`find_sidecar`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FoundSidecar {
+    /// The sidecar (default if none was read).
+    pub sidecar: Sidecar,
+    /// Where it came from, if one was read.
+    pub name: Option<String>,
+    /// Why a file beside the log was not read as its sidecar, if so.
+    pub note: Option<String>,
+}
+
+/// Whether JSON text declares itself an `aras-log` sidecar.
+enum Declaration {
+    /// `"format": "aras-log/…"` (any version: a wrong one is reported).
+    Declared,
+    /// Anything else: a lab's own JSON.
+    Foreign(&'static str),
+}
+
+fn declaration(text: &str) -> Declaration {
+    match serde_json::from_str::<serde_json::Value>(text) {
+        Ok(serde_json::Value::Object(m)) => match m.get("format") {
+            Some(serde_json::Value::String(f)) if f.starts_with("aras-log/") => {
+                Declaration::Declared
+            }
+            _ => Declaration::Foreign("does not declare the aras-log/1 format"),
+        },
+        Ok(_) => {
+            Declaration::Foreign("does not declare the aras-log/1 format (it is not a JSON object)")
+        }
+        // Broken JSON that names the format is a damaged sidecar: report it.
+        Err(_) if text.contains("\"aras-log/") => Declaration::Declared,
+        Err(_) => {
+            Declaration::Foreign("does not declare the aras-log/1 format (it is not valid JSON)")
+        }
+    }
+}
+
+/// The sidecar of the log at `log` (`None`: a stream) per `source`:
+///
+/// * [`SidecarSource::Auto`]: `LOG.json` beside the log, if it exists *and
+///   declares the format* (`"format": "aras-log/1"`); a lab's own JSON of
+///   that name is not read, and [`FoundSidecar::note`] says so. A file that
+///   declares the format but is broken is an error.
+/// * [`SidecarSource::Path`], [`SidecarSource::Text`]: that sidecar; one that
+///   does not declare the format is an error.
+/// * With [`SidecarSource::None`], none.
+pub fn find_sidecar(log: Option<&Path>, source: &SidecarSource) -> Result<FoundSidecar, LogError> {
+    let explicit = |text: &str, name: String| {
+        let sidecar = Sidecar::parse(text, &name)?;
+        if sidecar.format.is_none() {
+            return Err(LogError::SidecarUndeclared { file: name });
+        }
+        Ok(FoundSidecar {
+            sidecar,
+            name: Some(name),
+            note: None,
+        })
+    };
+    let read = |path: &Path| {
+        std::fs::read_to_string(path).map_err(|source| LogError::SidecarIo {
+            path: path.to_path_buf(),
+            source,
+        })
+    };
+    match source {
+        SidecarSource::None => Ok(FoundSidecar::default()),
+        SidecarSource::Auto => {
+            let Some(candidate) = log.map(crate::sidecar_path).filter(|c| c.is_file()) else {
+                return Ok(FoundSidecar::default());
+            };
+            let text = read(&candidate)?;
+            let name = candidate.display().to_string();
+            match declaration(&text) {
+                Declaration::Declared => Ok(FoundSidecar {
+                    sidecar: Sidecar::parse(&text, &name)?,
+                    name: Some(name),
+                    note: None,
+                }),
+                Declaration::Foreign(why) => Ok(FoundSidecar {
+                    note: Some(format!(
+                        "{name} {why}; not read as a sidecar (give it with --sidecar after adding \
+                         \"format\": \"aras-log/1\" if it is one)"
+                    )),
+                    ..FoundSidecar::default()
+                }),
+            }
+        }
+        SidecarSource::Path(p) => explicit(&read(p)?, p.display().to_string()),
+        SidecarSource::Text { name, json } => explicit(json, name.clone()),
     }
 }
 

@@ -75,6 +75,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         }
         let log = read_log(path, &log_args.read_options()?)
             .with_context(|| format!("reading {}", path.display()))?;
+        super::print_notes(path, &log.notes);
         let p = aras_signal::process(
             &log,
             &process_options(&cfg, log_args.period, false),

@@ -27,7 +27,19 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
         .collect();
     let out = OutDir::create(&args.out, args.force, &inputs)?;
     let mut stages = Stages::new(args.quiet);
-    let read = |p: &Path| read_joint_log(p, &columns).map_err(anyhow::Error::from);
+    let read = |p: &Path| {
+        if aras_log::is_bag(p) {
+            return read_bag(p, args);
+        }
+        if args.topic.is_some() || args.joint.is_some() {
+            anyhow::bail!(
+                "{}: --topic and --joint apply to ROS 2 bags (.mcap); a CSV's columns are named \
+                 with --columns",
+                p.display()
+            );
+        }
+        read_joint_log(p, &columns).map_err(anyhow::Error::from)
+    };
     let train = stages.run("read TRAIN", |_| read(&args.data))?;
     let vals = stages.run("read validation logs", |_| {
         args.validate
@@ -74,6 +86,49 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
     println!("{}", run.conclusion());
     println!("outputs in {}", dir.display());
     Ok(())
+}
+
+/// One joint of a ROS 2 bag as a joint log: `--topic`, `--joint`,
+/// `--stamps`; position is `q`, velocity `dq` (computed from `q` when the
+/// messages have none), effort `tau`. The rows go through the CSV joint
+/// log's checks, labelled `BAG#TOPIC`.
+fn read_bag(path: &Path, args: &FrictionArgs) -> Result<JointLog> {
+    if args.columns.is_some() {
+        anyhow::bail!(
+            "{}: a ROS 2 bag's joint is chosen with --joint NAME, not --columns",
+            path.display()
+        );
+    }
+    let stamps = match args.stamps {
+        crate::cli::StampsArg::Header => aras_log::Stamps::Header,
+        crate::cli::StampsArg::Log => aras_log::Stamps::Log,
+    };
+    let j = aras_log::read_bag_joint(path, args.topic.as_deref(), args.joint.as_deref(), stamps)?;
+    for n in &j.notes {
+        eprintln!("note: {}: {n}", path.display());
+    }
+    let mut csv = String::with_capacity(j.t.len() * 64);
+    csv.push_str(if j.velocity.is_some() {
+        "t,q,dq,tau\n"
+    } else {
+        "t,q,tau\n"
+    });
+    for i in 0..j.t.len() {
+        let _ = write!(csv, "{},{}", j.t[i], j.position[i]);
+        if let Some(v) = &j.velocity {
+            let _ = write!(csv, ",{}", v[i]);
+        }
+        let _ = writeln!(csv, ",{}", j.effort[i]);
+    }
+    let stem = path
+        .file_stem()
+        .map_or_else(|| "log".into(), |s| s.to_string_lossy().into_owned());
+    Ok(aras_friction::read_joint_log_from(
+        csv.as_bytes(),
+        &j.label,
+        &stem,
+        &ColumnMap::default(),
+    )?)
 }
 
 /// `pred_<stem>.csv` for each log; a stem used twice gets `_2`, `_3`, ….

@@ -100,6 +100,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         log = aras_signal::delay_torque(&log, d)
             .with_context(|| format!("removing the time delay from {}", args.data.display()))?;
     }
+    super::print_notes(&args.data, &log.notes);
     super::print_warnings(&args.data, &log.warnings);
     // The sidecar the reader took (`--sidecar`, else LOG.json beside the log).
     let truth = sidecar_truth(&log.sidecar);
@@ -157,10 +158,11 @@ fn run_streaming(args: &IdentifyArgs, extras: &Extras) -> Result<()> {
         model,
         geometry,
     } = setup(args, extras)?;
-    // The streaming reader keeps no sidecar for us: read it for its truth.
-    let truth = aras_log::Sidecar::read(&args.log.sidecar_of(&args.data))
+    // The streaming reader keeps no sidecar for us: find it for its truth,
+    // as the reader does (a declared LOG.json, `--sidecar`, or none).
+    let truth = aras_log::find_sidecar(Some(&args.data), &args.log.read_options()?.sidecar)
         .ok()
-        .and_then(|s| sidecar_truth(&s));
+        .and_then(|f| sidecar_truth(&f.sidecar));
     let base = stages.run("base parameters (58)", |_| {
         base_parameters(&model, &geometry, &cfg)
     })?;
@@ -171,6 +173,7 @@ fn run_streaming(args: &IdentifyArgs, extras: &Extras) -> Result<()> {
     let r = stages.run("stream log → least squares", |bar| {
         stream(&args.data, &model, &base, &opts, bar)
     })?;
+    super::print_notes(&args.data, &r.log.notes);
     super::print_warnings(&args.data, &r.log.warnings);
     let intro = format!(
         "Identification of `{}` ({} rows, streamed){}{}.",

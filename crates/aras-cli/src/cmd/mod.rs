@@ -48,6 +48,15 @@ pub fn input_files(common: &Common, loaded: &Loaded, extra: &[&Path]) -> Vec<Pat
     v
 }
 
+/// Prints the log reader's notes on stderr (what was read and how: a bag's
+/// topic, joints and message rate, a JSON beside the log not read as its
+/// sidecar, ignored columns), even with `--quiet`, like the warnings.
+pub fn print_notes(path: &Path, notes: &[String]) {
+    for n in notes {
+        eprintln!("note: {}: {n}", path.display());
+    }
+}
+
 /// Prints the log reader's warnings (saturation, …) on stderr, even with
 /// `--quiet`: they are about the data, not progress.
 pub fn print_warnings(path: &Path, warnings: &[aras_log::Warning]) {

@@ -33,6 +33,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let geometry = params.geometry()?;
     let log = read_log(&args.data, &args.log.read_options()?)
         .with_context(|| format!("reading {}", args.data.display()))?;
+    super::print_notes(&args.data, &log.notes);
     super::print_warnings(&args.data, &log.warnings);
     let logged = log.theta_dot.is_some() && log.theta_ddot.is_some();
     let mut opts = process_options(&cfg, args.log.period, logged);

@@ -1,0 +1,833 @@
+//! ROS 2 bags as logs: the `sensor_msgs/msg/JointState` messages of one
+//! topic of an MCAP file (`docs/log-format.md`, "ROS 2 bags").
+//!
+//! The MCAP container (chunks, zstd or lz4 compression, channels, schemas)
+//! is read by the `mcap` crate; the messages' CDR serialisation is decoded
+//! here: a `JointState` is a fixed, small layout (header stamp, frame id,
+//! four sequences), and decoding it directly gives exact messages about
+//! which message and which field is wrong.
+
+#![cfg_attr(not(feature = "bags"), allow(dead_code))]
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::LogError;
+use crate::reader::Columns;
+
+/// The message type read from a bag.
+pub const JOINT_STATE: &str = "sensor_msgs/msg/JointState";
+
+/// The first bytes of every MCAP file.
+pub const MCAP_MAGIC: &[u8; 8] = b"\x89MCAP0\r\n";
+
+/// Which time a bag's samples take.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stamps {
+    /// `header.stamp` of each message: when the driver sampled the joints.
+    #[default]
+    Header,
+    /// The bag's log time: when the recorder received the message (for
+    /// drivers that leave `header.stamp` unset; includes transport jitter).
+    Log,
+}
+
+/// Which joint of the `JointState` messages is θ1 and which θ2. Both or
+/// neither: with neither, a topic whose first message names exactly two
+/// joints takes them in that message's order.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct JointNames {
+    /// Joint name of θ1 (its effort is τ1).
+    pub theta1: Option<String>,
+    /// Joint name of θ2 (its effort is τ2).
+    pub theta2: Option<String>,
+}
+
+impl JointNames {
+    /// Parses `theta1=NAME,theta2=NAME` (joint names are matched exactly,
+    /// as ROS names are case-sensitive).
+    pub fn parse(spec: &str) -> Result<Self, LogError> {
+        let bad = |reason: String| LogError::InvalidOption {
+            name: "joints",
+            value: spec.into(),
+            reason,
+        };
+        let mut out = Self::default();
+        for item in spec.split(',').map(str::trim).filter(|i| !i.is_empty()) {
+            let Some((role, name)) = item.split_once('=') else {
+                return Err(bad(format!(
+                    "`{item}` is not ROLE=JOINT: write theta1=JOINT,theta2=JOINT"
+                )));
+            };
+            let name = name.trim();
+            if name.is_empty() {
+                return Err(bad(format!(
+                    "role `{}` has an empty joint name",
+                    role.trim()
+                )));
+            }
+            let slot = match role.trim().to_ascii_lowercase().as_str() {
+                "theta1" => &mut out.theta1,
+                "theta2" => &mut out.theta2,
+                other => {
+                    return Err(bad(format!(
+                        "unknown role `{other}`: the roles are theta1 and theta2"
+                    )));
+                }
+            };
+            if slot.is_some() {
+                return Err(bad(format!("role `{}` is given twice", role.trim())));
+            }
+            *slot = Some(name.to_string());
+        }
+        match (&out.theta1, &out.theta2) {
+            (Some(a), Some(b)) if a == b => Err(bad(format!(
+                "theta1 and theta2 are both joint `{a}`: give two different joints"
+            ))),
+            (Some(_), None) | (None, Some(_)) => Err(bad(
+                "give both theta1=JOINT and theta2=JOINT, or neither".into(),
+            )),
+            _ => Ok(out),
+        }
+    }
+
+    /// True if no joint is named (the two-joint default applies).
+    pub fn is_empty(&self) -> bool {
+        self.theta1.is_none() && self.theta2.is_none()
+    }
+}
+
+/// How a ROS 2 bag is read. `Default`: the only `JointState` topic, the
+/// two-joint default mapping, header stamps.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct BagOptions {
+    /// The `JointState` topic to read (needed when the bag has several).
+    pub topic: Option<String>,
+    /// Which joints are θ1 and θ2.
+    pub joints: JointNames,
+    /// Which time the samples take.
+    pub stamps: Stamps,
+}
+
+impl BagOptions {
+    /// True if every option has its default.
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
+/// True if `path` is a ROS 2 bag: extension `.mcap`, or a file that starts
+/// with the MCAP magic bytes.
+pub fn is_bag(path: &Path) -> bool {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+    {
+        return true;
+    }
+    use std::io::Read;
+    let mut magic = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut magic))
+        .is_ok_and(|()| &magic == MCAP_MAGIC)
+}
+
+/// One topic of a bag, decoded into log rows.
+pub(crate) struct BagRows {
+    /// Rows (`theta_dot` filled if every message has the joints' velocity).
+    pub cols: Columns,
+    /// True if `cols.theta_dot` holds the messages' velocities.
+    pub has_velocity: bool,
+    /// The topic read.
+    pub topic: String,
+    /// What was read and how (topic, joints, times, rates).
+    pub notes: Vec<String>,
+}
+
+/// A decoded `JointState`, borrowing its strings from the message.
+#[derive(Default)]
+struct JointState<'a> {
+    sec: i32,
+    nanosec: u32,
+    names: Vec<&'a str>,
+    position: Vec<f64>,
+    velocity: Vec<f64>,
+    effort: Vec<f64>,
+}
+
+/// A CDR (XCDR1, as ROS 2 writes it) cursor over one message.
+struct Cdr<'a> {
+    /// The bytes after the 4-byte encapsulation header (alignment origin).
+    buf: &'a [u8],
+    pos: usize,
+    little: bool,
+}
+
+impl<'a> Cdr<'a> {
+    fn new(data: &'a [u8]) -> Result<Self, String> {
+        if data.len() < 4 {
+            return Err(format!(
+                "the message has {} bytes, fewer than its 4-byte CDR header",
+                data.len()
+            ));
+        }
+        let little = match (data[0], data[1]) {
+            (0, 0) => false,
+            (0, 1) => true,
+            (a, b) => {
+                return Err(format!(
+                    "CDR encapsulation 0x{a:02x}{b:02x} is not plain CDR (0x0000 or 0x0001, \
+                     what ROS 2 writes)"
+                ));
+            }
+        };
+        Ok(Self {
+            buf: &data[4..],
+            pos: 0,
+            little,
+        })
+    }
+
+    fn take(&mut self, n: usize, what: &str) -> Result<&'a [u8], String> {
+        let end = self.pos.checked_add(n).filter(|&e| e <= self.buf.len());
+        let Some(end) = end else {
+            return Err(format!(
+                "the message ends inside {what} (byte {} of {}): it is truncated or not a \
+                 {JOINT_STATE}",
+                self.pos + 4,
+                self.buf.len() + 4
+            ));
+        };
+        let s = &self.buf[self.pos..end];
+        self.pos = end;
+        Ok(s)
+    }
+
+    fn align(&mut self, n: usize) {
+        self.pos = self.pos.div_ceil(n) * n;
+    }
+
+    fn u32(&mut self, what: &str) -> Result<u32, String> {
+        self.align(4);
+        let b: [u8; 4] = self.take(4, what)?.try_into().expect("4 bytes");
+        Ok(if self.little {
+            u32::from_le_bytes(b)
+        } else {
+            u32::from_be_bytes(b)
+        })
+    }
+
+    fn f64(&mut self, what: &str) -> Result<f64, String> {
+        self.align(8);
+        let b: [u8; 8] = self.take(8, what)?.try_into().expect("8 bytes");
+        Ok(if self.little {
+            f64::from_le_bytes(b)
+        } else {
+            f64::from_be_bytes(b)
+        })
+    }
+
+    fn string(&mut self, what: &str) -> Result<&'a str, String> {
+        let n = self.u32(what)? as usize;
+        let bytes = self.take(n, what)?;
+        let bytes = bytes.strip_suffix(&[0]).unwrap_or(bytes);
+        std::str::from_utf8(bytes).map_err(|_| format!("{what} is not UTF-8 text"))
+    }
+
+    /// A sequence length, checked against the bytes left (`min` bytes per
+    /// element), so a corrupt length cannot ask for a huge allocation.
+    fn len(&mut self, what: &str, min: usize) -> Result<usize, String> {
+        let n = self.u32(what)? as usize;
+        if n.saturating_mul(min) > self.buf.len() - self.pos.min(self.buf.len()) {
+            return Err(format!(
+                "{what} claims {n} elements, more than the message holds: it is truncated or \
+                 not a {JOINT_STATE}"
+            ));
+        }
+        Ok(n)
+    }
+
+    fn f64s(&mut self, what: &str, out: &mut Vec<f64>) -> Result<(), String> {
+        let n = self.len(what, 8)?;
+        out.clear();
+        for _ in 0..n {
+            out.push(self.f64(what)?);
+        }
+        Ok(())
+    }
+}
+
+/// Decodes one CDR `sensor_msgs/msg/JointState` into `m`.
+fn decode<'a>(data: &'a [u8], m: &mut JointState<'a>) -> Result<(), String> {
+    let mut c = Cdr::new(data)?;
+    m.sec = c.u32("header.stamp.sec")? as i32;
+    m.nanosec = c.u32("header.stamp.nanosec")?;
+    c.string("header.frame_id")?;
+    let n = c.len("name", 4)?;
+    m.names.clear();
+    for _ in 0..n {
+        m.names.push(c.string("name")?);
+    }
+    c.f64s("position", &mut m.position)?;
+    c.f64s("velocity", &mut m.velocity)?;
+    c.f64s("effort", &mut m.effort)
+}
+
+/// A topic of the bag: its message type and how many messages it has.
+struct TopicInfo {
+    schema: String,
+    encoding: String,
+    messages: usize,
+}
+
+fn topic_list(topics: &BTreeMap<String, TopicInfo>, only_joint_states: bool) -> String {
+    let list: Vec<String> = topics
+        .iter()
+        .filter(|(_, i)| !only_joint_states || i.schema == JOINT_STATE)
+        .map(|(t, i)| format!("{t} ({} {} messages)", i.messages, i.schema))
+        .collect();
+    if list.is_empty() {
+        "none".into()
+    } else {
+        list.join(", ")
+    }
+}
+
+fn ms(ns: i64) -> String {
+    format!("{}", crate::error::sig(ns as f64 * 1e-6))
+}
+
+/// Which joints a reading takes.
+pub(crate) struct Wanted<'a> {
+    /// Their roles, for messages (`θ1`, `θ2`; `q`).
+    pub roles: &'a [&'a str],
+    /// Their names; `None`: the first message's joints, if it names exactly
+    /// as many.
+    pub names: Option<Vec<String>>,
+    /// "are θ1 and θ2", for messages.
+    pub which: &'a str,
+    /// The option that names them, with its form.
+    pub flag: &'a str,
+}
+
+/// The chosen joints of a topic's messages, one vector per joint.
+pub(crate) struct JointRows {
+    pub t: Vec<f64>,
+    pub position: Vec<Vec<f64>>,
+    /// If every message has the joints' velocity.
+    pub velocity: Option<Vec<Vec<f64>>>,
+    pub effort: Vec<Vec<f64>>,
+    pub topic: String,
+    /// The joints' names.
+    pub joints: Vec<String>,
+    pub notes: Vec<String>,
+}
+
+#[cfg(feature = "bags")]
+/// Reads the two log joints of the MCAP file `bytes` into log rows; `file`
+/// names it in messages.
+pub(crate) fn read(bytes: &[u8], file: &str, opts: &BagOptions) -> Result<BagRows, LogError> {
+    let wanted = Wanted {
+        roles: &["θ1", "θ2"],
+        names: opts
+            .joints
+            .theta1
+            .clone()
+            .zip(opts.joints.theta2.clone())
+            .map(|(a, b)| vec![a, b]),
+        which: "are θ1 and θ2",
+        flag: "--joints theta1=JOINT,theta2=JOINT (BagOptions::joints)",
+    };
+    let r = read_joints(bytes, file, opts.topic.as_deref(), opts.stamps, wanted)?;
+    let pair = |mut v: Vec<Vec<f64>>| {
+        let b = v.pop().unwrap_or_default();
+        let a = v.pop().unwrap_or_default();
+        [a, b]
+    };
+    let has_velocity = r.velocity.is_some();
+    Ok(BagRows {
+        cols: Columns {
+            t: r.t,
+            theta: pair(r.position),
+            tau: pair(r.effort),
+            theta_dot: r.velocity.map(pair).unwrap_or_default(),
+            theta_ddot: Default::default(),
+        },
+        has_velocity,
+        topic: r.topic,
+        notes: r.notes,
+    })
+}
+
+/// One joint of a ROS 2 bag's `JointState` topic ([`read_bag_joint`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointSamples {
+    /// `BAG#TOPIC`: the file and topic, for messages.
+    pub label: String,
+    /// The joint's name.
+    pub joint: String,
+    /// Time (s) from the first message (header stamps or log time).
+    pub t: Vec<f64>,
+    /// Position (rad).
+    pub position: Vec<f64>,
+    /// Velocity (rad/s), if every message has it.
+    pub velocity: Option<Vec<f64>>,
+    /// Effort (N·m).
+    pub effort: Vec<f64>,
+    /// What was read and how (topic, joint, times, rates).
+    pub notes: Vec<String>,
+}
+
+/// Reads one joint of a ROS 2 bag (for single-joint tools such as the
+/// friction analysis): `topic` as [`BagOptions::topic`], `joint` by name
+/// (`None`: the only joint of a one-joint topic). The same checks as a log's
+/// bag reading apply, except the sampling checks, which belong to the user
+/// of the samples.
+#[cfg(feature = "bags")]
+pub fn read_bag_joint(
+    path: &Path,
+    topic: Option<&str>,
+    joint: Option<&str>,
+    stamps: Stamps,
+) -> Result<JointSamples, LogError> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| LogError::Io {
+        file: file.clone(),
+        source,
+    })?;
+    let wanted = Wanted {
+        roles: &["q"],
+        names: joint.map(|j| vec![j.to_string()]),
+        which: "is the joint",
+        flag: "--joint NAME",
+    };
+    let mut r = read_joints(&bytes, &file, topic, stamps, wanted)?;
+    let first = |v: &mut Vec<Vec<f64>>| v.pop().unwrap_or_default();
+    Ok(JointSamples {
+        label: format!("{file}#{}", r.topic),
+        joint: r.joints.pop().unwrap_or_default(),
+        t: r.t,
+        position: first(&mut r.position),
+        velocity: r.velocity.as_mut().map(first),
+        effort: first(&mut r.effort),
+        notes: r.notes,
+    })
+}
+
+#[cfg(feature = "bags")]
+/// Reads the `wanted` joints of a `JointState` topic of the MCAP file
+/// `bytes`; `file` names it in messages.
+pub(crate) fn read_joints(
+    bytes: &[u8],
+    file: &str,
+    topic: Option<&str>,
+    stamps: Stamps,
+    wanted: Wanted<'_>,
+) -> Result<JointRows, LogError> {
+    let bag_err = |e: mcap::McapError| LogError::Bag {
+        file: file.into(),
+        reason: e.to_string(),
+    };
+    // Pass 1: the topics and their message counts.
+    let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
+    for m in mcap::MessageStream::new(bytes).map_err(bag_err)? {
+        let m = m.map_err(bag_err)?;
+        let info = topics
+            .entry(m.channel.topic.clone())
+            .or_insert_with(|| TopicInfo {
+                schema: m
+                    .channel
+                    .schema
+                    .as_ref()
+                    .map_or_else(|| "(no schema)".into(), |s| s.name.clone()),
+                encoding: m.channel.message_encoding.clone(),
+                messages: 0,
+            });
+        info.messages += 1;
+    }
+    let topic_err = |problem: String| LogError::BagTopic {
+        file: file.into(),
+        problem,
+        topics: topic_list(&topics, false),
+    };
+    let topic = match topic {
+        Some(t) => match topics.get(t) {
+            None => return Err(topic_err(format!("the bag has no topic `{t}`"))),
+            Some(i) if i.schema != JOINT_STATE => {
+                return Err(topic_err(format!(
+                    "topic `{t}` holds {}, not {JOINT_STATE}",
+                    i.schema
+                )));
+            }
+            Some(_) => t.to_string(),
+        },
+        None => {
+            let js: Vec<&String> = topics
+                .iter()
+                .filter(|(_, i)| i.schema == JOINT_STATE)
+                .map(|(t, _)| t)
+                .collect();
+            match js.as_slice() {
+                [] => return Err(topic_err(format!("the bag has no {JOINT_STATE} topic"))),
+                [one] => (*one).clone(),
+                _ => {
+                    return Err(LogError::BagTopic {
+                        file: file.into(),
+                        problem: format!(
+                            "the bag has {} {JOINT_STATE} topics: choose one with --topic \
+                             (BagOptions::topic)",
+                            js.len()
+                        ),
+                        topics: topic_list(&topics, true),
+                    });
+                }
+            }
+        }
+    };
+    let info = &topics[&topic];
+    if info.encoding != "cdr" {
+        return Err(topic_err(format!(
+            "topic `{topic}` is encoded as `{}`; ROS 2 bags encode messages as `cdr`",
+            info.encoding
+        )));
+    }
+    // Pass 2: decode the topic's messages.
+    let count = wanted.roles.len();
+    let mut t_out = Vec::new();
+    let mut pos_out = vec![Vec::new(); count];
+    let mut vel_out = vec![Vec::new(); count];
+    let mut eff_out = vec![Vec::new(); count];
+    let mut has_velocity = true;
+    let mut notes = Vec::new();
+    let mut joints = wanted.names.clone();
+    let mut first_ns: Option<i64> = None;
+    let mut prev_ns = 0i64;
+    let mut steps: Vec<i64> = Vec::new();
+    let mut latency: Option<[i64; 2]> = None;
+    let mut extra: Vec<String> = Vec::new();
+    let mut number = 0u64;
+    for msg in mcap::MessageStream::new(bytes).map_err(bag_err)? {
+        let msg = msg.map_err(bag_err)?;
+        if msg.channel.topic != topic {
+            continue;
+        }
+        number += 1;
+        let at = |problem: String| LogError::BagMessage {
+            file: file.into(),
+            topic: topic.clone(),
+            message: number,
+            problem,
+        };
+        let mut state = JointState::default();
+        decode(&msg.data, &mut state).map_err(&at)?;
+        let stamp_ns = i64::from(state.sec) * 1_000_000_000 + i64::from(state.nanosec);
+        let log_ns = i64::try_from(msg.log_time).unwrap_or(i64::MAX);
+        let ns = match stamps {
+            Stamps::Header => stamp_ns,
+            Stamps::Log => log_ns,
+        };
+        let names = &state.names;
+        if joints.is_none() {
+            if names.len() != count {
+                return Err(LogError::BagJoints {
+                    file: file.into(),
+                    topic: topic.clone(),
+                    problem: format!(
+                        "the first message names {} joints ({}): say which {} with {}",
+                        names.len(),
+                        names.join(", "),
+                        wanted.which,
+                        wanted.flag
+                    ),
+                });
+            }
+            let roles: Vec<String> = wanted
+                .roles
+                .iter()
+                .zip(names)
+                .map(|(r, n)| format!("{r} = joint `{n}`"))
+                .collect();
+            notes.push(format!(
+                "{}: {} (choose with {})",
+                roles.join(", "),
+                match count {
+                    1 => "the only joint of the first message".to_string(),
+                    2 => "the two joints in the order of the first message".to_string(),
+                    n => format!("the {n} joints in the order of the first message"),
+                },
+                wanted.flag
+            ));
+            joints = Some(names.iter().map(|n| n.to_string()).collect());
+        }
+        let chosen = joints.as_ref().expect("set above");
+        let mut index = vec![0usize; count];
+        for (k, j) in chosen.iter().enumerate() {
+            index[k] = names.iter().position(|n| *n == j.as_str()).ok_or_else(|| {
+                at(format!(
+                    "joint `{j}` ({}) is not in the message, which names: {}; check {}",
+                    wanted.roles[k],
+                    if names.is_empty() {
+                        "no joints".to_string()
+                    } else {
+                        names.join(", ")
+                    },
+                    wanted.flag
+                ))
+            })?;
+        }
+        for n in names {
+            if !chosen.iter().any(|c| c == n) && !extra.iter().any(|e| e == n) {
+                extra.push(n.to_string());
+            }
+        }
+        if state.position.len() != names.len() {
+            return Err(at(format!(
+                "it names {} joints but has {} positions: each joint needs its position",
+                names.len(),
+                state.position.len()
+            )));
+        }
+        if state.effort.is_empty() {
+            return Err(at(format!(
+                "it has no effort: aras needs the joint torques (N·m); record effort in the \
+                 {JOINT_STATE} messages (the joint driver's measured torque), or give a CSV log \
+                 with tau1, tau2"
+            )));
+        }
+        if state.effort.len() != names.len() {
+            return Err(at(format!(
+                "it names {} joints but has {} efforts: each joint needs its effort",
+                names.len(),
+                state.effort.len()
+            )));
+        }
+        if has_velocity && state.velocity.len() != names.len() {
+            has_velocity = false;
+            if number > 1 {
+                notes.push(format!(
+                    "message {number} has no velocity for every joint: joint rates are computed \
+                     from the angles"
+                ));
+            }
+        }
+        let t = match first_ns {
+            None => {
+                first_ns = Some(ns);
+                0.0
+            }
+            Some(ns0) => {
+                if ns <= prev_ns {
+                    let hint = match stamps {
+                        Stamps::Header if stamp_ns == 0 => {
+                            "header.stamp is zero: the driver does not fill it; read the bag's \
+                             log time instead with --stamps log (BagOptions::stamps)"
+                        }
+                        Stamps::Header => {
+                            "the driver's stamps go backwards or repeat; if they are unreliable, \
+                             read the bag's log time with --stamps log"
+                        }
+                        Stamps::Log => "the bag's log time goes backwards or repeats",
+                    };
+                    return Err(at(format!(
+                        "its time {} s does not follow the previous message's {} s: {hint}",
+                        (ns - ns0) as f64 / 1e9,
+                        (prev_ns - ns0) as f64 / 1e9
+                    )));
+                }
+                steps.push(ns - prev_ns);
+                (ns - ns0) as f64 / 1e9
+            }
+        };
+        prev_ns = ns;
+        if stamps == Stamps::Header {
+            let d = log_ns.saturating_sub(stamp_ns);
+            latency = Some(latency.map_or([d, d], |[lo, hi]| [lo.min(d), hi.max(d)]));
+        }
+        let value = |v: &[f64], k: usize, field: &str| {
+            let x = v[index[k]];
+            if x.is_finite() {
+                Ok(x)
+            } else {
+                Err(at(format!(
+                    "{field} of joint `{}` is {x}: logs must hold finite numbers only (drop the \
+                     message or repair the recording)",
+                    chosen[k]
+                )))
+            }
+        };
+        t_out.push(t);
+        for k in 0..count {
+            pos_out[k].push(value(&state.position, k, "position")?);
+            eff_out[k].push(value(&state.effort, k, "effort")?);
+            if has_velocity {
+                vel_out[k].push(value(&state.velocity, k, "velocity")?);
+            }
+        }
+    }
+    let time = match stamps {
+        Stamps::Header => format!(
+            "t = 0 at the first message's header.stamp ({} s)",
+            first_ns.map_or(0.0, |n| n as f64 / 1e9)
+        ),
+        Stamps::Log => format!(
+            "t = 0 at the first message's log time ({} s; --stamps log)",
+            first_ns.map_or(0.0, |n| n as f64 / 1e9)
+        ),
+    };
+    notes.insert(
+        0,
+        format!(
+            "ROS 2 bag: topic {topic}, {number} {JOINT_STATE} messages; {time}{}",
+            if has_velocity {
+                "; joint rates from velocity"
+            } else {
+                ""
+            }
+        ),
+    );
+    if !steps.is_empty() {
+        let mut sorted = steps.clone();
+        sorted.sort_unstable();
+        let median = sorted[sorted.len() / 2];
+        let (lo, hi) = (sorted[0], sorted[sorted.len() - 1]);
+        notes.push(format!(
+            "message rate {} Hz (median step {} ms; steps {}–{} ms, i.e. {}–{} Hz)",
+            crate::error::sig(1e9 / median as f64),
+            ms(median),
+            ms(lo),
+            ms(hi),
+            crate::error::sig(1e9 / hi as f64),
+            crate::error::sig(1e9 / lo as f64),
+        ));
+    }
+    if let Some([lo, hi]) = latency {
+        notes.push(format!(
+            "the bag's log time trails header.stamp by {}–{} ms",
+            ms(lo),
+            ms(hi)
+        ));
+    }
+    if !extra.is_empty() {
+        notes.push(format!("joints ignored: {}", extra.join(", ")));
+    }
+    let others: Vec<&String> = topics.keys().filter(|t| **t != topic).collect();
+    if !others.is_empty() {
+        notes.push(format!(
+            "other topics ignored: {}",
+            others
+                .iter()
+                .map(|t| t.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    Ok(JointRows {
+        t: t_out,
+        position: pos_out,
+        velocity: has_velocity.then_some(vel_out),
+        effort: eff_out,
+        topic,
+        joints: joints.unwrap_or_default(),
+        notes,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A little-endian CDR JointState, built by hand.
+    fn message(names: &[&str], pos: &[f64], vel: &[f64], eff: &[f64]) -> Vec<u8> {
+        let mut b = vec![0u8, 1, 0, 0];
+        let pad = |b: &mut Vec<u8>, n: usize| {
+            while !(b.len() - 4).is_multiple_of(n) {
+                b.push(0);
+            }
+        };
+        let u32 = |b: &mut Vec<u8>, x: u32| {
+            pad(b, 4);
+            b.extend(x.to_le_bytes());
+        };
+        let string = |b: &mut Vec<u8>, s: &str| {
+            u32(b, s.len() as u32 + 1);
+            b.extend(s.as_bytes());
+            b.push(0);
+        };
+        u32(&mut b, 12);
+        u32(&mut b, 500);
+        string(&mut b, "base");
+        u32(&mut b, names.len() as u32);
+        for n in names {
+            string(&mut b, n);
+        }
+        for seq in [pos, vel, eff] {
+            u32(&mut b, seq.len() as u32);
+            for x in seq {
+                pad(&mut b, 8);
+                b.extend(x.to_le_bytes());
+            }
+        }
+        b
+    }
+
+    #[test]
+    fn cdr_joint_state_decodes_and_truncation_is_an_error() {
+        let data = message(&["a", "bb"], &[1.5, -2.0], &[], &[0.25, 3.0]);
+        let mut m = JointState::default();
+        decode(&data, &mut m).unwrap();
+        assert_eq!((m.sec, m.nanosec), (12, 500));
+        assert_eq!(m.names, ["a", "bb"]);
+        assert_eq!(m.position, [1.5, -2.0]);
+        assert!(m.velocity.is_empty());
+        assert_eq!(m.effort, [0.25, 3.0]);
+        for cut in [2, 10, data.len() - 1] {
+            let mut m = JointState::default();
+            let e = decode(&data[..cut], &mut m).unwrap_err();
+            assert!(
+                e.contains("truncated") || e.contains("4-byte"),
+                "{cut}: {e}"
+            );
+        }
+        let mut pl = data.clone();
+        pl[1] = 3;
+        let mut m = JointState::default();
+        assert!(decode(&pl, &mut m).unwrap_err().contains("not plain CDR"));
+    }
+
+    proptest::proptest! {
+        /// Any bytes decode or fail with a message: no panic, no huge
+        /// allocation from a corrupt length.
+        #[test]
+        fn cdr_decoder_never_panics(
+            mut bytes in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..200),
+            header in 0u8..3,
+        ) {
+            if bytes.len() >= 2 {
+                bytes[0] = 0;
+                bytes[1] = header;
+            }
+            let mut m = JointState::default();
+            let _ = decode(&bytes, &mut m);
+        }
+    }
+
+    #[test]
+    fn joint_names_parse() {
+        let j = JointNames::parse("theta1=motor_left, theta2=Motor_Right").unwrap();
+        assert_eq!(j.theta1.as_deref(), Some("motor_left"));
+        assert_eq!(j.theta2.as_deref(), Some("Motor_Right"));
+        for bad in [
+            "theta1=a",
+            "theta1=a,theta2=a",
+            "theta3=a,theta2=b",
+            "theta1",
+        ] {
+            assert!(JointNames::parse(bad).is_err(), "{bad}");
+        }
+    }
+}
