@@ -62,21 +62,31 @@ fn fitness_standard(st: &Stacked, beta: &[f64]) -> Result<[f64; 2]> {
     Ok([f[0], f[1]])
 }
 
+/// The model a cross-validation scores: its kinematics (X from the logged
+/// angles) and its regressor (effects and gravity).
+#[derive(Debug, Clone, Copy)]
+pub struct ScoredModel<'a> {
+    /// The model's geometry.
+    pub geometry: &'a aras_kin::Geometry,
+    /// The model's effects and gravity.
+    pub model: &'a Model,
+}
+
 /// Simulates the truth robot along (79) at each configured frequency with
 /// the same sensors and noise as the excitation run, writes each log into
 /// `dir` (`xv_<f>hz.csv` + sidecar), reads it back and processes it exactly
 /// like the identification data, and scores each candidate parameter vector
-/// (standard parameters of `model`).
+/// (standard parameters of `scored.model`).
 pub fn cross_validate(
     truth: &Params,
     nominal: &Params,
-    geometry: &aras_kin::Geometry,
-    model: &Model,
+    scored: ScoredModel,
     candidates: &[Vec<f64>],
     cfg: &Config,
     dir: &Path,
     progress: &indicatif::ProgressBar,
 ) -> Result<Vec<CrossValidation>> {
+    let ScoredModel { geometry, model } = scored;
     let mut out = Vec::new();
     for (i, &f) in cfg.validation.frequencies_hz.iter().enumerate() {
         let traj = Sinusoid::paper_79(f)?;
@@ -94,9 +104,9 @@ pub fn cross_validate(
         // unfiltered regressor, compared with the raw torques (78).
         let mut opts = process_options(cfg, None, false);
         opts.rows = OutputRows::EveryRow;
-        let processed = aras_signal::process(&read, &opts, &aras_kin::task_motion(&geometry))
+        let processed = aras_signal::process(&read, &opts, &aras_kin::task_motion(geometry))
             .with_context(|| format!("processing {}", path.display()))?;
-        let stacked = stack(model, &geometry, &processed.samples)?;
+        let stacked = stack(model, geometry, &processed.samples)?;
         let prep = Prepared {
             processed,
             stacked,
@@ -132,7 +142,7 @@ pub fn cross_validate(
             predicted.push(pick(&p));
         }
         let ceiling =
-            crate::ceiling::noise_ceiling(&read, &log.tau_clean, &prep, &opts, &geometry, &keep)?;
+            crate::ceiling::noise_ceiling(&read, &log.tau_clean, &prep, &opts, geometry, &keep)?;
         out.push(CrossValidation {
             frequency_hz: f,
             fitness,

@@ -60,14 +60,13 @@ fn printed(stdout: &str) -> [f64; 2] {
 /// time stamps moved by `shift(row)` seconds.
 fn write_subset(log: &Path, out: &Path, cols: &[&str], shift: impl Fn(usize) -> f64) {
     let c = columns(log);
-    let n = c["t"].len();
     let mut text = cols.join(",") + "\n";
-    for i in 0..n {
+    for (i, t) in c["t"].iter().enumerate() {
         let row: Vec<String> = cols
             .iter()
-            .map(|k| {
-                let v = c[*k][i];
-                format!("{}", if *k == "t" { v + shift(i) } else { v })
+            .map(|k| match *k {
+                "t" => format!("{}", t + shift(i)),
+                _ => format!("{}", c[*k][i]),
             })
             .collect();
         text += &(row.join(",") + "\n");
@@ -75,6 +74,14 @@ fn write_subset(log: &Path, out: &Path, cols: &[&str], shift: impl Fn(usize) -> 
     std::fs::write(out, text).unwrap();
     std::fs::copy(aras_log::sidecar_path(log), aras_log::sidecar_path(out)).unwrap();
 }
+
+/// A route: its name, the log's columns, the time shift per row, options.
+type Case<'a> = (
+    &'a str,
+    Vec<&'a str>,
+    Box<dyn Fn(usize) -> f64>,
+    Vec<String>,
+);
 
 #[test]
 fn printed_fitness_is_the_written_files() {
@@ -102,7 +109,7 @@ fn printed_fitness_is_the_written_files() {
     // irregular time base (every other step 0.2 ms longer, the next shorter).
     let auto = dir.join("auto.toml");
     std::fs::write(&auto, "[signal]\nbandwidth = \"auto\"\n").unwrap();
-    let cases: Vec<(&str, Vec<&str>, Box<dyn Fn(usize) -> f64>, Vec<String>)> = vec![
+    let cases: Vec<Case> = vec![
         ("logged", logged.to_vec(), Box::new(|_| 0.0), vec![]),
         ("fixed", base.to_vec(), Box::new(|_| 0.0), vec![]),
         (

@@ -18,7 +18,7 @@ use crate::report::run::{RunData, build};
 use crate::stages::Stages;
 use crate::summary::{PseudoInertia, SdpReport, Summary, base_file, fitness_list};
 use crate::validate::{
-    cross_validate, min_eigen_grid, parameter_errors, pd_check, pseudo_inertia_min,
+    ScoredModel, cross_validate, min_eigen_grid, parameter_errors, pd_check, pseudo_inertia_min,
 };
 
 /// What the fit needs.
@@ -89,8 +89,10 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
                 cross_validate(
                     truth,
                     input.nominal,
-                    &geometry,
-                    model,
+                    ScoredModel {
+                        geometry: &geometry,
+                        model,
+                    },
                     &[ols_std.clone(), sdp_std.clone()],
                     cfg,
                     &dir,

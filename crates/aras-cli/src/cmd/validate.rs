@@ -14,7 +14,7 @@ use crate::report::Report;
 use crate::robot::{ParamsUse, nominal, read_params};
 use crate::simulate::truth;
 use crate::stages::Stages;
-use crate::validate::{PdSummary, cross_validate, pd_check, pseudo_inertia_min};
+use crate::validate::{PdSummary, ScoredModel, cross_validate, pd_check, pseudo_inertia_min};
 
 /// `summary.json` of `validate`.
 #[derive(Debug, Serialize)]
@@ -72,8 +72,10 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
         cross_validate(
             &truth,
             &nominal,
-            &geometry,
-            &model,
+            ScoredModel {
+                geometry: &geometry,
+                model: &model,
+            },
             &[beta],
             &cfg,
             &out.path("."),
