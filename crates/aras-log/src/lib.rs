@@ -22,6 +22,7 @@
 
 mod checks;
 mod error;
+mod glitch;
 mod header;
 mod number;
 mod reader;
@@ -31,10 +32,16 @@ mod writer;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-pub use checks::{Extreme, NOMINAL_WINDOW, Span, StepDeviation, Warning};
+pub use checks::{
+    Extreme, JITTER_WARN, MIN_PLAUSIBLE_RATE_HZ, NOMINAL_WINDOW, Span, StepDeviation, Warning,
+};
 pub use error::LogError;
+pub use glitch::{
+    DEFAULT_GLITCH_THRESHOLD, Glitch, GlitchAction, GlitchKind, GlitchOptions, apply_glitches,
+    find_glitches,
+};
 pub use header::ColumnNames;
-pub use reader::{Columns, LogReader, LogReport, LogSummary};
+pub use reader::{Columns, LogReader, LogReport, LogSummary, RowLines, Timing};
 pub use sidecar::{Excitation, FORMAT, Sensors, Sidecar};
 pub use writer::{new_temp_file, sidecar_path, write_atomic, write_log};
 
@@ -56,6 +63,49 @@ pub enum SidecarSource {
         /// The JSON.
         json: String,
     },
+}
+
+/// Time stamps at or beyond this magnitude (s) are taken as a clock epoch:
+/// the first one is subtracted from every row ([`Warning::TimeOffset`]).
+pub const EPOCH_OFFSET_S: f64 = 1e6;
+
+/// The unit of the `t` column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum TimeUnit {
+    /// Seconds.
+    #[serde(rename = "s")]
+    Seconds,
+    /// Milliseconds.
+    #[serde(rename = "ms")]
+    Milliseconds,
+    /// Microseconds.
+    #[serde(rename = "us")]
+    Microseconds,
+    /// Nanoseconds.
+    #[serde(rename = "ns")]
+    Nanoseconds,
+}
+
+impl TimeUnit {
+    /// Seconds per unit.
+    pub fn seconds(self) -> f64 {
+        match self {
+            Self::Seconds => 1.0,
+            Self::Milliseconds => 1e-3,
+            Self::Microseconds => 1e-6,
+            Self::Nanoseconds => 1e-9,
+        }
+    }
+
+    /// The short name (`s`, `ms`, `us`, `ns`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Seconds => "s",
+            Self::Milliseconds => "ms",
+            Self::Microseconds => "us",
+            Self::Nanoseconds => "ns",
+        }
+    }
 }
 
 /// Options of the log reader. `Default` gives the documented defaults.
@@ -82,6 +132,10 @@ pub struct ReadOptions {
     pub check_degrees: bool,
     /// The lab's own column names (default: the standard names).
     pub columns: ColumnNames,
+    /// Unit of `t` (default `None`: seconds, and a log whose step is a
+    /// whole number at a rate below [`MIN_PLAUSIBLE_RATE_HZ`] is refused
+    /// with [`LogError::TimeUnit`]; `Some(TimeUnit::Seconds)` accepts it).
+    pub time_unit: Option<TimeUnit>,
 }
 
 impl Default for ReadOptions {
@@ -95,6 +149,7 @@ impl Default for ReadOptions {
             saturation_samples: 50,
             check_degrees: true,
             columns: ColumnNames::default(),
+            time_unit: None,
         }
     }
 }
