@@ -85,6 +85,16 @@ pub enum Warning {
         /// Largest such deviation (s).
         max_s: f64,
     },
+    /// Resampling interpolated across gaps in the time stamps (each no
+    /// longer than the stated limit).
+    GapsBridged {
+        /// Gaps bridged.
+        count: usize,
+        /// The longest (s).
+        longest_s: f64,
+        /// The first few, one per line of the message.
+        list: Vec<String>,
+    },
     /// Period averaging leaves a large part of the record unused.
     AveragingUnused {
         /// Periods per averaged block.
@@ -184,6 +194,22 @@ impl fmt::Display for Warning {
                  samples; check the period (--period) and the time unit and rate of the log",
                 unused * 100.0
             ),
+            Warning::GapsBridged {
+                count,
+                longest_s,
+                list,
+            } => {
+                write!(
+                    f,
+                    "{count} gap(s) in the time stamps interpolated by the resampling (longest \
+                     {} s):",
+                    crate::error::sig(*longest_s)
+                )?;
+                for l in list {
+                    write!(f, "\n  {l}")?;
+                }
+                Ok(())
+            }
             Warning::Glitches {
                 action,
                 count,
