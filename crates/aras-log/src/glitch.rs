@@ -8,14 +8,15 @@
 //!   quantisation a few counts; a spike of height `A` leaves `A` at its
 //!   sample and `2A/3` at its neighbours, so it is flagged where `|r|` is
 //!   largest.
-//! * Torques: the Hampel residual against the median of the six neighbours
-//!   (three each side), measured to the nearer of the two one-sided
-//!   medians: a sample on either side of a step (the sharp torque reversal
-//!   of Coulomb friction) is near one of them and is not a glitch; a
-//!   single spike is far from both.
+//! * Torques: a Hampel-type residual against the median of the six
+//!   neighbours (three each side; exact on a ramp), taken as the distance to
+//!   the nearest of that median and the linear extrapolations from the left
+//!   and from the right: a sample on either side of a step (the sharp
+//!   torque reversal of Coulomb friction) is near one of them and is not a
+//!   glitch; a single spike is far from all three.
 //!
-//! The scale of each channel is its residuals' median absolute deviation
-//! (×1.4826, σ for Gaussian noise); a sample is a glitch when its residual
+//! The scale of each channel is the median absolute deviation (×1.4826, σ
+//! for Gaussian noise) of its residuals (for torques: against the median); a sample is a glitch when its residual
 //! exceeds [`GlitchOptions::threshold`] scales and is the largest within
 //! ±2 (±3) samples. For quantised angles the floor of the scale is the
 //! encoder step, so a motionless joint (a MAD of 0) does not flag single
@@ -204,35 +205,32 @@ fn angle_residuals(x: &[f64]) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// `(expected, residual)` of every sample of a torque channel: expected is
-/// the median of up to three neighbours on each side; the residual is the
-/// distance to the nearer of the two one-sided medians, so a sample on
-/// either side of a step (a friction reversal) is not off.
-fn torque_residuals(x: &[f64]) -> Vec<(f64, f64)> {
+/// `(expected, residual, scale residual)` of every sample of a torque
+/// channel: expected is the median of three neighbours on each side (exact
+/// on a ramp); the residual is the distance to the nearest of it and the
+/// linear extrapolations from either side, so a sample next to a step (a
+/// friction reversal) is near one of them and is not off. The scale
+/// residual is the distance to the median alone: the noise the scale is
+/// measured from (the nearest of three would understate it).
+fn torque_residuals(x: &[f64]) -> Vec<(f64, f64, f64)> {
     let n = x.len();
     let mut w = Vec::with_capacity(6);
-    let mut l = Vec::with_capacity(3);
-    let mut r = Vec::with_capacity(3);
     (0..n)
         .map(|i| {
-            l.clear();
-            r.clear();
-            l.extend((i.saturating_sub(3)..i).map(|j| x[j]));
-            r.extend((i + 1..(i + 4).min(n)).map(|j| x[j]));
-            if l.len() < 3 || r.len() < 3 {
-                return (x[i], f64::NAN);
+            if i < 3 || i + 3 >= n {
+                return (x[i], f64::NAN, f64::NAN);
             }
             w.clear();
-            w.extend_from_slice(&l);
-            w.extend_from_slice(&r);
+            w.extend_from_slice(&x[i - 3..i]);
+            w.extend_from_slice(&x[i + 1..i + 4]);
             let e = median(&mut w);
-            let (ml, mr) = (median(&mut l), median(&mut r));
-            let d = if (x[i] - ml).abs() < (x[i] - mr).abs() {
-                x[i] - ml
-            } else {
-                x[i] - mr
-            };
-            (e, d)
+            let left = 2.0 * x[i - 1] - x[i - 2];
+            let right = 2.0 * x[i + 1] - x[i + 2];
+            let d = [x[i] - e, x[i] - left, x[i] - right]
+                .into_iter()
+                .min_by(|a, b| a.abs().total_cmp(&b.abs()))
+                .unwrap_or(f64::NAN);
+            (e, d, x[i] - e)
         })
         .collect()
 }
@@ -252,12 +250,14 @@ pub fn find_glitches(log: &Log, opts: &GlitchOptions) -> Vec<Glitch> {
             &log.tau[c - 2]
         };
         let (res, reach) = if c < 2 {
-            (angle_residuals(x), 2)
+            let a = angle_residuals(x);
+            (a.into_iter().map(|(e, r)| (e, r, r)).collect::<Vec<_>>(), 2)
         } else {
             (torque_residuals(x), 3)
         };
         let r: Vec<f64> = res.iter().map(|p| p.1).collect();
-        let mut scale = mad_scale(&r);
+        let for_scale: Vec<f64> = res.iter().map(|p| p.2).collect();
+        let mut scale = mad_scale(&for_scale);
         if c < 2 {
             let q = quantum(x);
             if q.is_finite() {
@@ -274,7 +274,7 @@ pub fn find_glitches(log: &Log, opts: &GlitchOptions) -> Vec<Glitch> {
             .filter(|_| c >= 2)
             .map(|l| l[c - 2].abs() * opts.limit_factor);
         for i in 0..x.len() {
-            let (expected, ri) = res[i];
+            let (expected, ri, _) = res[i];
             let beyond = limit.is_some_and(|l| x[i].abs() > l);
             let spike = ri.is_finite() && {
                 let a = ri.abs();
