@@ -191,8 +191,9 @@ pub enum LogError {
     /// The sampling step varies beyond the tolerance.
     #[error(
         "{file}:{line}: irregular sampling: the worst step, {s} s ending at t = {t} s, is \
-         {ratio:.3}× the nominal step {n} s (tolerance ±{percent}%); resample the log to a \
-         uniform rate, or raise ReadOptions::step_tolerance"
+         {ratio:.3}× the nominal step {n} s (tolerance ±{percent}%); samples are missing or the \
+         clock jumps: resample the log onto a uniform grid with --resample (config \
+         log.resample = true; gaps up to --max-gap s are interpolated, longer ones refused)"
     , percent = tolerance * 100.0, s = sig(*step), n = sig(*nominal))]
     IrregularSampling {
         /// File name.

@@ -3,7 +3,9 @@
 //! by file line and column, then refused, kept, dropped or repaired.
 //!
 //! * Angles: the residual of each sample against the cubic through its
-//!   four neighbours, `r_i = θ_i − (−θ_{i−2} + 4θ_{i−1} + 4θ_{i+1} − θ_{i+2})/6`.
+//!   four neighbours at their logged times (on a uniform grid
+//!   `r_i = θ_i − (−θ_{i−2} + 4θ_{i−1} + 4θ_{i+1} − θ_{i+2})/6`), so jitter
+//!   and missing samples are not glitches.
 //!   A smooth motion leaves `O(h⁴ θ⁗)` (nothing at 1 kHz), noise and encoder
 //!   quantisation a few counts; a spike of height `A` leaves `A` at its
 //!   sample and `2A/3` at its neighbours, so it is flagged where `|r|` is
@@ -189,18 +191,29 @@ fn quantum(x: &[f64]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// `(expected, residual)` of every sample of an angle channel (NaN where the
-/// cubic has no neighbours: the first and last two).
-fn angle_residuals(x: &[f64]) -> Vec<(f64, f64)> {
+/// `(expected, residual)` of every sample of an angle channel: expected is
+/// the cubic through the two neighbours on each side at their logged
+/// times, evaluated at the sample's time (NaN residual for the first and
+/// last two samples).
+fn angle_residuals(t: &[f64], x: &[f64]) -> Vec<(f64, f64)> {
     let n = x.len();
     (0..n)
         .map(|i| {
             if i < 2 || i + 2 >= n {
-                (x[i], f64::NAN)
-            } else {
-                let e = (-x[i - 2] + 4.0 * x[i - 1] + 4.0 * x[i + 1] - x[i + 2]) / 6.0;
-                (e, x[i] - e)
+                return (x[i], f64::NAN);
             }
+            let idx = [i - 2, i - 1, i + 1, i + 2];
+            let mut e = 0.0;
+            for &j in &idx {
+                let mut w = 1.0;
+                for &k in &idx {
+                    if k != j {
+                        w *= (t[i] - t[k]) / (t[j] - t[k]);
+                    }
+                }
+                e += w * x[j];
+            }
+            (e, x[i] - e)
         })
         .collect()
 }
@@ -212,7 +225,7 @@ fn angle_residuals(x: &[f64]) -> Vec<(f64, f64)> {
 /// friction reversal) is near one of them and is not off. The scale
 /// residual is the distance to the median alone: the noise the scale is
 /// measured from (the nearest of three would understate it).
-fn torque_residuals(x: &[f64]) -> Vec<(f64, f64, f64)> {
+fn torque_residuals(t: &[f64], x: &[f64]) -> Vec<(f64, f64, f64)> {
     let n = x.len();
     let mut w = Vec::with_capacity(6);
     (0..n)
@@ -224,8 +237,9 @@ fn torque_residuals(x: &[f64]) -> Vec<(f64, f64, f64)> {
             w.extend_from_slice(&x[i - 3..i]);
             w.extend_from_slice(&x[i + 1..i + 4]);
             let e = median(&mut w);
-            let left = 2.0 * x[i - 1] - x[i - 2];
-            let right = 2.0 * x[i + 1] - x[i + 2];
+            let left = x[i - 1] + (x[i - 1] - x[i - 2]) * (t[i] - t[i - 1]) / (t[i - 1] - t[i - 2]);
+            let right =
+                x[i + 1] + (x[i + 1] - x[i + 2]) * (t[i + 1] - t[i]) / (t[i + 2] - t[i + 1]);
             let d = [x[i] - e, x[i] - left, x[i] - right]
                 .into_iter()
                 .min_by(|a, b| a.abs().total_cmp(&b.abs()))
@@ -250,10 +264,10 @@ pub fn find_glitches(log: &Log, opts: &GlitchOptions) -> Vec<Glitch> {
             &log.tau[c - 2]
         };
         let (res, reach) = if c < 2 {
-            let a = angle_residuals(x);
+            let a = angle_residuals(&log.t, x);
             (a.into_iter().map(|(e, r)| (e, r, r)).collect::<Vec<_>>(), 2)
         } else {
-            (torque_residuals(x), 3)
+            (torque_residuals(&log.t, x), 3)
         };
         let r: Vec<f64> = res.iter().map(|p| p.1).collect();
         let for_scale: Vec<f64> = res.iter().map(|p| p.2).collect();

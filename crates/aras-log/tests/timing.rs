@@ -301,3 +301,29 @@ fn a_torque_spike_and_a_torque_beyond_the_limit_are_found() {
         Err(LogError::InvalidOption { .. })
     ));
 }
+
+#[test]
+fn jitter_and_missing_samples_are_not_glitches() {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(8);
+    let jitter: Vec<f64> = (0..20_000)
+        .map(|_| (rng.random::<f64>() - 0.5) * 4e-4)
+        .collect();
+    let text = csv(20_000, |i| format!("{}", i as f64 * 1e-3 + jitter[i]), 8);
+    let log = read(&text, &Default::default()).unwrap();
+    assert!(find_glitches(&log, &GlitchOptions::default()).is_empty());
+    // Rows 5000–5002 and 9000–9019 missing: the neighbours' cubic at their
+    // logged times bridges them.
+    let gappy: String = uniform(20_000, 8)
+        .lines()
+        .enumerate()
+        .filter(|(k, _)| !(5001..5004).contains(k) && !(9001..9021).contains(k))
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    let opts = ReadOptions {
+        step_tolerance: 100.0,
+        ..Default::default()
+    };
+    let log = read(&gappy, &opts).unwrap();
+    let g = find_glitches(&log, &GlitchOptions::default());
+    assert!(g.is_empty(), "{g:?}");
+}

@@ -99,7 +99,7 @@ pub use process::{
     Bandwidth, BandwidthChoice, BandwidthMethod, FilterSpec, FilterSummary, OutputRows,
     PeriodSource, PeriodSummary, ProcessOptions, ProcessSummary, Processed, Samples, process,
 };
-pub use resample::{GAP_RATIO, Gap, ResampleOptions, Resampling, resample_log};
+pub use resample::{GAP_RATIO, Gap, MAX_GROWTH, ResampleOptions, Resampling, resample_log};
 pub use sos::{FILTER_LANES, Sos, TransferFunction};
 pub use spectrum::{
     MAX_SEGMENT, PowerSpectrum, SpectrumAccumulator, SpectrumError, power_spectrum,

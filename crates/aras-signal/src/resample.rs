@@ -22,6 +22,9 @@ const LISTED: usize = 10;
 /// A step longer than this many nominal steps is a gap (samples missing).
 pub const GAP_RATIO: f64 = 1.5;
 
+/// Most rows out per row in that [`resample_log`] accepts.
+pub const MAX_GROWTH: usize = 2;
+
 /// Options of [`resample_log`]. `Default` gives the documented defaults.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -93,7 +96,8 @@ fn listing(gaps: &[&Gap]) -> Vec<String> {
 ///
 /// Errors: [`ProcessError::InvalidOption`] for a bad limit,
 /// [`ProcessError::GapTooLong`] (listing them) when a gap exceeds
-/// `opts.max_gap_s`. Bridged gaps are reported in [`Resampling::gaps`] and
+/// `opts.max_gap_s`, [`ProcessError::InvalidOption`] when the grid would
+/// have more than [`MAX_GROWTH`] times the rows of the log. Bridged gaps are reported in [`Resampling::gaps`] and
 /// a [`Warning::GapsBridged`]; the output's rows have no file lines.
 pub fn resample_log(log: &Log, opts: &ResampleOptions) -> Result<(Log, Resampling), ProcessError> {
     if !(opts.max_gap_s.is_finite() && opts.max_gap_s > 0.0) {
@@ -140,6 +144,19 @@ pub fn resample_log(log: &Log, opts: &ResampleOptions) -> Result<(Log, Resamplin
     let t0 = log.t[0];
     let span = log.t[n_in - 1] - t0;
     let n = (span / dt + 1e-9).floor() as usize + 1;
+    // The gaps' missing samples plus jitter add a few rows; far more means
+    // the gaps hold most of the log's time (or the nominal step is not
+    // the log's): refuse rather than invent most of the record.
+    if n > MAX_GROWTH * n_in {
+        return Err(ProcessError::InvalidOption {
+            name: "max_gap_s",
+            value: opts.max_gap_s.to_string(),
+            reason: format!(
+                "resampling at the nominal step {dt} s would turn {n_in} rows into {n}: \
+                 the gaps hold most of the log's time; lower the limit or split the log"
+            ),
+        });
+    }
     let re = |x: &[f64]| resample(&log.t, x, t0, dt, n);
     let pair = |p: &[Vec<f64>; 2]| [re(&p[0]), re(&p[1])];
     let mut out = log.clone();
