@@ -504,7 +504,7 @@ impl Checks {
         // Jitter cancels (telescoping) and the rounding of the median does
         // not enter, unlike the median of the steps alone.
         let span = self.prev_t - self.first_t;
-        let nominal = if given_step || !(self.intervals > 0.0) {
+        let nominal = if given_step || self.intervals <= 0.0 {
             median
         } else {
             span / self.intervals

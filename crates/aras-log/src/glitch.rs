@@ -295,7 +295,7 @@ pub fn find_glitches(log: &Log, opts: &GlitchOptions) -> Vec<Glitch> {
                 a > floor
                     && a > opts.threshold * scale
                     && (i.saturating_sub(reach)..(i + reach + 1).min(x.len()))
-                        .all(|j| j == i || !(r[j].abs() > a))
+                        .all(|j| j == i || r[j].is_nan() || r[j].abs() <= a)
             };
             if spike || beyond {
                 out.push(Glitch {
