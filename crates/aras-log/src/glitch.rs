@@ -20,9 +20,10 @@
 //! The scale of each channel is the median absolute deviation (×1.4826, σ
 //! for Gaussian noise) of its residuals (for torques: against the median); a sample is a glitch when its residual
 //! exceeds [`GlitchOptions::threshold`] scales and is the largest within
-//! ±2 (±3) samples. For quantised angles the floor of the scale is the
-//! encoder step, so a motionless joint (a MAD of 0) does not flag single
-//! counts.
+//! ±2 (±3) samples. The scale is at least [`ANGLE_FLOOR`] /
+//! [`TORQUE_FLOOR`] of the channel's range, and for quantised angles at
+//! least the encoder step, so a motionless joint or a noise-free record (a
+//! MAD of 0) does not turn single counts or curvature into glitches.
 
 use serde::{Deserialize, Serialize};
 
@@ -32,6 +33,16 @@ use crate::{Log, LogError, Warning};
 /// Gaussian noise a false alarm is a 10σ event (p ≈ 1.5·10⁻²³ a sample);
 /// a gross glitch sits tens to thousands of σ away.
 pub const DEFAULT_GLITCH_THRESHOLD: f64 = 10.0;
+
+/// Least scale of an angle channel, as a share of its range: a noise-free
+/// record (a simulation) has a MAD near 0, and its start-up transient
+/// would otherwise stand out; with the default threshold a glitch is then
+/// at least 0.1 % of the range off.
+pub const ANGLE_FLOOR: f64 = 1e-4;
+
+/// Least scale of a torque channel, as a share of its range (a glitch is
+/// then at least 1 % of the range off with the default threshold).
+pub const TORQUE_FLOOR: f64 = 1e-3;
 
 /// Glitches listed in messages; more are counted.
 const LISTED: usize = 10;
@@ -271,7 +282,13 @@ pub fn find_glitches(log: &Log, opts: &GlitchOptions) -> Vec<Glitch> {
         };
         let r: Vec<f64> = res.iter().map(|p| p.1).collect();
         let for_scale: Vec<f64> = res.iter().map(|p| p.2).collect();
-        let mut scale = mad_scale(&for_scale);
+        let (lo, hi) = x
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
+        let floor_share = if c < 2 { ANGLE_FLOOR } else { TORQUE_FLOOR };
+        let mut scale = mad_scale(&for_scale).max(floor_share * (hi - lo));
         if c < 2 {
             let q = quantum(x);
             if q.is_finite() {

@@ -37,8 +37,8 @@ pub use checks::{
 };
 pub use error::LogError;
 pub use glitch::{
-    DEFAULT_GLITCH_THRESHOLD, Glitch, GlitchAction, GlitchKind, GlitchOptions, apply_glitches,
-    find_glitches,
+    ANGLE_FLOOR, DEFAULT_GLITCH_THRESHOLD, Glitch, GlitchAction, GlitchKind, GlitchOptions,
+    TORQUE_FLOOR, apply_glitches, find_glitches,
 };
 pub use header::ColumnNames;
 pub use reader::{Columns, LogReader, LogReport, LogSummary, RowLines, Timing};
