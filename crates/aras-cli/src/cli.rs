@@ -162,6 +162,23 @@ pub struct LogArgs {
     /// (the bag's receive time, for drivers that leave the stamp unset).
     #[arg(long, value_enum, default_value = "header")]
     pub stamps: StampsArg,
+    /// Unit of the log's `t` column (default: seconds, and a whole-number
+    /// step below 10 Hz is refused as probably not seconds; config
+    /// `log.time_unit`).
+    #[arg(long, value_enum, value_name = "UNIT")]
+    pub time_unit: Option<TimeUnitArg>,
+    /// What to do with isolated glitches, samples far off their neighbours
+    /// (default `refuse`, naming their lines; config `log.glitches`).
+    #[arg(long, value_enum, value_name = "ACTION")]
+    pub glitches: Option<GlitchArg>,
+    /// Resample a jittered or gappy log onto a uniform grid at its nominal
+    /// step before processing; every gap is reported (config `log.resample`).
+    #[arg(long)]
+    pub resample: bool,
+    /// Longest gap (s) `--resample` interpolates across; longer gaps refuse
+    /// the log (default 0.005; config `log.max_gap_s`).
+    #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true)]
+    pub max_gap: Option<f64>,
 }
 
 /// `--stamps`.
@@ -174,10 +191,77 @@ pub enum StampsArg {
     Log,
 }
 
+/// `--time-unit`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum TimeUnitArg {
+    /// Seconds.
+    S,
+    /// Milliseconds.
+    Ms,
+    /// Microseconds.
+    Us,
+    /// Nanoseconds.
+    Ns,
+}
+
+impl From<TimeUnitArg> for aras_log::TimeUnit {
+    fn from(u: TimeUnitArg) -> Self {
+        match u {
+            TimeUnitArg::S => Self::Seconds,
+            TimeUnitArg::Ms => Self::Milliseconds,
+            TimeUnitArg::Us => Self::Microseconds,
+            TimeUnitArg::Ns => Self::Nanoseconds,
+        }
+    }
+}
+
+/// `--glitches`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum GlitchArg {
+    /// Refuse the log, naming each glitch's line and column.
+    Refuse,
+    /// Keep the samples, with a warning.
+    Warn,
+    /// Remove their rows (the gaps are interpolated).
+    Drop,
+    /// Replace each by the interpolation of its neighbours, with a warning.
+    Repair,
+    /// Do not look for glitches.
+    Off,
+}
+
+impl From<GlitchArg> for aras_log::GlitchAction {
+    fn from(g: GlitchArg) -> Self {
+        match g {
+            GlitchArg::Refuse => Self::Refuse,
+            GlitchArg::Warn => Self::Warn,
+            GlitchArg::Drop => Self::Drop,
+            GlitchArg::Repair => Self::Repair,
+            GlitchArg::Off => Self::Off,
+        }
+    }
+}
+
 impl LogArgs {
     /// True if `--sidecar none`.
     fn no_sidecar(&self) -> bool {
         self.sidecar.as_deref() == Some(std::path::Path::new("none"))
+    }
+
+    /// The config's `[log]` section with this command line's overrides.
+    pub fn settings(&self, cfg: &crate::config::LogConfig) -> crate::config::LogConfig {
+        let mut s = cfg.clone();
+        if let Some(u) = self.time_unit {
+            s.time_unit = Some(u.into());
+        }
+        if let Some(g) = self.glitches {
+            s.glitches = g.into();
+        }
+        s.resample |= self.resample;
+        if let Some(m) = self.max_gap {
+            s.max_gap_s = m;
+        }
+        s
     }
 
     /// The sidecar file `log` may be read with, which outputs must never
@@ -190,12 +274,25 @@ impl LogArgs {
         }
     }
 
-    /// The log reader's options: `--sidecar`, `--columns` and, for bags,
-    /// `--topic`, `--joints`, `--stamps`.
-    pub fn read_options(&self) -> anyhow::Result<aras_log::ReadOptions> {
+    /// The log reader's options: `--sidecar`, `--columns`, the time unit,
+    /// for bags `--topic`, `--joints`, `--stamps`, and, with resampling,
+    /// gaps let through to the resampler (which judges them against
+    /// `max_gap_s`).
+    pub fn read_options(
+        &self,
+        cfg: &crate::config::LogConfig,
+    ) -> anyhow::Result<aras_log::ReadOptions> {
         use anyhow::Context;
         use aras_log::{BagOptions, ColumnNames, JointNames, ReadOptions, SidecarSource, Stamps};
+        let s = self.settings(cfg);
+        let defaults = ReadOptions::default();
         Ok(ReadOptions {
+            time_unit: s.time_unit,
+            step_tolerance: if s.resample {
+                RESAMPLE_STEP_TOLERANCE
+            } else {
+                defaults.step_tolerance
+            },
             sidecar: if self.no_sidecar() {
                 SidecarSource::None
             } else {
@@ -218,10 +315,14 @@ impl LogArgs {
                     StampsArg::Log => Stamps::Log,
                 },
             },
-            ..ReadOptions::default()
+            ..defaults
         })
     }
 }
+
+/// The reader's step tolerance when resampling: any step passes the reader
+/// and the resampler refuses gaps beyond `log.max_gap_s`.
+const RESAMPLE_STEP_TOLERANCE: f64 = 1e12;
 
 /// Options every command shares.
 #[derive(Debug, Clone, Args)]

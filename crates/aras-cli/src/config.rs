@@ -24,6 +24,9 @@ pub struct Config {
     pub trajectory: TrajectoryConfig,
     /// The simulated robot (`docs/simulator.md`).
     pub simulation: SimulationConfig,
+    /// Reading a lab's log: time unit, glitches, resampling
+    /// (`docs/log-format.md`).
+    pub log: LogConfig,
     /// Signal processing (`docs/processing.md`).
     pub signal: SignalConfig,
     /// Identification ((58)–(73), `docs/model.md`).
@@ -222,6 +225,64 @@ pub enum BandwidthMode {
     /// series up to the noise floor for a periodic log, else a cut-off
     /// that follows the angle spectrum; `docs/processing.md`).
     Auto,
+}
+
+/// `[log]`: how a lab's log is read before processing (`docs/log-format.md`):
+/// the unit of `t`, what to do with isolated glitches, and resampling onto a
+/// uniform grid. The command line's `--time-unit`, `--glitches`,
+/// `--resample` and `--max-gap` override these.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LogConfig {
+    /// Unit of `t`: `"s"`, `"ms"`, `"us"`, `"ns"`. Absent: seconds, and a
+    /// whole-number step at a rate below 10 Hz is refused with the question
+    /// whether t is in seconds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_unit: Option<aras_log::TimeUnit>,
+    /// Isolated glitches: `"refuse"` (default), `"warn"`, `"drop"`,
+    /// `"repair"`, `"off"`.
+    pub glitches: aras_log::GlitchAction,
+    /// Residual (robust standard deviations) beyond which an isolated
+    /// sample is a glitch.
+    pub glitch_threshold: f64,
+    /// The robot's torque limits (N·m): a torque beyond
+    /// `torque_limit_factor` times them is a glitch.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub torque_limit: Option<[f64; 2]>,
+    /// Factor on `torque_limit`.
+    pub torque_limit_factor: f64,
+    /// Resample the log onto a uniform grid at its nominal step before
+    /// processing (gaps reported, none bridged beyond `max_gap_s`).
+    pub resample: bool,
+    /// Longest gap (s) the resampling interpolates across.
+    pub max_gap_s: f64,
+}
+
+impl Default for LogConfig {
+    fn default() -> Self {
+        let g = aras_log::GlitchOptions::default();
+        Self {
+            time_unit: None,
+            glitches: g.action,
+            glitch_threshold: g.threshold,
+            torque_limit: g.torque_limit,
+            torque_limit_factor: g.limit_factor,
+            resample: false,
+            max_gap_s: aras_signal::ResampleOptions::default().max_gap_s,
+        }
+    }
+}
+
+impl LogConfig {
+    /// The glitch detector's options.
+    pub fn glitch_options(&self) -> aras_log::GlitchOptions {
+        aras_log::GlitchOptions {
+            action: self.glitches,
+            threshold: self.glitch_threshold,
+            torque_limit: self.torque_limit,
+            limit_factor: self.torque_limit_factor,
+        }
+    }
 }
 
 /// `[signal]`: processing of the logs (`docs/processing.md`).
@@ -645,6 +706,20 @@ impl Config {
             pos("simulation.gear_ratios", s.gear_ratios[j])?;
             pos("simulation.counts_per_rev", s.counts_per_rev[j] as f64)?;
         }
+        let l = &self.log;
+        pos("log.glitch_threshold", l.glitch_threshold)?;
+        if !(l.torque_limit_factor.is_finite() && l.torque_limit_factor >= 1.0) {
+            return bad(
+                "log.torque_limit_factor",
+                format!("must be ≥ 1, found {}", l.torque_limit_factor),
+            );
+        }
+        if let Some(t) = l.torque_limit {
+            for v in t {
+                pos("log.torque_limit", v)?;
+            }
+        }
+        pos("log.max_gap_s", l.max_gap_s)?;
         let g = &self.signal;
         if !(1..=aras_signal::MAX_ORDER).contains(&g.filter_order) {
             return bad(

@@ -12,6 +12,14 @@ use crate::error::LogError;
 /// [`ReadOptions::step_tolerance`](crate::ReadOptions::step_tolerance)).
 pub const NOMINAL_WINDOW: usize = 4096;
 
+/// Relative RMS step jitter above which [`Warning::Jitter`] is given
+/// (0.1 % of the step: above the rounding of printed or epoch times).
+pub const JITTER_WARN: f64 = 1e-3;
+
+/// Sample rates below this (Hz) with whole-number steps make the reader ask
+/// whether `t` is in seconds.
+pub const MIN_PLAUSIBLE_RATE_HZ: f64 = 10.0;
+
 /// Saturation spans kept per channel and extreme; more are only counted.
 const MAX_SPANS: usize = 20;
 
@@ -56,6 +64,56 @@ pub enum Warning {
         /// Spans beyond those listed.
         more_spans: usize,
     },
+    /// Time stamps far from zero (a clock epoch): times are counted from
+    /// the first row, and the logged values carry the rounding of f64 at
+    /// their magnitude.
+    TimeOffset {
+        /// The first time stamp (s), subtracted from every row.
+        offset_s: f64,
+        /// Spacing of f64 values at that magnitude (s): the logged times
+        /// are known to ± half of it.
+        resolution_s: f64,
+    },
+    /// The time steps scatter around the nominal step by more than
+    /// [`JITTER_WARN`] of it.
+    Jitter {
+        /// Nominal step (s).
+        nominal_s: f64,
+        /// RMS deviation of a step from the nominal (or a whole multiple of
+        /// it) (s).
+        rms_s: f64,
+        /// Largest such deviation (s).
+        max_s: f64,
+    },
+    /// Resampling interpolated across gaps in the time stamps (each no
+    /// longer than the stated limit).
+    GapsBridged {
+        /// Gaps bridged.
+        count: usize,
+        /// The longest (s).
+        longest_s: f64,
+        /// The first few, one per line of the message.
+        list: Vec<String>,
+    },
+    /// Period averaging leaves a large part of the record unused.
+    AveragingUnused {
+        /// Periods per averaged block.
+        periods_per_block: usize,
+        /// Whole blocks averaged.
+        blocks: usize,
+        /// Fraction of the samples not averaged (settling and tail).
+        unused: f64,
+    },
+    /// Isolated samples far off their neighbours, kept, dropped or
+    /// repaired as the options say.
+    Glitches {
+        /// What was done with them.
+        action: String,
+        /// How many were found.
+        count: usize,
+        /// The first few, one per line of the message.
+        list: Vec<String>,
+    },
     /// A periodic record's torque periods differ notably (only reported).
     PeriodSpread {
         /// Channel name.
@@ -99,6 +157,69 @@ impl fmt::Display for Warning {
                     f,
                     "; samples there understate the true torque: exclude them or lower the excitation"
                 )
+            }
+            Warning::TimeOffset {
+                offset_s,
+                resolution_s,
+            } => write!(
+                f,
+                "time stamps start at t = {offset_s} s (a clock epoch?): times are counted from \
+                 the first row; at that magnitude f64 resolves only {:.3} µs, so every logged \
+                 time carries up to ±{:.3} µs of rounding (log times relative to the start for \
+                 full precision)",
+                resolution_s * 1e6,
+                resolution_s * 0.5e6
+            ),
+            Warning::Jitter {
+                nominal_s,
+                rms_s,
+                max_s,
+            } => write!(
+                f,
+                "time stamps jitter: steps deviate from the nominal {} s by {:.3} ms RMS (up to \
+                 {:.3} ms); the processing interpolates onto a uniform grid (or use --resample to \
+                 do it explicitly, with gaps reported)",
+                crate::error::sig(*nominal_s),
+                rms_s * 1e3,
+                max_s * 1e3
+            ),
+            Warning::AveragingUnused {
+                periods_per_block,
+                blocks,
+                unused,
+            } => write!(
+                f,
+                "period averaging uses {blocks} block(s) of {periods_per_block} period(s) and \
+                 leaves {:.1} % of the record unused: the period is not a whole number of \
+                 samples; check the period (--period) and the time unit and rate of the log",
+                unused * 100.0
+            ),
+            Warning::GapsBridged {
+                count,
+                longest_s,
+                list,
+            } => {
+                write!(
+                    f,
+                    "{count} gap(s) in the time stamps interpolated by the resampling (longest \
+                     {} s):",
+                    crate::error::sig(*longest_s)
+                )?;
+                for l in list {
+                    write!(f, "\n  {l}")?;
+                }
+                Ok(())
+            }
+            Warning::Glitches {
+                action,
+                count,
+                list,
+            } => {
+                write!(f, "{count} isolated glitch(es) {action}:")?;
+                for l in list {
+                    write!(f, "\n  {l}")?;
+                }
+                Ok(())
             }
             Warning::PeriodSpread { channel, relative } => write!(
                 f,
@@ -218,6 +339,11 @@ pub(crate) struct Checks {
     prev_t: f64,
     nominal: Option<f64>,
     pending: Vec<(f64, f64, u64)>,
+    median: Option<f64>,
+    intervals: f64,
+    jitter_ss: f64,
+    jitter_n: usize,
+    jitter_max: f64,
     worst: Option<StepDeviation>,
     angles: [AngleStat; 2],
     tau_range: [[f64; 2]; 2],
@@ -230,6 +356,8 @@ pub(crate) struct CheckResult {
     pub nominal_step: f64,
     pub worst_step: Option<StepDeviation>,
     pub duration: f64,
+    pub jitter_rms: f64,
+    pub jitter_max: f64,
     pub theta_range: [[f64; 2]; 2],
     pub tau_range: [[f64; 2]; 2],
     pub warnings: Vec<Warning>,
@@ -250,6 +378,11 @@ impl Checks {
             prev_t: f64::NEG_INFINITY,
             nominal,
             pending: Vec::new(),
+            median: nominal,
+            intervals: 0.0,
+            jitter_ss: 0.0,
+            jitter_n: 0,
+            jitter_max: 0.0,
             worst: None,
             angles: [angle; 2],
             tau_range: [[f64::INFINITY, f64::NEG_INFINITY]; 2],
@@ -260,6 +393,14 @@ impl Checks {
 
     fn judge_step(&mut self, step: f64, t: f64, line: u64, nominal: f64) {
         let ratio = step / nominal;
+        // Whole nominal intervals this step spans (1, or more across a gap
+        // when the tolerance lets gaps through), and its deviation from them.
+        let whole = ratio.round().max(1.0);
+        self.intervals += whole;
+        let dev_s = (step - whole * nominal).abs();
+        self.jitter_ss += dev_s * dev_s;
+        self.jitter_n += 1;
+        self.jitter_max = self.jitter_max.max(dev_s);
         let dev = (ratio - 1.0).abs();
         if self.worst.is_none_or(|w| dev > (w.ratio - 1.0).abs()) {
             self.worst = Some(StepDeviation {
@@ -280,6 +421,7 @@ impl Checks {
         let (_, m, _) = steps.select_nth_unstable_by(mid, f64::total_cmp);
         let nominal = *m;
         self.nominal = Some(nominal);
+        self.median = Some(nominal);
         for (step, t, line) in std::mem::take(&mut self.pending) {
             self.judge_step(step, t, line, nominal);
         }
@@ -346,6 +488,8 @@ impl Checks {
         min_rows: usize,
         step_tolerance: f64,
         check_degrees: bool,
+        unit_given: bool,
+        given_step: bool,
     ) -> Result<CheckResult, LogError> {
         if self.rows < min_rows {
             return Err(LogError::TooFewRows {
@@ -355,7 +499,36 @@ impl Checks {
             });
         }
         self.settle_nominal();
-        let nominal = self.nominal.unwrap_or(f64::NAN);
+        let median = self.median.unwrap_or(f64::NAN);
+        // The nominal step: the time span over the whole intervals it holds.
+        // Jitter cancels (telescoping) and the rounding of the median does
+        // not enter, unlike the median of the steps alone.
+        let span = self.prev_t - self.first_t;
+        let nominal = if given_step || self.intervals <= 0.0 {
+            median
+        } else {
+            span / self.intervals
+        };
+        if !unit_given
+            && nominal.is_finite()
+            && 1.0 / nominal < MIN_PLAUSIBLE_RATE_HZ
+            && median >= 1.0
+            && (median - median.round()).abs() <= 1e-6 * median
+        {
+            let (unit, flag) = if median < 1e3 {
+                ("milliseconds", "ms")
+            } else if median < 1e6 {
+                ("microseconds", "us")
+            } else {
+                ("nanoseconds", "ns")
+            };
+            return Err(LogError::TimeUnit {
+                file: file.into(),
+                step: median,
+                unit,
+                flag,
+            });
+        }
         if check_degrees {
             let limit = 3.0 * std::f64::consts::PI;
             for (c, a) in self.angles.iter().enumerate() {
@@ -389,11 +562,23 @@ impl Checks {
                 t: w.t,
                 step: w.step_s,
                 ratio: w.ratio,
-                nominal,
+                nominal: median,
                 tolerance: step_tolerance,
             });
         }
         let mut warnings = Vec::new();
+        let jitter_rms = if self.jitter_n > 0 {
+            (self.jitter_ss / self.jitter_n as f64).sqrt()
+        } else {
+            0.0
+        };
+        if jitter_rms > JITTER_WARN * nominal {
+            warnings.push(Warning::Jitter {
+                nominal_s: nominal,
+                rms_s: jitter_rms,
+                max_s: self.jitter_max,
+            });
+        }
         let [f1, f2] = self.flat;
         for (c, pair) in [f1, f2].into_iter().enumerate() {
             let [hi, lo] = pair;
@@ -417,7 +602,9 @@ impl Checks {
         Ok(CheckResult {
             nominal_step: nominal,
             worst_step: self.worst,
-            duration: self.prev_t - self.first_t,
+            duration: span,
+            jitter_rms,
+            jitter_max: self.jitter_max,
             theta_range: [
                 [self.angles[0].min, self.angles[0].max],
                 [self.angles[1].min, self.angles[1].max],

@@ -191,8 +191,9 @@ pub enum LogError {
     /// The sampling step varies beyond the tolerance.
     #[error(
         "{file}:{line}: irregular sampling: the worst step, {s} s ending at t = {t} s, is \
-         {ratio:.3}× the nominal step {n} s (tolerance ±{percent}%); resample the log to a \
-         uniform rate, or raise ReadOptions::step_tolerance"
+         {ratio:.3}× the nominal step {n} s (tolerance ±{percent}%); samples are missing or the \
+         clock jumps: resample the log onto a uniform grid with --resample (config \
+         log.resample = true; gaps up to --max-gap s are interpolated, longer ones refused)"
     , percent = tolerance * 100.0, s = sig(*step), n = sig(*nominal))]
     IrregularSampling {
         /// File name.
@@ -209,6 +210,41 @@ pub enum LogError {
         nominal: f64,
         /// Relative tolerance.
         tolerance: f64,
+    },
+    /// The time step is a whole number at an implausibly low rate: `t` is
+    /// probably not in seconds.
+    #[error(
+        "{file}: the time step is {step} (a rate of {rate} Hz if t is in seconds, implausibly \
+         slow for robot control): is t in seconds? (a step of {step} looks like {unit}; use \
+         --time-unit {flag} (config log.time_unit = \"{flag}\") or convert t to seconds; \
+         --time-unit s accepts the times as seconds)",
+        step = sig(*step), rate = sig(1.0 / *step)
+    )]
+    TimeUnit {
+        /// File name.
+        file: String,
+        /// The median step, in the log's own unit.
+        step: f64,
+        /// The unit it looks like.
+        unit: &'static str,
+        /// The `--time-unit` value for it.
+        flag: &'static str,
+    },
+    /// Isolated samples far off their neighbours, and the options say to
+    /// refuse the log.
+    #[error(
+        "{file}: {count} isolated glitch(es), samples far off their neighbours (a sensor or \
+         logging fault?):{list}\ncheck the sensor; to go on, use --glitches repair (replace \
+         each by the interpolation of its neighbours), drop (remove those rows), or warn \
+         (keep them) (config log.glitches)"
+    )]
+    Glitches {
+        /// File name.
+        file: String,
+        /// How many.
+        count: usize,
+        /// One line per glitch (the first few), each starting with a newline.
+        list: String,
     },
     /// Angle columns hold degrees.
     #[error(

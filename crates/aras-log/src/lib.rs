@@ -34,6 +34,7 @@
 mod bag;
 mod checks;
 mod error;
+mod glitch;
 mod header;
 mod number;
 mod reader;
@@ -46,10 +47,16 @@ use std::path::{Path, PathBuf};
 #[cfg(feature = "bags")]
 pub use bag::read_bag_joint;
 pub use bag::{BagOptions, JOINT_STATE, JointNames, JointSamples, MCAP_MAGIC, Stamps, is_bag};
-pub use checks::{Extreme, NOMINAL_WINDOW, Span, StepDeviation, Warning};
+pub use checks::{
+    Extreme, JITTER_WARN, MIN_PLAUSIBLE_RATE_HZ, NOMINAL_WINDOW, Span, StepDeviation, Warning,
+};
 pub use error::LogError;
+pub use glitch::{
+    ANGLE_FLOOR, DEFAULT_GLITCH_THRESHOLD, Glitch, GlitchAction, GlitchKind, GlitchOptions,
+    TORQUE_FLOOR, apply_glitches, find_glitches,
+};
 pub use header::ColumnNames;
-pub use reader::{Columns, LogReader, LogReport, LogSummary};
+pub use reader::{Columns, LogReader, LogReport, LogSummary, RowLines, Timing};
 pub use sidecar::{Excitation, FORMAT, FoundSidecar, Sensors, Sidecar, find_sidecar};
 pub use writer::{new_temp_file, sidecar_path, write_atomic, write_log};
 
@@ -71,6 +78,49 @@ pub enum SidecarSource {
         /// The JSON.
         json: String,
     },
+}
+
+/// Time stamps at or beyond this magnitude (s) are taken as a clock epoch:
+/// the first one is subtracted from every row ([`Warning::TimeOffset`]).
+pub const EPOCH_OFFSET_S: f64 = 1e6;
+
+/// The unit of the `t` column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum TimeUnit {
+    /// Seconds.
+    #[serde(rename = "s")]
+    Seconds,
+    /// Milliseconds.
+    #[serde(rename = "ms")]
+    Milliseconds,
+    /// Microseconds.
+    #[serde(rename = "us")]
+    Microseconds,
+    /// Nanoseconds.
+    #[serde(rename = "ns")]
+    Nanoseconds,
+}
+
+impl TimeUnit {
+    /// Seconds per unit.
+    pub fn seconds(self) -> f64 {
+        match self {
+            Self::Seconds => 1.0,
+            Self::Milliseconds => 1e-3,
+            Self::Microseconds => 1e-6,
+            Self::Nanoseconds => 1e-9,
+        }
+    }
+
+    /// The short name (`s`, `ms`, `us`, `ns`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Seconds => "s",
+            Self::Milliseconds => "ms",
+            Self::Microseconds => "us",
+            Self::Nanoseconds => "ns",
+        }
+    }
 }
 
 /// Options of the log reader. `Default` gives the documented defaults.
@@ -100,6 +150,10 @@ pub struct ReadOptions {
     pub columns: ColumnNames,
     /// How a ROS 2 bag is read (topic, joints, stamps; bags only).
     pub bag: BagOptions,
+    /// Unit of `t` (default `None`: seconds, and a log whose step is a
+    /// whole number at a rate below [`MIN_PLAUSIBLE_RATE_HZ`] is refused
+    /// with [`LogError::TimeUnit`]; `Some(TimeUnit::Seconds)` accepts it).
+    pub time_unit: Option<TimeUnit>,
 }
 
 impl Default for ReadOptions {
@@ -114,6 +168,7 @@ impl Default for ReadOptions {
             check_degrees: true,
             columns: ColumnNames::default(),
             bag: BagOptions::default(),
+            time_unit: None,
         }
     }
 }

@@ -15,6 +15,7 @@ use super::header::{
 };
 use super::number::parse_f64;
 use super::sidecar::Sidecar;
+use super::TimeUnit;
 use crate::error::LogError;
 
 /// Rows of a log in SI units, structure-of-arrays.
@@ -61,6 +62,59 @@ impl Columns {
     }
 }
 
+/// The time base of a log as read.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct Timing {
+    /// Seconds per unit of the `t` column.
+    pub unit_s: f64,
+    /// The first time stamp (s) subtracted from every row (a clock epoch,
+    /// [`EPOCH_OFFSET_S`](crate::EPOCH_OFFSET_S)), 0 if none.
+    pub offset_s: f64,
+    /// RMS deviation of the steps from the nominal step (or a whole
+    /// multiple of it, across gaps) (s).
+    pub jitter_rms_s: f64,
+    /// Largest such deviation (s).
+    pub jitter_max_s: f64,
+}
+
+/// The file line of each data row (comments and blank lines between rows
+/// make them differ from `row + header line + 1`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RowLines {
+    /// `(row, line)` where a row does not follow its predecessor's line.
+    breaks: Vec<(usize, u64)>,
+}
+
+impl RowLines {
+    /// Records that row `row` is on line `line` (rows in order).
+    pub fn push(&mut self, row: usize, line: u64) {
+        if let Some(&(r, l)) = self.breaks.last()
+            && l + (row - r) as u64 == line
+        {
+            return;
+        }
+        self.breaks.push((row, line));
+    }
+
+    /// The file line of `row`, if known (not for resampled rows).
+    pub fn line(&self, row: usize) -> Option<u64> {
+        let i = self.breaks.partition_point(|b| b.0 <= row);
+        let (r, l) = *self.breaks.get(i.checked_sub(1)?)?;
+        Some(l + (row - r) as u64)
+    }
+
+    /// The lines of the rows kept by `keep` (in order), renumbered.
+    pub fn filtered(&self, keep: impl Iterator<Item = usize>) -> Self {
+        let mut out = Self::default();
+        for (new, old) in keep.enumerate() {
+            if let Some(l) = self.line(old) {
+                out.push(new, l);
+            }
+        }
+        out
+    }
+}
+
 /// What the reader learnt about the whole log, available once it is read.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LogSummary {
@@ -89,6 +143,15 @@ pub struct LogSummary {
     pub tau_range: [[f64; 2]; 2],
     /// Where the sidecar came from, if any.
     pub sidecar: Option<String>,
+    /// Time unit, epoch offset and jitter.
+    pub timing: Timing,
+    /// File line of each row.
+    #[serde(skip)]
+    pub lines: RowLines,
+    /// 1-based file columns of the fields θ1, θ2, τ1, τ2 come from (0 if
+    /// unknown).
+    #[serde(skip)]
+    pub channel_columns: [usize; 4],
 }
 
 /// Summary, notes and warnings from [`LogReader::finish`].
@@ -207,6 +270,10 @@ pub struct LogReader<R> {
     checks: Checks,
     opts: ReadOptions,
     done: bool,
+    unit_s: f64,
+    offset: Option<f64>,
+    lines_of_rows: RowLines,
+    offset_warning: Option<Warning>,
 }
 
 impl LogReader<File> {
@@ -374,6 +441,10 @@ impl<R: Read> LogReader<R> {
             checks,
             opts: opts.clone(),
             done: false,
+            unit_s: opts.time_unit.map_or(1.0, TimeUnit::seconds),
+            offset: None,
+            lines_of_rows: RowLines::default(),
+            offset_warning: None,
         })
     }
 
@@ -430,7 +501,28 @@ impl<R: Read> LogReader<R> {
                 continue;
             }
             parse_row(bytes, &self.layout, &self.name, line, &mut vals)?;
-            let t = vals[T];
+            let raw_t = vals[T];
+            // A clock epoch: subtract the first stamp in the file's own unit
+            // (exact for stamps within a factor of 2 of it, Sterbenz).
+            let offset = *self.offset.get_or_insert_with(|| {
+                if (raw_t * self.unit_s).abs() >= crate::EPOCH_OFFSET_S {
+                    raw_t
+                } else {
+                    0.0
+                }
+            });
+            let t = if offset == 0.0 {
+                raw_t * self.unit_s
+            } else {
+                if self.offset_warning.is_none() {
+                    let ulp = f64::from_bits(raw_t.abs().to_bits() + 1) - raw_t.abs();
+                    self.offset_warning = Some(Warning::TimeOffset {
+                        offset_s: raw_t * self.unit_s,
+                        resolution_s: ulp * self.unit_s,
+                    });
+                }
+                (raw_t - offset) * self.unit_s
+            };
             let theta = match self.layout.angles {
                 AngleSource::Theta => [vals[THETA[0]], vals[THETA[1]]],
                 AngleSource::Encoder { scale } => {
@@ -445,6 +537,7 @@ impl<R: Read> LogReader<R> {
             };
             self.checks
                 .row(&self.name, line, self.layout.column_of[T], t, theta, tau)?;
+            self.lines_of_rows.push(self.checks.rows - 1, line);
             out.t.push(t);
             for c in 0..2 {
                 out.theta[c].push(theta[c]);
@@ -504,7 +597,32 @@ impl<R: Read> LogReader<R> {
             self.opts.min_rows,
             self.opts.step_tolerance,
             check_degrees,
+            self.opts.time_unit.is_some(),
+            self.opts.nominal_step.is_some(),
         )?;
+        let column = |slot: usize| self.layout.column_of[slot];
+        let channel_columns = [
+            match self.layout.angles {
+                AngleSource::Theta => column(THETA[0]),
+                AngleSource::Encoder { .. } => column(ENC[0]),
+            },
+            match self.layout.angles {
+                AngleSource::Theta => column(THETA[1]),
+                AngleSource::Encoder { .. } => column(ENC[1]),
+            },
+            match self.layout.torques {
+                TorqueSource::Tau => column(TAU_[0]),
+                TorqueSource::Current { .. } => column(CURRENT[0]),
+            },
+            match self.layout.torques {
+                TorqueSource::Tau => column(TAU_[1]),
+                TorqueSource::Current { .. } => column(CURRENT[1]),
+            },
+        ];
+        let mut warnings = res.warnings;
+        if let Some(w) = self.offset_warning.take() {
+            warnings.insert(0, w);
+        }
         let summary = LogSummary {
             file: self.name.clone(),
             rows,
@@ -523,11 +641,19 @@ impl<R: Read> LogReader<R> {
             theta_range: res.theta_range,
             tau_range: res.tau_range,
             sidecar: self.sidecar_name.clone(),
+            timing: Timing {
+                unit_s: self.unit_s,
+                offset_s: self.offset.unwrap_or(0.0) * self.unit_s,
+                jitter_rms_s: res.jitter_rms,
+                jitter_max_s: res.jitter_max,
+            },
+            lines: self.lines_of_rows,
+            channel_columns,
         };
         Ok(LogReport {
             summary,
             notes: self.layout.notes,
-            warnings: res.warnings,
+            warnings,
         })
     }
 }

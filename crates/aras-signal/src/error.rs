@@ -157,6 +157,22 @@ pub enum ProcessError {
         /// The period (s).
         period_s: f64,
     },
+    /// Resampling would have to bridge gaps longer than allowed.
+    #[error(
+        "{file}: {count} gap(s) in the time stamps longer than the {max_gap_s} s that resampling \
+         may bridge:{list}\nsplit the log at the gaps, or raise the limit (--max-gap, config \
+         log.max_gap_s) if interpolating across them is acceptable"
+    )]
+    GapTooLong {
+        /// Log name.
+        file: String,
+        /// Gaps beyond the limit.
+        count: usize,
+        /// One line per gap (the first few), each starting with a newline.
+        list: String,
+        /// The limit (s).
+        max_gap_s: f64,
+    },
     /// The model's coordinates could not be computed at a sample
     /// ([`Coordinates`](crate::Coordinates), e.g. a pose the kinematics reject).
     #[error("the model's coordinates failed at t = {t} s (sample {index})")]

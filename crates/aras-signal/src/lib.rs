@@ -12,6 +12,9 @@
 //!    the caller's [`Coordinates`] ([`JointCoordinates`] when the model is
 //!    written in joint angles), with a serialisable [`ProcessSummary`] for
 //!    the report.
+//!    [`resample_log`] first brings a jittered or gappy log onto a uniform
+//!    grid on request, reporting every gap and bridging none beyond a
+//!    stated length.
 //! 2. [`delay_torque`]: torque samples logged later than the angles they
 //!    belong to, shifted back (a whole or fractional number of samples).
 //! 3. The same [`Sos`] filters any other column (`filtfilt`,
@@ -76,6 +79,7 @@ mod error;
 mod fourier;
 mod periods;
 mod process;
+mod resample;
 mod sos;
 mod spectrum;
 
@@ -95,6 +99,7 @@ pub use process::{
     Bandwidth, BandwidthChoice, BandwidthMethod, FilterSpec, FilterSummary, OutputRows,
     PeriodSource, PeriodSummary, ProcessOptions, ProcessSummary, Processed, Samples, process,
 };
+pub use resample::{GAP_RATIO, Gap, MAX_GROWTH, ResampleOptions, Resampling, resample_log};
 pub use sos::{FILTER_LANES, Sos, TransferFunction};
 pub use spectrum::{
     MAX_SEGMENT, PowerSpectrum, SpectrumAccumulator, SpectrumError, power_spectrum,

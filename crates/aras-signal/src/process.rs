@@ -378,6 +378,10 @@ const CHANNELS: [&str; 4] = ["theta1", "theta2", "tau1", "tau2"];
 /// still treated as uniform (rounding of printed times).
 const UNIFORM_TOLERANCE: f64 = 1e-6;
 
+/// Fraction of the record that period averaging may leave unused (settling
+/// and tail) without a [`Warning::AveragingUnused`].
+const MAX_UNUSED_SILENT: f64 = 0.25;
+
 /// Turns a validated log into samples ready for identification or
 /// prediction.
 ///
@@ -587,6 +591,17 @@ pub fn process(
                         relative: avg.spread_relative[c],
                     });
                 }
+            }
+            // A large unused remainder means the block is many periods long
+            // (the period is not a whole number of samples at this step):
+            // say so rather than average silently less of the record.
+            let unused = (nu - avg.samples_per_block * avg.blocks) as f64 / nu as f64;
+            if unused > MAX_UNUSED_SILENT {
+                warnings.push(Warning::AveragingUnused {
+                    periods_per_block: avg.periods_per_block,
+                    blocks: avg.blocks,
+                    unused,
+                });
             }
             let t = t_uniform[avg.start..avg.start + avg.samples_per_block].to_vec();
             let summary = PeriodSummary {

@@ -5,7 +5,6 @@
 //! `diagnosis.json`, `diagnosis.md`, `diagnosis.html` and the plots.
 
 use anyhow::{Context, Result};
-use aras_log::read_log;
 use aras_pipeline::diagnose::residual::Profile;
 use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, RefinementStatus, diagnose};
 
@@ -61,7 +60,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         );
         if streamed {
             let opts = StreamingOptions {
-                read: log_args.read_options()?,
+                read: super::streaming_read_options(log_args, &cfg)?,
                 process: process_options(&cfg, log_args.period, false),
                 geometry,
                 ..StreamingOptions::default()
@@ -73,9 +72,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
             return spool_log(path, &opts, &out.path(""), &mut progress)
                 .with_context(|| format!("processing {}", path.display()));
         }
-        let log = read_log(path, &log_args.read_options()?)
-            .with_context(|| format!("reading {}", path.display()))?;
-        super::print_notes(path, &log.notes);
+        let log = super::load_log(path, log_args, &cfg)?;
         let p = aras_signal::process(
             &log,
             &process_options(&cfg, log_args.period, false),

@@ -3,7 +3,6 @@
 use anyhow::{Context, Result};
 use aras_dyn::{Model, Params};
 use aras_kin::Geometry;
-use aras_log::read_log;
 
 use crate::cli::{IdentifyArgs, StreamingMode};
 use crate::cmd::fit::{self, FitInput};
@@ -92,16 +91,11 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         model,
         geometry,
     } = setup(args, &extras)?;
-    let read = args.log.read_options()?;
-    let mut log = stages
-        .run("read log", |_| read_log(&args.data, &read))
-        .with_context(|| format!("reading {}", args.data.display()))?;
+    let mut log = stages.run("read log", |_| super::load_log(&args.data, &args.log, &cfg))?;
     if let Some(d) = extras.torque_delay {
         log = aras_signal::delay_torque(&log, d)
             .with_context(|| format!("removing the time delay from {}", args.data.display()))?;
     }
-    super::print_notes(&args.data, &log.notes);
-    super::print_warnings(&args.data, &log.warnings);
     // The sidecar the reader took (`--sidecar`, else LOG.json beside the log).
     let truth = sidecar_truth(&log.sidecar);
     let base = stages.run("base parameters (58)", |_| {
@@ -160,7 +154,7 @@ fn run_streaming(args: &IdentifyArgs, extras: &Extras) -> Result<()> {
     } = setup(args, extras)?;
     // The streaming reader keeps no sidecar for us: find it for its truth,
     // as the reader does (a declared LOG.json, `--sidecar`, or none).
-    let truth = aras_log::find_sidecar(Some(&args.data), &args.log.read_options()?.sidecar)
+    let truth = aras_log::find_sidecar(Some(&args.data), &args.log.read_options(&cfg.log)?.sidecar)
         .ok()
         .and_then(|f| sidecar_truth(&f.sidecar));
     let base = stages.run("base parameters (58)", |_| {

@@ -34,7 +34,7 @@ use crate::validate::{parameter_errors, pd_check, pseudo_inertia_min};
 /// exclusion.
 pub fn options(args: &IdentifyArgs, cfg: &Config, nominal: &Params) -> Result<StreamingOptions> {
     Ok(StreamingOptions {
-        read: args.log.read_options()?,
+        read: super::streaming_read_options(&args.log, cfg)?,
         process: process_options(cfg, args.log.period, false),
         filter_mode: match cfg.identification.filtering {
             FilteringMode::Parallel => FilterMode::Parallel,

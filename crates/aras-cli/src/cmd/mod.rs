@@ -64,3 +64,54 @@ pub fn print_warnings(path: &Path, warnings: &[aras_log::Warning]) {
         eprintln!("warning: {}: {w}", path.display());
     }
 }
+
+/// Reads a log the way every command does: the reader with `args`' options
+/// and the config's `[log]` section, then the glitch check and, if asked,
+/// resampling onto a uniform grid. Warnings are printed here.
+pub fn load_log(path: &Path, args: &crate::cli::LogArgs, cfg: &Config) -> Result<aras_log::Log> {
+    use anyhow::Context;
+    let settings = args.settings(&cfg.log);
+    let log = aras_log::read_log(path, &args.read_options(&cfg.log)?)
+        .with_context(|| format!("reading {}", path.display()))?;
+    let (mut log, _) = aras_log::apply_glitches(log, &settings.glitch_options())
+        .with_context(|| format!("reading {}", path.display()))?;
+    if settings.resample {
+        let opts = aras_signal::ResampleOptions {
+            max_gap_s: settings.max_gap_s,
+        };
+        log = aras_signal::resample_log(&log, &opts)
+            .with_context(|| format!("resampling {}", path.display()))?
+            .0;
+    }
+    print_notes(path, &log.notes);
+    print_warnings(path, &log.warnings);
+    Ok(log)
+}
+
+/// The reader's options for a streamed log. The streaming reader keeps no
+/// whole log, so it can neither look for glitches nor resample: asking for
+/// either is refused rather than ignored.
+pub fn streaming_read_options(
+    args: &crate::cli::LogArgs,
+    cfg: &Config,
+) -> Result<aras_log::ReadOptions> {
+    let s = args.settings(&cfg.log);
+    if s.resample {
+        anyhow::bail!(
+            "--resample (log.resample) needs the whole log in memory: use --streaming off"
+        );
+    }
+    if matches!(
+        s.glitches,
+        aras_log::GlitchAction::Drop
+            | aras_log::GlitchAction::Repair
+            | aras_log::GlitchAction::Warn
+    ) {
+        anyhow::bail!(
+            "--glitches {} (log.glitches) needs the whole log in memory: use --streaming off \
+             (streamed logs are not checked for glitches)",
+            s.glitches.name()
+        );
+    }
+    args.read_options(&cfg.log)
+}

@@ -3,7 +3,6 @@
 use std::fmt::Write as _;
 
 use anyhow::{Context, Result};
-use aras_log::read_log;
 use aras_signal::OutputRows;
 
 use crate::cli::PredictArgs;
@@ -31,10 +30,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let model = params.model()?;
     let beta = params.standard_vector(&model)?.as_slice().to_vec();
     let geometry = params.geometry()?;
-    let log = read_log(&args.data, &args.log.read_options()?)
-        .with_context(|| format!("reading {}", args.data.display()))?;
-    super::print_notes(&args.data, &log.notes);
-    super::print_warnings(&args.data, &log.warnings);
+    let log = super::load_log(&args.data, &args.log, &cfg)?;
     let logged = log.theta_dot.is_some() && log.theta_ddot.is_some();
     let mut opts = process_options(&cfg, args.log.period, logged);
     opts.rows = OutputRows::EveryRow;
