@@ -351,6 +351,11 @@ impl LogReader<File> {
             checks: r.checks,
             opts: r.opts,
             done: false,
+            // Bag times are already seconds from the first message.
+            unit_s: 1.0,
+            offset: None,
+            lines_of_rows: r.lines_of_rows,
+            offset_warning: None,
         })
     }
 
