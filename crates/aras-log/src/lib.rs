@@ -26,6 +26,7 @@ mod header;
 mod number;
 mod reader;
 mod sidecar;
+pub mod units;
 mod writer;
 
 use std::io::Read;
@@ -34,7 +35,7 @@ use std::path::{Path, PathBuf};
 pub use checks::{Extreme, NOMINAL_WINDOW, Span, StepDeviation, Warning};
 pub use error::LogError;
 pub use header::ColumnNames;
-pub use reader::{Columns, LogReader, LogReport, LogSummary};
+pub use reader::{Columns, LogReader, LogReport, LogSummary, MAX_MAGNITUDE};
 pub use sidecar::{Excitation, FORMAT, Sensors, Sidecar};
 pub use writer::{new_temp_file, sidecar_path, write_atomic, write_log};
 
