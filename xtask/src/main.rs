@@ -25,7 +25,7 @@
 //! own output is shown (on stderr, so a command's stdout stays clean).
 
 use std::io::{IsTerminal, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode, Stdio};
 
 /// Shared objects the numeric crates link against, with the Debian package
@@ -290,12 +290,38 @@ fn remove_own_dir(dir: &Path) -> Result<(), String> {
         .map_err(|e| format!("cannot remove the old {}: {e}", dir.display()))
 }
 
+/// The workspace this run belongs to, found at run time (a copied or moved
+/// checkout runs its own tree): the parent of `manifest_dir` (the
+/// `CARGO_MANIFEST_DIR` cargo sets for `cargo run`, the xtask package) when
+/// it holds a workspace manifest, else the nearest directory at or above
+/// `start` whose `Cargo.toml` declares `[workspace]`.
+fn workspace_root(manifest_dir: Option<&Path>, start: &Path) -> Option<PathBuf> {
+    let is_workspace = |d: &Path| {
+        std::fs::read_to_string(d.join("Cargo.toml"))
+            .is_ok_and(|t| t.lines().any(|l| l.trim() == "[workspace]"))
+    };
+    if let Some(parent) = manifest_dir.and_then(Path::parent)
+        && is_workspace(parent)
+    {
+        return Some(parent.to_path_buf());
+    }
+    start
+        .ancestors()
+        .find(|d| is_workspace(d))
+        .map(Path::to_path_buf)
+}
+
 /// `cargo xtask check-mjcf`: build `aras`, make the throwaway venv, run the script.
 fn check_mjcf(args: &[String]) -> ExitCode {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .expect("xtask lives inside the workspace")
-        .to_path_buf();
+    let here = std::env::current_dir().unwrap_or_else(|_| ".".into());
+    let manifest = std::env::var_os("CARGO_MANIFEST_DIR").map(PathBuf::from);
+    let Some(root) = workspace_root(manifest.as_deref(), &here) else {
+        eprintln!(
+            "xtask: no Cargo workspace above {}; run `cargo xtask check-mjcf` inside the checkout",
+            here.display()
+        );
+        return ExitCode::FAILURE;
+    };
     let target = std::env::var_os("CARGO_TARGET_DIR")
         .map(std::path::PathBuf::from)
         .unwrap_or_else(|| root.join("target"));
@@ -398,6 +424,29 @@ fn check_mjcf(args: &[String]) -> ExitCode {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A checkout copied elsewhere is located where it now is: from the
+    /// run-time manifest directory or by walking up from the current one.
+    #[test]
+    fn workspace_is_located_at_run_time() {
+        let tmp = std::env::temp_dir().join(format!("xtask-root-{}", std::process::id()));
+        let copy = tmp.join("copy");
+        let sub = copy.join("crates").join("x");
+        std::fs::create_dir_all(copy.join("xtask")).unwrap();
+        std::fs::create_dir_all(&sub).unwrap();
+        std::fs::write(copy.join("Cargo.toml"), "[workspace]\nmembers = []\n").unwrap();
+        std::fs::write(sub.join("Cargo.toml"), "[package]\nname = \"x\"\n").unwrap();
+        let xtask = copy.join("xtask");
+        assert_eq!(
+            workspace_root(Some(&xtask), Path::new("/")),
+            Some(copy.clone())
+        );
+        assert_eq!(workspace_root(None, &sub), Some(copy.clone()));
+        // A manifest directory outside any workspace falls back to the walk.
+        assert_eq!(workspace_root(Some(&sub), &sub), Some(copy.clone()));
+        assert_eq!(workspace_root(None, &tmp), None);
+        std::fs::remove_dir_all(&tmp).unwrap();
+    }
 
     #[test]
     fn installs_only_with_apt_get_as_root_when_not_declined() {

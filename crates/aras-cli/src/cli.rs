@@ -355,7 +355,8 @@ pub struct PipelineArgs {
     /// byte-identical outputs (the report still shows them).
     #[arg(long)]
     pub reproducible: bool,
-    /// Print the default configuration (TOML) and exit.
+    /// Print the configuration (TOML) and exit: the defaults, or with
+    /// --config that file's settings with the defaults filled in.
     #[arg(long)]
     pub print_config: bool,
     /// Shared options.
@@ -437,7 +438,8 @@ pub struct IdentifyArgs {
 /// `identify --streaming`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum StreamingMode {
-    /// Stream logs larger than 256 MB (`cmd::identify::STREAMING_BYTES`).
+    /// Stream logs larger than the command's threshold (its --streaming
+    /// help gives it).
     Auto,
     /// Always stream.
     On,

@@ -591,7 +591,8 @@ impl Config {
         Ok(config)
     }
 
-    /// The defaults as TOML (what `--print-config` prints).
+    /// These settings as TOML (what `--print-config` prints: the defaults,
+    /// or the `--config` file's settings with the defaults filled in).
     pub fn to_toml(&self) -> String {
         toml::to_string_pretty(self).unwrap_or_else(|e| format!("# cannot print: {e}\n"))
     }

@@ -217,7 +217,14 @@ impl FrictionRun {
                 )
             }
         );
-        if self.final_effects.is_empty() {
+        if self.diagnosis.is_none() {
+            s.push(' ');
+            s.push_str(
+                self.diagnosis_note
+                    .as_deref()
+                    .unwrap_or("No diagnosis was run."),
+            );
+        } else if self.final_effects.is_empty() {
             s.push_str(" No further effect was added.");
         } else {
             let names: Vec<String> = self.final_effects.iter().map(|(e, _)| e.label()).collect();

@@ -64,6 +64,20 @@ pub fn process_options(
     }
 }
 
+/// What the identification does with a log's logged derivative columns,
+/// and why (`None` when the log has none): they are ignored, so that the
+/// torques and the regressor, built from θ̇, θ̈ differentiated from the
+/// angles, pass through the same zero-phase low-pass. `aras predict` uses
+/// them, checked against the angles.
+pub fn logged_derivatives_note(log: &Log) -> Option<String> {
+    (log.theta_dot.is_some() || log.theta_ddot.is_some()).then(|| {
+        "the logged dtheta/ddtheta columns are ignored: the identification differentiates the \
+         angles so that the regressor and the torques pass through the same zero-phase \
+         low-pass (`aras predict` uses logged derivatives, checked against the angles)"
+            .to_string()
+    })
+}
+
 /// Data ready for least squares (`aras_pipeline::prepare`).
 pub use aras_pipeline::prepare::Prepared;
 
@@ -261,17 +275,30 @@ pub fn identify(
     let names = model.names();
     let bnames = base.base_names();
     let keep = prepared.keep_mask(ic.min_speed, ic.reversal_reach)?;
-    let fit = keep_rows(&prepared.stacked, &keep)?;
-    let [n1, n2] = [fit.groups.counts()[0], fit.groups.counts()[1]];
+    // Counted on the mask, before the rows are taken, so a log whose joints
+    // never move gets this message rather than one about empty row groups.
+    let n = prepared.n();
+    let [n1, n2] = [0, 1].map(|j| keep[j * n..(j + 1) * n].iter().filter(|&&k| k).count());
     if n1 < base.n_base() || n2 < base.n_base() {
+        let top = prepared
+            .processed
+            .samples
+            .theta_dot
+            .each_ref()
+            .map(|v| v.iter().fold(0.0f64, |m, x| m.max(x.abs())));
         bail!(
             "only {n1} (joint 1) and {n2} (joint 2) samples are away from velocity reversals \
              (identification.min_speed = {} rad/s, widened by the filter's reach at \
-             identification.reversal_reach = {}); lower them or excite the joints more",
+             identification.reversal_reach = {}); the joints reach at most |θ̇| = {:.3} / \
+             {:.3} rad/s; log a motion that excites both joints (e.g. `aras excite`), or lower \
+             those settings",
             ic.min_speed,
-            ic.reversal_reach
+            ic.reversal_reach,
+            top[0],
+            top[1]
         );
     }
+    let fit = keep_rows(&prepared.stacked, &keep)?;
     let w_fit = base.base_regressor(fit.w.as_ref())?;
     // σ, σ% and the covariance: the HAC sandwich (`aras_ident::covariance`)
     // on the rows as fitted (scaled by 1/σ_joint for WLS).

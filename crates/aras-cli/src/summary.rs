@@ -127,6 +127,10 @@ pub struct Summary {
     pub excitation_condition_number: Option<f64>,
     /// Samples used in the fit (per joint).
     pub samples: usize,
+    /// What became of the log's logged derivative columns (`dtheta*`,
+    /// `ddtheta*`) and why; absent when the log has none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub logged_derivatives: Option<String>,
     /// Sensor noise of the simulated logs (N·m, per joint), if simulated.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub torque_noise_std_nm: Option<[f64; 2]>,

@@ -570,3 +570,184 @@ fn bad_command_line_values() {
         &["unknown key `extra.gear_backlash`"],
     );
 }
+
+/// The first `rows` rows of a simulated 0.5 Hz log (with its logged
+/// derivatives, no sidecar), each row passed through `edit` (which may
+/// drop trailing columns).
+fn simulated_log(dir: &Path, name: &str, rows: usize, edit: impl Fn(&mut Vec<f64>)) -> String {
+    let sim = dir.join("sim.csv");
+    if !sim.exists() {
+        let r = aras(&[
+            "simulate",
+            "--frequency",
+            "0.5",
+            "--out",
+            sim.to_str().unwrap(),
+            "-q",
+        ]);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    }
+    let text = std::fs::read_to_string(&sim).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut out = String::new();
+    let mut width = header.len();
+    for l in lines.take(rows) {
+        let mut v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+        edit(&mut v);
+        let f: Vec<String> = v
+            .iter()
+            .map(|x| {
+                if x.abs() > 1e12 {
+                    format!("{x:e}")
+                } else {
+                    x.to_string()
+                }
+            })
+            .collect();
+        width = f.len();
+        out += &f.join(",");
+        out.push('\n');
+    }
+    // A row cut short by `edit` drops the same trailing columns.
+    let out = format!("{}\n{out}", header[..width].join(","));
+    let p = dir.join(name);
+    std::fs::write(&p, out).unwrap();
+    p.display().to_string()
+}
+
+/// Messages that point at the cause: constant angles, a 1e300 cell, a
+/// tab-separated file, the streaming threshold of `diagnose --help`, the
+/// printed configuration, the filter's origin and the friction summary
+/// without validation logs.
+#[test]
+fn messages_point_at_the_cause() {
+    let dir = scratch("pointing");
+    let o = dir.join("o");
+    let o = o.to_str().unwrap();
+    // Joints that never move: the reason, not an empty row group.
+    let still = simulated_log(&dir, "still.csv", 3000, |v| {
+        v[1] = 2.9;
+        v[2] = 1.05;
+        v[5..9].fill(0.0);
+    });
+    let err = fails_with(
+        &["identify", "--data", &still, "--out", o, "-q"],
+        &[
+            "only 0 (joint 1) and 0 (joint 2) samples are away from velocity reversals",
+            "the joints reach at most |θ̇| = 0.000 / 0.000 rad/s",
+            "log a motion that excites both joints",
+        ],
+    );
+    assert!(!err.contains("row groups"), "{err}");
+    // A huge cell is named where it is, not as a NaN of the regressor.
+    let huge = simulated_log(&dir, "huge.csv", 3000, |v| {
+        if v[0] == 0.01 {
+            v[3] = 1e300;
+        }
+    });
+    let err = fails_with(
+        &strs(&predict_log(&huge, &dir)),
+        &["huge.csv:12:4: `tau1` value \"1e300\" is beyond ±1e12"],
+    );
+    assert!(!err.contains("NaN"), "{err}");
+    // Tabs: said so, not "required column `t` is missing".
+    let tabs = dir.join("tabs.csv");
+    let text = std::fs::read_to_string(&huge).unwrap().replace(',', "\t");
+    std::fs::write(&tabs, text).unwrap();
+    let err = fails_with(
+        &strs(&predict_log(tabs.to_str().unwrap(), &dir)),
+        &[
+            "tabs.csv:1: the header is separated by tabs",
+            "replace every tab by ','",
+        ],
+    );
+    assert!(!err.contains("is missing"), "{err}");
+    // `diagnose --help` gives its own streaming threshold only.
+    let help = String::from_utf8_lossy(&aras(&["diagnose", "--help"]).stdout).into_owned();
+    assert!(help.contains("larger than 64 MB"), "{help}");
+    assert!(!help.contains("256 MB"), "{help}");
+    // --print-config prints the given configuration.
+    let cfg = dir.join("seven.toml");
+    std::fs::write(&cfg, "[signal]\ncutoff_hz = 7.5\n").unwrap();
+    let r = aras(&[
+        "pipeline",
+        "--print-config",
+        "--config",
+        cfg.to_str().unwrap(),
+    ]);
+    let printed = String::from_utf8_lossy(&r.stdout).into_owned();
+    assert!(
+        r.status.success() && printed.contains("cutoff_hz = 7.5"),
+        "{printed}"
+    );
+    let r = aras(&["pipeline", "--print-config"]);
+    assert!(String::from_utf8_lossy(&r.stdout).contains("cutoff_hz = 10.0"));
+    // The default filter is the settings', not the user's.
+    let plain = simulated_log(&dir, "plain.csv", 3000, |v| v.truncate(5));
+    let r = aras(&strs(&predict_log(&plain, &dir)));
+    let said = String::from_utf8_lossy(&r.stdout).into_owned();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(
+        said.contains("at 10.000 Hz: a fixed cut-off from the settings, not chosen from the data"),
+        "{said}"
+    );
+    assert!(!said.contains("by the user"), "{said}");
+}
+
+/// Logged derivatives: `predict` uses them only when they are the angles'
+/// derivatives; `identify` says that it ignores them.
+#[test]
+fn logged_derivatives_are_checked_or_said_to_be_ignored() {
+    let dir = scratch("derivatives");
+    // dtheta1 in degrees per second.
+    let deg = simulated_log(&dir, "deg.csv", 3000, |v| v[5] = v[5].to_degrees());
+    fails_with(
+        &strs(&predict_log(&deg, &dir)),
+        &[
+            "deg.csv: `dtheta1` is not the derivative of `theta1`: integrated, it is 57.2",
+            "degrees per second",
+            "convert `dtheta1` to radians",
+        ],
+    );
+    // ddtheta2 of the other joint.
+    let swapped = simulated_log(&dir, "swapped.csv", 3000, |v| v[8] = v[7]);
+    fails_with(
+        &strs(&predict_log(&swapped, &dir)),
+        &["swapped.csv: `ddtheta2` is not the derivative of `dtheta2`"],
+    );
+    // Consistent columns are used.
+    let good = simulated_log(&dir, "good.csv", 3000, |_| {});
+    let r = aras(&strs(&predict_log(&good, &dir)));
+    let said = String::from_utf8_lossy(&r.stdout).into_owned();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(
+        said.contains("dtheta/ddtheta columns are used exactly as given"),
+        "{said}"
+    );
+    // identify ignores them and says so, on stderr and in summary.json.
+    let long = simulated_log(&dir, "long.csv", 8000, |_| {});
+    let out = dir.join("id");
+    let r = aras(&[
+        "identify",
+        "--data",
+        &long,
+        "--out",
+        out.to_str().unwrap(),
+        "-q",
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr).into_owned();
+    assert!(r.status.success(), "{err}");
+    assert!(
+        err.contains("note: ") && err.contains("logged dtheta/ddtheta columns are ignored"),
+        "{err}"
+    );
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    assert!(
+        v["logged_derivatives"]
+            .as_str()
+            .is_some_and(|s| s.contains("ignored")),
+        "{summary}"
+    );
+}

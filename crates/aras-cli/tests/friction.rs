@@ -210,3 +210,71 @@ fn command_writes_json_report_and_predictions() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--force"));
 }
+
+/// Without a validation log the terminal says so: no empty validation list
+/// and no "no further effect" from a diagnosis that did not run.
+#[test]
+fn command_without_validation_says_there_is_no_diagnosis() {
+    let dir = aras_testkit::Scratch::new("friction-noval");
+    let sim = JointSimulation {
+        duration: 10.0,
+        ..JointSimulation::default()
+    };
+    std::fs::write(dir.join("train.csv"), sim.run("train").log.to_csv()).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_aras"))
+        .args(["friction", "--data"])
+        .arg(dir.join("train.csv"))
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("N·m, no validation log"), "{err}");
+    assert!(!err.contains("validation []"), "{err}");
+    assert!(
+        out.contains("No diagnosis: give at least one validation log"),
+        "{out}"
+    );
+    assert!(!out.contains("No further effect"), "{out}");
+}
+
+/// A position logged in degrees and a joint that never moves are refused
+/// through the command, naming the file.
+#[test]
+fn command_refuses_degrees_and_a_still_joint() {
+    let dir = aras_testkit::Scratch::new("friction-units");
+    let log = JointSimulation {
+        duration: 5.0,
+        ..JointSimulation::default()
+    }
+    .run("train")
+    .log;
+    let mut deg = String::from("t,q,tau\n");
+    let mut still = String::from("t,q,tau\n");
+    for i in 0..log.len() {
+        deg += &format!("{},{},{}\n", log.t[i], log.q[i].to_degrees(), log.tau[i]);
+        still += &format!("{},0.4,{}\n", log.t[i], log.tau[i]);
+    }
+    std::fs::write(dir.join("deg.csv"), deg).unwrap();
+    std::fs::write(dir.join("still.csv"), still).unwrap();
+    for (file, want) in [
+        ("deg.csv", "deg.csv: angles look like degrees"),
+        ("still.csv", "the joint never moves"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_aras"))
+            .args(["friction", "-q", "--data"])
+            .arg(dir.join(file))
+            .arg("--out")
+            .arg(dir.join(format!("out-{file}")))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{file} accepted");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(err.contains(want), "{file}: {err}");
+    }
+}

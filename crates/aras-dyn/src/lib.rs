@@ -82,7 +82,7 @@ pub mod sim;
 mod task_regressor;
 mod trajectory;
 
-pub use aras_core::Inertia;
+pub use aras_core::{Inertia, Motion};
 pub use dynamics::Dynamics;
 pub use effects::{Effect, EffectId, UnknownEffect};
 pub use error::{DynError, ParamError, SimError};

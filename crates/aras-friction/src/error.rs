@@ -40,6 +40,20 @@ pub enum FrictionError {
         /// This time stamp, s.
         value: f64,
     },
+    /// The joint does not move enough for friction to be identified.
+    #[error(
+        "the joint never moves: q spans {range:.2e} rad and |dq| reaches {speed:.2e} rad/s (at least \
+         {min_travel:e} rad of travel is needed); friction is identified from motion: log a run \
+         in which the joint moves, in both directions"
+    )]
+    NoMotion {
+        /// Range of the position, rad.
+        range: f64,
+        /// Largest |velocity|, rad/s.
+        speed: f64,
+        /// The travel needed, rad.
+        min_travel: f64,
+    },
     /// Too few samples for the requested operation.
     #[error("{what}: {found} samples, at least {needed} are needed")]
     TooFewSamples {

@@ -222,6 +222,7 @@ impl<'a, M: Separable + Sync> Problem<'a, M> {
                 value,
             });
         }
+        check_motion(&motion)?;
         let p = M::coefficient_info().len() + extra.len();
         if n < p + 2 {
             return Err(FrictionError::TooFewSamples {
@@ -548,6 +549,28 @@ pub fn log_grid(lo: f64, hi: f64, count: usize) -> Vec<f64> {
 pub(crate) struct Scales {
     pub(crate) vmax: f64,
     pub(crate) range: f64,
+}
+
+/// Smallest range of the position (rad) a fit accepts: below it the joint
+/// is taken as still (the presliding lengths searched start at 1e-7 rad).
+pub const MIN_TRAVEL: f64 = 1e-6;
+
+/// Refuses a track along which the joint does not move: a position range
+/// below [`MIN_TRAVEL`] or no velocity at all.
+pub fn check_motion(motion: &Track) -> Result<(), FrictionError> {
+    let q = motion.q();
+    let range = q.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+        - q.iter().cloned().fold(f64::INFINITY, f64::min);
+    let speed = motion.dq().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if range >= MIN_TRAVEL && speed > 0.0 {
+        Ok(())
+    } else {
+        Err(FrictionError::NoMotion {
+            range: range.max(0.0),
+            speed,
+            min_travel: MIN_TRAVEL,
+        })
+    }
 }
 
 pub(crate) fn scales(motion: &Track) -> Scales {

@@ -8,6 +8,11 @@
 //! lines are skipped. Time must increase strictly; the steps may be irregular
 //! (jitter, gaps). Every defect is a [`LogError`] naming the file, line,
 //! column and value.
+//!
+//! Units are checked as the robot log reader checks them
+//! ([`aras_log::units`]): a position whose range looks like degrees is
+//! refused, and so are logged `dq` / `ddq` columns that are not the
+//! derivatives of `q` / `dq` (e.g. degrees per second, a reversed sign).
 
 use std::{fmt, io::BufRead, path::Path, str::FromStr};
 
@@ -123,6 +128,10 @@ pub enum LogError {
         /// Minimum.
         needed: usize,
     },
+    /// A column's units are wrong: degrees, or a logged derivative that is
+    /// not the derivative of its column.
+    #[error(transparent)]
+    Units(#[from] aras_log::LogError),
     /// A malformed `--columns` mapping.
     #[error("--columns {text:?}: {reason}; write e.g. t=time,q=q2,dq=dq2,tau=tau_f")]
     BadMapping {
@@ -357,6 +366,7 @@ pub fn read_joint_log_from(
     .collect();
     let need = used.iter().map(|u| u.0).max().unwrap_or(0) + 1;
     let mut cols: Vec<Vec<f64>> = vec![Vec::new(); used.len()];
+    let mut data_lines: Vec<u64> = Vec::new();
     for (i, line) in lines {
         let line = line.map_err(io)?;
         let s = line.trim();
@@ -364,6 +374,7 @@ pub fn read_joint_log_from(
             continue;
         }
         let lno = i as u64 + 1;
+        data_lines.push(lno);
         let fields: Vec<&str> = s.split(',').map(str::trim).collect();
         if fields.len() < need {
             return Err(LogError::RowLength {
@@ -419,6 +430,13 @@ pub fn read_joint_log_from(
     let tau = it.next().unwrap_or_default();
     let dq_logged = if idq.is_some() { it.next() } else { None };
     let ddq = if iddq.is_some() { it.next() } else { None };
+    check_units(
+        file,
+        columns,
+        (&t, &q, &data_lines),
+        dq_logged.as_deref(),
+        ddq.as_deref(),
+    )?;
     let dq_from_q = dq_logged.is_none();
     let dq = dq_logged.unwrap_or_else(|| derivative(&t, &q));
     Ok(JointLog {
@@ -430,6 +448,47 @@ pub fn read_joint_log_from(
         ddq,
         dq_from_q,
     })
+}
+
+/// The position in radians (not degrees, [`aras_log::units::check_angle_column`])
+/// and the logged derivatives consistent with it
+/// ([`aras_log::units::check_derivative_column`]; `ddq` against the logged
+/// `dq`, or against the derivative of `q` without one). `lines[i]` is the
+/// file line of sample `i`.
+fn check_units(
+    file: &str,
+    columns: &ColumnMap,
+    (t, q, lines): (&[f64], &[f64], &[u64]),
+    dq: Option<&[f64]>,
+    ddq: Option<&[f64]>,
+) -> Result<(), LogError> {
+    use aras_log::units::{check_angle_column, check_derivative_column};
+    let (mut lo, mut hi, mut top, mut at) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64, 0);
+    for (i, &v) in q.iter().enumerate() {
+        lo = lo.min(v);
+        hi = hi.max(v);
+        if v.abs() > top {
+            top = v.abs();
+            at = i;
+        }
+    }
+    let line = lines.get(at).copied().unwrap_or(0);
+    check_angle_column(file, &columns.q, [lo, hi, top], line)?;
+    let from_q;
+    let dq = match dq {
+        Some(dq) => {
+            check_derivative_column(file, (&columns.dq, dq), (&columns.q, q), t)?;
+            dq
+        }
+        None => {
+            from_q = derivative(t, q);
+            &from_q
+        }
+    };
+    if let Some(ddq) = ddq {
+        check_derivative_column(file, (&columns.ddq, ddq), (&columns.dq, dq), t)?;
+    }
+    Ok(())
 }
 
 /// Derivative of samples `y(t)` on an irregular grid: at interior points the
@@ -489,6 +548,43 @@ mod tests {
         assert!(!log.dq_from_q);
         assert!((log.dq[3] - log.t[3].cos()).abs() < 1e-12);
         assert!(log.ddq.is_none());
+    }
+
+    /// `t, q, dq, tau` of a sine, `q` and `dq` scaled by `kq`, `kv`.
+    fn sine(kq: f64, kv: f64) -> String {
+        let mut s = String::from("t,q,dq,tau\n");
+        for i in 0..400 {
+            let t = i as f64 * 0.005;
+            let (q, dq) = (0.8 * (2.0 * t).sin(), 1.6 * (2.0 * t).cos());
+            s += &format!("{t},{},{},{}\n", kq * q, kv * dq, 0.1 * dq.signum());
+        }
+        s
+    }
+
+    #[test]
+    fn units_are_checked_like_the_robot_logs() {
+        let deg = 180.0 / std::f64::consts::PI;
+        assert!(read(&sine(1.0, 1.0), &ColumnMap::default()).is_ok());
+        // Degrees: the position spans 92°, beyond 3π "radians".
+        let e = read(&sine(deg, deg), &ColumnMap::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("x.csv: angles look like degrees (max |q| = 45.8)"),
+            "{e}"
+        );
+        assert!(e.contains("convert to radians"), "{e}");
+        // A rate in degrees per second beside radians: the column, the ratio, the fix.
+        let e = read(&sine(1.0, deg), &ColumnMap::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`dq` is not the derivative of `q`"), "{e}");
+        assert!(e.contains("57.2"), "{e}");
+        assert!(e.contains("degrees per second"), "{e}");
+        let e = read(&sine(1.0, -1.0), &ColumnMap::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("sign is reversed"), "{e}");
     }
 
     #[test]

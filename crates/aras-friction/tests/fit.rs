@@ -129,3 +129,26 @@ fn a_missing_joint_log_keeps_the_io_error_as_source() {
     assert_eq!(io_source_kind(&e), std::io::ErrorKind::NotFound);
     assert_source_not_repeated(&e);
 }
+
+#[test]
+fn a_joint_that_never_moves_is_refused_not_a_panic() {
+    let t: Vec<f64> = (0..200).map(|i| i as f64 * 0.01).collect();
+    // Still, up to encoder-level jitter far below the travel needed.
+    let q: Vec<f64> = (0..200).map(|i| 0.3 + 1e-9 * (i % 3) as f64).collect();
+    let dq = vec![0.0; 200];
+    let tau: Vec<f64> = (0..200).map(|i| 0.01 * (i % 5) as f64).collect();
+    let m = aras_friction::Track::new(&t, &q, &dq).unwrap();
+    let s = aras_friction::fit::FitSettings::default();
+    for e in [
+        aras_friction::fit::fit_coulomb_viscous(&m, &tau, &s).map(|_| ()),
+        aras_friction::fit::fit_stribeck(&m, &tau, &s).map(|_| ()),
+        aras_friction::fit::fit_dahl(&m, &tau, &s).map(|_| ()),
+    ] {
+        let e = e.unwrap_err().to_string();
+        assert!(
+            e.contains("the joint never moves: q spans 2.00e-9 rad"),
+            "{e}"
+        );
+        assert!(e.contains("log a run in which the joint moves"), "{e}");
+    }
+}

@@ -530,27 +530,13 @@ impl Checks {
             });
         }
         if check_degrees {
-            let limit = 3.0 * std::f64::consts::PI;
             for (c, a) in self.angles.iter().enumerate() {
-                if a.max_abs > limit || a.max - a.min > limit {
-                    let name = format!("theta{}", c + 1);
-                    // Degrees of a robot joint stay within a couple of turns.
-                    return Err(if a.max_abs <= 720.0 {
-                        LogError::Degrees {
-                            file: file.into(),
-                            name,
-                            max: a.max_abs,
-                            line: a.line_of_max_abs,
-                        }
-                    } else {
-                        LogError::ImplausibleAngle {
-                            file: file.into(),
-                            name,
-                            max: a.max_abs,
-                            line: a.line_of_max_abs,
-                        }
-                    });
-                }
+                crate::units::check_angle_column(
+                    file,
+                    &format!("theta{}", c + 1),
+                    [a.min, a.max, a.max_abs],
+                    a.line_of_max_abs,
+                )?;
             }
         }
         if let Some(w) = self.worst

@@ -57,6 +57,17 @@ pub enum LogError {
         /// Line of the header.
         line: u64,
     },
+    /// The header is separated by tabs.
+    #[error(
+        "{file}:{line}: the header is separated by tabs but aras logs are comma-separated: \
+         replace every tab by ','"
+    )]
+    TabSeparated {
+        /// File name.
+        file: String,
+        /// Line of the header.
+        line: u64,
+    },
     /// A header field is empty.
     #[error(
         "{file}:{line}:{column}: column {column} of the header has no name: name it or remove the empty field"
@@ -161,6 +172,25 @@ pub enum LogError {
         /// The text found.
         text: String,
     },
+    /// A value is finite but too large to be a measurement.
+    #[error(
+        "{file}:{line}:{column}: `{name}` value {text:?} is beyond ±{limit:e}, too large to be a \
+         measurement (a corrupt cell?): drop or repair the row"
+    )]
+    OutOfRange {
+        /// File name.
+        file: String,
+        /// Line number.
+        line: u64,
+        /// 1-based column.
+        column: usize,
+        /// Column name.
+        name: String,
+        /// The text found.
+        text: String,
+        /// The largest magnitude accepted.
+        limit: f64,
+    },
     /// Time does not strictly increase.
     #[error(
         "{file}:{line}:{column}: time does not increase: t = {t} s follows t = {previous} s; rows \
@@ -259,6 +289,23 @@ pub enum LogError {
         max: f64,
         /// Line of that value.
         line: u64,
+    },
+    /// A logged derivative column is not the derivative of its column.
+    #[error(
+        "{file}: `{name}` is not the derivative of `{of}`: integrated, it is {ratio:.4}× the \
+         change of `{of}` (1 expected); {hint}"
+    )]
+    InconsistentDerivative {
+        /// File name.
+        file: String,
+        /// The derivative column.
+        name: String,
+        /// The column it should be the derivative of.
+        of: String,
+        /// Least-squares ratio of the logged to the column's own derivative.
+        ratio: f64,
+        /// What the ratio suggests and how to fix it.
+        hint: String,
     },
     /// Angle columns hold values that are neither radians nor degrees.
     #[error(

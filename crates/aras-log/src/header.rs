@@ -172,6 +172,12 @@ impl Layout {
                 line,
             });
         }
+        if header.contains('\t') && !header.contains(',') {
+            return Err(LogError::TabSeparated {
+                file: file.into(),
+                line,
+            });
+        }
         let names: Vec<String> = header.split(',').map(clean).collect();
         let mut column_of = [0usize; SLOTS];
         let mut extra = Vec::new();

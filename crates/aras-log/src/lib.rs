@@ -39,6 +39,7 @@ mod header;
 mod number;
 mod reader;
 mod sidecar;
+pub mod units;
 mod writer;
 
 use std::io::Read;
@@ -56,7 +57,7 @@ pub use glitch::{
     TORQUE_FLOOR, apply_glitches, find_glitches,
 };
 pub use header::ColumnNames;
-pub use reader::{Columns, LogReader, LogReport, LogSummary, RowLines, Timing};
+pub use reader::{Columns, LogReader, LogReport, LogSummary, MAX_MAGNITUDE, RowLines, Timing};
 pub use sidecar::{Excitation, FORMAT, FoundSidecar, Sensors, Sidecar, find_sidecar};
 pub use writer::{new_temp_file, sidecar_path, write_atomic, write_log};
 

@@ -733,6 +733,12 @@ fn trim(mut b: &[u8]) -> &[u8] {
     b
 }
 
+/// Largest magnitude of a logged value: beyond it a cell is corrupt (no
+/// time in seconds, angle, torque, current, count or derivative of a robot
+/// reaches 10¹²), and such values would overflow the sums of squares of the
+/// identification to infinity far from the cell that caused it.
+pub const MAX_MAGNITUDE: f64 = 1e12;
+
 /// Parses the used fields of one data row into `vals`.
 #[inline]
 fn parse_row(
@@ -753,7 +759,17 @@ fn parse_row(
         };
         let f = trim(field);
         match parse_f64(f) {
-            Some(v) if v.is_finite() => vals[slot] = v,
+            Some(v) if v.abs() <= MAX_MAGNITUDE => vals[slot] = v,
+            Some(v) if v.is_finite() => {
+                return Err(LogError::OutOfRange {
+                    file: file.into(),
+                    line,
+                    column: j + 1,
+                    name: NAMES[slot].into(),
+                    text: String::from_utf8_lossy(f).into_owned(),
+                    limit: MAX_MAGNITUDE,
+                });
+            }
             Some(_) => {
                 return Err(LogError::NonFinite {
                     file: file.into(),

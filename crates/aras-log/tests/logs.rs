@@ -65,6 +65,20 @@ const CORPUS: &[(&str, &[&str])] = &[
         ],
     ),
     (
+        "tab_separated.csv",
+        &[
+            ":1: the header is separated by tabs",
+            "replace every tab by ','",
+        ],
+    ),
+    (
+        "huge_value.csv",
+        &[
+            ":7:4: `tau1` value \"1e300\" is beyond ±1e12",
+            "drop or repair the row",
+        ],
+    ),
+    (
         "unpaired_derivative.csv",
         &["column `dtheta1` is present but `dtheta2` is not"],
     ),

@@ -308,6 +308,31 @@ fn finds_cogging() {
     named_first("cogging", 10.0);
 }
 
+/// A pure 12-cycle cogging (first harmonic only, 0.01 N·m): 6 cycles of
+/// order 2 hold the same 12-cycle harmonic and fit it equally well, but the
+/// name is the fundamental present, 12 cycles of order 1 (half the
+/// parameters), with the hidden amplitudes within 10 %.
+#[test]
+fn names_the_fundamental_of_a_pure_cogging() {
+    let mut p = Params::aras_diamond();
+    p.extra.cogging = Some(Cogging {
+        cycles_per_rev: 12.0,
+        sin: [vec![0.01], vec![0.0]],
+        cos: [vec![0.0], vec![0.01]],
+    });
+    let d = run(&p, 0, "cogging_order_1");
+    let s = d.steps.first().expect("nothing found");
+    assert_eq!(
+        s.label, "cogging(12 cycles/rev, order 1)",
+        "{}",
+        d.conclusion
+    );
+    for (name, want) in [("Cs1_1", 0.01), ("Cc2_1", 0.01)] {
+        let q = s.parameters.iter().find(|q| q.name == name).expect(name);
+        assert!((q.value - want).abs() <= 0.1 * want, "{name}: {}", q.value);
+    }
+}
+
 #[test]
 fn finds_quadratic_damping() {
     named_first("quadratic_damping", 2.0);

@@ -185,4 +185,12 @@ pub enum ProcessError {
         #[source]
         source: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// The log's derivative columns, asked to be used, contradict its
+    /// angles ([`aras_log::units::check_derivative_column`]).
+    #[error("the logged derivatives cannot be used")]
+    LoggedDerivatives {
+        /// Which column, its ratio and the fix.
+        #[source]
+        source: aras_log::LogError,
+    },
 }

@@ -413,6 +413,9 @@ pub fn process(
         .then_some(log.theta_dot.as_ref())
         .flatten();
     let logged_acc = logged_vel.and(log.theta_ddot.as_ref());
+    if let Some(v) = logged_vel {
+        check_logged_derivatives(log, v, logged_acc)?;
+    }
     if !opts.use_logged_derivatives && (log.theta_dot.is_some() || log.theta_ddot.is_some()) {
         notes.push(
             "logged derivative columns ignored; θ̇, θ̈ differentiated from θ \
@@ -1003,7 +1006,9 @@ fn describe(
         )
     } else if let Some(s) = spec {
         let why = match (asked, spectrum) {
-            (Bandwidth::Fixed(_), _) => "fixed by the user".to_string(),
+            (Bandwidth::Fixed(_), _) => {
+                "a fixed cut-off from the settings, not chosen from the data".to_string()
+            }
             (_, Some(c)) => format!(
                 "the angles' motion reaches {:.2} / {:.2} Hz above the noise floor \
                  (≈ {:.2e} / {:.2e} rad RMS per sample); cut-off {CUTOFF_MARGIN}× that{declined}",
@@ -1138,6 +1143,39 @@ fn model_coordinates(s: &mut Samples, c: &impl Coordinates) -> Result<(), Proces
             s.x[j][i] = task.pos[j];
             s.x_dot[j][i] = task.vel[j];
             s.x_ddot[j][i] = task.acc[j];
+        }
+    }
+    Ok(())
+}
+
+/// Refuses logged derivative columns that are not the derivatives of the
+/// logged angles (θ̇ against θ, θ̈ against the logged θ̇): a rate in degrees
+/// per second, a reversed sign or another column would otherwise be used as
+/// given.
+fn check_logged_derivatives(
+    log: &Log,
+    vel: &[Vec<f64>; 2],
+    acc: Option<&[Vec<f64>; 2]>,
+) -> Result<(), ProcessError> {
+    let wrap = |source| ProcessError::LoggedDerivatives { source };
+    for j in 0..2 {
+        let [theta, dtheta, ddtheta] =
+            ["theta", "dtheta", "ddtheta"].map(|c| format!("{c}{}", j + 1));
+        aras_log::units::check_derivative_column(
+            &log.name,
+            (&dtheta, &vel[j]),
+            (&theta, &log.theta[j]),
+            &log.t,
+        )
+        .map_err(wrap)?;
+        if let Some(a) = acc {
+            aras_log::units::check_derivative_column(
+                &log.name,
+                (&ddtheta, &a[j]),
+                (&dtheta, &vel[j]),
+                &log.t,
+            )
+            .map_err(wrap)?;
         }
     }
     Ok(())

@@ -11,7 +11,7 @@ use aras_ident::BaseParameters;
 use aras_log::Log;
 
 use crate::config::Config;
-use crate::identify::{identify, prepare, process_options};
+use crate::identify::{identify, logged_derivatives_note, prepare, process_options};
 use crate::output::OutDir;
 use crate::plausibility;
 use crate::report::run::{RunData, build};
@@ -63,6 +63,13 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
     let model = input.model;
     let geometry = input.nominal.geometry()?;
     let options = process_options(cfg, input.period, false);
+    // Said where the user gave the log (the pipeline's simulated log has
+    // its derivative columns as a record of the truth).
+    if input.command == "identify"
+        && let Some(note) = logged_derivatives_note(input.log)
+    {
+        eprintln!("note: {}: {note}", input.log.name);
+    }
     let prepared = stages.run("process log + regressor", |_| {
         prepare(
             input.log,
@@ -181,6 +188,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         base_parameters: id.base.n_base(),
         excitation_condition_number: input.design.map(|d| d.condition_number),
         samples: prepared.n(),
+        logged_derivatives: logged_derivatives_note(input.log),
         torque_noise_std_nm: input.noise,
         fitness: fitness.clone(),
         pd_check: pd.clone(),

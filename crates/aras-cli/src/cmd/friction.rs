@@ -75,11 +75,14 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
                 .iter()
                 .map(|x| format!("{:.4}", x.rms))
                 .collect();
+            let validation = if v.is_empty() {
+                "no validation log".to_string()
+            } else {
+                format!("validation {} N·m", v.join(", "))
+            };
             eprintln!(
-                "{:<16} RMS train {:.4} N·m, validation [{}]",
-                m.name,
-                m.train.rms,
-                v.join(", ")
+                "{:<16} RMS train {:.4} N·m, {validation}",
+                m.name, m.train.rms
             );
         }
     }

@@ -246,6 +246,7 @@ pub fn fit_and_write(
         base_parameters: base.n_base(),
         excitation_condition_number: None,
         samples: r.samples_used,
+        logged_derivatives: None,
         torque_noise_std_nm: None,
         fitness,
         pd_check: pd,

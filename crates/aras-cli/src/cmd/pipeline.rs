@@ -5,7 +5,6 @@ use aras_log::{ReadOptions, read_log};
 
 use crate::cli::PipelineArgs;
 use crate::cmd::fit::{self, FitInput};
-use crate::config::Config;
 use crate::identify::base_parameters;
 use crate::output::OutDir;
 use crate::robot::{nominal, paper_model};
@@ -14,11 +13,11 @@ use crate::stages::Stages;
 
 /// Runs the pipeline; prints the paper-vs-ours table on stdout.
 pub fn run(args: &PipelineArgs) -> Result<()> {
+    let loaded = super::load_config(&args.common)?;
     if args.print_config {
-        print!("{}", Config::default().to_toml());
+        print!("{}", loaded.config.to_toml());
         return Ok(());
     }
-    let loaded = super::load_config(&args.common)?;
     let mut cfg = loaded.config.clone();
     if let Some(s) = args.seed {
         cfg.trajectory.seed = s;

@@ -238,7 +238,8 @@ pub struct CandidateGrid {
     /// 0.2–2 rad/s (motor cogging of 6 per motor revolution through the
     /// 10:1 capstan is 60 per joint revolution).
     pub cogging_cycles: Vec<f64>,
-    /// Cogging harmonics (1–16, default 2).
+    /// Cogging harmonics (1–16, default 2). Each cycle count is tried with
+    /// its fundamental alone and with this many harmonics.
     pub cogging_order: usize,
     /// Torque-against-angle shifts in samples (both signs). Default ±1, 2,
     /// 3, 5, 8, 12, 20 samples (1–20 ms at 1 kHz: amplifier and bus
@@ -279,12 +280,27 @@ impl CandidateGrid {
                         .map(|&v_s| eff(Effect::StribeckFriction { v_s })),
                 ),
                 Ok(EffectId::PassiveJointViscous) => out.push(eff(Effect::PassiveJointViscous)),
-                Ok(EffectId::Cogging) => out.extend(self.cogging_cycles.iter().map(|&c| {
-                    eff(Effect::Cogging {
-                        cycles_per_rev: c,
-                        order: self.cogging_order,
-                    })
-                })),
+                // Each cycle count with its fundamental alone and with
+                // `cogging_order` harmonics: c cycles of order 2 hold the
+                // 2c harmonic, so a pure 2c-cycle cogging is fitted as well
+                // by both; the order-1 2c candidate does it with half the
+                // parameters and wins the ΔBIC, so the name is the
+                // fundamental actually present.
+                Ok(EffectId::Cogging) => {
+                    for &c in &self.cogging_cycles {
+                        let orders: &[usize] = if self.cogging_order > 1 {
+                            &[1, self.cogging_order]
+                        } else {
+                            &[self.cogging_order]
+                        };
+                        out.extend(orders.iter().map(|&order| {
+                            eff(Effect::Cogging {
+                                cycles_per_rev: c,
+                                order,
+                            })
+                        }));
+                    }
+                }
                 Ok(EffectId::QuadraticDamping) => out.push(eff(Effect::QuadraticDamping)),
                 Ok(EffectId::RigidLinks | EffectId::Friction | EffectId::Elasticity) => {}
                 Err(_) => out.extend(self.delays.iter().map(|&samples| Candidate::TimeDelay {

@@ -271,6 +271,7 @@ pub fn identify_log_with_progress(
             if n == 0 {
                 break;
             }
+            check_chunk_derivatives(&name, &chunk)?;
             for v in x.iter_mut().chain(&mut xd).chain(&mut xdd) {
                 v.resize(n, 0.0);
             }
@@ -394,6 +395,33 @@ pub fn identify_log_with_progress(
         periods: out.periods,
         log: report,
     })
+}
+
+/// The logged derivatives of a chunk checked against its angles, as the
+/// in-memory processing checks them
+/// ([`aras_log::units::check_derivative_column`]).
+fn check_chunk_derivatives(name: &str, chunk: &Columns) -> Result<(), IdentError> {
+    use aras_log::units::check_derivative_column;
+    for j in 0..2 {
+        let [theta, dtheta, ddtheta] =
+            ["theta", "dtheta", "ddtheta"].map(|c| format!("{c}{}", j + 1));
+        check_derivative_column(
+            name,
+            (&dtheta, &chunk.theta_dot[j]),
+            (&theta, &chunk.theta[j]),
+            &chunk.t,
+        )
+        .and_then(|()| {
+            check_derivative_column(
+                name,
+                (&ddtheta, &chunk.theta_ddot[j]),
+                (&dtheta, &chunk.theta_dot[j]),
+                &chunk.t,
+            )
+        })
+        .map_err(|e| sig("the logged derivatives cannot be used", e))?;
+    }
+    Ok(())
 }
 
 /// The period a log is averaged over (the options', else the sidecar's;
