@@ -168,7 +168,7 @@ pub struct LogArgs {
     #[arg(long, value_enum, value_name = "UNIT")]
     pub time_unit: Option<TimeUnitArg>,
     /// What to do with isolated glitches, samples far off their neighbours
-    /// (default `refuse`, naming their lines; config `log.glitches`).
+    /// (default `warn`, naming their lines; config `log.glitches`).
     #[arg(long, value_enum, value_name = "ACTION")]
     pub glitches: Option<GlitchArg>,
     /// Resample a jittered or gappy log onto a uniform grid at its nominal

@@ -239,7 +239,7 @@ pub struct LogConfig {
     /// whether t is in seconds.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time_unit: Option<aras_log::TimeUnit>,
-    /// Isolated glitches: `"refuse"` (default), `"warn"`, `"drop"`,
+    /// Isolated glitches: `"warn"` (default), `"refuse"`, `"drop"`,
     /// `"repair"`, `"off"`.
     pub glitches: aras_log::GlitchAction,
     /// Residual (robust standard deviations) beyond which an isolated

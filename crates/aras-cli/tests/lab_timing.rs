@@ -197,7 +197,11 @@ fn a_bad_sample_is_refused_by_line_then_repaired_or_dropped_on_request() {
     let tau: f64 = bad[5000][4].parse().unwrap();
     bad[5000][4] = format!("{}", tau + 5.0);
     let log = write(dir.path(), "glitch.csv", &h, &bad);
+    // The default warns by line and goes on.
     let (ok, err) = predict(dir.path(), &log, &[]);
+    assert!(ok, "{err}");
+    assert!(err.contains("line 801, column 2: theta1 = "), "{err}");
+    let (ok, err) = predict(dir.path(), &log, &["--glitches", "refuse"]);
     assert!(!ok);
     for e in [
         "2 isolated glitch(es)",
@@ -217,6 +221,15 @@ fn a_bad_sample_is_refused_by_line_then_repaired_or_dropped_on_request() {
     std::fs::write(&cfg, "[log]\ntorque_limit = [0.05, 0.05]\n").unwrap();
     let clean = write(dir.path(), "clean.csv", &h, &rows);
     let (ok, err) = predict(dir.path(), &clean, &["--config", cfg.to_str().unwrap()]);
+    assert!(
+        ok && err.contains("beyond the stated torque limit"),
+        "{err}"
+    );
+    let (ok, err) = predict(
+        dir.path(),
+        &clean,
+        &["--config", cfg.to_str().unwrap(), "--glitches", "refuse"],
+    );
     assert!(
         !ok && err.contains("beyond the stated torque limit"),
         "{err}"

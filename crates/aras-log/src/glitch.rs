@@ -51,11 +51,13 @@ const LISTED: usize = 10;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum GlitchAction {
-    /// Refuse the log, naming the lines (default: a silent repair would
-    /// hide a sensor fault).
-    #[default]
+    /// Refuse the log, naming the lines.
     Refuse,
-    /// Keep the samples as they are, with a warning.
+    /// Keep the samples as they are, with a warning naming the lines and
+    /// the other actions (default: a silent repair would hide a sensor
+    /// fault, and a refusal would block healthy logs whose torque chatters
+    /// at reversals, which a neighbour test cannot tell from a glitch).
+    #[default]
     Warn,
     /// Remove the rows (the time grid then has holes: the processing
     /// interpolates onto a uniform grid).
@@ -85,7 +87,7 @@ impl GlitchAction {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GlitchOptions {
-    /// What to do (default [`GlitchAction::Refuse`]).
+    /// What to do (default [`GlitchAction::Warn`]).
     pub action: GlitchAction,
     /// Residual, in robust standard deviations of the channel, beyond which
     /// an isolated sample is a glitch (default
@@ -103,7 +105,7 @@ pub struct GlitchOptions {
 impl Default for GlitchOptions {
     fn default() -> Self {
         Self {
-            action: GlitchAction::Refuse,
+            action: GlitchAction::Warn,
             threshold: DEFAULT_GLITCH_THRESHOLD,
             torque_limit: None,
             limit_factor: 1.5,

@@ -9,13 +9,13 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::ReadOptions;
+use super::TimeUnit;
 use super::checks::{Checks, StepDeviation, Warning};
 use super::header::{
     AngleSource, CURRENT, DDTHETA, DTHETA, ENC, Layout, NAMES, SLOTS, T, TAU_, THETA, TorqueSource,
 };
 use super::number::parse_f64;
 use super::sidecar::Sidecar;
-use super::TimeUnit;
 use crate::error::LogError;
 
 /// Rows of a log in SI units, structure-of-arrays.

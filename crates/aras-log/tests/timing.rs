@@ -212,7 +212,11 @@ fn one_bad_encoder_sample_is_refused_by_line_and_column() {
     // The neighbours' cubic gives the true value to within an encoder count.
     assert!((g[0].expected - log0.theta[0][799]).abs() < 1.6e-4);
 
-    let e = apply_glitches(log.clone(), &GlitchOptions::default()).unwrap_err();
+    let refuse = GlitchOptions {
+        action: GlitchAction::Refuse,
+        ..Default::default()
+    };
+    let e = apply_glitches(log.clone(), &refuse).unwrap_err();
     let msg = e.to_string();
     assert!(msg.contains("line 801, column 2: theta1 = "), "{msg}");
     assert!(msg.contains("--glitches repair"), "{msg}");

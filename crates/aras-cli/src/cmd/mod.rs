@@ -90,7 +90,9 @@ pub fn load_log(path: &Path, args: &crate::cli::LogArgs, cfg: &Config) -> Result
 
 /// The reader's options for a streamed log. The streaming reader keeps no
 /// whole log, so it can neither look for glitches nor resample: asking for
-/// either is refused rather than ignored.
+/// either (`--resample`, `--glitches refuse|drop|repair`) is refused rather
+/// than ignored, and with the default (`warn`) a note says the log is not
+/// checked.
 pub fn streaming_read_options(
     args: &crate::cli::LogArgs,
     cfg: &Config,
@@ -101,11 +103,17 @@ pub fn streaming_read_options(
             "--resample (log.resample) needs the whole log in memory: use --streaming off"
         );
     }
+    if s.glitches == aras_log::GlitchAction::Warn {
+        eprintln!(
+            "note: streamed logs are not checked for isolated glitches; run with \
+             --streaming off to check them",
+        );
+    }
     if matches!(
         s.glitches,
         aras_log::GlitchAction::Drop
             | aras_log::GlitchAction::Repair
-            | aras_log::GlitchAction::Warn
+            | aras_log::GlitchAction::Refuse
     ) {
         anyhow::bail!(
             "--glitches {} (log.glitches) needs the whole log in memory: use --streaming off \
