@@ -66,10 +66,11 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
                 geometry,
                 ..StreamingOptions::default()
             };
-            let read = super::identify_streaming::rows_read(path);
-            let mut progress = |rows: u64| {
-                bar.set_message(format!("read + process {name} (streamed): {}", read(rows)));
-            };
+            let mut progress = super::identify_streaming::track_rows(
+                bar,
+                path,
+                format!("read + process {name} (streamed)"),
+            );
             return spool_log(path, &opts, &out.path(""), &mut progress)
                 .with_context(|| format!("processing {}", path.display()));
         }
