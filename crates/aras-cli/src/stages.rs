@@ -112,7 +112,9 @@ pub fn progress_text(done: u64, total: Option<u64>, unit: &str, elapsed: Duratio
     );
     if done > 0 && done < total {
         let left = elapsed.as_secs_f64() * (total - done) as f64 / done as f64;
-        s.push_str(&format!(", ≈ {} left", duration_text(left)));
+        let d = duration_text(left);
+        let about = if d.starts_with('<') { "" } else { "≈ " };
+        s.push_str(&format!(", {about}{d} left"));
     }
     s
 }
