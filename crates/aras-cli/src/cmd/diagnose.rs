@@ -5,14 +5,14 @@
 //! `diagnosis.json`, `diagnosis.md`, `diagnosis.html` and the plots.
 
 use anyhow::{Context, Result};
-use aras_pipeline::diagnose::residual::Profile;
+use aras_pipeline::diagnose::residual::{ResidualAnalysis, RowSample, SampledRow};
 use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, RefinementStatus, diagnose};
 
 use crate::cli::{DiagnoseArgs, LogArgs};
 use crate::identify::process_options;
 use crate::output::OutDir;
 use crate::report::Report;
-use crate::report::plots::{Series, lines};
+use crate::report::plots::{Binned, Series, StepPanel, binned_means, lines, scatter_binned, steps};
 use crate::robot::{effect_spec, nominal, paper_model};
 use crate::stages::Stages;
 use aras_pipeline::streaming::{StreamingOptions, spool_log};
@@ -65,10 +65,11 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
                 geometry,
                 ..StreamingOptions::default()
             };
-            let read = super::identify_streaming::rows_read(path);
-            let mut progress = |rows: u64| {
-                bar.set_message(format!("read + process {name} (streamed): {}", read(rows)));
-            };
+            let mut progress = super::identify_streaming::track_rows(
+                bar,
+                path,
+                format!("read + process {name} (streamed)"),
+            );
             return spool_log(path, &opts, &out.path(""), &mut progress)
                 .with_context(|| format!("processing {}", path.display()));
         }
@@ -289,34 +290,11 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
                 .join(", ")
         ));
     }
-    let steps: Vec<f64> = d.fitness.iter().map(|f| f.step as f64).collect();
-    let ys: Vec<(String, Vec<f64>)> = (0..names.len())
-        .flat_map(|s| (0..2).map(move |j| (s, j)))
-        .map(|(s, j)| {
-            (
-                format!("{} τ{}", names[s], j + 1),
-                d.fitness.iter().map(|f| f.fitness[s][j]).collect(),
-            )
-        })
-        .collect();
-    let series: Vec<Series> = ys
-        .iter()
-        .map(|(n, y)| Series {
-            name: n.clone(),
-            x: &steps,
-            y,
-        })
-        .collect();
     r.figure(
         "fitness_steps.svg",
-        "Validation fitness per joint after each step (0 = starting model).",
-        lines(
-            "Validation fitness per step",
-            "step",
-            "fitness (78) %",
-            &series,
-            100,
-        )?,
+        "Validation fitness per joint after each step (start = starting model; one panel per \
+         validation set and joint, each axis zoomed to its values).",
+        fitness_steps(d, &names)?,
     );
 
     r.heading(2, "Residual before and after");
@@ -368,49 +346,80 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
             }
         }
         r.list(items);
+        let friction = friction_found(d, b, a);
         for j in 1..=2 {
-            let (Some(pb), Some(pa)) = (b.velocity_profile(j), a.velocity_profile(j)) else {
+            let (Some(sb), Some(sa)) = (sample(b, j), sample(a, j)) else {
                 continue;
             };
-            let (xb, yb) = centres(pb);
-            let (xa, ya) = centres(pa);
-            let (xl, yl) = a
-                .left_out
-                .iter()
-                .find(|l| l.joint == j)
-                .map_or((Vec::new(), Vec::new()), |l| centres(&l.profile));
-            let file = format!("residual_{}_j{j}.svg", sanitize(&b.dataset));
-            r.figure(
-                file,
-                format!(
-                    "`{}`, joint {j}: mean residual binned against velocity, before and after, \
-                     and after on the rows left out near velocity reversals.",
-                    b.dataset
-                ),
-                lines(
-                    &format!("{} joint {j}: residual vs velocity", b.dataset),
-                    "θ̇ (rad/s)",
-                    "mean residual (N·m)",
-                    &[
-                        Series {
-                            name: "before".into(),
-                            x: &xb,
-                            y: &yb,
-                        },
-                        Series {
-                            name: "after".into(),
-                            x: &xa,
-                            y: &ya,
-                        },
-                        Series {
-                            name: "after, rows left out".into(),
-                            x: &xl,
-                            y: &yl,
-                        },
-                    ],
-                    200,
-                )?,
-            );
+            let ds = sanitize(&b.dataset);
+            for (axis, symbol, unit) in [
+                (ScatterAxis::Velocity, "θ̇", "rad/s"),
+                (ScatterAxis::Position, "θ", "rad"),
+            ] {
+                let fitted = |s: &RowSample, fitted: bool| -> Vec<(f64, f64)> {
+                    s.rows
+                        .iter()
+                        .filter(|r| r.fitted == fitted)
+                        .map(|r| (axis.of(r), r.residual))
+                        .collect()
+                };
+                let (before, after, left) = (fitted(sb, true), fitted(sa, true), fitted(sa, false));
+                let mut groups = vec![
+                    Binned {
+                        name: "before, binned mean ± sd".into(),
+                        bins: binned_means(&before, SCATTER_BINS),
+                        points: Vec::new(),
+                    },
+                    Binned {
+                        name: "after, binned mean ± sd (points: rows)".into(),
+                        bins: binned_means(&after, SCATTER_BINS),
+                        points: after,
+                    },
+                ];
+                if axis == ScatterAxis::Velocity && !left.is_empty() {
+                    groups.push(Binned {
+                        name: "after, rows left out near reversals".into(),
+                        bins: binned_means(&left, SCATTER_BINS / 2),
+                        points: left,
+                    });
+                }
+                let name = axis.name();
+                r.figure(
+                    format!("residual_{name}_{ds}_j{j}.svg"),
+                    format!(
+                        "`{}`, joint {j}: residual against {name}, a sample of {} rows (one in \
+                         {}) after the final model, with the binned mean ± standard deviation \
+                         before and after ({SCATTER_BINS} bins of equal count).",
+                        b.dataset,
+                        sa.rows.len(),
+                        sa.stride
+                    ),
+                    scatter_binned(
+                        &format!("{} joint {j}: residual vs {name}", b.dataset),
+                        &format!("{symbol} ({unit})"),
+                        "residual (N·m)",
+                        &groups,
+                    )?,
+                );
+            }
+            if friction.contains(&j) {
+                r.figure(
+                    format!("hysteresis_{ds}_j{j}.svg"),
+                    format!(
+                        "`{}`, joint {j}: residual against velocity near the reversals, before \
+                         the added effects, split by the sign of the acceleration: two branches \
+                         apart are a loop (friction or backlash that depends on the direction \
+                         of travel); after, the same rows.",
+                        b.dataset
+                    ),
+                    scatter_binned(
+                        &format!("{} joint {j}: hysteresis near reversals", b.dataset),
+                        "θ̇ (rad/s)",
+                        "residual (N·m)",
+                        &hysteresis(sb, sa),
+                    )?,
+                );
+            }
         }
     }
 
@@ -550,8 +559,150 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
     Ok(r)
 }
 
-fn centres(p: &Profile) -> (Vec<f64>, Vec<f64>) {
-    p.bins.iter().map(|b| (0.5 * (b.lo + b.hi), b.mean)).unzip()
+/// The step plot: one panel per validation set and joint, one point per
+/// step named by the effect it added.
+pub fn fitness_steps(d: &Diagnosis, names: &[&str]) -> Result<String> {
+    let step_names: Vec<String> = d
+        .fitness
+        .iter()
+        .map(
+            |f| match f.step.checked_sub(1).and_then(|k| d.steps.get(k)) {
+                Some(s) => format!("+ {}", s.id),
+                None => "start".into(),
+            },
+        )
+        .collect();
+    let panels: Vec<StepPanel> = names
+        .iter()
+        .enumerate()
+        .flat_map(|(s, n)| {
+            (0..2).map(move |j| StepPanel {
+                title: format!("{n}, τ{}", j + 1),
+                values: d
+                    .fitness
+                    .iter()
+                    .map(|f| f.fitness.get(s).map_or(f64::NAN, |v| v[j]))
+                    .collect(),
+                ceiling: None,
+            })
+        })
+        .collect();
+    steps(
+        "Validation fitness per step",
+        "fitness (78) %",
+        &step_names,
+        &panels,
+    )
+}
+
+/// Bins of the residual scatter figures.
+const SCATTER_BINS: usize = 16;
+
+/// Effects whose evidence is a friction law or a direction-dependent
+/// torque: the diagnosis then draws the hysteresis figure.
+const FRICTION_EFFECTS: [&str; 3] = [
+    "coulomb_asymmetry",
+    "stribeck_friction",
+    "passive_joint_viscous",
+];
+
+/// What the residual scatter figures put on x.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ScatterAxis {
+    Velocity,
+    Position,
+}
+
+impl ScatterAxis {
+    fn of(self, r: &SampledRow) -> f64 {
+        match self {
+            ScatterAxis::Velocity => r.theta_dot,
+            ScatterAxis::Position => r.theta,
+        }
+    }
+    fn name(self) -> &'static str {
+        match self {
+            ScatterAxis::Velocity => "velocity",
+            ScatterAxis::Position => "position",
+        }
+    }
+}
+
+fn sample(a: &ResidualAnalysis, joint: usize) -> Option<&RowSample> {
+    a.samples
+        .iter()
+        .find(|s| s.joint == joint && !s.rows.is_empty())
+}
+
+/// The joints with friction findings: a friction-like effect added, or a
+/// systematic residual near the velocity reversals (the jump at reversal,
+/// or the rows left out there) before or after.
+fn friction_found(d: &Diagnosis, b: &ResidualAnalysis, a: &ResidualAnalysis) -> Vec<usize> {
+    let any_step = d
+        .steps
+        .iter()
+        .any(|s| FRICTION_EFFECTS.contains(&s.id.as_str()));
+    (1..=2)
+        .filter(|&j| {
+            any_step
+                || [b, a].iter().any(|x| {
+                    x.findings
+                        .iter()
+                        .any(|f| f.joint == j && f.systematic && f.text.contains("reversal"))
+                        || x.left_out
+                            .iter()
+                            .any(|l| l.joint == j && !l.findings.is_empty())
+                })
+        })
+        .collect()
+}
+
+/// Velocity below which a row is near a reversal for the hysteresis
+/// figure: the fastest row left out near a reversal, or four times the
+/// rest band when none was left out.
+fn reversal_band(s: &RowSample) -> f64 {
+    let left = s
+        .rows
+        .iter()
+        .filter(|r| !r.fitted)
+        .map(|r| r.theta_dot.abs())
+        .fold(0.0, f64::max);
+    if left > 0.0 {
+        left
+    } else {
+        4.0 * aras_pipeline::diagnose::residual::REST_VELOCITY
+    }
+}
+
+/// The hysteresis figure's groups: the rows near reversals before (points
+/// and binned means) and after (binned means), split by the sign of θ̈.
+fn hysteresis(before: &RowSample, after: &RowSample) -> Vec<Binned> {
+    let band = reversal_band(before);
+    let branch = |s: &RowSample, rising: bool| -> Vec<(f64, f64)> {
+        s.rows
+            .iter()
+            .filter(|r| r.theta_dot.abs() <= band && (r.theta_ddot > 0.0) == rising)
+            .map(|r| (r.theta_dot, r.residual))
+            .collect()
+    };
+    let mut groups = Vec::new();
+    for (tag, rising) in [("θ̈ > 0", true), ("θ̈ ≤ 0", false)] {
+        let pts = branch(before, rising);
+        groups.push(Binned {
+            name: format!("before, {tag}"),
+            bins: binned_means(&pts, 8),
+            points: pts,
+        });
+    }
+    for (tag, rising) in [("θ̈ > 0", true), ("θ̈ ≤ 0", false)] {
+        let pts = branch(after, rising);
+        groups.push(Binned {
+            name: format!("after, {tag}"),
+            bins: binned_means(&pts, 8),
+            points: Vec::new(),
+        });
+    }
+    groups
 }
 
 fn sanitize(s: &str) -> String {

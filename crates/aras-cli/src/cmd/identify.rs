@@ -17,6 +17,18 @@ pub fn sidecar_truth(sidecar: &aras_log::Sidecar) -> Option<aras_dyn::Params> {
     aras_dyn::Params::from_value(sidecar.truth.as_ref()?.get("params")?).ok()
 }
 
+/// What the intro of an identification report says about the log's
+/// origin: a simulated log's truth gives parameter errors; a measured
+/// log has neither truth nor noise ceiling.
+pub fn truth_clause(truth: bool) -> &'static str {
+    if truth {
+        "; the sidecar holds the simulation's truth, so parameter errors are reported"
+    } else {
+        "; a measured log (its sidecar holds no simulation truth): the fitness is against the \
+         measured torques, with no noise ceiling and no parameter errors"
+    }
+}
+
 /// Log size above which `--streaming auto` streams: 256 MB, about 2 M rows
 /// of a 9-column log (≈ 130 bytes per row), whose in-memory stacked
 /// regressor alone would take ≈ 1.3 GB.
@@ -108,11 +120,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         log.summary.duration_s,
         log.summary.sample_rate_hz,
         extras.delay_clause(),
-        if truth.is_some() {
-            "; the sidecar holds the simulation's truth, so parameter errors are reported"
-        } else {
-            ""
-        }
+        truth_clause(truth.is_some())
     );
     let summary = fit::run(
         FitInput {
@@ -174,11 +182,7 @@ fn run_streaming(args: &IdentifyArgs, extras: &Extras) -> Result<()> {
         args.data.display(),
         r.samples_read,
         extras.delay_clause(),
-        if truth.is_some() {
-            "; the sidecar holds the simulation's truth, so parameter errors are reported"
-        } else {
-            ""
-        }
+        truth_clause(truth.is_some())
     );
     let summary = fit_and_write(
         &r,

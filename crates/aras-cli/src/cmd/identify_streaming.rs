@@ -53,8 +53,8 @@ pub fn options(args: &IdentifyArgs, cfg: &Config, nominal: &Params) -> Result<St
 
 /// Streams the log; reruns with the QR accumulation if the normal
 /// equations' accuracy check fails (a second pass, said on stderr). The
-/// stage's spinner shows the rows read and, from the file size, roughly
-/// how far along it is (an hour at 10 kHz takes minutes).
+/// stage's bar shows the rows read of the total estimated from the file
+/// size and the time left (an hour at 10 kHz takes minutes).
 pub fn stream(
     data: &Path,
     model: &Model,
@@ -62,14 +62,7 @@ pub fn stream(
     opts: &StreamingOptions,
     bar: &ProgressBar,
 ) -> Result<StreamingResult> {
-    let read = rows_read(data);
-    let show = |pass: &str| {
-        let bar = bar.clone();
-        let pass = pass.to_string();
-        move |rows: u64| {
-            bar.set_message(format!("stream log → least squares{pass}: {}", read(rows)));
-        }
-    };
+    let show = |pass: &str| track_rows(bar, data, format!("stream log → least squares{pass}"));
     let r = identify_log_with_progress(data, model, base, opts, &mut show(""))
         .with_context(|| format!("streaming identification of {}", data.display()))?;
     match r.gram_check {
@@ -90,16 +83,25 @@ pub fn stream(
     }
 }
 
-/// "`rows` rows (≈ P %)" for a progress message while the log at `path`
-/// streams, the share from the rows it is estimated to hold (left out if
-/// they cannot be estimated).
-pub fn rows_read(path: &Path) -> impl Fn(u64) -> String + Copy {
+/// A progress callback for a stage reading the rows of `path`: the
+/// stage's bar becomes a bar over the rows estimated from the file size
+/// and shows `what`, the rows read of that total and the time left
+/// ([`crate::stages::progress_text`]); the time counts from this call.
+pub fn track_rows(bar: &ProgressBar, path: &Path, what: String) -> impl FnMut(u64) + use<> {
     let total = estimated_rows(path);
+    if let Some(t) = total {
+        crate::stages::determinate(bar, t);
+    }
+    let start = std::time::Instant::now();
+    let bar = bar.clone();
     move |rows| {
-        let pct = total
-            .map(|t| format!(" (≈ {:.0} %)", (100.0 * rows as f64 / t as f64).min(100.0)))
-            .unwrap_or_default();
-        format!("{rows} rows{pct}")
+        if total.is_some() {
+            bar.set_position(rows);
+        }
+        bar.set_message(format!(
+            "{what}: {}",
+            crate::stages::progress_text(rows, total, "rows", start.elapsed())
+        ));
     }
 }
 

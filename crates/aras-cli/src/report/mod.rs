@@ -150,9 +150,9 @@ impl Report {
             "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
              <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\
              <title>{}</title><style>{}</style></head><body><main>\n<h1>{}</h1>\n",
-            esc(&self.title),
+            esc(&plots::plain_title(&self.title)),
             CSS,
-            esc(&self.title)
+            inline(&self.title)
         );
         for b in &self.blocks {
             match b {
@@ -254,7 +254,7 @@ mod tests {
 
     #[test]
     fn renders_both_formats() {
-        let mut r = Report::new("T <1>");
+        let mut r = Report::new("T <1> `x`");
         r.heading(1, "Fit")
             .paragraph("a `b` **c**")
             .table(&["x", "y"], vec![vec!["1".into(), "2".into()]]);
@@ -263,7 +263,14 @@ mod tests {
         assert!(md.contains("| x | y |\n|---|---|\n| 1 | 2 |"));
         assert!(md.contains("![cap](f.svg)"));
         let html = r.to_html();
-        assert!(html.contains("<title>T &lt;1&gt;</title>"));
+        assert!(
+            html.contains("<title>T &lt;1&gt; x</title>"),
+            "no markup in the page title"
+        );
+        assert!(
+            html.contains("<h1>T &lt;1&gt; <code>x</code></h1>"),
+            "markup rendered in headings"
+        );
         assert!(html.contains("a <code>b</code> <b>c</b>"));
         assert!(html.contains("<figure><svg></svg>"));
         assert_eq!(r.figures().count(), 1);

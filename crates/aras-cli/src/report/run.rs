@@ -65,6 +65,53 @@ fn g(v: f64) -> String {
     }
 }
 
+/// What the summary table means for a simulated log: the noise ceiling
+/// and the paper's values next to ours.
+pub const SIMULATED_FITNESS: &str = "Fitness (78) in %, `100 (1 − ‖τ − τ̂‖/‖τ − mean τ‖)`, on \
+     the processed (period-averaged, zero-phase filtered) torques: OLS and SDP columns on \
+     **every** sample; the \"kept\" columns only on the rows away from velocity reversals (the \
+     rows the fit uses; `identification.min_speed`, widened by the filter's reach), where \
+     (49)'s Coulomb model holds. **Ceiling**: the fitness of a perfect prediction against the \
+     same noisy log: the torque the simulated motors really produced, before the sensor noise \
+     (no model, no parameters, no processing; on the kept rows it is processed exactly like \
+     the measured torques). What separates it from 100 % is the sensor noise alone; what \
+     separates ours from it is everything else: the identification, the processing \
+     (derivatives from quantised angles) and, on every row, the paper's sign-Coulomb friction \
+     (49) against the simulated robot's smooth friction at velocity reversals. It is known \
+     only for logs simulated in the same run. **Paper**: the published values measured on the \
+     *real* robot (§7: about 75 % OLS / 78 % constrained on the excitation; Table 2 on (79)), \
+     a different experiment with the real robot's unmodelled effects and sensors: shown for \
+     orientation, not comparable with a simulation.";
+
+/// What the summary table means for a log scored without a noise ceiling
+/// (a measured log, or a simulated one whose noise-free torques this run
+/// does not have); [`measured_fitness`] adds what the sidecar tells.
+const MEASURED_FITNESS: &str = "Fitness (78) in %, `100 (1 − ‖τ − τ̂‖/‖τ − mean τ‖)`, of \
+     the identified model against this log's processed (period-averaged, zero-phase \
+     filtered) measured torques: OLS and SDP columns on **every** sample; the \"kept\" columns \
+     only on the rows away from velocity reversals (the rows the fit uses; \
+     `identification.min_speed`, widened by the filter's reach), where (49)'s Coulomb model \
+     holds.";
+
+/// [`MEASURED_FITNESS`] and what the log's origin allows: with the
+/// simulation's truth (`truth`) parameter errors but no ceiling; without
+/// it, neither.
+pub fn measured_fitness(truth: bool) -> String {
+    let origin = if truth {
+        "The sidecar holds the simulation's truth (parameter errors below) but this run does \
+         not have the noise-free torques, so there is no noise ceiling"
+    } else {
+        "The log is measured (its sidecar holds no simulation truth), so there is no noise \
+         ceiling and no parameter error"
+    };
+    format!(
+        "{MEASURED_FITNESS} {origin}: what separates the fitness from 100 % is sensor noise and \
+         model error together; `aras diagnose` shows which effects the model misses. \
+         **Paper**: the published values measured on the real robot (§7), another experiment: \
+         shown for orientation."
+    )
+}
+
 /// Builds the report.
 pub fn build(d: &RunData) -> Result<Report> {
     let mut r = Report::new(&d.title);
@@ -90,6 +137,8 @@ pub fn build(d: &RunData) -> Result<Report> {
             "Summary: fitness on the log"
         },
     );
+    // The ceiling columns and their explanation only where a ceiling is
+    // known: a measured log has none.
     let mut rows = Vec::new();
     for x in d.fitness {
         let pair = |v: Option<[f64; 2]>, digits: usize| {
@@ -100,23 +149,37 @@ pub fn build(d: &RunData) -> Result<Report> {
         let c = pair(x.noise_ceiling, 2);
         let ck = pair(x.noise_ceiling_kept, 2);
         let p = pair(x.paper_real_robot, 1);
-        rows.push(vec![
-            x.dataset.clone(),
-            f(x.ols[0], 2),
-            f(x.sdp[0], 2),
-            c[0].clone(),
-            f(x.ols[1], 2),
-            f(x.sdp[1], 2),
-            c[1].clone(),
-            f(x.ols_kept[0], 2),
-            ck[0].clone(),
-            f(x.ols_kept[1], 2),
-            ck[1].clone(),
-            p[0].clone(),
-            p[1].clone(),
-        ]);
+        rows.push(if simulated {
+            vec![
+                x.dataset.clone(),
+                f(x.ols[0], 2),
+                f(x.sdp[0], 2),
+                c[0].clone(),
+                f(x.ols[1], 2),
+                f(x.sdp[1], 2),
+                c[1].clone(),
+                f(x.ols_kept[0], 2),
+                ck[0].clone(),
+                f(x.ols_kept[1], 2),
+                ck[1].clone(),
+                p[0].clone(),
+                p[1].clone(),
+            ]
+        } else {
+            vec![
+                x.dataset.clone(),
+                f(x.ols[0], 2),
+                f(x.sdp[0], 2),
+                f(x.ols[1], 2),
+                f(x.sdp[1], 2),
+                f(x.ols_kept[0], 2),
+                f(x.ols_kept[1], 2),
+                p[0].clone(),
+                p[1].clone(),
+            ]
+        });
     }
-    r.table(
+    let header: &[&str] = if simulated {
         &[
             "dataset",
             "OLS τ1",
@@ -131,26 +194,26 @@ pub fn build(d: &RunData) -> Result<Report> {
             "kept ceiling τ2",
             "paper τ1 (real robot)",
             "paper τ2 (real robot)",
-        ],
-        rows,
-    );
-    r.paragraph(
-        "Fitness (78) in %, `100 (1 − ‖τ − τ̂‖/‖τ − mean τ‖)`, on the processed (period-averaged, \
-         zero-phase filtered) torques: OLS and SDP columns on **every** sample; the \"kept\" \
-         columns only on the rows away from velocity reversals (the rows the fit uses; \
-         `identification.min_speed`, widened by the filter's reach), where (49)'s Coulomb \
-         model holds. **Ceiling**: the fitness of a perfect prediction against the same noisy \
-         log: the torque the simulated motors really produced, before the sensor noise (no \
-         model, no parameters, no processing; on the kept rows it is processed exactly like \
-         the measured torques). What separates it from 100 % is the sensor noise alone; what \
-         separates ours from it is everything else: the identification, the processing \
-         (derivatives from quantised angles) and, on every row, the paper's sign-Coulomb \
-         friction (49) against the simulated robot's smooth friction at velocity reversals. \
-         It is known only for logs simulated in the same run. **Paper**: the published values measured on the *real* robot \
-         (§7: about 75 % OLS / 78 % constrained on the excitation; Table 2 on (79)), a \
-         different experiment with the real robot's unmodelled effects and sensors: shown \
-         for orientation, not comparable with a simulation.",
-    );
+        ]
+    } else {
+        &[
+            "dataset",
+            "OLS τ1",
+            "SDP τ1",
+            "OLS τ2",
+            "SDP τ2",
+            "kept OLS τ1",
+            "kept OLS τ2",
+            "paper τ1 (real robot)",
+            "paper τ2 (real robot)",
+        ]
+    };
+    r.table(header, rows);
+    r.paragraph(if simulated {
+        SIMULATED_FITNESS.to_string()
+    } else {
+        measured_fitness(d.errors.is_some())
+    });
 
     if let Some(des) = d.design {
         r.heading(1, "Excitation trajectory (74)–(77)");

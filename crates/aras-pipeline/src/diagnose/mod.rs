@@ -61,7 +61,8 @@
 //! set (width ≈ 170 with the default grid; each joint's rows carry only the
 //! columns that are not zero on them). The residual analysis summarises
 //! each validation set row by row in record order into fixed-size
-//! histograms, lag sums, Welch spectra and a decimated trace (at most
+//! histograms, lag sums, Welch spectra, a decimated trace and an evenly
+//! strided sample of at most [`SAMPLE_ROWS`] rows for the figures (at most
 //! ≈ 8 MB per joint, whatever the set's length).
 //! Passes over the training log: one for the selection, two per refined
 //! setting, one for the physically consistent fit. Deterministic: fixed
@@ -81,8 +82,8 @@ pub use candidates::{
 };
 pub use data::Dataset;
 pub use residual::{
-    Finding, LeftOut, ResidualAnalysis, ResidualSpectrum, SpectrumBand, TRACE_POINTS, Trace,
-    Whiteness,
+    Finding, LeftOut, ResidualAnalysis, ResidualSpectrum, RowSample, SAMPLE_ROWS, SampledRow,
+    SpectrumBand, TRACE_POINTS, Trace, Whiteness,
 };
 pub use select::{
     CandidateScore, ConsistentFit, DiagnoseOptions, Diagnosis, FitnessRow, NamedValue, Refinement,

@@ -145,6 +145,79 @@ pub struct ResidualAnalysis {
     pub spectra: Vec<ResidualSpectrum>,
     /// Per joint, the residual (every row) against time, decimated.
     pub traces: Vec<Trace>,
+    /// Per joint, a bounded sample of rows (for scatter figures; not
+    /// written to `diagnosis.json`).
+    #[serde(skip)]
+    pub samples: Vec<RowSample>,
+}
+
+/// One sampled row of a joint: its motion and residual.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SampledRow {
+    /// Time (s).
+    pub t: f64,
+    /// Joint angle θ (rad).
+    pub theta: f64,
+    /// Joint rate θ̇ (rad/s).
+    pub theta_dot: f64,
+    /// Joint acceleration θ̈ (rad/s²).
+    pub theta_ddot: f64,
+    /// Model residual (N·m).
+    pub residual: f64,
+    /// Whether fits use the row (false: left out near a velocity reversal).
+    pub fitted: bool,
+}
+
+/// A joint's rows sampled evenly over the record, at most [`SAMPLE_ROWS`]
+/// of them: every `stride`-th row, the stride doubling (and every other
+/// kept row dropped) when the sample fills, so a record of any length
+/// keeps between half and all of [`SAMPLE_ROWS`]. Deterministic.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RowSample {
+    /// Joint (1 or 2).
+    pub joint: usize,
+    /// One row kept out of `stride`.
+    pub stride: usize,
+    /// The rows kept, in record order.
+    pub rows: Vec<SampledRow>,
+}
+
+/// Most rows of a [`RowSample`].
+pub const SAMPLE_ROWS: usize = 2000;
+
+/// Builds a [`RowSample`] row by row in bounded memory.
+#[derive(Debug, Default)]
+struct SampleBuilder {
+    seen: usize,
+    stride: usize,
+    rows: Vec<SampledRow>,
+}
+
+impl SampleBuilder {
+    fn push(&mut self, row: SampledRow) {
+        if self.stride == 0 {
+            self.stride = 1;
+        }
+        if self.seen.is_multiple_of(self.stride) {
+            if self.rows.len() == SAMPLE_ROWS {
+                let kept: Vec<SampledRow> = self.rows.iter().copied().step_by(2).collect();
+                self.rows = kept;
+                self.stride *= 2;
+            }
+            if self.seen.is_multiple_of(self.stride) {
+                self.rows.push(row);
+            }
+        }
+        self.seen += 1;
+    }
+
+    fn finish(self, joint: usize) -> RowSample {
+        RowSample {
+            joint,
+            stride: self.stride.max(1),
+            rows: self.rows,
+        }
+    }
 }
 
 /// A joint's residual against time, decimated to at most [`TRACE_POINTS`]
@@ -380,6 +453,7 @@ struct JointSummary {
     residual_spectrum: SpectrumAccumulator,
     torque_spectrum: SpectrumAccumulator,
     trace: TraceBuilder,
+    sample: SampleBuilder,
 }
 
 /// One data set's residual analysis, built row by row in record order
@@ -441,6 +515,7 @@ impl ResidualSummary {
                 residual_spectrum: spectrum()?,
                 torque_spectrum: spectrum()?,
                 trace: TraceBuilder::default(),
+                sample: SampleBuilder::default(),
             })
         };
         Ok(Self {
@@ -472,6 +547,14 @@ impl ResidualSummary {
         j.all_rows.push(row.measured, row.measured - r);
         let [theta, theta_dot, theta_ddot, t] = row.motion;
         j.trace.push(t, r);
+        j.sample.push(SampledRow {
+            t,
+            theta,
+            theta_dot,
+            theta_ddot,
+            residual: r,
+            fitted: row.fitted,
+        });
         if row.fitted {
             if j.correlation.len().is_multiple_of(self.step) {
                 j.decimated.push(r);
@@ -500,6 +583,7 @@ impl ResidualSummary {
             left_out: Vec::new(),
             spectra: Vec::new(),
             traces: Vec::new(),
+            samples: Vec::new(),
         };
         let dof_ratio = self.dof_ratio;
         for (g, j) in self.joints.into_iter().enumerate() {
@@ -583,6 +667,7 @@ impl ResidualSummary {
                         .map_err(|e| aras_ident::IdentError::external("the residual's spectrum", e))
                 };
             a.traces.push(j.trace.finish(joint));
+            a.samples.push(j.sample.finish(joint));
             a.spectra.push(spectrum_analysis(
                 joint,
                 &spectrum(j.residual_spectrum)?,
@@ -771,6 +856,41 @@ fn spectrum_analysis(
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    fn sampled(n: usize) -> RowSample {
+        let mut b = SampleBuilder::default();
+        for i in 0..n {
+            b.push(SampledRow {
+                t: i as f64,
+                ..SampledRow::default()
+            });
+        }
+        b.finish(1)
+    }
+
+    /// The row sample keeps every row of a short record, and of a long one
+    /// between half and all of `SAMPLE_ROWS`, evenly strided from the first.
+    #[test]
+    fn row_sample_is_bounded_and_even() {
+        let short = sampled(500);
+        assert_eq!((short.rows.len(), short.stride), (500, 1));
+        for n in [SAMPLE_ROWS, SAMPLE_ROWS + 1, 10_007, 123_456] {
+            let s = sampled(n);
+            assert!(
+                s.rows.len() >= SAMPLE_ROWS / 2 && s.rows.len() <= SAMPLE_ROWS,
+                "{n}: {} rows",
+                s.rows.len()
+            );
+            for (k, r) in s.rows.iter().enumerate() {
+                assert_eq!(r.t, (k * s.stride) as f64, "{n}: row {k}");
+            }
+            assert_eq!(
+                s.rows.len(),
+                n.div_ceil(s.stride),
+                "{n}: every stride-th row"
+            );
+        }
+    }
 
     proptest! {
         /// Every velocity lands in one bin whose edges hold it, the rest
