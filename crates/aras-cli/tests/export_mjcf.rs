@@ -101,7 +101,7 @@ fn exports_refuses_foreign_files_and_inconsistent_links() {
     ]);
     assert!(!r.status.success());
     assert!(
-        stderr(&r).contains("link 1 cannot be a MuJoCo body"),
+        stderr(&r).contains("link 1 is not physically consistent"),
         "{}",
         stderr(&r)
     );

@@ -733,10 +733,11 @@ fn trim(mut b: &[u8]) -> &[u8] {
     b
 }
 
-/// Largest magnitude of a logged value: beyond it a cell is corrupt (no
-/// time in seconds, angle, torque, current, count or derivative of a robot
+/// Largest magnitude of a logged value other than time: beyond it a cell is
+/// corrupt (no angle, torque, current, count or derivative of a robot
 /// reaches 10¹²), and such values would overflow the sums of squares of the
-/// identification to infinity far from the cell that caused it.
+/// identification to infinity far from the cell that caused it. Time stamps
+/// may be clock epochs in ms or ns (≈ 1.7·10¹², 1.7·10¹⁸): only finite.
 pub const MAX_MAGNITUDE: f64 = 1e12;
 
 /// Parses the used fields of one data row into `vals`.
@@ -759,7 +760,9 @@ fn parse_row(
         };
         let f = trim(field);
         match parse_f64(f) {
-            Some(v) if v.abs() <= MAX_MAGNITUDE => vals[slot] = v,
+            // Time may be a clock epoch in ms or ns (1.7e12, 1.7e18): its
+            // offset is removed later; the magnitude limit is for values.
+            Some(v) if v.abs() <= MAX_MAGNITUDE || (slot == T && v.is_finite()) => vals[slot] = v,
             Some(v) if v.is_finite() => {
                 return Err(LogError::OutOfRange {
                     file: file.into(),
