@@ -419,6 +419,144 @@ pub fn read_bag_joint(
     })
 }
 
+/// One message of a bag, with its channel's topic, schema and encoding.
+struct BagMessage {
+    topic: String,
+    schema: String,
+    encoding: String,
+    log_time: u64,
+    data: Vec<u8>,
+}
+
+/// Every message of `bytes`, read with MCAP's sans-I/O reader with a record
+/// length limit (the file's size) and chunk CRCs checked: the crate's own
+/// message stream sets no limit inside chunks, and the garbage of a damaged
+/// compressed chunk can hold a record length of 10¹⁸ bytes, which it would
+/// try to allocate (an abort, not an error).
+fn messages(bytes: &[u8]) -> mcap::McapResult<Vec<BagMessage>> {
+    use mcap::records::Record;
+    use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+    use std::collections::HashMap;
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_record_length_limit(bytes.len())
+            .with_validate_chunk_crcs(true),
+    );
+    let mut rest = bytes;
+    let mut schemas: HashMap<u16, String> = HashMap::new();
+    let mut channels: HashMap<u16, (String, u16, String)> = HashMap::new();
+    let mut out = Vec::new();
+    while let Some(event) = reader.next_event() {
+        match event? {
+            LinearReadEvent::ReadRequest(need) => {
+                let n = need.min(rest.len());
+                reader.insert(n).copy_from_slice(&rest[..n]);
+                reader.notify_read(n);
+                rest = &rest[n..];
+            }
+            LinearReadEvent::Record { data, opcode } => match mcap::parse_record(opcode, data)? {
+                Record::Schema { header, .. } => {
+                    schemas.insert(header.id, header.name);
+                }
+                Record::Channel(c) => {
+                    channels.insert(c.id, (c.topic, c.schema_id, c.message_encoding));
+                }
+                Record::Message { header, data } => {
+                    let Some((topic, schema_id, encoding)) = channels.get(&header.channel_id)
+                    else {
+                        return Err(mcap::McapError::UnknownChannel(
+                            header.sequence,
+                            header.channel_id,
+                        ));
+                    };
+                    out.push(BagMessage {
+                        topic: topic.clone(),
+                        schema: schemas
+                            .get(schema_id)
+                            .cloned()
+                            .unwrap_or_else(|| "(no schema)".into()),
+                        encoding: encoding.clone(),
+                        log_time: header.log_time,
+                        data: data.into_owned(),
+                    });
+                }
+                _ => {}
+            },
+        }
+    }
+    Ok(out)
+}
+
+/// Largest ratio of a chunk's declared uncompressed size to its compressed
+/// records: far beyond what zstd or lz4 give on joint states (single
+/// digits), and what keeps a damaged size field from being allocated.
+const MAX_CHUNK_RATIO: u64 = 1024;
+
+/// Checks every chunk's declared uncompressed size before the MCAP reader
+/// allocates it: a damaged size field (e.g. 1.7e18 bytes) would abort the
+/// process instead of giving an error. The record walk ends at the first
+/// record the file cuts short (after checking it, if it is a chunk); the
+/// reader then reports the damage itself.
+fn check_chunk_sizes(bytes: &[u8]) -> Result<(), String> {
+    const CHUNK: u8 = 0x06;
+    let u64_at = |b: &[u8], at: usize| -> Option<u64> {
+        b.get(at..at + 8)
+            .map(|s| u64::from_le_bytes(s.try_into().expect("8 bytes")))
+    };
+    let u32_at = |b: &[u8], at: usize| -> Option<u32> {
+        b.get(at..at + 4)
+            .map(|s| u32::from_le_bytes(s.try_into().expect("4 bytes")))
+    };
+    let mut at = MCAP_MAGIC.len();
+    while let (Some(&op), Some(len)) = (bytes.get(at), u64_at(bytes, at + 1)) {
+        let start = at + 9;
+        // A record cut short by the end of the file is still read from its
+        // header on (a chunk's sizes come first): its sizes are checked on
+        // what is there, and the walk ends with it.
+        let whole = usize::try_from(len)
+            .ok()
+            .and_then(|l| bytes.get(start..start.checked_add(l)?));
+        let cut = whole.is_none();
+        let body = whole.unwrap_or_else(|| bytes.get(start..).unwrap_or_default());
+        if op == CHUNK {
+            // start time, end time, uncompressed size, crc, compression, records.
+            let damaged = |what: String| {
+                Err(format!(
+                    "the chunk at byte {at} {what}: the file is damaged (re-record or re-copy \
+                     the bag)"
+                ))
+            };
+            let (Some(declared), Some(name_len)) = (u64_at(body, 16), u32_at(body, 28)) else {
+                return damaged("is cut short".into());
+            };
+            let records_at = 32 + name_len as usize;
+            let Some(records) = u64_at(body, records_at) else {
+                return damaged("is cut short".into());
+            };
+            let room = (body.len() - (records_at + 8).min(body.len())) as u64;
+            if records > room {
+                return damaged(format!(
+                    "declares {records} bytes of records but holds {room}"
+                ));
+            }
+            if declared
+                > records
+                    .saturating_mul(MAX_CHUNK_RATIO)
+                    .saturating_add(1 << 20)
+            {
+                return damaged(format!(
+                    "declares {declared} uncompressed bytes for {records} compressed ones"
+                ));
+            }
+        }
+        if cut {
+            return Ok(());
+        }
+        at = start + body.len();
+    }
+    Ok(())
+}
+
 #[cfg(feature = "bags")]
 /// Reads the `wanted` joints of a `JointState` topic of the MCAP file
 /// `bytes`; `file` names it in messages.
@@ -433,21 +571,19 @@ pub(crate) fn read_joints(
         file: file.into(),
         reason: e.to_string(),
     };
+    check_chunk_sizes(bytes).map_err(|reason| LogError::Bag {
+        file: file.into(),
+        reason,
+    })?;
     // Pass 1: the topics and their message counts.
     let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
-    for m in mcap::MessageStream::new(bytes).map_err(bag_err)? {
-        let m = m.map_err(bag_err)?;
-        let info = topics
-            .entry(m.channel.topic.clone())
-            .or_insert_with(|| TopicInfo {
-                schema: m
-                    .channel
-                    .schema
-                    .as_ref()
-                    .map_or_else(|| "(no schema)".into(), |s| s.name.clone()),
-                encoding: m.channel.message_encoding.clone(),
-                messages: 0,
-            });
+    let all = messages(bytes).map_err(bag_err)?;
+    for m in &all {
+        let info = topics.entry(m.topic.clone()).or_insert_with(|| TopicInfo {
+            schema: m.schema.clone(),
+            encoding: m.encoding.clone(),
+            messages: 0,
+        });
         info.messages += 1;
     }
     let topic_err = |problem: String| LogError::BagTopic {
@@ -511,9 +647,8 @@ pub(crate) fn read_joints(
     let mut latency: Option<[i64; 2]> = None;
     let mut extra: Vec<String> = Vec::new();
     let mut number = 0u64;
-    for msg in mcap::MessageStream::new(bytes).map_err(bag_err)? {
-        let msg = msg.map_err(bag_err)?;
-        if msg.channel.topic != topic {
+    for msg in &all {
+        if msg.topic != topic {
             continue;
         }
         number += 1;

@@ -428,3 +428,31 @@ proptest::proptest! {
         }
     }
 }
+
+/// A chunk whose uncompressed-size field is damaged (1.7e18 bytes) is an
+/// error naming the chunk, not an allocation that aborts the process.
+#[test]
+fn a_damaged_chunk_size_is_an_error_not_an_abort() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/bags/clean.mcap");
+    let mut bytes = std::fs::read(&path).unwrap();
+    // Walk the records (opcode, u64 length, body) to the first chunk.
+    let mut at = 8;
+    let chunk = loop {
+        let op = bytes[at];
+        let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+        if op == 0x06 {
+            break at;
+        }
+        at += 9 + len;
+    };
+    // Body: start time, end time, then the uncompressed size.
+    let size = chunk + 9 + 16;
+    bytes[size..size + 8].copy_from_slice(&1_704_067_201_986_331_401u64.to_le_bytes());
+    let dir = std::env::temp_dir().join(format!("aras-bag-chunk-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("damaged.mcap");
+    std::fs::write(&bad, &bytes).unwrap();
+    let e = aras_log::read_log(&bad, &aras_log::ReadOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("declares"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
