@@ -295,7 +295,7 @@ pub(super) fn unregister(path: &Path) {
 /// Removes this run's staging directories and lock files: for the binary's
 /// Ctrl-C / `SIGTERM` handler, before it exits. An output already swapped
 /// into place is not touched; one being swapped is left to the next run's
-/// [`sweep_leftovers`].
+/// `sweep_leftovers`.
 pub fn clean_up_interrupted() {
     let live = match LIVE.lock() {
         Ok(mut v) => std::mem::take(&mut *v),

@@ -93,7 +93,7 @@ const MEASURED_FITNESS: &str = "Fitness (78) in %, `100 (1 − ‖τ − τ̂‖
      `identification.min_speed`, widened by the filter's reach), where (49)'s Coulomb model \
      holds.";
 
-/// [`MEASURED_FITNESS`] and what the log's origin allows: with the
+/// `MEASURED_FITNESS` and what the log's origin allows: with the
 /// simulation's truth (`truth`) parameter errors but no ceiling; without
 /// it, neither.
 pub fn measured_fitness(truth: bool) -> String {
