@@ -5,9 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
 
-use super::lock::{
-    Leftover, OutputLock, register, sweep_leftovers, unique_sibling, unregister, unsaved_path,
-};
+use super::lock::{OutputLock, Staging, sweep_leftovers, unique_sibling};
 use super::manifest::{MANIFEST, Manifest, check_replaceable, remove_listed};
 use super::{canonical, warn};
 
@@ -66,10 +64,9 @@ pub(super) fn absolute(target: &Path) -> Result<PathBuf> {
 /// A run's output directory, staged until [`OutDir::commit`].
 pub struct OutDir {
     target: PathBuf,
-    staging: PathBuf,
+    staging: Staging,
     force: bool,
-    committed: bool,
-    // Held until the directory is in place (dropped after `committed`).
+    // Held until the directory is in place (dropped after the staging).
     _lock: OutputLock,
 }
 
@@ -122,14 +119,11 @@ impl OutDir {
             }
             check_replaceable(&target)?;
         }
-        let staging = unique_sibling(&target, "staging");
-        fs::create_dir(&staging).with_context(|| format!("cannot create {}", staging.display()))?;
-        register(&staging, Leftover::Dir);
+        let staging = Staging::create(&target)?;
         Ok(Self {
             target,
             staging,
             force,
-            committed: false,
             _lock: lock,
         })
     }
@@ -141,7 +135,7 @@ impl OutDir {
 
     /// Path of `name` inside the staging directory (where files go until commit).
     pub fn path(&self, name: &str) -> PathBuf {
-        self.staging.join(name)
+        self.staging.dir().join(name)
     }
 
     /// Writes a file into the run's directory.
@@ -173,8 +167,8 @@ impl OutDir {
     /// place they are kept in a visible `NAME.unsaved-PID` beside the
     /// target, which the error names.
     pub fn commit(mut self) -> Result<PathBuf> {
-        let manifest = Manifest::of_dir(&self.staging)?;
-        manifest.write_to(&self.staging.join(MANIFEST))?;
+        let manifest = Manifest::of_dir(self.staging.dir())?;
+        manifest.write_to(&self.staging.dir().join(MANIFEST))?;
         let old = if is_occupied(&self.target) {
             if !self.force {
                 let e = anyhow!(
@@ -191,9 +185,7 @@ impl OutDir {
         } else {
             None
         };
-        // From here an interrupt leaves the staging directory to the next
-        // run's sweep: removing it mid-swap could lose both outputs.
-        unregister(&self.staging);
+        self.staging.swapping();
         let backup = match &old {
             Some(_) => {
                 let b = unique_sibling(&self.target, "previous");
@@ -213,7 +205,7 @@ impl OutDir {
                 None
             }
         };
-        if let Err(e) = fs::rename(&self.staging, &self.target) {
+        if let Err(e) = fs::rename(self.staging.dir(), &self.target) {
             if let Some(b) = &backup {
                 let _ = fs::rename(b, &self.target);
             }
@@ -223,7 +215,7 @@ impl OutDir {
             ));
             return Err(self.keep(e));
         }
-        self.committed = true;
+        self.staging.done();
         if let (Some(b), Some(m)) = (&backup, &old)
             && let Err(e) = remove_listed(b, m)
         {
@@ -237,28 +229,13 @@ impl OutDir {
         Ok(self.target.clone())
     }
 
-    /// Moves the finished results out of the staging directory to a visible
-    /// name no later run sweeps, and says where in `e`.
+    /// Keeps the finished results where the user can move them, and says
+    /// where in `e`.
     fn keep(&mut self, e: anyhow::Error) -> anyhow::Error {
-        unregister(&self.staging);
-        self.committed = true;
-        let kept = unsaved_path(&self.target);
-        let at = match fs::rename(&self.staging, &kept) {
-            Ok(()) => kept,
-            Err(_) => self.staging.clone(),
-        };
+        let at = self.staging.keep();
         e.context(format!(
             "the results were kept in {}; move them by hand",
             at.display()
         ))
-    }
-}
-
-impl Drop for OutDir {
-    fn drop(&mut self) {
-        if !self.committed {
-            let _ = fs::remove_dir_all(&self.staging);
-            unregister(&self.staging);
-        }
     }
 }

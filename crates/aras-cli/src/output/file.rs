@@ -6,10 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
 
-use super::lock::{
-    Leftover, OutputLock, register, sibling, sweep_leftovers, unique_sibling, unregister,
-    unsaved_path,
-};
+use super::lock::{OutputLock, Staging, sibling, sweep_leftovers};
 use super::manifest::Manifest;
 use super::{canonical, warn};
 
@@ -101,8 +98,7 @@ pub struct NewFile {
     target: PathBuf,
     kind: FileKind,
     force: bool,
-    staging: PathBuf,
-    committed: bool,
+    staging: Staging,
     _lock: OutputLock,
 }
 
@@ -155,15 +151,12 @@ impl NewFile {
             }
             check_own(&target, &file, kind)?;
         }
-        let staging = unique_sibling(&target, "staging");
-        fs::create_dir(&staging).with_context(|| format!("cannot create {}", staging.display()))?;
-        register(&staging, Leftover::Dir);
+        let staging = Staging::create(&target)?;
         Ok(Self {
             target,
             kind,
             force,
             staging,
-            committed: false,
             _lock: lock,
         })
     }
@@ -172,7 +165,7 @@ impl NewFile {
     /// staging directory, with the target's file name; a simulated log's
     /// sidecar goes beside it, as [`aras_log::sidecar_path`] says).
     pub fn path(&self) -> PathBuf {
-        self.staging.join(name_of(&self.target))
+        self.staging.dir().join(name_of(&self.target))
     }
 
     /// Writes the output's bytes (atomically) into [`NewFile::path`].
@@ -189,7 +182,7 @@ impl NewFile {
     pub fn commit(mut self) -> Result<PathBuf> {
         let files = self.kind.files(&self.target);
         let names: Vec<String> = files.iter().map(|f| name_of(f)).collect();
-        let manifest = Manifest::of_files(&self.staging, names.clone(), Some(self.kind.id()))
+        let manifest = Manifest::of_files(self.staging.dir(), names.clone(), Some(self.kind.id()))
             .context("the output was not written completely")?;
         if self.force {
             for file in &files {
@@ -200,14 +193,14 @@ impl NewFile {
                 }
             }
         }
-        unregister(&self.staging);
+        self.staging.swapping();
         for (file, name) in files.iter().zip(&names) {
-            if let Err(e) = place(&self.staging.join(name), file, self.force) {
+            if let Err(e) = place(&self.staging.dir().join(name), file, self.force) {
                 return Err(self.keep(e));
             }
         }
-        self.committed = true;
-        let _ = fs::remove_dir(&self.staging);
+        let _ = fs::remove_dir(self.staging.dir());
+        self.staging.done();
         let record = record_path(&self.target);
         if Manifest::read_file(&record).is_ok() {
             if let Err(e) = manifest.write_to(&record) {
@@ -229,29 +222,14 @@ impl NewFile {
         Ok(self.target.clone())
     }
 
-    /// Moves the staged files to a visible directory no later run sweeps,
-    /// and says where in `e`.
+    /// Keeps the staged files where the user can move them, and says
+    /// where in `e`.
     fn keep(&mut self, e: anyhow::Error) -> anyhow::Error {
-        unregister(&self.staging);
-        self.committed = true;
-        let kept = unsaved_path(&self.target);
-        let at = match fs::rename(&self.staging, &kept) {
-            Ok(()) => kept,
-            Err(_) => self.staging.clone(),
-        };
+        let at = self.staging.keep();
         e.context(format!(
             "the output was kept in {}; move it by hand",
             at.display()
         ))
-    }
-}
-
-impl Drop for NewFile {
-    fn drop(&mut self) {
-        if !self.committed {
-            let _ = fs::remove_dir_all(&self.staging);
-            unregister(&self.staging);
-        }
     }
 }
 

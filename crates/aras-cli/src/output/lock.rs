@@ -142,7 +142,7 @@ pub(super) fn unique_sibling(target: &Path, what: &str) -> PathBuf {
 /// A visible `DIR/NAME.unsaved-PID` (or `-K`) that does not exist: where
 /// finished results go when they cannot be moved into place, out of reach
 /// of [`sweep_leftovers`].
-pub(super) fn unsaved_path(target: &Path) -> PathBuf {
+fn unsaved_path(target: &Path) -> PathBuf {
     let name = file_name(target);
     let pid = std::process::id();
     (1..)
@@ -267,9 +267,72 @@ fn previous_output(p: &Path, target: &Path) -> String {
     }
 }
 
+/// The staging directory of an output, `.NAME.staging-PID` beside it:
+/// where a run writes until its outputs are moved into place. Dropped
+/// before [`Staging::done`], it is removed with everything in it; until
+/// [`Staging::swapping`] an interrupt removes it too.
+pub(super) struct Staging {
+    dir: PathBuf,
+    target: PathBuf,
+    done: bool,
+}
+
+impl Staging {
+    /// Creates the staging directory of the output `target`.
+    pub(super) fn create(target: &Path) -> Result<Self> {
+        let dir = unique_sibling(target, "staging");
+        fs::create_dir(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        register(&dir, Leftover::Dir);
+        Ok(Self {
+            dir,
+            target: target.to_path_buf(),
+            done: false,
+        })
+    }
+
+    /// The directory.
+    pub(super) fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The outputs are being moved into place: from here an interrupt
+    /// leaves the directory to the next run's sweep, as removing it
+    /// mid-swap could lose both the old and the new outputs.
+    pub(super) fn swapping(&self) {
+        unregister(&self.dir);
+    }
+
+    /// The directory was moved into place or emptied: nothing to remove.
+    pub(super) fn done(&mut self) {
+        unregister(&self.dir);
+        self.done = true;
+    }
+
+    /// Moves the finished outputs to a visible name no later run sweeps
+    /// (`NAME.unsaved-PID`) and returns where they are (the staging
+    /// directory itself if that move fails).
+    pub(super) fn keep(&mut self) -> PathBuf {
+        self.done();
+        let kept = unsaved_path(&self.target);
+        match fs::rename(&self.dir, &kept) {
+            Ok(()) => kept,
+            Err(_) => self.dir.clone(),
+        }
+    }
+}
+
+impl Drop for Staging {
+    fn drop(&mut self) {
+        if !self.done {
+            let _ = fs::remove_dir_all(&self.dir);
+            unregister(&self.dir);
+        }
+    }
+}
+
 /// What the interrupt handler removes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Leftover {
+enum Leftover {
     /// A staging directory (removed with everything in it).
     Dir,
     /// A lock file.
@@ -279,14 +342,14 @@ pub(super) enum Leftover {
 static LIVE: Mutex<Vec<(PathBuf, Leftover)>> = Mutex::new(Vec::new());
 
 /// Marks `path` as this run's, to remove if the run is interrupted.
-pub(super) fn register(path: &Path, what: Leftover) {
+fn register(path: &Path, what: Leftover) {
     if let Ok(mut v) = LIVE.lock() {
         v.push((path.to_path_buf(), what));
     }
 }
 
 /// `path` no longer needs removing on interrupt (done, or handed over).
-pub(super) fn unregister(path: &Path) {
+fn unregister(path: &Path) {
     if let Ok(mut v) = LIVE.lock() {
         v.retain(|(p, _)| p != path);
     }
