@@ -8,7 +8,7 @@ mod common;
 
 use std::process::Output;
 
-use common::{aras, fixture, own_run, scratch, snapshot};
+use common::{aras, fixture, own_run, scratch, short_validate_config, snapshot};
 
 use aras_cli::output::{FileKind, MANIFEST, Manifest, NewFile, OutDir, OutputLock, record_path};
 
@@ -169,12 +169,7 @@ fn force_replaces_the_tools_own_previous_output() {
 #[test]
 fn validate_twice_with_force_replaces_its_own_output() {
     let dir = scratch("force", "validate");
-    let cfg = dir.join("short.toml");
-    std::fs::write(
-        &cfg,
-        "[validation]\nfrequencies_hz = [1.0]\nperiods = 2\npd_grid = 5\npd_random = 10\n",
-    )
-    .unwrap();
+    let cfg = short_validate_config(&dir);
     let out = dir.join("out");
     let params = fixture("robots/aras-diamond.json");
     let run = |force: bool| {
@@ -576,7 +571,7 @@ fn leftovers_of_interrupted_runs_are_cleaned_up_and_never_block() {
         "--params",
         fixture("robots/aras-diamond.json").to_str().unwrap(),
         "--config",
-        write_short_config(&dir).to_str().unwrap(),
+        short_validate_config(&dir).to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
         "--force",
@@ -606,17 +601,6 @@ fn leftovers_of_interrupted_runs_are_cleaned_up_and_never_block() {
     let o = OutDir::create(&out, true, &[]).unwrap();
     assert_eq!(backup[0].exists(), root, "removed once it can be");
     drop(o);
-}
-
-/// A short `validate` configuration in `dir`.
-fn write_short_config(dir: &std::path::Path) -> std::path::PathBuf {
-    let cfg = dir.join("short.toml");
-    std::fs::write(
-        &cfg,
-        "[validation]\nfrequencies_hz = [1.0]\nperiods = 2\npd_grid = 5\npd_random = 10\n",
-    )
-    .unwrap();
-    cfg
 }
 
 /// Whether the tests run as root (who may remove files from read-only

@@ -6,7 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{aras, fixture, scratch};
+use common::{aras, fixture, scratch, short_validate_config};
 
 /// The nominal robot's file with `edit` applied, written to `dir/name`.
 fn edited(dir: &Path, name: &str, edit: impl Fn(&mut serde_json::Value)) -> PathBuf {
@@ -22,12 +22,7 @@ fn edited(dir: &Path, name: &str, edit: impl Fn(&mut serde_json::Value)) -> Path
 
 /// `validate`'s fitness `[τ1, τ2]` at its one frequency.
 fn validate(dir: &Path, params: &Path, tag: &str) -> Result<[f64; 2], String> {
-    let cfg = dir.join("short.toml");
-    std::fs::write(
-        &cfg,
-        "[validation]\nfrequencies_hz = [1.0]\nperiods = 2\npd_grid = 5\npd_random = 10\n",
-    )
-    .unwrap();
+    let cfg = short_validate_config(dir);
     let out = dir.join(format!("validate-{tag}"));
     let r = aras(&[
         "validate",

@@ -61,3 +61,15 @@ pub fn own_run(out: &Path, files: &[(&str, &str)]) {
     }
     o.commit().unwrap();
 }
+
+/// A short `validate` configuration (one frequency of (79), two periods, a
+/// coarse PD grid) written as `dir/short.toml`.
+pub fn short_validate_config(dir: &Path) -> PathBuf {
+    let cfg = dir.join("short.toml");
+    std::fs::write(
+        &cfg,
+        "[validation]\nfrequencies_hz = [1.0]\nperiods = 2\npd_grid = 5\npd_random = 10\n",
+    )
+    .unwrap();
+    cfg
+}
