@@ -58,7 +58,7 @@ pub use glitch::{
 };
 pub use header::ColumnNames;
 pub use reader::{Columns, LogReader, LogReport, LogSummary, MAX_MAGNITUDE, RowLines, Timing};
-pub use sidecar::{Excitation, FORMAT, FoundSidecar, Sensors, Sidecar, find_sidecar};
+pub use sidecar::{Excitation, FORMAT, FoundSidecar, Sensors, Sidecar, TorqueTiming, find_sidecar};
 pub use writer::{new_temp_file, sidecar_path, write_atomic, write_log};
 
 /// Where to find the JSON sidecar.

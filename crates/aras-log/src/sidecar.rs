@@ -29,6 +29,10 @@ pub struct Sidecar {
     /// What the robot was made to do.
     #[serde(default, skip_serializing_if = "Excitation::is_empty")]
     pub excitation: Excitation,
+    /// How the logged torques relate to the sample times (absent: not
+    /// stated, taken as [`TorqueTiming::Sampled`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torques: Option<TorqueTiming>,
     /// Whatever the log's writer knows and wants kept with it (the
     /// simulator: its ground truth); neither read nor checked here.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -36,6 +40,36 @@ pub struct Sidecar {
     /// Free notes of the log's writer; neither read nor checked here.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub notes: Option<serde_json::Value>,
+}
+
+/// What a logged torque sample stands for in time.
+///
+/// Why it matters: a digital amplifier holds each commanded torque over the
+/// controller step `[t_k, t_{k+1})`, so the held torque `τ_k` acts on the
+/// motion between the samples, on average at `t_k + h/2`: against the motion
+/// at `t_k` it lags by half a sample, which at 1 kHz costs a few tenths of a
+/// fitness point at 2.5 Hz. A measured torque (a current sensor sampled with
+/// the angles) belongs to `t_k` itself.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum TorqueTiming {
+    /// `τ_k` is measured at `t_k`, like the angles (the default).
+    #[default]
+    Sampled,
+    /// `τ_k` is a command held over `[t_k, t_{k+1})` (zero-order hold):
+    /// the processing evaluates the motion at the hold's midpoint.
+    Held,
+}
+
+impl TorqueTiming {
+    /// Where in the sample step the torque acts, as a fraction of the step
+    /// after `t_k`: 0 for sampled torques, ½ for held commands.
+    pub fn offset_steps(self) -> f64 {
+        match self {
+            TorqueTiming::Sampled => 0.0,
+            TorqueTiming::Held => 0.5,
+        }
+    }
 }
 
 /// Sensor constants, per actuator `[motor 1, motor 2]`.
