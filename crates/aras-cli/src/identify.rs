@@ -202,7 +202,7 @@ pub fn fitness_on_log_rows(
 /// log's raw torques on every row that has a sample.
 pub fn raw_fitness(processed: &Processed, predicted: &[f64]) -> Result<[f64; 2]> {
     let n = processed.samples.len();
-    let [a, b] = processed.on_log_rows([&predicted[..n], &predicted[n..]]);
+    let [a, b] = processed.on_log_rows([&predicted[..n], &predicted[n..]])?;
     Ok([
         aras_ident::validate::fitness(&a.0, &a.1)?,
         aras_ident::validate::fitness(&b.0, &b.1)?,

@@ -136,7 +136,12 @@ pub fn cross_validate(
         let pick =
             |v: &[f64]| -> Vec<f64> { v[..rows].iter().chain(&v[n..n + rows]).copied().collect() };
         for beta in candidates {
-            let p = predict_standard(&prep, beta)?;
+            // The prediction passes the processing's band-limiting, as the
+            // angles did (`Processed::band_limit`).
+            let mut p = predict_standard(&prep, beta)?;
+            for g in p.chunks_mut(n) {
+                prep.processed.band_limit().apply(g)?;
+            }
             fitness.push(fitness_per_joint(prep.t(), &p)?);
             fitness_kept.push(fitness_standard(&kept, beta)?);
             predicted.push(pick(&p));

@@ -9,7 +9,7 @@ use aras_dyn::Model;
 use aras_ident::{BaseParameters, IdentError};
 use aras_kin::{Geometry, KinematicSample};
 use aras_log::Log;
-use aras_signal::{Butterworth, ProcessOptions, ProcessSummary, Processed, Sos};
+use aras_signal::{BandLimit, Butterworth, ProcessOptions, ProcessSummary, Processed, Sos};
 use faer::{Mat, MatRef};
 
 use crate::robot::{
@@ -112,9 +112,13 @@ pub fn prepare(
 ) -> Result<Prepared, IdentError> {
     let (processed, mut stacked) = process_and_stack(log, opts, model, geometry, columns, None)?;
     let filter_sos = processing_filter(&processed.summary)?;
-    let unfiltered = (keep_unfiltered && filter_sos.is_some()).then(|| stacked.clone());
+    let projected = matches!(processed.band_limit(), BandLimit::Harmonics(_));
+    let unfiltered =
+        (keep_unfiltered && (filter_sos.is_some() || projected)).then(|| stacked.clone());
     if let Some(sos) = &filter_sos {
         filter(&mut stacked, sos, mode, processed.summary.periods.is_some())?;
+    } else if projected {
+        band_limit_stacked(&mut stacked, processed.band_limit(), mode)?;
     }
     Ok(Prepared {
         processed,
@@ -122,6 +126,49 @@ pub fn prepare(
         filter: filter_sos,
         unfiltered,
     })
+}
+
+/// Applies a harmonic band ([`BandLimit::Harmonics`]) to each joint's block
+/// of the torques and (with [`FilterMode::Parallel`]) of every regressor
+/// column: the truncated series the angles passed is then the operator of
+/// both sides of `T = W β`, as the low-pass is on the filtered route.
+/// Without it the torques keep the acceleration content above the series'
+/// highest harmonic that the regressor's inertial columns have lost.
+fn band_limit_stacked(
+    stacked: &mut Stacked,
+    band: &BandLimit,
+    mode: FilterMode,
+) -> Result<(), IdentError> {
+    use rayon::prelude::*;
+    let n = stacked.groups.counts()[0];
+    let err = |e| IdentError::external("band-limiting the stacked data", e);
+    for g in 0..2 {
+        band.apply(&mut stacked.t[g * n..(g + 1) * n])
+            .map_err(err)?;
+    }
+    if mode == FilterMode::Parallel {
+        let nc = stacked.w.ncols();
+        let cols: Vec<Vec<f64>> = (0..nc)
+            .into_par_iter()
+            .map(|c| {
+                let mut col: Vec<f64> = (0..2 * n).map(|i| stacked.w[(i, c)]).collect();
+                for g in 0..2 {
+                    let block = &mut col[g * n..(g + 1) * n];
+                    if block.iter().any(|v| *v != 0.0) {
+                        band.apply(block)
+                            .map_err(|e| IdentError::external("band-limiting a column", e))?;
+                    }
+                }
+                Ok(col)
+            })
+            .collect::<Result<_, IdentError>>()?;
+        for (c, col) in cols.into_iter().enumerate() {
+            for (i, v) in col.into_iter().enumerate() {
+                stacked.w[(i, c)] = v;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// What accumulating a block needs: its filtered regressor and torques,

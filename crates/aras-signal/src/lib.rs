@@ -70,6 +70,7 @@
 #![warn(missing_docs)]
 
 mod autocorrelation;
+mod band;
 mod bandwidth;
 mod butterworth;
 mod coordinates;
@@ -84,6 +85,7 @@ mod sos;
 mod spectrum;
 
 pub use autocorrelation::Autocorrelation;
+pub use band::{BandLimit, HarmonicBand};
 pub use bandwidth::{
     CUTOFF_MARGIN, HARMONIC_FALSE_ALARM, HarmonicSelection, MIN_PERIOD_CORRELATION,
     PeriodDetection, PeriodOrigin, SPECTRUM_THRESHOLD, SpectrumCutoff, detect_period,

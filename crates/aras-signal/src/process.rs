@@ -26,7 +26,7 @@ use crate::derivative::{DerivativeMethod, derivatives, resolve, spectral_with};
 use crate::error::ProcessError;
 use crate::fourier::Fourier;
 use crate::periods::average_periods;
-use crate::{Butterworth, Sos};
+use crate::{BandLimit, Butterworth, HarmonicBand, Sos};
 use aras_log::{Log, Warning};
 
 /// Low-pass filter settings.
@@ -332,6 +332,7 @@ pub struct Processed {
     /// The log's raw torques τ1, τ2, every row.
     pub log_tau: [Vec<f64>; 2],
     map: RowMap,
+    band: BandLimit,
 }
 
 impl Processed {
@@ -348,24 +349,53 @@ impl Processed {
         }
     }
 
+    /// The band-limiting the angles passed ([`BandLimit`]), as it acts on
+    /// any series with one value per sample.
+    pub fn band_limit(&self) -> &BandLimit {
+        &self.band
+    }
+
     /// Pairs the log's raw torques with a per-sample prediction
     /// (`predicted[j]` of length `samples.len()`) on every row that has a
-    /// sample: `(measured, predicted)` per joint. For an averaged block
-    /// the prediction repeats on every period, settling and tail included,
-    /// so the fitness (78) of the pair is the paper's, on all rows.
-    pub fn on_log_rows(&self, predicted: [&[f64]; 2]) -> [(Vec<f64>, Vec<f64>); 2] {
-        std::array::from_fn(|j| {
+    /// sample: `(measured, predicted)` per joint. The prediction first
+    /// passes the processing's own band-limiting ([`band_limit`](Self::band_limit)),
+    /// as the angles did, so its inertial and friction parts see the same
+    /// bandwidth (`docs/processing.md`, "Parallel filtering"). For an
+    /// averaged block the prediction repeats on every period, settling and
+    /// tail included, so the fitness (78) of the pair is the paper's, on
+    /// all rows.
+    ///
+    /// # Errors
+    /// [`ProcessError`] when a prediction does not have one value per
+    /// sample.
+    pub fn on_log_rows(
+        &self,
+        predicted: [&[f64]; 2],
+    ) -> Result<[(Vec<f64>, Vec<f64>); 2], ProcessError> {
+        let mut limited = [predicted[0].to_vec(), predicted[1].to_vec()];
+        for p in &mut limited {
+            if p.len() != self.samples.len() {
+                return Err(ProcessError::TooShort {
+                    what: "pairing a prediction with the log's rows".into(),
+                    have: p.len(),
+                    need: self.samples.len(),
+                    hint: "give one predicted torque per processed sample".into(),
+                });
+            }
+            self.band.apply(p)?;
+        }
+        Ok(std::array::from_fn(|j| {
             let rows = self.log_tau[j].len();
             let mut m = Vec::with_capacity(rows);
             let mut p = Vec::with_capacity(rows);
             for r in 0..rows {
                 if let Some(i) = self.sample_of_row(r) {
                     m.push(self.log_tau[j][r]);
-                    p.push(predicted[j][i]);
+                    p.push(limited[j][i]);
                 }
             }
             (m, p)
-        })
+        }))
     }
 }
 
@@ -424,6 +454,10 @@ pub fn process(
         );
     }
     let every_row = opts.rows == OutputRows::EveryRow;
+    // Held torques act over [t_k, t_k+1): the motion that balances τ_k is
+    // the motion at the hold's midpoint (`aras_log::TorqueTiming`).
+    let timing = log.sidecar.torques.unwrap_or_default();
+    let shift = timing.offset_steps();
 
     // Logged derivatives, every row: the log as it is.
     if let (Some(v), Some(a), true) = (logged_vel, logged_acc, every_row) {
@@ -467,6 +501,7 @@ pub fn process(
             warnings,
             log_tau: log.tau.clone(),
             map: RowMap::Direct { edge: 0 },
+            band: BandLimit::None,
         });
     }
 
@@ -783,7 +818,7 @@ pub fn process(
             let m = x.len();
             let t0 = t[edge];
             for &ti in &log.t {
-                let pos = (ti - t0) / dt;
+                let pos = (ti - t0) / dt + if irregular { shift } else { 0.0 };
                 let (k, u) = if irregular {
                     let k = pos.floor();
                     (k as i64, pos - k)
@@ -821,10 +856,16 @@ pub fn process(
                 .map(|j| th[j].iter().zip(&x[j]).map(|(a, b)| a - b).collect())
                 .collect();
             let mut c = spectrum_cutoff([&r[0], &r[1]], dt);
-            // Above the series' highest harmonic the angles hold noise only.
+            // Above the band of the series (the smallest highest harmonic
+            // of the joints that move, `band_of`) the angles hold noise for
+            // the torque.
             if let Some(h) = harmonics {
-                let top = h[0].highest_hz.max(h[1].highest_hz);
-                if top > 0.0 {
+                let top = h
+                    .iter()
+                    .map(|s| s.highest_hz)
+                    .filter(|f| *f > 0.0)
+                    .fold(f64::INFINITY, f64::min);
+                if top.is_finite() {
                     c.cutoff_hz = c.cutoff_hz.min(top);
                 }
             }
@@ -850,6 +891,9 @@ pub fn process(
             }
             aperiodic = Some(c);
         }
+        if !irregular && shift != 0.0 {
+            shift_motion(&mut x, &mut v, &mut a, shift, dt, false);
+        }
         s = samples_from(log.t.clone(), x, v, a, log.tau.clone());
         dropped = 0;
         RowMap::Direct { edge: 0 }
@@ -865,17 +909,29 @@ pub fn process(
         };
         if irregular && !periodic {
             let mut out: [[Vec<f64>; 2]; 3] = Default::default();
+            let at: Vec<f64> = log.t.iter().map(|ti| ti + shift * dt).collect();
             for j in 0..2 {
                 let jerk = periodic_slopes(&theta_ddot[j], dt, false);
-                out[0][j] = hermite_at(&t[keep.clone()], &theta[j], &theta_dot[j], &log.t);
-                out[1][j] = hermite_at(&t[keep.clone()], &theta_dot[j], &theta_ddot[j], &log.t);
-                out[2][j] = hermite_at(&t[keep.clone()], &theta_ddot[j], &jerk, &log.t);
+                out[0][j] = hermite_at(&t[keep.clone()], &theta[j], &theta_dot[j], &at);
+                out[1][j] = hermite_at(&t[keep.clone()], &theta_dot[j], &theta_ddot[j], &at);
+                out[2][j] = hermite_at(&t[keep.clone()], &theta_ddot[j], &jerk, &at);
             }
             let [x, v, a] = out;
             s = samples_from(log.t.clone(), x, v, a, tau);
             RowMap::Direct { edge: 0 }
         } else {
             dropped += 2 * edge;
+            let (mut theta, mut theta_dot, mut theta_ddot) = (theta, theta_dot, theta_ddot);
+            if shift != 0.0 {
+                shift_motion(
+                    &mut theta,
+                    &mut theta_dot,
+                    &mut theta_ddot,
+                    shift,
+                    dt,
+                    periodic,
+                );
+            }
             s = samples_from(t[keep.clone()].to_vec(), theta, theta_dot, theta_ddot, tau);
             match map {
                 RowMap::Direct { .. } => RowMap::Direct { edge },
@@ -900,6 +956,28 @@ pub fn process(
         bandwidth.aperiodic = Some(c);
     }
 
+    // The operator the angles passed, for whatever is computed from them.
+    let band = band_of(BandInputs {
+        logged,
+        harmonics,
+        spec_used,
+        remainder_hz: aperiodic.map(|c| c.cutoff_hz),
+        periods: period_summary.as_ref(),
+        every_row,
+        irregular,
+        rows: nu,
+        block: n,
+        fs,
+    })
+    .map_err(|source| ProcessError::Filter {
+        context: format!("designing the band-limiting of {}", log.name),
+        source,
+    })?;
+    if shift != 0.0 && !logged {
+        bandwidth.reason += "; torques held over each step (zero-order hold): the motion is \
+                             evaluated at the hold's midpoint, half a step after each sample";
+    }
+
     // 4. Kinematics.
     model_coordinates(&mut s, coordinates)?;
 
@@ -922,7 +1000,108 @@ pub fn process(
         warnings,
         log_tau: log.tau.clone(),
         map,
+        band,
     })
+}
+
+/// What [`band_of`] needs to know about a processing run.
+struct BandInputs<'a> {
+    logged: bool,
+    harmonics: Option<[crate::HarmonicSelection; 2]>,
+    spec_used: Option<FilterSpec>,
+    remainder_hz: Option<f64>,
+    periods: Option<&'a PeriodSummary>,
+    every_row: bool,
+    irregular: bool,
+    rows: usize,
+    block: usize,
+    fs: f64,
+}
+
+/// The band-limiting the angles passed, as an operator on per-sample
+/// series. One band for every channel: the harmonic series keeps, for the
+/// torque of either joint, the harmonics that the angles of every moving
+/// joint resolve (the smallest count among joints that move), since each
+/// joint's torque is built from both joints' motion and a harmonic beyond a
+/// joint's count is noise in its θ̈. Samples at irregular log times are left
+/// as they are (a uniform filter does not apply to them).
+fn band_of(b: BandInputs<'_>) -> Result<BandLimit, crate::FilterError> {
+    if b.logged {
+        return Ok(BandLimit::None);
+    }
+    let samples_irregular = b.irregular && (b.every_row || b.periods.is_none());
+    if let (Some(h), Some(p)) = (b.harmonics, b.periods) {
+        let moving: Vec<usize> = h.iter().map(|s| s.harmonics).filter(|m| *m > 0).collect();
+        let count = moving.iter().copied().min().unwrap_or(0);
+        let kp = p.periods_per_block.max(1);
+        if samples_irregular {
+            return Ok(BandLimit::None);
+        }
+        let rows = b.every_row.then(|| {
+            let whole = (b.rows - p.settling_samples - p.tail_samples) / p.samples_per_block.max(1);
+            (p.settling_samples, whole)
+        });
+        let remainder = match (b.every_row, b.remainder_hz) {
+            (true, Some(hz)) => Some(Butterworth::lowpass(FilterSpec::default().order, hz, b.fs)?),
+            _ => None,
+        };
+        return Ok(BandLimit::Harmonics(HarmonicBand {
+            per: b.block,
+            periods_per_block: kp,
+            top_bin: count * kp,
+            rows,
+            remainder,
+        }));
+    }
+    match b.spec_used {
+        Some(spec) if !samples_irregular => Ok(BandLimit::LowPass {
+            sos: Butterworth::lowpass(spec.order, spec.cutoff_hz, b.fs)?,
+            periodic: b.periods.is_some() && !b.every_row,
+        }),
+        _ => Ok(BandLimit::None),
+    }
+}
+
+/// Moves the motion `u` steps later (`0 ≤ u < 1`) by cubic Hermite
+/// interpolation between neighbouring samples, each quantity with its own
+/// derivative as slope (the jerk from central differences of θ̈); the last
+/// sample of a non-periodic record by its Taylor step.
+fn shift_motion(x: &mut Pair, v: &mut Pair, a: &mut Pair, u: f64, dt: f64, periodic: bool) {
+    let (u2, u3) = (u * u, u * u * u);
+    let (h00, h10, h01, h11) = (
+        2.0 * u3 - 3.0 * u2 + 1.0,
+        u3 - 2.0 * u2 + u,
+        -2.0 * u3 + 3.0 * u2,
+        u3 - u2,
+    );
+    for j in 0..2 {
+        let m = x[j].len();
+        if m < 2 {
+            continue;
+        }
+        let jerk = periodic_slopes(&a[j], dt, periodic);
+        let step = |y: &[f64], dy: &[f64], i: usize| -> f64 {
+            if i + 1 < m || periodic {
+                let i1 = (i + 1) % m;
+                y[i] * h00 + dy[i] * dt * h10 + y[i1] * h01 + dy[i1] * dt * h11
+            } else {
+                y[i] + dy[i] * u * dt
+            }
+        };
+        let nx: Vec<f64> = (0..m)
+            .map(|i| {
+                let last = i + 1 == m && !periodic;
+                if last {
+                    x[j][i] + v[j][i] * u * dt + 0.5 * a[j][i] * (u * dt).powi(2)
+                } else {
+                    step(&x[j], &v[j], i)
+                }
+            })
+            .collect();
+        let nv: Vec<f64> = (0..m).map(|i| step(&v[j], &a[j], i)).collect();
+        let na: Vec<f64> = (0..m).map(|i| step(&a[j], &jerk, i)).collect();
+        (x[j], v[j], a[j]) = (nx, nv, na);
+    }
 }
 
 fn samples_from(

@@ -353,3 +353,72 @@ fn a_coordinate_failure_names_the_sample_and_keeps_its_cause() {
     assert_eq!(ok.samples.x, ok.samples.theta);
     assert_eq!(ok.samples.x_ddot, ok.samples.theta_ddot);
 }
+
+/// Held torques (`aras_log::TorqueTiming::Held`): every route evaluates the
+/// motion half a step after each sample, the hold's midpoint; sampled
+/// torques keep the motion at the samples.
+#[test]
+fn held_torques_move_the_motion_to_the_holds_midpoint() {
+    let g = Geometry::aras_diamond();
+    let truth = |t: f64, j: usize| inverse(&g, &trajectory(t).pos).unwrap().theta[j];
+    let fixed = Bandwidth::Fixed(FilterSpec {
+        order: 4,
+        cutoff_hz: 40.0,
+    });
+    for (filter, period, rows) in [
+        (
+            Bandwidth::Auto,
+            PeriodSource::Seconds(PERIOD),
+            aras_signal::OutputRows::EveryRow,
+        ),
+        (
+            Bandwidth::Auto,
+            PeriodSource::Seconds(PERIOD),
+            aras_signal::OutputRows::Averaged,
+        ),
+        (fixed, PeriodSource::Off, aras_signal::OutputRows::EveryRow),
+    ] {
+        let opts = ProcessOptions {
+            filter,
+            period,
+            rows,
+            ..ProcessOptions::default()
+        };
+        let mut log = read_log_from(
+            log_text(3, false).as_bytes(),
+            "x.csv",
+            &ReadOptions::default(),
+        )
+        .unwrap();
+        let sampled = process(&log, &opts, &aras_signal::JointCoordinates).unwrap();
+        log.sidecar.torques = Some(aras_log::TorqueTiming::Held);
+        let held = process(&log, &opts, &aras_signal::JointCoordinates).unwrap();
+        // Rows away from the filter's edges.
+        let n = held.samples.len();
+        let inner = n / 10..n - n / 10;
+        for j in 0..2 {
+            let err = |s: &aras_signal::Processed, lag: f64| -> f64 {
+                inner
+                    .clone()
+                    .map(|i| (s.samples.theta[j][i] - truth(s.samples.t[i] + lag, j)).abs())
+                    .fold(0.0, f64::max)
+            };
+            // The half-step move is ≈ |θ̇| h/2 ≈ 3e-4 rad here; both routes
+            // land on their own instant to 1 % of it.
+            let (at_mid, at_sample) = (err(&held, DT / 2.0), err(&sampled, 0.0));
+            assert!(
+                at_mid < 3e-6 && at_sample < 3e-6,
+                "{filter:?} {rows:?} joint {j}: {at_mid:e} {at_sample:e}"
+            );
+            assert!(
+                err(&held, 0.0) > 30.0 * at_mid,
+                "{filter:?} {rows:?} joint {j}: the motion did not move"
+            );
+        }
+        assert!(
+            held.summary.bandwidth.reason.contains("midpoint"),
+            "{}",
+            held.summary.bandwidth.reason
+        );
+    }
+}

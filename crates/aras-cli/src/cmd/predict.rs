@@ -43,7 +43,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     // The log's raw torques on the rows written (the processed samples'
     // torques are band-limited with the motion: not what the file is
     // compared with).
-    let [(m1, p1), (m2, p2)] = processed.on_log_rows([&tau[..n], &tau[n..]]);
+    let [(m1, p1), (m2, p2)] = processed.on_log_rows([&tau[..n], &tau[n..]])?;
     let fit = [
         aras_ident::validate::fitness(&m1, &p1)?,
         aras_ident::validate::fitness(&m2, &p2)?,
