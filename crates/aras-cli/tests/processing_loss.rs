@@ -93,7 +93,7 @@ fn predict_reports_the_loss_recomputed_from_both_routes_files() {
     let base = ["t", "theta1", "theta2", "tau1", "tau2"];
     let angles = dir.join("angles.csv");
     let mut text = base.join(",") + "\n";
-    for i in 0..c["t"].len() {
+    for (i, _) in c["t"].iter().enumerate() {
         let row: Vec<String> = base.iter().map(|k| format!("{}", c[*k][i])).collect();
         text += &(row.join(",") + "\n");
     }
@@ -170,7 +170,7 @@ fn the_loss_of_the_logged_route_against_itself_is_exactly_zero() {
     let dir = scratch("loss", "itself");
     let sim = simulated(&dir);
     let log = aras_log::read_log(&sim, &aras_log::ReadOptions::default()).unwrap();
-    let params = aras_dyn::Params::load(&fixture("robots/aras-diamond.json")).unwrap();
+    let params = aras_dyn::Params::load(fixture("robots/aras-diamond.json")).unwrap();
     let model = params.model().unwrap();
     let geometry = params.geometry().unwrap();
     let beta = params.standard_vector(&model).unwrap().as_slice().to_vec();
@@ -210,8 +210,8 @@ fn validate_reports_the_loss_per_frequency() {
     let loss = pair(&f["processing_loss"]);
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("loss τ1"), "{report}");
-    for j in 0..2 {
-        assert!(loss[j].is_finite());
+    for (j, &loss_j) in loss.iter().enumerate() {
+        assert!(loss_j.is_finite());
         // The fitness with the exact derivatives is a prediction's fitness
         // on the same rows as the ceiling (the perfect prediction): a
         // model prediction beats it only by fitting noise, so the loss is
