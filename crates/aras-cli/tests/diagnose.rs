@@ -421,7 +421,7 @@ fn diagnose_streams_a_long_log_as_in_memory() {
             .as_array()
             .unwrap()
             .iter()
-            .flat_map(|r| r["fitness"].as_array().unwrap().clone())
+            .flat_map(|r| r["fitness_filtered"].as_array().unwrap().clone())
             .flat_map(|p| p.as_array().unwrap().clone())
             .map(|x| x.as_f64().unwrap())
             .collect()
