@@ -482,6 +482,10 @@ pub struct PredictArgs {
     /// Output CSV with columns t,tau1,tau2.
     #[arg(long, value_name = "PRED.csv")]
     pub out: PathBuf,
+    /// Also write the figures as JSON (`"format": "aras-predict/1"`: the
+    /// route of PRED.csv, its fitness (78), the processing loss).
+    #[arg(long, value_name = "PRED.json")]
+    pub summary: Option<PathBuf>,
     /// The log's period and sidecar (every row of the log is predicted
     /// either way).
     #[command(flatten)]

@@ -31,6 +31,7 @@ pub mod config;
 pub mod excite;
 pub mod friction;
 pub mod identify;
+pub mod loss;
 pub mod output;
 pub mod paper;
 pub mod plausibility;

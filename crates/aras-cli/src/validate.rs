@@ -33,6 +33,10 @@ pub struct CrossValidation {
     /// Noise ceiling (78) per joint: the true robot's noise-free torques
     /// against the same log (`crate::ceiling`).
     pub ceiling: crate::ceiling::Ceiling,
+    /// Processing loss of each candidate (`crate::loss`): its fitness with
+    /// the simulator's exact θ̇, θ̈ minus its fitness from the angles
+    /// alone (the `fitness` above), on the rows both cover.
+    pub processing_loss: Vec<crate::loss::ProcessingLoss>,
     /// Time, raw measured and predicted torques of the first two periods,
     /// for plots.
     #[serde(skip)]
@@ -120,6 +124,20 @@ pub fn cross_validate(
             false,
         )?;
         let kept = keep_rows(&prep.stacked, &keep)?;
+        // The same log with the simulator's exact derivatives, for the
+        // processing loss.
+        let exact_opts = process_options(cfg, None, true);
+        let exact = if crate::loss::has_derivatives(&read) {
+            let mut o = exact_opts.clone();
+            o.rows = OutputRows::EveryRow;
+            let p = aras_signal::process(&read, &o, &aras_kin::task_motion(geometry))
+                .with_context(|| format!("processing {} with its derivatives", path.display()))?;
+            let w = stack(model, geometry, &p.samples)?;
+            Some((p, w))
+        } else {
+            None
+        };
+        let mut processing_loss = Vec::new();
         let mut fitness = Vec::new();
         let mut fitness_kept = Vec::new();
         let mut predicted = Vec::new();
@@ -143,6 +161,10 @@ pub fn cross_validate(
                 prep.processed.band_limit().apply(g)?;
             }
             fitness.push(fitness_per_joint(prep.t(), &p)?);
+            if let Some((ep, ew)) = &exact {
+                let pe = aras_ident::validate::predict(ew.w.as_ref(), beta)?;
+                processing_loss.push(crate::loss::loss_between(ep, &pe, &prep.processed, &p)?);
+            }
             fitness_kept.push(fitness_standard(&kept, beta)?);
             predicted.push(pick(&p));
         }
@@ -153,6 +175,7 @@ pub fn cross_validate(
             fitness,
             fitness_kept,
             ceiling,
+            processing_loss,
             traces: Traces {
                 t: prep.processed.samples.t[..rows].to_vec(),
                 measured: pick(prep.t()),

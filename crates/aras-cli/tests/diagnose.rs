@@ -421,7 +421,7 @@ fn diagnose_streams_a_long_log_as_in_memory() {
             .as_array()
             .unwrap()
             .iter()
-            .flat_map(|r| r["fitness"].as_array().unwrap().clone())
+            .flat_map(|r| r["fitness_filtered"].as_array().unwrap().clone())
             .flat_map(|p| p.as_array().unwrap().clone())
             .map(|x| x.as_f64().unwrap())
             .collect()
@@ -450,4 +450,88 @@ fn diagnose_streams_a_long_log_as_in_memory() {
         0,
         "no staging directory stays"
     );
+}
+
+/// Fitness (78), two-pass, in percent.
+fn fitness(measured: &[f64], predicted: &[f64]) -> f64 {
+    let mean = measured.iter().sum::<f64>() / measured.len() as f64;
+    let err: f64 = measured
+        .iter()
+        .zip(predicted)
+        .map(|(m, p)| (m - p).powi(2))
+        .sum();
+    let var: f64 = measured.iter().map(|m| (m - mean).powi(2)).sum();
+    100.0 * (1.0 - (err / var).sqrt())
+}
+
+/// The step-0 validation fitness in `diagnosis.json` is the raw-torque
+/// figure on every row: what the written prediction scores against the
+/// log's own torques, and at most the noise ceiling (the simulator's
+/// noise-free torques against the same rows).
+#[test]
+fn diagnose_fitness_is_against_the_raw_torques() {
+    let dir = scratch("diagnose", "raw");
+    let truth = Params::aras_diamond();
+    let exc = default_excitation();
+    let (train, val) = (dir.join("train.csv"), dir.join("val.csv"));
+    log(&truth, &exc, 2.0 * exc.period(), &train);
+    let sim = simulate(
+        &truth,
+        &Sinusoid::paper_79(0.5).unwrap(),
+        &SimConfig {
+            duration_s: 10.0,
+            ..SimConfig::default()
+        },
+    )
+    .unwrap();
+    write_log(&val, &sim, true).unwrap();
+    let out = dir.join("out");
+    let r = Command::new(env!("CARGO_BIN_EXE_aras"))
+        .args(["diagnose", "--data"])
+        .arg(&train)
+        .arg("--validate")
+        .arg(&val)
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let j = json(&out.join("diagnosis.json"));
+    let row0 = &j["fitness"][0];
+    assert_eq!(row0["step"], 0);
+    let raw = aras_log::read_log(&val, &aras_log::ReadOptions::default()).unwrap();
+    let pred = std::fs::read_to_string(out.join("pred_start_val.csv")).unwrap();
+    let mut rows = Vec::new();
+    let mut p = [Vec::new(), Vec::new()];
+    for line in pred.lines().skip(1) {
+        let v: Vec<&str> = line.split(',').collect();
+        rows.push(v[0].parse::<usize>().unwrap());
+        p[0].push(v[1].parse::<f64>().unwrap());
+        p[1].push(v[2].parse::<f64>().unwrap());
+    }
+    // A period-averaged validation set: its prediction on every row.
+    assert_eq!(rows.len(), raw.len());
+    for jn in 0..2 {
+        let said = row0["fitness"][0][jn].as_f64().unwrap();
+        let filtered = row0["fitness_filtered"][0][jn].as_f64().unwrap();
+        let m: Vec<f64> = rows.iter().map(|&r| raw.tau[jn][r]).collect();
+        let clean: Vec<f64> = rows.iter().map(|&r| sim.tau_clean[r][jn]).collect();
+        let ceiling = fitness(&m, &clean);
+        let again = fitness(&m, &p[jn]);
+        eprintln!(
+            "τ{}: raw {said}, filtered {filtered}, ceiling {ceiling}",
+            jn + 1
+        );
+        assert!(
+            (said - again).abs() < 1e-9,
+            "τ{}: {said} vs recomputed {again}",
+            jn + 1
+        );
+        assert!(
+            said <= ceiling,
+            "τ{}: {said} above the ceiling {ceiling}",
+            jn + 1
+        );
+    }
 }

@@ -207,7 +207,7 @@ fn show(tag: &str, d: &Diagnosis) {
 /// sets, percentage points).
 fn first_gain(d: &Diagnosis) -> f64 {
     let m = |k: usize| {
-        let f = &d.fitness[k].fitness;
+        let f = &d.fitness[k].fitness_filtered;
         f.iter().map(|x| 0.5 * (x[0] + x[1])).sum::<f64>() / f.len() as f64
     };
     m(1) - m(0)
@@ -629,23 +629,27 @@ fn all_row_fitness_equals_the_in_memory_prediction() {
             eprintln!(
                 "{} joint {}: all rows {:.4} % (in memory {all:.4}), fitted {:.4} % \
                  (in memory {fitted:.4}), left out {} rows ({left})",
-                v.name, l.joint, l.fitness_all_rows, l.fitness_fitted_rows, l.rows
+                v.name,
+                l.joint,
+                l.fitness_filtered_all_rows,
+                l.fitness_filtered_fitted_rows,
+                l.rows
             );
             assert_eq!(l.rows, left, "{} joint {}", v.name, l.joint);
             // Same model, rows and filter; the estimates agree to 1e-8
             // relative (`added_effect_sigma_equals_in_memory_corrected_sigma`),
             // so the fitness in percent agrees far below 1e-5 points.
             assert!(
-                (l.fitness_all_rows - all).abs() < 1e-5,
+                (l.fitness_filtered_all_rows - all).abs() < 1e-5,
                 "{} vs {all}",
-                l.fitness_all_rows
+                l.fitness_filtered_all_rows
             );
             assert!(
-                (l.fitness_fitted_rows - fitted).abs() < 1e-5,
+                (l.fitness_filtered_fitted_rows - fitted).abs() < 1e-5,
                 "{} vs {fitted}",
-                l.fitness_fitted_rows
+                l.fitness_filtered_fitted_rows
             );
-            assert!(l.fitness_all_rows < l.fitness_fitted_rows);
+            assert!(l.fitness_filtered_all_rows < l.fitness_filtered_fitted_rows);
         }
     }
 }
@@ -697,7 +701,7 @@ fn lugre_friction_is_located_at_reversals_and_nothing_is_named() {
     let parts: Vec<_> = d.after.iter().flat_map(|a| a.left_out.iter()).collect();
     let gap: f64 = parts
         .iter()
-        .map(|l| l.fitness_fitted_rows - l.fitness_all_rows)
+        .map(|l| l.fitness_filtered_fitted_rows - l.fitness_filtered_all_rows)
         .sum::<f64>()
         / parts.len() as f64;
     eprintln!("fitted − all-row fitness: {gap:.2} points");

@@ -167,7 +167,7 @@ fn streamed_train_gives_the_in_memory_diagnosis_and_removes_its_scratch_file() {
         assert!(close(x.std_dev, y.std_dev, 1e-6), "σ of {}", x.name);
     }
     for (x, y) in ds.fitness.iter().zip(&dm.fitness) {
-        for (p, q) in x.fitness.iter().zip(&y.fitness) {
+        for (p, q) in x.fitness_filtered.iter().zip(&y.fitness_filtered) {
             assert!((p[0] - q[0]).abs() < 1e-6 && (p[1] - q[1]).abs() < 1e-6);
         }
     }

@@ -133,9 +133,35 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     let train_name = train.name.clone();
     // The scratch file of a streamed TRAIN goes before the outputs are
     // committed.
+    let vals_names: Vec<String> = vals
+        .iter()
+        .map(|v| {
+            std::path::Path::new(&v.name)
+                .file_stem()
+                .map_or_else(|| v.name.clone(), |s| s.to_string_lossy().into_owned())
+        })
+        .collect();
     drop(train);
     drop(vals);
     out.write_json("diagnosis.json", &d)?;
+    // The predictions behind the raw-torque fitness of the starting and
+    // the final model, per validation set: `row,tau1,tau2` on every log row
+    // that has a sample.
+    let last = d.fitness.len().saturating_sub(1);
+    for (tag, k) in [("start", 0), ("final", last)] {
+        let Some(row) = d.fitness.get(k) else {
+            continue;
+        };
+        for (v, p) in vals_names.iter().zip(&row.predicted) {
+            let Some(p) = p else { continue };
+            let mut csv = String::from("row,tau1,tau2\n");
+            for (i, r) in p.rows.iter().enumerate() {
+                use std::fmt::Write as _;
+                let _ = writeln!(csv, "{r},{},{}", p.tau[0][i], p.tau[1][i]);
+            }
+            out.write(&format!("pred_{tag}_{v}.csv"), csv)?;
+        }
+    }
     let report = build(&d, &train_name)?;
     for (file, svg) in report.figures() {
         out.write(file, svg)?;
@@ -144,11 +170,19 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     out.write("diagnosis.html", report.to_html())?;
     let dir = out.commit()?;
     println!("{}", d.conclusion);
+    println!(
+        "validation fitness (78) vs the raw torques on every row, τ1/τ2 (in brackets: filtered, \
+         on the fitted rows, as the selection scores it)"
+    );
     for r in &d.fitness {
         let f: Vec<String> = r
             .fitness
             .iter()
-            .map(|x| format!("{:.2}/{:.2} %", x[0], x[1]))
+            .zip(&r.fitness_filtered)
+            .map(|(x, y)| {
+                let raw = x.map_or("–".to_string(), |x| format!("{:.2}/{:.2} %", x[0], x[1]));
+                format!("{raw} ({:.2}/{:.2} %)", y[0], y[1])
+            })
             .collect();
         println!("step {}: {}  [{}]", r.step, f.join("  "), r.model);
     }
@@ -263,6 +297,8 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
     for n in &names {
         header.push(format!("{n} τ1"));
         header.push(format!("{n} τ2"));
+        header.push(format!("{n} τ1 filtered"));
+        header.push(format!("{n} τ2 filtered"));
     }
     let header_ref: Vec<&str> = header.iter().map(|s| s.as_str()).collect();
     let rows = d
@@ -270,19 +306,30 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
         .iter()
         .map(|row| {
             let mut v = vec![row.step.to_string(), row.model.clone()];
-            for f in &row.fitness {
-                v.push(pct(f[0]));
-                v.push(pct(f[1]));
+            for (f, g) in row.fitness.iter().zip(&row.fitness_filtered) {
+                v.push(f.map_or("–".into(), |f| pct(f[0])));
+                v.push(f.map_or("–".into(), |f| pct(f[1])));
+                v.push(pct(g[0]));
+                v.push(pct(g[1]));
             }
             v
         })
         .collect();
     r.table(&header_ref, rows);
+    r.paragraph(
+        "τ1, τ2: the fitness (78) of the prediction from the processed motion against the \
+         log's raw torques on every row, as `identify`, `predict` and `validate` report it \
+         (– for a streamed validation log). Filtered: the selection's score, the fitness of \
+         the filtered (and period-averaged) torques on the rows the fits keep away from \
+         velocity reversals; the candidates' gains are differences of it. It is higher than \
+         the raw-torque figure and can exceed the noise ceiling of the raw torques.",
+    );
     if let Some(c) = &d.consistent {
         r.paragraph(format!(
-            "Physically consistent re-identification of the final model ({}): {}.",
+            "Physically consistent re-identification of the final model ({}): filtered \
+             validation fitness on the fitted rows {}.",
             c.status,
-            c.fitness
+            c.fitness_filtered
                 .iter()
                 .zip(&names)
                 .map(|(f, n)| format!("{n} {:.2} / {:.2} %", f[0], f[1]))
@@ -292,7 +339,7 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
     }
     r.figure(
         "fitness_steps.svg",
-        "Validation fitness per joint after each step (start = starting model; one panel per \
+        "Validation fitness (78) against the raw torques on every row, per joint after each step (start = starting model; one panel per \
          validation set and joint, each axis zoomed to its values).",
         fitness_steps(d, &names)?,
     );
@@ -317,9 +364,9 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
         for l in &a.left_out {
             items.push(format!(
                 "after, the {} rows of joint {} left out near velocity reversals: residual RMS \
-                 {:.4} N·m (fitted rows {:.4}); validation fitness on all rows {:.2} %, on the \
+                 {:.4} N·m (fitted rows {:.4}); filtered validation fitness on all rows {:.2} %, on the \
                  fitted rows {:.2} %",
-                l.rows, l.joint, l.rms, l.fitted_rms, l.fitness_all_rows, l.fitness_fitted_rows
+                l.rows, l.joint, l.rms, l.fitted_rms, l.fitness_filtered_all_rows, l.fitness_filtered_fitted_rows
             ));
             items.extend(
                 l.findings
@@ -581,7 +628,13 @@ pub fn fitness_steps(d: &Diagnosis, names: &[&str]) -> Result<String> {
                 values: d
                     .fitness
                     .iter()
-                    .map(|f| f.fitness.get(s).map_or(f64::NAN, |v| v[j]))
+                    .map(|f| {
+                        f.fitness
+                            .get(s)
+                            .copied()
+                            .flatten()
+                            .map_or(f64::NAN, |v| v[j])
+                    })
                     .collect(),
                 ceiling: None,
             })

@@ -2,43 +2,79 @@
 
 use std::fmt::Write as _;
 
-use anyhow::{Context, Result};
-use aras_signal::OutputRows;
+use anyhow::Result;
+use serde::Serialize;
 
 use crate::cli::PredictArgs;
 use crate::identify::process_options;
+use crate::loss::{ProcessingLoss, has_derivatives, predict_route, processing_loss};
 use crate::output::{FileKind, NewFile};
 use crate::robot::{ParamsUse, read_params};
+
+/// Which θ̇, θ̈ a prediction was made from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Route {
+    /// The log's `dtheta*`, `ddtheta*` columns as given.
+    LoggedDerivatives,
+    /// Differentiated from the angles with the configured bandwidth.
+    Angles,
+}
+
+/// `--summary` of `predict` (`"format": "aras-predict/1"`).
+#[derive(Debug, Serialize)]
+struct PredictSummary {
+    format: &'static str,
+    params: String,
+    data: String,
+    /// The route of the written PRED.csv.
+    route: Route,
+    /// Rows of PRED.csv (and of the log).
+    rows: [usize; 2],
+    /// Fitness (78) per joint of PRED.csv against the log's raw torques on
+    /// its rows (%).
+    fitness: [f64; 2],
+    /// Logged-derivative route minus angles-only route (`crate::loss`);
+    /// `null` for a log without derivative columns.
+    processing_loss: Option<ProcessingLoss>,
+}
 
 /// Runs `predict`: writes `t,tau1,tau2`, the model torque `Y(θ, θ̇, θ̈) β`
 /// on every row of the log (θ̇, θ̈ from the log's derivative columns as
 /// given, else from the angles with the data-chosen bandwidth), and prints
 /// the per-joint fitness (78) of exactly that file against the log's raw
-/// torques on the same rows.
+/// torques on the same rows. A log with derivative columns also gets its
+/// processing loss (`crate::loss`): the same parameters predicted from the
+/// angles alone, both scored on the rows both cover.
 pub fn run(args: &PredictArgs) -> Result<()> {
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config.clone();
     let sidecar = args.log.sidecar_of(&args.data);
-    let out = NewFile::create(
-        &args.out,
-        args.common.force,
-        FileKind::Prediction,
-        &super::input_files(&args.common, &loaded, &[&args.params, &args.data, &sidecar]),
-    )?;
+    let inputs = super::input_files(&args.common, &loaded, &[&args.params, &args.data, &sidecar]);
+    let out = NewFile::create(&args.out, args.common.force, FileKind::Prediction, &inputs)?;
+    let summary_out = match &args.summary {
+        Some(p) if p == &args.out => anyhow::bail!(
+            "--summary {} is the --out file; give the summary its own name (e.g. PRED.json)",
+            p.display()
+        ),
+        Some(p) => Some(NewFile::create(
+            p,
+            args.common.force,
+            FileKind::PredictionSummary,
+            &inputs,
+        )?),
+        None => None,
+    };
     let params = read_params(&args.params, ParamsUse::Estimate)?;
     // The parameter file's own model: extra effects in it are predicted too.
     let model = params.model()?;
     let beta = params.standard_vector(&model)?.as_slice().to_vec();
     let geometry = params.geometry()?;
     let log = super::load_log(&args.data, &args.log, &cfg)?;
-    let logged = log.theta_dot.is_some() && log.theta_ddot.is_some();
-    let mut opts = process_options(&cfg, args.log.period, logged);
-    opts.rows = OutputRows::EveryRow;
-    let processed = aras_signal::process(&log, &opts, &aras_kin::task_motion(&geometry))
-        .with_context(|| format!("processing {}", args.data.display()))?;
+    let logged = has_derivatives(&log);
+    let opts = process_options(&cfg, args.log.period, logged);
+    let (processed, tau) = predict_route(&log, &opts, &model, &geometry, &beta)?;
     let samples = &processed.samples;
-    let w = aras_pipeline::robot::stack(&model, &geometry, samples)?;
-    let tau = aras_ident::validate::predict(w.w.as_ref(), &beta)?;
     let n = samples.len();
     // The log's raw torques on the rows written (the processed samples'
     // torques are band-limited with the motion: not what the file is
@@ -48,13 +84,40 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         aras_ident::validate::fitness(&m1, &p1)?,
         aras_ident::validate::fitness(&m2, &p2)?,
     ];
+    let loss = processing_loss(
+        &log,
+        &opts,
+        &model,
+        &geometry,
+        &beta,
+        Some((&processed, &tau)),
+    )?;
     let mut csv = String::with_capacity(n * 48);
     csv.push_str("t,tau1,tau2\n");
     for i in 0..n {
         let _ = writeln!(csv, "{},{},{}", samples.t[i], tau[i], tau[n + i]);
     }
     out.write(csv.as_bytes())?;
+    if let Some(s) = &summary_out {
+        let summary = PredictSummary {
+            format: "aras-predict/1",
+            params: args.params.display().to_string(),
+            data: args.data.display().to_string(),
+            route: if logged {
+                Route::LoggedDerivatives
+            } else {
+                Route::Angles
+            },
+            rows: [n, log.len()],
+            fitness: fit,
+            processing_loss: loss,
+        };
+        s.write((serde_json::to_string_pretty(&summary)? + "\n").as_bytes())?;
+    }
     out.commit()?;
+    if let Some(s) = summary_out {
+        s.commit()?;
+    }
     let rows = if n == log.len() {
         format!("all {n} rows")
     } else {
@@ -71,5 +134,20 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         fit[0],
         fit[1]
     );
+    if let Some(l) = loss {
+        println!(
+            "processing loss (logged θ̇, θ̈ minus the angles alone, same parameters, the {} rows \
+             both cover, vs the raw torques): τ1 {:.3} points ({:.3} % vs {:.3} %), \
+             τ2 {:.3} points ({:.3} % vs {:.3} %); {} holds the logged-derivative prediction",
+            l.rows,
+            l.loss[0],
+            l.fitness_logged[0],
+            l.fitness_angles[0],
+            l.loss[1],
+            l.fitness_logged[1],
+            l.fitness_angles[1],
+            args.out.display()
+        );
+    }
     Ok(())
 }

@@ -35,6 +35,10 @@ struct XvFitness {
     simulated: [f64; 2],
     /// The true robot's noise-free torques on the same log (`crate::ceiling`).
     noise_ceiling: [f64; 2],
+    /// Processing loss `[τ1, τ2]` (percentage points, `crate::loss`): the
+    /// file's fitness with the simulator's exact θ̇, θ̈ minus its fitness
+    /// from the angles alone, on the rows both cover.
+    processing_loss: Option<[f64; 2]>,
     /// The paper's Table 2, measured on the real robot (another experiment).
     #[serde(skip_serializing_if = "Option::is_none")]
     paper_real_robot: Option<[f64; 2]>,
@@ -93,6 +97,7 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
                 frequency_hz: x.frequency_hz,
                 simulated: x.fitness[0],
                 noise_ceiling: x.ceiling.all,
+                processing_loss: x.processing_loss.first().map(|l| l.loss),
                 paper_real_robot: paper::table2(x.frequency_hz),
             })
             .collect(),
@@ -109,12 +114,18 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
                 x.paper_real_robot
                     .map_or("–".into(), |p: [f64; 2]| format!("{:.1}", p[j]))
             };
+            let loss = |j: usize| {
+                x.processing_loss
+                    .map_or("–".into(), |l: [f64; 2]| format!("{:.2}", l[j]))
+            };
             vec![
                 format!("{} Hz", x.frequency_hz),
                 format!("{:.2}", x.simulated[0]),
                 format!("{:.2}", x.noise_ceiling[0]),
+                loss(0),
                 format!("{:.2}", x.simulated[1]),
                 format!("{:.2}", x.noise_ceiling[1]),
+                loss(1),
                 ps(0),
                 ps(1),
             ]
@@ -125,8 +136,10 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
             "f",
             "ours τ1",
             "ceiling τ1",
+            "loss τ1",
             "ours τ2",
             "ceiling τ2",
+            "loss τ2",
             "paper τ1 (real robot)",
             "paper τ2 (real robot)",
         ],
@@ -134,7 +147,9 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
     );
     r.paragraph(
         "Fitness (78) in % on simulated logs of (79). Ceiling: the true robot's noise-free \
-         torques against the same log, the best attainable. Paper: Table 2, measured on the \
+         torques against the same log, the best attainable. Loss: the processing loss, the \
+         fitness with the simulator's exact θ̇, θ̈ minus the fitness from the angles alone \
+         (percentage points, same parameters, the rows both cover). Paper: Table 2, measured on the \
          real robot (another experiment, for orientation only).",
     );
     let mut pdm = BTreeMap::new();
@@ -158,8 +173,11 @@ pub fn run(args: &ValidateArgs) -> Result<()> {
         let paper = x
             .paper_real_robot
             .map_or("–".to_string(), |p| format!("{:.1} / {:.1}", p[0], p[1]));
+        let loss = x
+            .processing_loss
+            .map_or("–".to_string(), |l| format!("{:.2} / {:.2}", l[0], l[1]));
         println!(
-            "{:>5} Hz  τ1 {:6.2} % (ceiling {:6.2})  τ2 {:6.2} % (ceiling {:6.2})  paper (real robot) {paper}",
+            "{:>5} Hz  τ1 {:6.2} % (ceiling {:6.2})  τ2 {:6.2} % (ceiling {:6.2})  processing loss {loss} points  paper (real robot) {paper}",
             x.frequency_hz, x.simulated[0], x.noise_ceiling[0], x.simulated[1], x.noise_ceiling[1]
         );
     }

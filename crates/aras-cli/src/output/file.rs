@@ -17,6 +17,8 @@ use super::{canonical, warn};
 pub enum FileKind {
     /// `aras predict`: a CSV `t,tau1,tau2`.
     Prediction,
+    /// `aras predict --summary`: its figures as JSON (`"format": "aras-predict/1"`).
+    PredictionSummary,
     /// `aras excite`: a trajectory JSON (`"format": "aras-fourier/1"`).
     Trajectory,
     /// `aras simulate`: a log and its sidecar (LOG.json), written together.
@@ -30,6 +32,7 @@ impl FileKind {
     pub fn id(self) -> &'static str {
         match self {
             Self::Prediction => "prediction",
+            Self::PredictionSummary => "prediction-summary",
             Self::Trajectory => "trajectory",
             Self::SimulatedLog => "simulated-log",
             Self::Mjcf => "mjcf",
@@ -39,6 +42,7 @@ impl FileKind {
     fn describe(self) -> &'static str {
         match self {
             Self::Prediction => "a prediction CSV written by `aras predict`",
+            Self::PredictionSummary => "a prediction summary written by `aras predict --summary`",
             Self::Trajectory => "a trajectory written by `aras excite`",
             Self::SimulatedLog => "a log written by `aras simulate` (with its sidecar LOG.json)",
             Self::Mjcf => "an MJCF file written by `aras export-mjcf`",

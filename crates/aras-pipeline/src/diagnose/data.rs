@@ -34,6 +34,20 @@ pub struct Dataset {
     pub periodic: bool,
     /// Sample rate (Hz).
     pub sample_rate_hz: f64,
+    /// The log's rows, for the fitness (78) against its raw torques on
+    /// every row (`None` for a spooled data set).
+    log_rows: Option<Arc<LogRows>>,
+}
+
+/// The rows of the log a data set was processed from: its raw torques and
+/// the sample standing for each row (`aras_signal::Processed::sample_of_row`;
+/// for a period-averaged set the block's sample on every period).
+#[derive(Debug, Clone)]
+pub(crate) struct LogRows {
+    /// The log's raw torques τ1, τ2, every row.
+    pub tau: [Vec<f64>; 2],
+    /// The sample of each row (`None` for rows lost at the derivative's edges).
+    pub sample: Vec<Option<usize>>,
 }
 
 /// Where a data set's samples are.
@@ -61,6 +75,7 @@ impl Dataset {
             filter,
             periodic: s.periods.is_some(),
             sample_rate_hz: s.sample_rate_hz,
+            log_rows: Some(Arc::new(log_rows(processed))),
         })
     }
 
@@ -72,9 +87,12 @@ impl Dataset {
         processed: aras_signal::Processed,
     ) -> Result<Self, IdentError> {
         let mut p = processed;
+        // The rows' samples are looked up while the samples are in place.
+        let rows = log_rows(&p);
         let samples = std::mem::take(&mut p.samples);
         let mut d = Self::from_processed(name, &p)?;
         d.storage = Storage::Memory(Box::new(samples));
+        d.log_rows = Some(Arc::new(rows));
         Ok(d)
     }
 
@@ -94,7 +112,20 @@ impl Dataset {
             filter,
             periodic: false,
             sample_rate_hz,
+            log_rows: None,
         }
+    }
+
+    /// True if the data set knows its log's rows and raw torques (made
+    /// [`Self::from_processed`]), so the diagnosis reports its fitness (78)
+    /// against the raw torques on every row; false for a spooled set.
+    pub fn has_log_rows(&self) -> bool {
+        self.log_rows.is_some()
+    }
+
+    /// The log's rows, if known.
+    pub(crate) fn log_rows(&self) -> Option<&LogRows> {
+        self.log_rows.as_deref()
     }
 
     /// The samples, if they are held in memory (`None` for a spooled data
@@ -249,6 +280,16 @@ impl Dataset {
             });
         }
         Ok(())
+    }
+}
+
+/// The log rows of a processed log.
+fn log_rows(processed: &aras_signal::Processed) -> LogRows {
+    LogRows {
+        tau: processed.log_tau.clone(),
+        sample: (0..processed.log_tau[0].len())
+            .map(|r| processed.sample_of_row(r))
+            .collect(),
     }
 }
 

@@ -86,6 +86,6 @@ pub use residual::{
     SpectrumBand, TRACE_POINTS, Trace, Whiteness,
 };
 pub use select::{
-    CandidateScore, ConsistentFit, DiagnoseOptions, Diagnosis, FitnessRow, NamedValue, Refinement,
-    RefinementStatus, Step, diagnose,
+    CandidateScore, ConsistentFit, DiagnoseOptions, Diagnosis, FitnessRow, LogPrediction,
+    NamedValue, Refinement, RefinementStatus, Step, diagnose,
 };

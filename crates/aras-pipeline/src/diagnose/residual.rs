@@ -354,10 +354,12 @@ pub struct LeftOut {
     pub rms: f64,
     /// Residual RMS on the fitted rows (N·m).
     pub fitted_rms: f64,
-    /// Validation fitness (78) on every row of the set (%).
-    pub fitness_all_rows: f64,
-    /// Validation fitness (78) on the fitted rows (%).
-    pub fitness_fitted_rows: f64,
+    /// Validation fitness (78) of the filtered (and period-averaged)
+    /// torques on every processed row of the set, left out or fitted (%):
+    /// not the raw-torque figure ([`super::FitnessRow::fitness`]).
+    pub fitness_filtered_all_rows: f64,
+    /// The same on the fitted rows (%).
+    pub fitness_filtered_fitted_rows: f64,
     /// The residual of the rows left out binned against velocity (rest
     /// band split by sign, quantile bins beyond), standard errors from the
     /// fitted rows' RMS.
@@ -656,8 +658,8 @@ impl ResidualSummary {
                 fitted_rows: fitted,
                 rms: rms(j.square[1], left),
                 fitted_rms: sigma,
-                fitness_all_rows: j.all_rows.fitness(g)?,
-                fitness_fitted_rows: j.fitted_rows.fitness(g)?,
+                fitness_filtered_all_rows: j.all_rows.fitness(g)?,
+                fitness_filtered_fitted_rows: j.fitted_rows.fitness(g)?,
                 profile,
                 findings,
             });
@@ -996,13 +998,13 @@ mod tests {
             let meas: Vec<f64> = rows[g].iter().map(|r| r.measured).collect();
             let est: Vec<f64> = rows[g].iter().map(|r| r.measured - r.residual).collect();
             let fit_all = aras_ident::validate::fitness(&meas, &est).unwrap();
-            assert!((l.fitness_all_rows - fit_all).abs() < 1e-9);
+            assert!((l.fitness_filtered_all_rows - fit_all).abs() < 1e-9);
             let fit_kept = aras_ident::validate::fitness(
                 &pick(true, |r| r.measured),
                 &pick(true, |r| r.measured - r.residual),
             )
             .unwrap();
-            assert!((l.fitness_fitted_rows - fit_kept).abs() < 1e-9);
+            assert!((l.fitness_filtered_fitted_rows - fit_kept).abs() < 1e-9);
             let resid: Vec<f64> = rows[g].iter().map(|r| r.residual).collect();
             let ps = aras_signal::power_spectrum(&resid, rate, false).unwrap();
             let sp = &a.spectra[g];

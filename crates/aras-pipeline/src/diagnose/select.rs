@@ -9,7 +9,7 @@ use faer::{Mat, MatRef};
 use serde::Serialize;
 
 use super::candidates::{Candidate, CandidateGrid};
-use super::chunks::{Plan, in_lanes, in_order};
+use super::chunks::{Plan, WINDOW_TOL, in_lanes, in_order};
 use super::data::{Dataset, check_rows};
 use super::residual::{ResidualAnalysis, ResidualSummary, Row};
 use crate::prepare::RegressorColumns;
@@ -123,7 +123,8 @@ pub struct CandidateScore {
     /// it imitates.
     pub delta_bic: f64,
     /// Validation fitness gain per joint (percentage points, mean over the
-    /// validation sets).
+    /// validation sets), of the filtered kept-row fitness
+    /// ([`FitnessRow::fitness_filtered`]).
     pub gain: [f64; 2],
     /// Mean of `gain`.
     pub mean_gain: f64,
@@ -198,8 +199,10 @@ pub struct Refinement {
     /// The effect's parameters refitted at the refined value (its columns
     /// interpolated by a cubic from the four nearest trial values').
     pub parameters: Vec<NamedValue>,
-    /// Validation fitness per set and joint at the refined value (%).
-    pub fitness: Vec<[f64; 2]>,
+    /// Validation fitness (78) per set and joint at the refined value (%),
+    /// on the filtered (and period-averaged) torques of the rows the fits
+    /// keep, as the selection scores it: not the raw-torque figure.
+    pub fitness_filtered: Vec<[f64; 2]>,
 }
 
 /// Validation fitness after a step.
@@ -209,8 +212,31 @@ pub struct FitnessRow {
     pub step: usize,
     /// What the model is at this step.
     pub model: String,
-    /// Fitness (78) per validation set, per joint (%).
-    pub fitness: Vec<[f64; 2]>,
+    /// Fitness (78) per validation set, per joint (%): the prediction from
+    /// the processed motion, unfiltered, against the log's raw torques on
+    /// every row that has a sample (an averaged block's prediction repeated
+    /// on every period), as every other command reports it. `None` for a
+    /// set whose log rows are not known (spooled, [`Dataset::has_log_rows`]).
+    pub fitness: Vec<Option<[f64; 2]>>,
+    /// The selection's score (%): the fitness of the filtered (and
+    /// period-averaged) torques on the rows the fits keep, away from
+    /// velocity reversals. The gains of [`CandidateScore`] are differences
+    /// of it.
+    pub fitness_filtered: Vec<[f64; 2]>,
+    /// The prediction behind [`Self::fitness`] per validation set: the
+    /// log rows that have a sample and the predicted τ1, τ2 on them (not
+    /// serialised; `aras diagnose` writes the starting and final models').
+    #[serde(skip)]
+    pub predicted: Vec<Option<LogPrediction>>,
+}
+
+/// A prediction on a log's rows.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct LogPrediction {
+    /// Row numbers of the log (0-based, data rows).
+    pub rows: Vec<usize>,
+    /// Predicted τ1, τ2 on those rows (N·m).
+    pub tau: [Vec<f64>; 2],
 }
 
 /// The physically consistent re-identification of the final model.
@@ -218,8 +244,10 @@ pub struct FitnessRow {
 pub struct ConsistentFit {
     /// Solver status.
     pub status: aras_ident::SolverStatus,
-    /// Validation fitness per set per joint (%).
-    pub fitness: Vec<[f64; 2]>,
+    /// Validation fitness (78) per set per joint (%) on the filtered (and
+    /// period-averaged) torques of the kept rows, as
+    /// [`FitnessRow::fitness_filtered`].
+    pub fitness_filtered: Vec<[f64; 2]>,
     /// Standard parameters of the final model.
     pub parameters: Vec<NamedValue>,
 }
@@ -296,8 +324,8 @@ fn left_out_sentence(after: &[ResidualAnalysis], min_speed: f64) -> String {
         parts.iter().map(|l| f(l)).sum::<f64>() / parts.len() as f64
     };
     let (all, fitted) = (
-        mean(|l| l.fitness_all_rows),
-        mean(|l| l.fitness_fitted_rows),
+        mean(|l| l.fitness_filtered_all_rows),
+        mean(|l| l.fitness_filtered_fitted_rows),
     );
     let worst = parts
         .iter()
@@ -306,8 +334,8 @@ fn left_out_sentence(after: &[ResidualAnalysis], min_speed: f64) -> String {
     match worst {
         Some(w) => format!(
             " Near velocity reversals, on the rows the fits leave out (|θ̇| < {min_speed} rad/s \
-             and the filter's reach), the final model misses beyond noise ({}); validation \
-             fitness on all rows is {all:.1} % against {fitted:.1} % on the fitted rows: \
+             and the filter's reach), the final model misses beyond noise ({}); filtered \
+             validation fitness on all rows is {all:.1} % against {fitted:.1} % on the fitted rows: \
              friction at low speed (sticking, presliding, a Stribeck velocity below \
              {min_speed} rad/s) that the sign law (49) does not describe and that the \
              candidates, fitted on moving rows, do not see.",
@@ -315,7 +343,7 @@ fn left_out_sentence(after: &[ResidualAnalysis], min_speed: f64) -> String {
         ),
         None => format!(
             " On the rows left out near velocity reversals the residual is within noise \
-             (validation fitness on all rows {all:.1} %, on the fitted rows {fitted:.1} %)."
+             (filtered validation fitness on all rows {all:.1} %, on the fitted rows {fitted:.1} %)."
         ),
     }
 }
@@ -645,6 +673,105 @@ impl Context<'_> {
         summary.finish()
     }
 
+    /// Fitness (78) per joint of the selected model `fit` on `d` against
+    /// its log's raw torques on every row that has a sample (`None` if `d`
+    /// does not know its log's rows): the prediction from the processed
+    /// motion with the columns unfiltered, a torque-against-angle shift
+    /// of the model applied to the prediction (shifted back by the delay),
+    /// an averaged block's prediction repeated on every period.
+    fn raw_fitness(
+        &self,
+        d: &Dataset,
+        p: &Plan,
+        fit: &ModelFit,
+    ) -> Result<Option<([f64; 2], LogPrediction)>, IdentError> {
+        let Some(rows) = d.log_rows() else {
+            return Ok(None);
+        };
+        let mut u = d.clone();
+        u.filter = None;
+        let plan = Plan::new(&u, p.min_speed, WINDOW_TOL, 0)?;
+        let n = u.len();
+        let pb = self.layout.base_columns();
+        let mut beta = vec![0.0; self.layout.width()];
+        for (c, v) in fit.columns.iter().zip(&fit.estimate) {
+            beta[*c] = *v;
+        }
+        let delay = self.fit_delay(fit);
+        let used: Vec<usize> = (0..self.cands.len())
+            .filter(|&k| {
+                self.effect_models[k].is_some()
+                    && self.layout.candidate_columns(k).any(|c| beta[c] != 0.0)
+            })
+            .collect();
+        let mut pred: [Vec<f64>; 2] = [Vec::with_capacity(n), Vec::with_capacity(n)];
+        in_order(
+            &u,
+            &plan,
+            (0, n),
+            |w, a, b| {
+                let (wl, nw) = (w.lo, w.len());
+                let kin = w.kinematics(self.geometry)?;
+                let (wb, cols) = self.window_columns(
+                    &u,
+                    &kin,
+                    used.iter().filter_map(|&k| self.effect_models[k].as_ref()),
+                )?;
+                let out: [Vec<f64>; 2] = std::array::from_fn(|g| {
+                    (a..b)
+                        .map(|i| {
+                            let row = g * nw + (i - wl);
+                            let mut v = 0.0;
+                            for j in 0..pb {
+                                v += beta[j] * wb[(row, j)];
+                            }
+                            for (k, bk) in used.iter().zip(&cols) {
+                                for (jj, j) in self.layout.candidate_columns(*k).enumerate() {
+                                    v += beta[j] * bk[(row, jj)];
+                                }
+                            }
+                            v
+                        })
+                        .collect()
+                });
+                Ok(out)
+            },
+            |out| {
+                for (g, v) in out.into_iter().enumerate() {
+                    pred[g].extend(v);
+                }
+                Ok(())
+            },
+        )?;
+        let on: Vec<(usize, usize)> = rows
+            .sample
+            .iter()
+            .enumerate()
+            .filter_map(|(r, i)| Some((r, (*i).filter(|i| *i < n)?)))
+            .collect();
+        let mut f = [0.0; 2];
+        let mut out = LogPrediction {
+            rows: on.iter().map(|(r, _)| *r).collect(),
+            tau: Default::default(),
+        };
+        for (g, fg) in f.iter_mut().enumerate() {
+            let q: Vec<f64> = on
+                .iter()
+                .map(|&(_, i)| {
+                    if delay == 0.0 {
+                        pred[g][i]
+                    } else {
+                        aras_signal::delayed_at(&pred[g], i, -delay)
+                    }
+                })
+                .collect();
+            let m: Vec<f64> = on.iter().map(|&(r, _)| rows.tau[g][r]).collect();
+            *fg = aras_ident::validate::fitness(&m, &q)?;
+            out.tau[g] = q;
+        }
+        Ok(Some((f, out)))
+    }
+
     /// Model `model` with base `base` on `d`: calls `f(state, g, W_b rows,
     /// torques)` chunk by chunk (torques shifted by `delay`).
     #[allow(clippy::too_many_arguments)]
@@ -824,10 +951,25 @@ pub fn diagnose(
     let sel = select(&train_acc, &val_accs, &sel_opts)?;
     let pair_rows =
         |f: &ModelFit| -> Vec<[f64; 2]> { f.fitness.iter().map(|v| fitness_pair(v)).collect() };
+    type Raw = (Vec<Option<[f64; 2]>>, Vec<Option<LogPrediction>>);
+    let raw_rows = |f: &ModelFit| -> Result<Raw, IdentError> {
+        let all = validation
+            .iter()
+            .zip(&vals_p)
+            .map(|(v, p)| ctx.raw_fitness(v, p, f))
+            .collect::<Result<Vec<_>, IdentError>>()?;
+        Ok(all
+            .into_iter()
+            .map(|x| x.map_or((None, None), |(f, p)| (Some(f), Some(p))))
+            .unzip())
+    };
+    let (fitness, predicted) = raw_rows(&sel.initial)?;
     let mut fitness_rows = vec![FitnessRow {
         step: 0,
         model: describe(start, &[]),
-        fitness: pair_rows(&sel.initial),
+        fitness,
+        fitness_filtered: pair_rows(&sel.initial),
+        predicted,
     }];
     let mut steps: Vec<Step> = Vec::new();
     let mut delay_samples = 0.0;
@@ -868,10 +1010,13 @@ pub fn diagnose(
             evidence: score_of(c, &st.evaluation),
             refinement: None,
         });
+        let (fitness, predicted) = raw_rows(&st.fit)?;
         fitness_rows.push(FitnessRow {
             step: steps.len(),
             model: describe(start, &steps),
-            fitness: pair_rows(&st.fit),
+            fitness,
+            fitness_filtered: pair_rows(&st.fit),
+            predicted,
         });
     }
     // Nonlinear settings between the grid points: one pass over TRAIN per
@@ -1231,7 +1376,7 @@ fn refine_setting(
         std_dev,
         status,
         parameters,
-        fitness: f.fitness.iter().map(|x| fitness_pair(x)).collect(),
+        fitness_filtered: f.fitness.iter().map(|x| fitness_pair(x)).collect(),
     })
 }
 
@@ -1355,7 +1500,7 @@ fn consistent_fit(
         .collect::<Result<Vec<_>, _>>()?;
     Ok(ConsistentFit {
         status: sol.status,
-        fitness,
+        fitness_filtered: fitness,
         parameters: names
             .iter()
             .zip(&sol.standard)
