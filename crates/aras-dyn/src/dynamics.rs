@@ -96,7 +96,11 @@ impl Dynamics {
         let law = |j: usize| {
             let v = theta_dot[j];
             let w = f.width[j];
-            if w > 0.0 { (v / w).tanh() } else { sign.eval(v) }
+            if w > 0.0 {
+                (v / w).tanh()
+            } else {
+                sign.eval(v)
+            }
         };
         Vector2::new(
             f.viscous[0] * theta_dot[0] + f.coulomb[0] * law(0),

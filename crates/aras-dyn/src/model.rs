@@ -58,7 +58,11 @@ impl Model {
     /// The paper's 42-column model: rigid links, friction, elasticity.
     pub fn paper(gravity: Vector3<f64>) -> Result<Self, DynError> {
         Self::new(
-            vec![Effect::RigidLinks, Effect::FRICTION_SIGN_LAW, Effect::Elasticity],
+            vec![
+                Effect::RigidLinks,
+                Effect::FRICTION_SIGN_LAW,
+                Effect::Elasticity,
+            ],
             gravity,
         )
     }

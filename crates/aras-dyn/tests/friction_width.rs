@@ -2,9 +2,7 @@
 //! `w = 0`, `Y β` against the direct dynamics for `w > 0`, the width's
 //! derivative, and its place in the parameter file.
 
-use aras_dyn::{
-    Dynamics, Effect, Model, Params, Sign, coulomb_law, coulomb_law_dw,
-};
+use aras_dyn::{Dynamics, Effect, Model, Params, Sign, coulomb_law, coulomb_law_dw};
 use aras_kin::{Geometry, Motion, evaluate};
 use nalgebra::Vector2;
 use proptest::prelude::*;
@@ -126,7 +124,10 @@ fn width_in_the_parameter_file() {
     let mut p = Params::aras_diamond();
     let old = p.to_json_string();
     assert!(!old.contains("\"w\""), "{old}");
-    assert_eq!(Params::from_json_str(&old).unwrap().friction.width, [0.0; 2]);
+    assert_eq!(
+        Params::from_json_str(&old).unwrap().friction.width,
+        [0.0; 2]
+    );
     p.friction.width = [0.03, 0.012];
     let text = p.to_json_string();
     let back = Params::from_json_str(&text).unwrap();

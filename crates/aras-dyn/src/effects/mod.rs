@@ -389,7 +389,10 @@ mod tests {
         for bad in [-1e-3, f64::NAN, f64::INFINITY] {
             let e = Effect::Friction { w: [0.01, bad] }.validate().unwrap_err();
             let text = e.to_string();
-            assert!(text.contains("w[1] (joint 2)") && text.contains("≥ 0"), "{text}");
+            assert!(
+                text.contains("w[1] (joint 2)") && text.contains("≥ 0"),
+                "{text}"
+            );
         }
         assert!(
             Effect::Cogging {
