@@ -55,7 +55,8 @@ impl ProfileMinimum {
         }
         let i0 = self.best.clamp(1, self.points.len() - 2);
         let (fm, f0, fp) = (self.rss[i0 - 1], self.rss[i0], self.rss[i0 + 1]);
-        if !(fm.min(f0).min(fp) > 0.0) {
+        let positive = [fm, f0, fp].iter().all(|x| *x > 0.0);
+        if !positive {
             return None;
         }
         let j2 = n_eff * (fp.ln() - 2.0 * f0.ln() + fm.ln()) / (self.step * self.step);
