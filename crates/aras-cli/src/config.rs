@@ -11,6 +11,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use aras_pipeline::friction_width::{FitRows, WidthSearch};
 use serde::{Deserialize, Serialize};
 
 /// The whole configuration. Units: SI, angles in degrees only where a key
@@ -396,6 +397,13 @@ pub struct IdentificationConfig {
     /// The exclusion around a slow row reaches as far as the zero-phase
     /// filter's impulse response stays above this fraction of its peak.
     pub reversal_reach: f64,
+    /// Which rows are fitted: `"all"` (default: every row, the friction's
+    /// Coulomb transition widths refined) or `"away_from_reversals"` (the
+    /// rows away from velocity reversals by `min_speed`, the sign law (49));
+    /// a joint whose width is not identifiable falls back to the latter.
+    pub rows: FitRows,
+    /// The width search of `rows = "all"` (`min`, `max` in rad/s, `rounds`).
+    pub width: WidthSearch,
     /// The SDP.
     pub sdp: SdpConfig,
 }
@@ -408,6 +416,8 @@ impl Default for IdentificationConfig {
             base_samples: 400,
             min_speed: 0.2,
             reversal_reach: 1e-3,
+            rows: FitRows::All,
+            width: WidthSearch::default(),
             sdp: SdpConfig::default(),
         }
     }
@@ -768,6 +778,15 @@ impl Config {
         }
         nonneg("identification.min_speed", i.min_speed)?;
         fraction("identification.reversal_reach", i.reversal_reach)?;
+        if let Err(e) = i.width.validate() {
+            return bad(
+                "identification.width",
+                format!(
+                    "{e} (found min = {}, max = {}, rounds = {})",
+                    i.width.min, i.width.max, i.width.rounds
+                ),
+            );
+        }
         let d = &i.sdp;
         nonneg("identification.sdp.epsilon", d.epsilon)?;
         if !(d.mass_tolerance.is_finite() && d.mass_tolerance >= 0.0 && d.mass_tolerance < 1.0) {

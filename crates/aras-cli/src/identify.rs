@@ -20,6 +20,7 @@ use aras_ident::{
 };
 use aras_kin::{Geometry, Workspace};
 use aras_log::Log;
+use aras_pipeline::friction_width::{FitRows, WidthRefinement, apply_widths, refine_widths};
 use aras_pipeline::prepare::RegressorColumns;
 use aras_pipeline::robot::{
     self, FilterMode, Stacked, consistent_problem, keep_rows, params_from_solution,
@@ -260,21 +261,52 @@ pub fn consistent_fit(
         .context("physically consistent fit (SDP)")
 }
 
-/// OLS and SDP on prepared data, with `nominal` as the SDP's reference:
-/// rows near velocity reversals are left out (`identification.min_speed`,
-/// widened by the filter's reach), σ is the HAC sandwich's
-/// (`aras_ident::covariance`).
+/// The friction's Coulomb widths for `identification.rows`
+/// (`aras_pipeline::friction_width`): with `"all"` refined on every row
+/// and written into `prepared`'s columns, the model returned with them;
+/// with `"away_from_reversals"` the sign law. A refinement that fails
+/// falls back (both joints on the rows away from reversals, the reason
+/// kept in the result), it does not stop the identification.
+pub fn friction_widths(
+    prepared: &mut Prepared,
+    base: &BaseParameters,
+    model: &Model,
+    cfg: &Config,
+) -> Result<(Model, WidthRefinement, Vec<bool>)> {
+    let ic = &cfg.identification;
+    let mode = match ic.filtering {
+        FilteringMode::Parallel => FilterMode::Parallel,
+        FilteringMode::TorqueOnly => FilterMode::TorqueOnly,
+    };
+    let away = prepared.keep_mask(ic.min_speed, ic.reversal_reach)?;
+    let refinement = match ic.rows {
+        FitRows::AwayFromReversals => WidthRefinement::not_refined(),
+        FitRows::All => match refine_widths(prepared, model, base, mode, &ic.width) {
+            Ok(r) => r,
+            Err(e) => WidthRefinement::failed(e.to_string()),
+        },
+    };
+    let refined = apply_widths(prepared, model, mode, refinement.widths())?;
+    let keep = refinement.keep(&away);
+    Ok((refined, refinement, keep))
+}
+
+/// OLS and SDP on prepared data, with `nominal` as the SDP's reference, on
+/// the rows `keep` (joint-major; [`friction_widths`]: every row, or a
+/// joint's rows away from its velocity reversals by
+/// `identification.min_speed`, widened by the filter's reach); σ is the
+/// HAC sandwich's (`aras_ident::covariance`).
 pub fn identify(
     prepared: &Prepared,
     base: &BaseParameters,
     model: &Model,
     nominal: &Params,
     cfg: &Config,
+    keep: &[bool],
 ) -> Result<Identification> {
     let ic = &cfg.identification;
     let names = model.names();
     let bnames = base.base_names();
-    let keep = prepared.keep_mask(ic.min_speed, ic.reversal_reach)?;
     // Counted on the mask, before the rows are taken, so a log whose joints
     // never move gets this message rather than one about empty row groups.
     let n = prepared.n();
@@ -298,7 +330,7 @@ pub fn identify(
             top[1]
         );
     }
-    let fit = keep_rows(&prepared.stacked, &keep)?;
+    let fit = keep_rows(&prepared.stacked, keep)?;
     let w_fit = base.base_regressor(fit.w.as_ref())?;
     // σ, σ% and the covariance: the HAC sandwich (`aras_ident::covariance`)
     // on the rows as fitted (scaled by 1/σ_joint for WLS).

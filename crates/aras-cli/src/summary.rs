@@ -148,6 +148,12 @@ pub struct Summary {
     /// Findings that make the result implausible (`crate::plausibility`);
     /// empty when it is believable.
     pub implausible: Vec<crate::plausibility::Implausible>,
+    /// The friction's Coulomb transition widths with σ, which rows each
+    /// joint was fitted on, and why a joint fell back to the rows away from
+    /// its reversals (`identification.rows`); absent on the streaming route,
+    /// which fits the rows away from reversals with the sign law.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_width: Option<aras_pipeline::friction_width::WidthRefinement>,
     /// Wall-clock seconds per stage (absent with `--reproducible`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub timings_s: Option<BTreeMap<String, f64>>,

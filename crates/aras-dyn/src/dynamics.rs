@@ -88,24 +88,23 @@ impl Dynamics {
         s.jacobian.inverse().transpose() * acc
     }
 
-    /// Friction (49) with the given sign model (N·m).
+    /// Friction `Fv θ̇ + Fc tanh(θ̇ / w)` with the parameters' widths; a joint
+    /// whose width is 0 takes the given sign model (the exact sign of (49),
+    /// or the simulator's smoothing) (N·m).
     pub fn friction_torque(&self, theta_dot: &Vector2<f64>, sign: Sign) -> Vector2<f64> {
         let f = &self.params.friction;
-        let sg = |v: f64| match sign {
-            Sign::Exact => {
-                if v > 0.0 {
-                    1.0
-                } else if v < 0.0 {
-                    -1.0
-                } else {
-                    0.0
-                }
+        let law = |j: usize| {
+            let v = theta_dot[j];
+            let w = f.width[j];
+            if w > 0.0 {
+                (v / w).tanh()
+            } else {
+                sign.eval(v)
             }
-            Sign::Tanh(w) => (v / w).tanh(),
         };
         Vector2::new(
-            f.viscous[0] * theta_dot[0] + f.coulomb[0] * sg(theta_dot[0]),
-            f.viscous[1] * theta_dot[1] + f.coulomb[1] * sg(theta_dot[1]),
+            f.viscous[0] * theta_dot[0] + f.coulomb[0] * law(0),
+            f.viscous[1] * theta_dot[1] + f.coulomb[1] * law(1),
         )
     }
 
@@ -134,7 +133,8 @@ impl Dynamics {
         t
     }
 
-    /// Full inverse dynamics: links (33) + friction (exact sign) +
+    /// Full inverse dynamics: links (33) + friction (the parameters' widths,
+    /// the exact sign where a width is 0) +
     /// elasticity + extra effects, the direct counterpart of `Y β` (48).
     pub fn inverse(&self, s: &KinematicSample) -> Vector2<f64> {
         self.link_torque(s)

@@ -84,7 +84,7 @@ mod trajectory;
 
 pub use aras_core::{Inertia, Motion};
 pub use dynamics::Dynamics;
-pub use effects::{Effect, EffectId, UnknownEffect};
+pub use effects::{Effect, EffectId, UnknownEffect, coulomb_law, coulomb_law_dw};
 pub use error::{DynError, ParamError, SimError};
 pub use lagrange::{LagrangeTerms, lagrange_terms};
 pub use model::Model;

@@ -246,7 +246,8 @@ fn ry(a: f64) -> Matrix3<f64> {
 /// values (named as in the parameter file).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Unrepresented {
-    /// The effect (its id names the parameter file's `extra` section).
+    /// The effect (its id names the parameter file's section: `friction`
+    /// for the Coulomb width, else an `extra` section).
     pub effect: EffectId,
     /// `(name, value)` pairs.
     pub values: Vec<(String, f64)>,
@@ -266,6 +267,16 @@ pub fn unrepresented(params: &Params) -> Vec<Unrepresented> {
             .zip(v.iter().copied())
             .collect()
     };
+    let w = params.friction.width;
+    if w.iter().any(|x| *x != 0.0) {
+        out.push(Unrepresented {
+            effect: EffectId::Friction,
+            values: named(&["w1", "w2"], &w),
+            why: "frictionloss is a hard Coulomb level (a constraint with MuJoCo's own \
+                  regularisation); the tanh transition width has no MJCF attribute, so the \
+                  exported Coulomb level acts as the sign law",
+        });
+    }
     if let Some([_, _, fpd]) = e.passive_joint_viscous
         && fpd != 0.0
     {

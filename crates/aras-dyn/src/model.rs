@@ -58,7 +58,11 @@ impl Model {
     /// The paper's 42-column model: rigid links, friction, elasticity.
     pub fn paper(gravity: Vector3<f64>) -> Result<Self, DynError> {
         Self::new(
-            vec![Effect::RigidLinks, Effect::Friction, Effect::Elasticity],
+            vec![
+                Effect::RigidLinks,
+                Effect::FRICTION_SIGN_LAW,
+                Effect::Elasticity,
+            ],
             gravity,
         )
     }
@@ -110,7 +114,13 @@ impl Params {
     /// every extra effect present (in the order of [`Extras`](crate::Extras)'s
     /// fields), with these parameters' gravity.
     pub fn model(&self) -> Result<Model, DynError> {
-        let mut v = vec![Effect::RigidLinks, Effect::Friction, Effect::Elasticity];
+        let mut v = vec![
+            Effect::RigidLinks,
+            Effect::Friction {
+                w: self.friction.width,
+            },
+            Effect::Elasticity,
+        ];
         let e = &self.extra;
         if e.torque_offset.is_some() {
             v.push(Effect::TorqueOffset);
@@ -151,7 +161,10 @@ impl Params {
                         dst[9 * k..9 * k + 9].copy_from_slice(&l.standard());
                     }
                 }
-                Effect::Friction => {
+                // The widths shape the columns; the coefficients are the
+                // same whatever they are (a reference robot with the sign
+                // law serves a model with refined widths).
+                Effect::Friction { .. } => {
                     let f = &self.friction;
                     dst.copy_from_slice(&[f.viscous[0], f.coulomb[0], f.viscous[1], f.coulomb[1]]);
                 }
@@ -228,7 +241,8 @@ impl Params {
                         l.set_standard(&a);
                     }
                 }
-                Effect::Friction => {
+                Effect::Friction { w } => {
+                    self.friction.width = w;
                     self.friction.viscous = [src[0], src[2]];
                     self.friction.coulomb = [src[1], src[3]];
                 }

@@ -28,13 +28,17 @@ pub(crate) const LINK_KEYS: [&str; 10] = [
     "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz", "hx", "hy", "hz", "mass",
 ];
 
-/// Viscous and Coulomb friction per actuator, (49).
+/// Viscous and Coulomb friction per actuator:
+/// `τ_j = Fv_j θ̇_j + Fc_j tanh(θ̇_j / w_j)`, the sign law (49) where `w_j = 0`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Friction {
     /// Viscous coefficients `[Fv1, Fv2]` (N·m·s/rad).
     pub viscous: [f64; 2],
     /// Coulomb levels `[Fc1, Fc2]` (N·m).
     pub coulomb: [f64; 2],
+    /// Coulomb transition widths `[w1, w2]` (rad/s, ≥ 0; 0 = `sign`, (49)):
+    /// the file's optional `friction.w`, absent = `[0, 0]`.
+    pub width: [f64; 2],
 }
 
 /// Stribeck friction: `τ_j = Fs_j sign(θ̇_j) exp(−(θ̇_j/v_s)²)`.
@@ -259,6 +263,17 @@ impl Params {
             finite(self.friction.viscous[j], &format!("friction.Fv{}", j + 1))?;
             finite(self.friction.coulomb[j], &format!("friction.Fc{}", j + 1))?;
             finite(self.elasticity[j], &format!("elasticity.Ke{}", j + 1))?;
+            let w = self.friction.width[j];
+            let key = format!("friction.w[{j}]");
+            finite(w, &key)?;
+            if w < 0.0 {
+                return Err(ParamError::Invalid {
+                    key,
+                    value: w,
+                    reason: "the Coulomb transition width must be ≥ 0 rad/s (0 is the sign law \
+                             (49)); give a non-negative width or leave `w` out",
+                });
+            }
         }
         let e = &self.extra;
         // Keys `extra.<effect>.<parameter>`, the parameters named by the
@@ -398,10 +413,15 @@ impl Params {
         }
         let f = top.obj("friction")?;
         let [fv1, fc1, fv2, fc2] = FRICTION_NAMES;
-        f.only(&FRICTION_NAMES)?;
+        f.only(&[fv1, fc1, fv2, fc2, "w"])?;
         p.friction = Friction {
             viscous: [f.num(fv1)?, f.num(fv2)?],
             coulomb: [f.num(fc1)?, f.num(fc2)?],
+            width: if f.opt("w").is_some() {
+                f.nums::<2>("w")?
+            } else {
+                [0.0; 2]
+            },
         };
         let e = top.obj("elasticity")?;
         p.elasticity = pair(&e, ELASTICITY_NAMES)?;
@@ -523,6 +543,28 @@ impl Serialize for Links<'_> {
     }
 }
 
+/// The `friction` section: the four coefficients, then `w` when a width
+/// is not zero (a file with the sign law (49) keeps its old form).
+struct FrictionSer<'a>(&'a Friction);
+
+impl Serialize for FrictionSer<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let f = self.0;
+        let mut m = s.serialize_map(None)?;
+        let kv = named(
+            FRICTION_NAMES,
+            [f.viscous[0], f.coulomb[0], f.viscous[1], f.coulomb[1]],
+        );
+        for (k, v) in kv {
+            m.serialize_entry(k, &v)?;
+        }
+        if f.width != [0.0; 2] {
+            m.serialize_entry("w", &f.width)?;
+        }
+        m.end()
+    }
+}
+
 struct ExtrasSer<'a>(&'a Extras);
 
 impl Serialize for ExtrasSer<'_> {
@@ -585,14 +627,7 @@ impl Serialize for Params {
         )?;
         m.serialize_entry("gravity", &[self.gravity.x, self.gravity.y, self.gravity.z])?;
         m.serialize_entry("links", &Links(&self.links))?;
-        let f = &self.friction;
-        m.serialize_entry(
-            "friction",
-            &Flat(&named(
-                FRICTION_NAMES,
-                [f.viscous[0], f.coulomb[0], f.viscous[1], f.coulomb[1]],
-            )),
-        )?;
+        m.serialize_entry("friction", &FrictionSer(&self.friction))?;
         m.serialize_entry(
             "elasticity",
             &Flat(&named(ELASTICITY_NAMES, self.elasticity)),

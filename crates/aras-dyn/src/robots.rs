@@ -66,6 +66,7 @@ impl Params {
             friction: Friction {
                 viscous: [0.034321, 0.008779],
                 coulomb: [0.076031, 0.28876],
+                width: [0.0; 2],
             },
             elasticity: [0.001, 0.065757],
             extra: Default::default(),

@@ -280,6 +280,14 @@ fn unrepresented_effects_are_listed_with_values() {
     assert!(xml.contains("torque_offset: tau0_1 = 0.05, tau0_2 = -0.01"));
     let plain = to_mjcf(&Params::aras_diamond(), &MjcfOptions::default()).unwrap();
     assert!(plain.contains("Every effect of the parameter file is represented"));
+    // The Coulomb transition width: frictionloss keeps the level, the
+    // width is named in the notes.
+    let mut p = Params::aras_diamond();
+    p.friction.width = [0.03, 0.0125];
+    let xml = to_mjcf(&p, &MjcfOptions::default()).unwrap();
+    parse(&xml);
+    assert!(xml.contains("friction: w1 = 0.03, w2 = 0.0125"), "{xml}");
+    assert!(xml.contains("frictionloss=\"0.076031\""), "{xml}");
 }
 
 #[test]

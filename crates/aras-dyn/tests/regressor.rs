@@ -122,7 +122,7 @@ fn paper_model_has_42_named_columns() {
 fn model_rejects_duplicates_and_bad_settings() {
     let g = Vector3::new(0.0, -9.81, 0.0);
     let m = Model::paper(g).unwrap();
-    let e = m.with_effect(Effect::Friction).unwrap_err();
+    let e = m.with_effect(Effect::FRICTION_SIGN_LAW).unwrap_err();
     assert!(e.to_string().contains("`friction` appears twice"), "{e}");
     let e = m
         .with_effect(Effect::StribeckFriction { v_s: 0.0 })
@@ -301,7 +301,7 @@ fn effect_ids_are_spelled_once() {
     use aras_dyn::EffectId;
     let examples = [
         Effect::RigidLinks,
-        Effect::Friction,
+        Effect::FRICTION_SIGN_LAW,
         Effect::Elasticity,
         Effect::TorqueOffset,
         Effect::CoulombAsymmetry,

@@ -13,10 +13,14 @@
 //!    stack, the processing's low-pass on torques and columns alike; the
 //!    in-memory identification, the streaming blocks and the diagnosis's
 //!    data sets all start there.
-//! 3. [`streaming`]: identification from a CSV log of any length in bounded
+//! 3. [`refine`]: the one refinement of a continuous non-linear setting
+//!    (zoomed passes over a scalar RSS profile, parabola vertex, σ from the
+//!    curvature), used by the diagnosis's candidates and by
+//!    [`friction_width`], the identification's Coulomb transition widths.
+//! 4. [`streaming`]: identification from a CSV log of any length in bounded
 //!    memory (chunked reading, filtering with overlap, reversal exclusion,
 //!    `aras_ident`'s accumulators).
-//! 4. [`diagnose`]: where model and measurement disagree, which missing
+//! 5. [`diagnose`]: where model and measurement disagree, which missing
 //!    effect explains it, and how much the gap shrinks once it is added;
 //!    [`spool`] holds a long log's processed samples in a scratch file that
 //!    its passes read window by window ([`streaming::spool_log`]).
@@ -33,7 +37,9 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod diagnose;
+pub mod friction_width;
 pub mod prepare;
+pub mod refine;
 pub mod robot;
 pub mod spool;
 pub mod streaming;

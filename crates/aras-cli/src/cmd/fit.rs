@@ -11,7 +11,9 @@ use aras_ident::BaseParameters;
 use aras_log::Log;
 
 use crate::config::Config;
-use crate::identify::{identify, logged_derivatives_note, prepare, process_options};
+use crate::identify::{
+    friction_widths, identify, logged_derivatives_note, prepare, process_options,
+};
 use crate::output::OutDir;
 use crate::plausibility;
 use crate::report::run::{RunData, build};
@@ -70,7 +72,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
     {
         eprintln!("note: {}: {note}", input.log.name);
     }
-    let prepared = stages.run("process log + regressor", |_| {
+    let mut prepared = stages.run("process log + regressor", |_| {
         prepare(
             input.log,
             &options,
@@ -79,8 +81,15 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
             &geometry,
         )
     })?;
+    let (refined_model, widths, keep) = stages.run("Coulomb widths", |_| {
+        friction_widths(&mut prepared, input.base, model, cfg)
+    })?;
+    for f in &widths.fallback {
+        eprintln!("note: {f}");
+    }
+    let model = &refined_model;
     let id = stages.run("identify (OLS + SDP)", |_| {
-        identify(&prepared, input.base, model, input.nominal, cfg)
+        identify(&prepared, input.base, model, input.nominal, cfg, &keep)
     })?;
     let ols_std = id.ols_params.standard_vector(model)?.as_slice().to_vec();
     let sdp_std = id.sdp.standard.clone();
@@ -150,15 +159,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
     };
     let ceiling = match input.clean_torque {
         Some(clean) => Some(crate::ceiling::noise_ceiling(
-            input.log,
-            clean,
-            &prepared,
-            &options,
-            &geometry,
-            &prepared.keep_mask(
-                cfg.identification.min_speed,
-                cfg.identification.reversal_reach,
-            )?,
+            input.log, clean, &prepared, &options, &geometry, &keep,
         )?),
         None => None,
     };
@@ -196,6 +197,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         parameter_errors: errors.clone(),
         sdp: SdpReport::new(&id.sdp),
         implausible: implausible.clone(),
+        friction_width: Some(widths.clone()),
         timings_s: None,
     };
     if !input.reproducible {
@@ -208,7 +210,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
             "ARAS-Diamond identification report (`aras {}`)",
             input.command
         ),
-        intro: input.intro,
+        intro: format!("{} {}", input.intro, widths.sentence()),
         timings: stages.timings(),
         design: input.design,
         processing: &prepared.processed.summary,

@@ -260,6 +260,7 @@ pub fn fit_and_write(
         parameter_errors: errors,
         sdp: SdpReport::new(&sdp),
         implausible: implausible.clone(),
+        friction_width: None,
         timings_s: None,
     };
     if !reproducible {

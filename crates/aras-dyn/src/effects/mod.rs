@@ -20,6 +20,7 @@ pub(crate) use cogging::names as cogging_names;
 pub(crate) use coulomb_asymmetry::NAMES as COULOMB_ASYMMETRY_NAMES;
 pub(crate) use elasticity::NAMES as ELASTICITY_NAMES;
 pub(crate) use friction::NAMES as FRICTION_NAMES;
+pub use friction::{coulomb_law, coulomb_law_dw};
 pub(crate) use passive_joint_viscous::NAMES as PASSIVE_JOINT_VISCOUS_NAMES;
 pub(crate) use quadratic_damping::NAMES as QUADRATIC_DAMPING_NAMES;
 pub(crate) use stribeck_friction::NAMES as STRIBECK_FRICTION_NAMES;
@@ -43,8 +44,15 @@ use crate::{DynError, Sign};
 pub enum Effect {
     /// Rigid links 1–4: 9 columns each (`Lk.Ixx … Lk.hz`), (38)–(46).
     RigidLinks,
-    /// Viscous + Coulomb friction per actuator: `Fv1, Fc1, Fv2, Fc2`, (49).
-    Friction,
+    /// Viscous + Coulomb friction per actuator: `Fv1, Fc1, Fv2, Fc2`, with
+    /// the Coulomb law `Fc_j tanh(θ̇_j / w_j)`; `w_j = 0` is the sign law (49).
+    /// Serialised as `{"id": "friction", "w": [w1, w2]}`; an absent `w` is
+    /// `[0, 0]`.
+    Friction {
+        /// Coulomb transition width per joint (rad/s, finite, ≥ 0).
+        #[serde(default)]
+        w: [f64; 2],
+    },
     /// Capstan elasticity `τ_e = K_e θ`: `Ke1, Ke2`, (50).
     Elasticity,
     /// Constant torque offset per actuator: `tau0_1, tau0_2`.
@@ -197,11 +205,15 @@ fn known_effects() -> String {
 }
 
 impl Effect {
+    /// The paper's friction (49): viscous + Coulomb with the exact sign
+    /// (transition width 0 on both joints).
+    pub const FRICTION_SIGN_LAW: Effect = Effect::Friction { w: [0.0; 2] };
+
     /// Which effect this is, without its settings.
     pub fn kind(&self) -> EffectId {
         match self {
             Effect::RigidLinks => EffectId::RigidLinks,
-            Effect::Friction => EffectId::Friction,
+            Effect::Friction { .. } => EffectId::Friction,
             Effect::Elasticity => EffectId::Elasticity,
             Effect::TorqueOffset => EffectId::TorqueOffset,
             Effect::CoulombAsymmetry => EffectId::CoulombAsymmetry,
@@ -222,7 +234,7 @@ impl Effect {
     pub fn columns(&self) -> usize {
         match *self {
             Effect::RigidLinks => rigid_links::COLUMNS,
-            Effect::Friction => friction::NAMES.len(),
+            Effect::Friction { .. } => friction::NAMES.len(),
             Effect::PassiveJointViscous => passive_joint_viscous::NAMES.len(),
             Effect::Cogging { order, .. } => cogging::columns(order),
             _ => 2,
@@ -234,7 +246,7 @@ impl Effect {
         let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect();
         match *self {
             Effect::RigidLinks => rigid_links::names(),
-            Effect::Friction => s(&friction::NAMES),
+            Effect::Friction { .. } => s(&friction::NAMES),
             Effect::Elasticity => s(&elasticity::NAMES),
             Effect::TorqueOffset => s(&torque_offset::NAMES),
             Effect::CoulombAsymmetry => s(&coulomb_asymmetry::NAMES),
@@ -248,6 +260,7 @@ impl Effect {
     /// Checks the settings.
     pub fn validate(&self) -> Result<(), DynError> {
         match *self {
+            Effect::Friction { w } => friction::validate(w),
             Effect::StribeckFriction { v_s } => stribeck_friction::validate(v_s),
             Effect::Cogging {
                 cycles_per_rev,
@@ -270,7 +283,7 @@ impl Effect {
     /// either sign.
     pub fn nonnegative(&self) -> &'static [&'static str] {
         match self {
-            Effect::Friction => friction::NONNEGATIVE,
+            Effect::Friction { .. } => friction::NONNEGATIVE,
             Effect::Elasticity => elasticity::NONNEGATIVE,
             Effect::StribeckFriction { .. } => stribeck_friction::NONNEGATIVE,
             Effect::PassiveJointViscous => passive_joint_viscous::NONNEGATIVE,
@@ -301,7 +314,7 @@ impl Effect {
     ) {
         match *self {
             Effect::RigidLinks => rigid_links::fill(s, g, out),
-            Effect::Friction => friction::fill(s, sign, out),
+            Effect::Friction { w } => friction::fill(s, w, sign, out),
             Effect::Elasticity => elasticity::fill(s, out),
             Effect::TorqueOffset => torque_offset::fill(out),
             Effect::CoulombAsymmetry => coulomb_asymmetry::fill(s, sign, out),
@@ -337,7 +350,7 @@ mod tests {
     fn each_effect_is_complete() {
         let all = [
             Effect::RigidLinks,
-            Effect::Friction,
+            Effect::Friction { w: [0.03, 0.0] },
             Effect::Elasticity,
             Effect::TorqueOffset,
             Effect::CoulombAsymmetry,
@@ -373,6 +386,14 @@ mod tests {
             e.validate().unwrap();
         }
         assert!(Effect::StribeckFriction { v_s: 0.0 }.validate().is_err());
+        for bad in [-1e-3, f64::NAN, f64::INFINITY] {
+            let e = Effect::Friction { w: [0.01, bad] }.validate().unwrap_err();
+            let text = e.to_string();
+            assert!(
+                text.contains("w[1] (joint 2)") && text.contains("≥ 0"),
+                "{text}"
+            );
+        }
         assert!(
             Effect::Cogging {
                 cycles_per_rev: 1.0,

@@ -13,6 +13,7 @@ use super::chunks::{Plan, WINDOW_TOL, in_lanes, in_order};
 use super::data::{Dataset, check_rows};
 use super::residual::{ResidualAnalysis, ResidualSummary, Row};
 use crate::prepare::RegressorColumns;
+use crate::refine::minimise_profile;
 use crate::robot::consistent_problem;
 use aras_ident::BaseParameters;
 use aras_ident::IdentError;
@@ -1183,24 +1184,12 @@ pub fn diagnose(
     })
 }
 
-/// Trial values of a refinement per zoom pass (and per search centre in
-/// the first pass).
-const ZOOM_POINTS: usize = 16;
-
-/// Zoom passes of a refinement: each narrows the interval to two spacings
-/// of the previous one, `2 / (ZOOM_POINTS − 1)`; two leave a spacing of
-/// `2 / 15² ≈ 8.9e-3` of the first interval (2 % in `v_s`, 0.4 % in
-/// cogging cycles), and a parabola through the best three points of a
-/// smooth profile lands within 0.03 % of where a third pass ends (measured
-/// on the refinement tests).
-const ZOOM_PASSES: usize = 2;
-
 /// Refinement of `candidate`'s continuous setting
 /// ([`Candidate::setting`]) over [`Candidate::search_scale`]'s interval
 /// around each search centre, the `others` added effects kept; σ from the
 /// profile's curvature. Every trial value of a zoom pass is a candidate of
 /// one layout, so one bounded pass over TRAIN scores them all (the
-/// selection's own scheme): [`ZOOM_PASSES`] passes, whatever the log's
+/// selection's own scheme): [`ZOOM_PASSES`](crate::refine::ZOOM_PASSES) passes, whatever the log's
 /// length. The fit at the refined value needs no pass of its own: its
 /// columns are the cubic interpolation of the four nearest trial values'
 /// columns, whose sums the last pass holds ([`Accumulator::combined`]).
@@ -1238,10 +1227,17 @@ fn refine_setting(
         })
     };
     let with_trial = |k: usize| -> Vec<usize> { (0..k0).chain([k0 + k]).collect() };
-    // One pass over TRAIN: the TRAIN RSS of the model at every trial value
-    // (TRAIN's own sums stand in for a validation set, whose figures are
-    // not used), and the pass's sums and layout.
-    let profile = |us: &[f64]| -> Result<(Vec<f64>, Accumulator, TrialLayout), IdentError> {
+    // One pass over TRAIN per zoom pass: the TRAIN RSS of the model at
+    // every trial value (TRAIN's own sums stand in for a validation set,
+    // whose figures are not used); the last pass's sums and layout are kept
+    // for the fit at the refined value.
+    let intervals: Vec<(f64, f64)> = candidate
+        .search_centres()
+        .into_iter()
+        .map(|c| scale.interval(c))
+        .collect();
+    let mut last_pass: Option<(Accumulator, TrialLayout)> = None;
+    let min = minimise_profile(&intervals, |us: &[f64]| -> Result<Vec<f64>, IdentError> {
         let (c, m, l) = setup(us)?;
         let acc = ctx.accumulate_with(train.0, train.1, &c, &m, &l)?;
         let rss = (0..us.len())
@@ -1250,67 +1246,26 @@ fn refine_setting(
                     .map(|f| f.total_rss())
             })
             .collect::<Result<Vec<_>, _>>()?;
-        Ok((rss, acc, (c, m, l)))
+        last_pass = Some((acc, (c, m, l)));
+        Ok(rss)
+    })?;
+    let Some((acc, trials)) = last_pass else {
+        return Err(IdentError::InvalidSetting {
+            name: "refined candidate",
+            value: 0.0,
+            reason: "internal: the refinement evaluated no pass",
+        });
     };
-    let spaced = |lo: f64, hi: f64| -> Vec<f64> {
-        (0..ZOOM_POINTS)
-            .map(|i| lo + (hi - lo) * i as f64 / (ZOOM_POINTS - 1) as f64)
-            .collect()
-    };
-    // First pass: every centre's whole interval.
-    let intervals: Vec<(f64, f64)> = candidate
-        .search_centres()
-        .into_iter()
-        .map(|c| scale.interval(c))
-        .collect();
-    let us: Vec<f64> = intervals
-        .iter()
-        .flat_map(|&(lo, hi)| spaced(lo, hi))
-        .collect();
-    let (mut rss, mut acc, mut trials) = profile(&us)?;
-    let mut best = argmin(&rss);
-    let (lo, hi) = intervals[best / ZOOM_POINTS];
-    let mut points = us;
-    let mut step = (hi - lo) / (ZOOM_POINTS - 1) as f64;
-    // Zoom passes: two spacings around the best point, inside its interval.
-    for _ in 1..ZOOM_PASSES {
-        let u = points[best];
-        let (a, b) = ((u - step).max(lo), (u + step).min(hi));
-        points = spaced(a, b);
-        (rss, acc, trials) = profile(&points)?;
-        best = argmin(&rss);
-        step = (b - a) / (ZOOM_POINTS - 1) as f64;
-    }
-    // The vertex of the parabola through the best point and its neighbours.
-    let mut u = points[best];
-    if best > 0 && best + 1 < points.len() {
-        let (fm, f0, fp) = (rss[best - 1], rss[best], rss[best + 1]);
-        let curv = fp - 2.0 * f0 + fm;
-        if curv > 0.0 {
-            u = (u - 0.5 * step * (fp - fm) / curv).clamp(u - step, u + step);
-        }
-    }
-    let edge = 0.01 * (hi - lo);
-    let status = if u - lo < edge || hi - u < edge {
+    let (u, points, best) = (min.u, &min.points, min.best);
+    let status = if min.at_bound {
         RefinementStatus::AtBound
     } else {
         RefinementStatus::Interior
     };
     // σ from the curvature of the profile at the three trial values around
     // its minimum.
-    let i0 = best.clamp(1, points.len().saturating_sub(2).max(1));
     let ne = opts.effective_fraction * acc.rows().iter().sum::<usize>() as f64;
-    let (fm, f0, fp) = (rss[i0 - 1], rss[i0], rss[i0 + 1]);
-    let std_dev = if status == RefinementStatus::Interior && fm.min(f0).min(fp) > 0.0 {
-        let j2 = ne * (fp.ln() - 2.0 * f0.ln() + fm.ln()) / (step * step);
-        if j2 > 0.0 {
-            scale.sigma(u, (2.0 / j2).sqrt())
-        } else {
-            0.0
-        }
-    } else {
-        0.0
-    };
+    let std_dev = min.std_dev(ne).map_or(0.0, |su| scale.sigma(u, su));
     let v = scale.setting_value(u);
     // The candidate's columns at u: the cubic through the four trial values
     // around it (u between the middle two where the grid allows).
@@ -1394,19 +1349,6 @@ fn lagrange<const N: usize>(x: [f64; N], u: f64) -> [f64; N] {
             .map(|k| (u - x[k]) / (x[i] - x[k]))
             .product()
     })
-}
-
-/// Index of the smallest value (the first of equals).
-fn argmin(v: &[f64]) -> usize {
-    v.iter()
-        .enumerate()
-        .fold(
-            (0, f64::INFINITY),
-            |(bi, bv), (i, x)| {
-                if *x < bv { (i, *x) } else { (bi, bv) }
-            },
-        )
-        .0
 }
 
 /// The physically consistent re-identification of the final model: its

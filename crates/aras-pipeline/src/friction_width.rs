@@ -1,0 +1,429 @@
+//! The friction effect's Coulomb transition widths `w_j` (`Fc_j tanh(θ̇_j /
+//! w_j)`, `w = 0` the sign law (49)), refined on a prepared log by the one
+//! refinement of the workspace ([`crate::refine`]): the profile RSS of the
+//! least-squares fit over `ln w_j`, one joint at a time (a width changes
+//! only joint `j`'s `Fc_j` column on joint `j`'s rows), alternating; `w = 0`
+//! is a candidate too. Where a width is not identifiable, that joint falls
+//! back to the rows away from its velocity reversals with the sign law.
+
+use aras_dyn::{Effect, Model};
+use aras_ident::{BaseParameters, IdentError, ReducedLs};
+use faer::Mat;
+use serde::{Deserialize, Serialize};
+
+use crate::prepare::Prepared;
+use crate::refine::minimise_profile;
+use crate::robot::{FilterMode, filter_columns};
+
+/// Which rows identification fits (`identification.rows`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FitRows {
+    /// Every row, with the Coulomb widths refined ([`refine_widths`]); a
+    /// joint whose width is not identifiable falls back to
+    /// [`FitRows::AwayFromReversals`].
+    #[default]
+    All,
+    /// The rows of each joint away from its velocity reversals
+    /// (`identification.min_speed`, widened by the filter's reach), the sign
+    /// law (49) (`w = 0`).
+    AwayFromReversals,
+}
+
+/// How the widths are searched.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WidthSearch {
+    /// Smallest width searched (rad/s, > 0).
+    pub min: f64,
+    /// Largest width searched (rad/s, > `min`).
+    pub max: f64,
+    /// Rounds of refining joint 1 then joint 2 (≥ 1).
+    pub rounds: usize,
+}
+
+impl Default for WidthSearch {
+    fn default() -> Self {
+        Self {
+            min: 1e-4,
+            max: 1.0,
+            rounds: 2,
+        }
+    }
+}
+
+impl WidthSearch {
+    /// Errors unless `0 < min < max` (finite) and `rounds ≥ 1`.
+    pub fn validate(&self) -> Result<(), IdentError> {
+        if !(self.min.is_finite() && self.max.is_finite() && self.min > 0.0 && self.max > self.min)
+        {
+            return Err(IdentError::InvalidSetting {
+                name: "Coulomb width search interval",
+                value: self.min,
+                reason: "give 0 < min < max in rad/s (e.g. 1e-4 … 1)",
+            });
+        }
+        if self.rounds == 0 {
+            return Err(IdentError::InvalidSetting {
+                name: "Coulomb width search rounds",
+                value: 0.0,
+                reason: "give at least 1 round",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// What the refinement found for one joint's width.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WidthStatus {
+    /// An interior minimum of the profile with σ from its curvature; the
+    /// joint is fitted on every row.
+    Refined,
+    /// The sign law (`w = 0`) fits every row at least as well as any width
+    /// in the interval; the joint is fitted on every row with `w = 0`.
+    SignLaw,
+    /// The minimum lies at an end of the interval, or the profile has no
+    /// curvature there: the width is not identifiable from this log, so the
+    /// joint falls back to the rows away from its reversals, with `w = 0`.
+    NotIdentifiable,
+    /// `identification.rows = "away_from_reversals"`: not refined.
+    NotRefined,
+}
+
+/// One joint's width.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct JointWidth {
+    /// The width used (rad/s; 0 = the sign law).
+    pub w: f64,
+    /// Its standard deviation from the profile's curvature (rad/s; 0 if
+    /// unknown).
+    pub std_dev: f64,
+    /// What the refinement found.
+    pub status: WidthStatus,
+    /// True when the joint is fitted on every row, false when on the rows
+    /// away from its velocity reversals.
+    pub all_rows: bool,
+    /// The minimum of the profile (rad/s), whatever was used.
+    pub profile_minimum: f64,
+}
+
+/// The widths of both joints, with the reason of any fallback.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct WidthRefinement {
+    /// Joint 1, joint 2.
+    pub joints: [JointWidth; 2],
+    /// Why a joint fell back to the rows away from reversals (empty if
+    /// none did).
+    pub fallback: Vec<String>,
+}
+
+impl WidthRefinement {
+    /// The widths used, `[w1, w2]` (rad/s).
+    pub fn widths(&self) -> [f64; 2] {
+        self.joints.map(|j| j.w)
+    }
+
+    /// The setting `rows = "away_from_reversals"`: sign law, no refinement.
+    pub fn not_refined() -> Self {
+        let j = JointWidth {
+            w: 0.0,
+            std_dev: 0.0,
+            status: WidthStatus::NotRefined,
+            all_rows: false,
+            profile_minimum: 0.0,
+        };
+        Self {
+            joints: [j, j],
+            fallback: Vec::new(),
+        }
+    }
+
+    /// Every joint falls back (the refinement failed with `reason`).
+    pub fn failed(reason: String) -> Self {
+        let j = JointWidth {
+            w: 0.0,
+            std_dev: 0.0,
+            status: WidthStatus::NotIdentifiable,
+            all_rows: false,
+            profile_minimum: 0.0,
+        };
+        Self {
+            joints: [j, j],
+            fallback: vec![format!(
+                "the width refinement failed ({reason}); both joints use the rows away from \
+                 their velocity reversals with the sign law (49)"
+            )],
+        }
+    }
+
+    /// The rows to fit, joint-major: every row of a joint fitted on all
+    /// rows, `away` (the reversal mask) on the others.
+    pub fn keep(&self, away: &[bool]) -> Vec<bool> {
+        let n = away.len() / 2;
+        away.iter()
+            .enumerate()
+            .map(|(i, &k)| self.joints[i / n.max(1)].all_rows || k)
+            .collect()
+    }
+
+    /// One sentence per joint for a report.
+    pub fn sentence(&self) -> String {
+        let mut s = String::from("Coulomb transition width w (Fc tanh(θ̇/w); 0 = sign (49)): ");
+        let parts: Vec<String> = self
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(j, x)| {
+                let rows = if x.all_rows {
+                    "all rows"
+                } else {
+                    "rows away from reversals"
+                };
+                match x.status {
+                    WidthStatus::Refined => format!(
+                        "joint {}: {:.4} ± {:.4} rad/s ({rows})",
+                        j + 1,
+                        x.w,
+                        x.std_dev
+                    ),
+                    WidthStatus::SignLaw => {
+                        format!("joint {}: 0, the sign law fits best ({rows})", j + 1)
+                    }
+                    WidthStatus::NotIdentifiable => format!(
+                        "joint {}: not identifiable (profile minimum {:.3e} rad/s), sign law on \
+                         the {rows}",
+                        j + 1,
+                        x.profile_minimum
+                    ),
+                    WidthStatus::NotRefined => format!("joint {}: 0, not refined ({rows})", j + 1),
+                }
+            })
+            .collect();
+        s += &parts.join("; ");
+        s.push('.');
+        for f in &self.fallback {
+            s += " ";
+            s += f;
+        }
+        s
+    }
+}
+
+/// The friction effect of `model` with the widths `w`, in place of its own.
+pub fn with_widths(model: &Model, w: [f64; 2]) -> Result<Model, IdentError> {
+    let effects: Vec<Effect> = model
+        .effects()
+        .iter()
+        .map(|e| match e {
+            Effect::Friction { .. } => Effect::Friction { w },
+            other => *other,
+        })
+        .collect();
+    Model::new(effects, model.gravity())
+        .map_err(|e| IdentError::external("the model with the Coulomb widths", e))
+}
+
+/// Column of `Fc_j` in `model`, or an error naming the missing effect.
+fn coulomb_column(model: &Model, j: usize) -> Result<usize, IdentError> {
+    model
+        .column_range("friction")
+        .map(|r| r.start + 1 + 2 * j)
+        .ok_or(IdentError::InvalidSetting {
+            name: "friction effect",
+            value: 0.0,
+            reason: "the model has no friction effect, so it has no Coulomb width to refine",
+        })
+}
+
+/// Joint `j`'s Coulomb column (`2N` rows, zero on the other joint's) at width
+/// `w`, filtered as `prepared`'s regressor was (`mode`).
+fn coulomb_values(
+    prepared: &Prepared,
+    mode: FilterMode,
+    j: usize,
+    w: f64,
+) -> Result<Mat<f64>, IdentError> {
+    let v = &prepared.processed.samples.theta_dot[j];
+    let n = v.len();
+    let mut c = Mat::zeros(2 * n, 1);
+    for (i, x) in v.iter().enumerate() {
+        c[(j * n + i, 0)] = aras_dyn::coulomb_law(*x, w);
+    }
+    let raw = c.clone();
+    if let (Some(sos), FilterMode::Parallel) = (&prepared.filter, mode) {
+        filter_columns(&mut c, n, sos, prepared.periodic())?;
+    }
+    Ok(
+        if prepared.filter.is_some() && mode == FilterMode::Parallel {
+            c
+        } else {
+            raw
+        },
+    )
+}
+
+/// Writes joint `j`'s Coulomb column at width `w` into `prepared`'s
+/// regressor (filtered as it was) and its unfiltered copy.
+fn write_column(
+    prepared: &mut Prepared,
+    mode: FilterMode,
+    col: usize,
+    j: usize,
+    w: f64,
+) -> Result<(), IdentError> {
+    let filtered = coulomb_values(prepared, mode, j, w)?;
+    let n = prepared.n();
+    for i in 0..2 * n {
+        prepared.stacked.w[(i, col)] = filtered[(i, 0)];
+    }
+    if let Some(u) = prepared.unfiltered.as_mut() {
+        let v = &prepared.processed.samples.theta_dot[j];
+        for i in 0..2 * n {
+            u.w[(i, col)] = if i / n == j {
+                aras_dyn::coulomb_law(v[i - j * n], w)
+            } else {
+                0.0
+            };
+        }
+    }
+    Ok(())
+}
+
+/// Sets both widths: `prepared`'s Coulomb columns (filtered and unfiltered)
+/// and the model's friction effect. Returns the model with the widths.
+pub fn apply_widths(
+    prepared: &mut Prepared,
+    model: &Model,
+    mode: FilterMode,
+    w: [f64; 2],
+) -> Result<Model, IdentError> {
+    for (j, wj) in w.iter().enumerate() {
+        write_column(prepared, mode, coulomb_column(model, j)?, j, *wj)?;
+    }
+    with_widths(model, w)
+}
+
+/// Refines both widths on every row of `prepared` (stacked with `model`,
+/// filtered with `mode`), `base` its base parameters: the weighted RSS of
+/// the least-squares fit (rows weighted by `1/σ_j` of each joint's residual
+/// at the start) as a profile over `u = ln w_j` in `[ln min, ln max]`,
+/// [`minimise_profile`]; σ_w = w σ_u from the curvature with `n_eff = 2N ×
+/// noise_gain` (the filter leaves `noise_gain` of white noise's power, so
+/// about that fraction of the rows carry independent residuals). `w = 0` is
+/// compared at the end. Leaves `prepared`'s columns at the widths returned
+/// (0 on a joint that fell back).
+pub fn refine_widths(
+    prepared: &mut Prepared,
+    model: &Model,
+    base: &BaseParameters,
+    mode: FilterMode,
+    search: &WidthSearch,
+) -> Result<WidthRefinement, IdentError> {
+    search.validate()?;
+    let n = prepared.n();
+    let cols = [coulomb_column(model, 0)?, coulomb_column(model, 1)?];
+    let names = base.base_names();
+    let gain = prepared.noise_gain()?;
+    let n_eff = 2.0 * n as f64 * gain;
+    // Start in the middle of the interval (log scale).
+    let mut w = [(search.min * search.max).sqrt(); 2];
+    for j in 0..2 {
+        write_column(prepared, mode, cols[j], j, w[j])?;
+    }
+    // Row weights 1/σ_j from the residual of the fit at the start.
+    let w_b = base.base_regressor(prepared.stacked.w.as_ref())?;
+    let fit = ReducedLs::new(w_b.as_ref(), &prepared.stacked.t, &names)?.ols()?;
+    let pred = aras_ident::validate::predict(w_b.as_ref(), &fit.estimate)?;
+    let t = &prepared.stacked.t;
+    let sd: Vec<f64> = (0..2)
+        .map(|j| {
+            let r: f64 = (j * n..(j + 1) * n).map(|i| (t[i] - pred[i]).powi(2)).sum();
+            (r / n as f64).sqrt().max(f64::MIN_POSITIVE)
+        })
+        .collect();
+    let weights: Vec<f64> = (0..2 * n).map(|i| 1.0 / sd[i / n]).collect();
+    let rss_at = |p: &Prepared, col: usize, j: usize, wj: f64| -> Result<f64, IdentError> {
+        let c = coulomb_values(p, mode, j, wj)?;
+        let mut wm = p.stacked.w.clone();
+        for i in 0..2 * n {
+            wm[(i, col)] = c[(i, 0)];
+        }
+        let wb = base.base_regressor(wm.as_ref())?;
+        Ok(ReducedLs::weighted(wb.as_ref(), &p.stacked.t, &names, &weights)?.min_rss())
+    };
+    let (lo, hi) = (search.min.ln(), search.max.ln());
+    let mut out: [Option<crate::refine::ProfileMinimum>; 2] = [None, None];
+    for _ in 0..search.rounds {
+        for j in 0..2 {
+            let snapshot: &Prepared = prepared;
+            let min = minimise_profile(&[(lo, hi)], |us: &[f64]| {
+                us.iter()
+                    .map(|u| rss_at(snapshot, cols[j], j, u.exp()))
+                    .collect::<Result<Vec<_>, _>>()
+            })?;
+            w[j] = min.u.exp();
+            write_column(prepared, mode, cols[j], j, w[j])?;
+            out[j] = Some(min);
+        }
+    }
+    let mut joints = [JointWidth {
+        w: 0.0,
+        std_dev: 0.0,
+        status: WidthStatus::NotIdentifiable,
+        all_rows: false,
+        profile_minimum: 0.0,
+    }; 2];
+    let mut fallback = Vec::new();
+    for j in 0..2 {
+        let Some(min) = &out[j] else { continue };
+        let wj = min.u.exp();
+        let at_w = rss_at(prepared, cols[j], j, wj)?;
+        let at_zero = rss_at(prepared, cols[j], j, 0.0)?;
+        let sigma = min.std_dev(n_eff);
+        joints[j] = if at_zero <= at_w {
+            JointWidth {
+                w: 0.0,
+                std_dev: 0.0,
+                status: WidthStatus::SignLaw,
+                all_rows: true,
+                profile_minimum: wj,
+            }
+        } else if let Some(su) = sigma {
+            JointWidth {
+                w: wj,
+                std_dev: wj * su,
+                status: WidthStatus::Refined,
+                all_rows: true,
+                profile_minimum: wj,
+            }
+        } else {
+            fallback.push(format!(
+                "joint {}: the RSS profile over w has its minimum at {wj:.3e} rad/s, {} of the \
+                 search interval {:.0e} … {:.0e} rad/s, so the width is not identifiable from \
+                 this log; the joint is fitted on the rows away from its velocity reversals \
+                 with the sign law (49)",
+                j + 1,
+                if min.at_bound {
+                    "at an end"
+                } else {
+                    "on a flat stretch"
+                },
+                search.min,
+                search.max
+            ));
+            JointWidth {
+                w: 0.0,
+                std_dev: 0.0,
+                status: WidthStatus::NotIdentifiable,
+                all_rows: false,
+                profile_minimum: wj,
+            }
+        };
+    }
+    for j in 0..2 {
+        write_column(prepared, mode, cols[j], j, joints[j].w)?;
+    }
+    Ok(WidthRefinement { joints, fallback })
+}
