@@ -397,10 +397,11 @@ pub struct IdentificationConfig {
     /// The exclusion around a slow row reaches as far as the zero-phase
     /// filter's impulse response stays above this fraction of its peak.
     pub reversal_reach: f64,
-    /// Which rows are fitted: `"all"` (default: every row, the friction's
-    /// Coulomb transition widths refined) or `"away_from_reversals"` (the
-    /// rows away from velocity reversals by `min_speed`, the sign law (49));
-    /// a joint whose width is not identifiable falls back to the latter.
+    /// Which rows are fitted: `"away_from_reversals"` (default: the rows
+    /// away from velocity reversals by `min_speed`, the sign law (49)) or
+    /// `"all"` (every row, the friction's Coulomb transition widths
+    /// refined; a joint whose width is not identifiable falls back to the
+    /// former).
     pub rows: FitRows,
     /// The width search of `rows = "all"` (`min`, `max` in rad/s, `rounds`).
     pub width: WidthSearch,
@@ -416,7 +417,7 @@ impl Default for IdentificationConfig {
             base_samples: 400,
             min_speed: 0.2,
             reversal_reach: 1e-3,
-            rows: FitRows::All,
+            rows: FitRows::default(),
             width: WidthSearch::default(),
             sdp: SdpConfig::default(),
         }

@@ -22,11 +22,13 @@ pub enum FitRows {
     /// Every row, with the Coulomb widths refined ([`refine_widths`]); a
     /// joint whose width is not identifiable falls back to
     /// [`FitRows::AwayFromReversals`].
-    #[default]
     All,
     /// The rows of each joint away from its velocity reversals
     /// (`identification.min_speed`, widened by the filter's reach), the sign
-    /// law (49) (`w = 0`).
+    /// law (49) (`w = 0`). The default: on the simulated robot the all-row
+    /// fit's parameters predict the faster cross-validation motions worse
+    /// (`docs/model.md`, "The Coulomb transition width").
+    #[default]
     AwayFromReversals,
 }
 
