@@ -135,6 +135,10 @@ impl Default for TrajectoryConfig {
 pub struct SimulationConfig {
     /// Periods of the excitation to simulate (paper: 16).
     pub periods: usize,
+    /// Time (s) the simulated robot tracks the trajectory before the log
+    /// starts, so the log holds no start-up transient; the first row is
+    /// the trajectory's phase 0 (0: log from the start-up).
+    pub lead_in_s: f64,
     /// Controller and log rate (Hz).
     pub rate_hz: f64,
     /// RK4 substeps per log sample.
@@ -180,6 +184,7 @@ impl Default for SimulationConfig {
         let s = aras_dyn::sim::SimConfig::default();
         Self {
             periods: 16,
+            lead_in_s: s.lead_in_s,
             rate_hz: s.output_rate_hz,
             substeps: s.substeps,
             kp: s.controller.kp,
@@ -693,6 +698,7 @@ impl Config {
             return bad("simulation.periods", "simulate at least one period".into());
         }
         pos("simulation.rate_hz", s.rate_hz)?;
+        nonneg("simulation.lead_in_s", s.lead_in_s)?;
         if s.substeps == 0 {
             return bad("simulation.substeps", "at least 1".into());
         }
