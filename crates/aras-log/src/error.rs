@@ -375,7 +375,10 @@ pub enum LogError {
     /// The torque timing given in the options contradicts the sidecar's
     /// statement.
     #[error(
-        "{log}: the torques are given as `{given}` (ReadOptions::torques, the command line's          --torques or the config's log.torques) but the sidecar {sidecar} states          \"torques\": \"{stated}\": drop the override (the sidecar's writer knows how its          torques were logged) or correct the sidecar's `torques` key"
+        "{log}: the torques are given as `{given}` (ReadOptions::torques: the command line's \
+         --torques or the config's log.torques) but the sidecar {sidecar} states \
+         \"torques\": \"{stated}\": drop the override (the sidecar's writer knows how its \
+         torques were logged) or correct the sidecar's `torques` key"
     )]
     TorqueTimingConflict {
         /// Log file name.
