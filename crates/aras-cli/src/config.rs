@@ -234,8 +234,8 @@ pub enum BandwidthMode {
 
 /// `[log]`: how a lab's log is read before processing (`docs/log-format.md`):
 /// the unit of `t`, what to do with isolated glitches, and resampling onto a
-/// uniform grid. The command line's `--time-unit`, `--glitches`,
-/// `--resample` and `--max-gap` override these.
+/// uniform grid, the torque timing. The command line's `--time-unit`,
+/// `--glitches`, `--resample`, `--max-gap` and `--torques` override these.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LogConfig {
@@ -261,6 +261,12 @@ pub struct LogConfig {
     pub resample: bool,
     /// Longest gap (s) the resampling interpolates across.
     pub max_gap_s: f64,
+    /// What the logged torques are: `"sampled"` (measured at the sample
+    /// times) or `"held"` (commands held until the next sample). Absent:
+    /// as the log's sidecar states (`torques`), else sampled. A value
+    /// contradicting the sidecar is refused.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub torques: Option<aras_log::TorqueTiming>,
 }
 
 impl Default for LogConfig {
@@ -274,6 +280,7 @@ impl Default for LogConfig {
             torque_limit_factor: g.limit_factor,
             resample: false,
             max_gap_s: aras_signal::ResampleOptions::default().max_gap_s,
+            torques: aras_log::ReadOptions::default().torques,
         }
     }
 }
