@@ -179,6 +179,31 @@ pub struct LogArgs {
     /// the log (default 0.005; config `log.max_gap_s`).
     #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true)]
     pub max_gap: Option<f64>,
+    /// What the logged torques are: `sampled` (measured at each sample's
+    /// time, like the angles) or `held` (commands held until the next
+    /// sample, as a simulator or a drive's command log writes them).
+    /// Default: the sidecar's `torques`, else sampled (config
+    /// `log.torques`); a value contradicting the sidecar is refused.
+    #[arg(long, value_enum, value_name = "TIMING")]
+    pub torques: Option<TorquesArg>,
+}
+
+/// `--torques`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum TorquesArg {
+    /// Measured at the sample times.
+    Sampled,
+    /// Held over each sample step (zero-order hold).
+    Held,
+}
+
+impl From<TorquesArg> for aras_log::TorqueTiming {
+    fn from(t: TorquesArg) -> Self {
+        match t {
+            TorquesArg::Sampled => Self::Sampled,
+            TorquesArg::Held => Self::Held,
+        }
+    }
 }
 
 /// `--stamps`.
@@ -261,6 +286,9 @@ impl LogArgs {
         if let Some(m) = self.max_gap {
             s.max_gap_s = m;
         }
+        if let Some(t) = self.torques {
+            s.torques = Some(t.into());
+        }
         s
     }
 
@@ -275,6 +303,7 @@ impl LogArgs {
     }
 
     /// The log reader's options: `--sidecar`, `--columns`, the time unit,
+    /// the torque timing,
     /// for bags `--topic`, `--joints`, `--stamps`, and, with resampling,
     /// gaps let through to the resampler (which judges them against
     /// `max_gap_s`).
@@ -288,6 +317,7 @@ impl LogArgs {
         let defaults = ReadOptions::default();
         Ok(ReadOptions {
             time_unit: s.time_unit,
+            torques: s.torques,
             step_tolerance: if s.resample {
                 RESAMPLE_STEP_TOLERANCE
             } else {

@@ -136,6 +136,10 @@ impl Default for TrajectoryConfig {
 pub struct SimulationConfig {
     /// Periods of the excitation to simulate (paper: 16).
     pub periods: usize,
+    /// Time (s) the simulated robot tracks the trajectory before the log
+    /// starts, so the log holds no start-up transient; the first row is
+    /// the trajectory's phase 0 (0: log from the start-up).
+    pub lead_in_s: f64,
     /// Controller and log rate (Hz).
     pub rate_hz: f64,
     /// RK4 substeps per log sample.
@@ -181,6 +185,7 @@ impl Default for SimulationConfig {
         let s = aras_dyn::sim::SimConfig::default();
         Self {
             periods: 16,
+            lead_in_s: s.lead_in_s,
             rate_hz: s.output_rate_hz,
             substeps: s.substeps,
             kp: s.controller.kp,
@@ -230,8 +235,8 @@ pub enum BandwidthMode {
 
 /// `[log]`: how a lab's log is read before processing (`docs/log-format.md`):
 /// the unit of `t`, what to do with isolated glitches, and resampling onto a
-/// uniform grid. The command line's `--time-unit`, `--glitches`,
-/// `--resample` and `--max-gap` override these.
+/// uniform grid, the torque timing. The command line's `--time-unit`,
+/// `--glitches`, `--resample`, `--max-gap` and `--torques` override these.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LogConfig {
@@ -257,6 +262,12 @@ pub struct LogConfig {
     pub resample: bool,
     /// Longest gap (s) the resampling interpolates across.
     pub max_gap_s: f64,
+    /// What the logged torques are: `"sampled"` (measured at the sample
+    /// times) or `"held"` (commands held until the next sample). Absent:
+    /// as the log's sidecar states (`torques`), else sampled. A value
+    /// contradicting the sidecar is refused.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub torques: Option<aras_log::TorqueTiming>,
 }
 
 impl Default for LogConfig {
@@ -270,6 +281,7 @@ impl Default for LogConfig {
             torque_limit_factor: g.limit_factor,
             resample: false,
             max_gap_s: aras_signal::ResampleOptions::default().max_gap_s,
+            torques: aras_log::ReadOptions::default().torques,
         }
     }
 }
@@ -704,6 +716,7 @@ impl Config {
             return bad("simulation.periods", "simulate at least one period".into());
         }
         pos("simulation.rate_hz", s.rate_hz)?;
+        nonneg("simulation.lead_in_s", s.lead_in_s)?;
         if s.substeps == 0 {
             return bad("simulation.substeps", "at least 1".into());
         }

@@ -16,6 +16,7 @@ pub fn sim_config(cfg: &Config, nominal: &Params, duration_s: f64, seed: u64) ->
     let s = &cfg.simulation;
     SimConfig {
         duration_s,
+        lead_in_s: s.lead_in_s,
         output_rate_hz: s.rate_hz,
         substeps: s.substeps,
         controller: Controller {

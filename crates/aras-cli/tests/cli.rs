@@ -277,3 +277,108 @@ fn print_config_prints_parseable_defaults() {
         aras_cli::config::Config::parse(&text, aras_cli::config::Format::Toml, "printed").unwrap();
     assert_eq!(c, aras_cli::config::Config::default());
 }
+
+/// `--torques` and `log.torques` reach the log reader: the simulator's log
+/// states held torques, a contradicting `--torques sampled` is refused
+/// naming both, `--torques held` on a log without a sidecar is taken (with
+/// a note) and is what `Log::torque_timing` says; an invalid value names the
+/// valid ones.
+#[test]
+fn torques_option_reaches_the_log_reader() {
+    use aras_cli::cli::{Cli, Command};
+    use aras_cli::config::{Config, Format};
+    use aras_log::TorqueTiming;
+    let dir = scratch("torques");
+    let cfg = dir.join("short.toml");
+    std::fs::write(&cfg, "[simulation]\nperiods = 1\n").unwrap();
+    let (c, log) = (cfg.to_str().unwrap(), dir.join("log.csv"));
+    let l = log.to_str().unwrap();
+    let r = aras(&[
+        "simulate",
+        "--config",
+        c,
+        "--frequency",
+        "2.5",
+        "--out",
+        l,
+        "-q",
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert_eq!(json(&dir.join("log.json"))["torques"], "held");
+    let sim = aras_log::read_log(&log, &aras_log::ReadOptions::default()).unwrap();
+    assert_eq!(sim.torque_timing(), TorqueTiming::Held);
+    assert_eq!(sim.len(), 400);
+
+    let params = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/robots/aras-diamond.json"
+    );
+    let pred = dir.join("pred.csv");
+    let p = pred.to_str().unwrap();
+    let predict = |extra: &[&str]| {
+        let mut args = vec!["predict", "--params", params, "--data", l, "--out", p, "-q"];
+        args.extend(extra);
+        aras(&args)
+    };
+    let r = predict(&["--torques", "sampled"]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success());
+    assert!(
+        err.contains("the torques are given as `sampled`")
+            && err.contains("log.json states \"torques\": \"held\""),
+        "{err}"
+    );
+    let r = predict(&["--torques", "held", "--force"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let r = predict(&["--torques", "held", "--sidecar", "none", "--force"]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    assert!(
+        err.contains("torques taken as held (from the options)"),
+        "{err}"
+    );
+    let r = predict(&["--torques", "hold"]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success());
+    assert!(
+        err.contains("invalid value 'hold' for '--torques <TIMING>'")
+            && err.contains("[possible values: sampled, held]"),
+        "{err}"
+    );
+
+    // The parsed command line and the config give the reader's options.
+    let timing = |argv: &[&str], config: &str| {
+        let cli = <Cli as clap::Parser>::try_parse_from(argv).unwrap();
+        let Command::Predict(args) = cli.command else {
+            panic!("not predict")
+        };
+        let config = Config::parse(config, Format::Toml, "t.toml").unwrap();
+        let mut opts = args.log.read_options(&config.log).unwrap();
+        opts.sidecar = aras_log::SidecarSource::None;
+        aras_log::read_log(&log, &opts).unwrap().torque_timing()
+    };
+    let base = [
+        "aras", "predict", "--params", params, "--data", l, "--out", p,
+    ];
+    assert_eq!(timing(&base, ""), TorqueTiming::Sampled);
+    let mut held = base.to_vec();
+    held.extend(["--torques", "held"]);
+    assert_eq!(timing(&held, ""), TorqueTiming::Held);
+    assert_eq!(
+        timing(&base, "[log]\ntorques = \"held\"\n"),
+        TorqueTiming::Held
+    );
+    let mut sampled = base.to_vec();
+    sampled.extend(["--torques", "sampled"]);
+    assert_eq!(
+        timing(&sampled, "[log]\ntorques = \"held\"\n"),
+        TorqueTiming::Sampled
+    );
+    let e = Config::parse("[log]\ntorques = \"hold\"\n", Format::Toml, "t.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("t.toml") && e.contains("unknown variant `hold`"),
+        "{e}"
+    );
+}

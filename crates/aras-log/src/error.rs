@@ -372,6 +372,24 @@ pub enum LogError {
         /// What is allowed.
         reason: String,
     },
+    /// The torque timing given in the options contradicts the sidecar's
+    /// statement.
+    #[error(
+        "{log}: the torques are given as `{given}` (ReadOptions::torques: the command line's \
+         --torques or the config's log.torques) but the sidecar {sidecar} states \
+         \"torques\": \"{stated}\": drop the override (the sidecar's writer knows how its \
+         torques were logged) or correct the sidecar's `torques` key"
+    )]
+    TorqueTimingConflict {
+        /// Log file name.
+        log: String,
+        /// Sidecar file name.
+        sidecar: String,
+        /// The sidecar's statement.
+        stated: crate::TorqueTiming,
+        /// The options' value.
+        given: crate::TorqueTiming,
+    },
     /// A sidecar file given explicitly does not exist.
     #[error("sidecar {path} cannot be read")]
     SidecarIo {

@@ -155,6 +155,11 @@ pub struct ReadOptions {
     /// whole number at a rate below [`MIN_PLAUSIBLE_RATE_HZ`] is refused
     /// with [`LogError::TimeUnit`]; `Some(TimeUnit::Seconds)` accepts it).
     pub time_unit: Option<TimeUnit>,
+    /// How the logged torques relate to the sample times when the sidecar
+    /// does not say (default `None`: as the sidecar's `torques` states, else
+    /// [`TorqueTiming::Sampled`]). A value that contradicts the sidecar's
+    /// statement is refused ([`LogError::TorqueTimingConflict`]).
+    pub torques: Option<TorqueTiming>,
 }
 
 impl Default for ReadOptions {
@@ -170,6 +175,7 @@ impl Default for ReadOptions {
             columns: ColumnNames::default(),
             bag: BagOptions::default(),
             time_unit: None,
+            torques: None,
         }
     }
 }
@@ -230,7 +236,9 @@ pub struct Log {
     pub theta_dot: Option<[Vec<f64>; 2]>,
     /// Logged joint accelerations (rad/s²), if present.
     pub theta_ddot: Option<[Vec<f64>; 2]>,
-    /// The sidecar (default if none).
+    /// The sidecar (default if none); its `torques` is the log's torque
+    /// timing, from the file or, when the file does not state it, from
+    /// [`ReadOptions::torques`].
     pub sidecar: Sidecar,
     /// What was read.
     pub summary: LogSummary,
@@ -249,6 +257,14 @@ impl Log {
     /// True if there are no samples (never, for a log that was read).
     pub fn is_empty(&self) -> bool {
         self.t.is_empty()
+    }
+
+    /// How the logged torques relate to the sample times: the sidecar's
+    /// `torques`, else the reader's [`ReadOptions::torques`] (the reader
+    /// records it in [`Log::sidecar`]), else [`TorqueTiming::Sampled`]
+    /// (a ROS 2 bag's efforts are measurements).
+    pub fn torque_timing(&self) -> TorqueTiming {
+        self.sidecar.torques.unwrap_or_default()
     }
 }
 

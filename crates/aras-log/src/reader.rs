@@ -391,10 +391,26 @@ impl<R: Read> LogReader<R> {
         opts.validate()?;
         opts.sensors.validate("ReadOptions::sensors")?;
         let crate::FoundSidecar {
-            sidecar,
+            mut sidecar,
             name: sidecar_name,
             note: sidecar_note,
         } = found;
+        let mut timing_note = None;
+        match (sidecar.torques, opts.torques) {
+            (Some(stated), Some(given)) if stated != given => {
+                return Err(LogError::TorqueTimingConflict {
+                    log: name,
+                    sidecar: sidecar_name.unwrap_or_default(),
+                    stated,
+                    given,
+                });
+            }
+            (None, Some(given)) => {
+                sidecar.torques = Some(given);
+                timing_note = Some(format!("torques taken as {given} (from the options)"));
+            }
+            _ => {}
+        }
         let sensors = sidecar.sensors.overridden_by(&opts.sensors);
         let mut lines = Lines::new(src);
         let io = |source| LogError::Io {
@@ -434,6 +450,7 @@ impl<R: Read> LogReader<R> {
         if opts.sensors != Default::default() {
             notes.push("sensor constants from ReadOptions override the sidecar".into());
         }
+        notes.extend(timing_note);
         let checks = Checks::new(opts.nominal_step, opts.saturation_samples);
         let mut layout = layout;
         layout.notes = notes;
@@ -458,9 +475,17 @@ impl<R: Read> LogReader<R> {
         &self.name
     }
 
-    /// The sidecar (default if none).
+    /// The sidecar (default if none); its `torques` is the log's torque
+    /// timing, from the file or, when the file does not state it, from
+    /// [`ReadOptions::torques`].
     pub fn sidecar(&self) -> &Sidecar {
         &self.sidecar
+    }
+
+    /// How the logged torques relate to the sample times (as
+    /// [`Log::torque_timing`](crate::Log::torque_timing)).
+    pub fn torque_timing(&self) -> crate::TorqueTiming {
+        self.sidecar.torques.unwrap_or_default()
     }
 
     /// Column names of the header, trimmed and lower-cased, in file order.

@@ -62,6 +62,15 @@ pub enum TorqueTiming {
 }
 
 impl TorqueTiming {
+    /// The name written in sidecars and accepted on the command line:
+    /// `sampled` or `held`.
+    pub fn name(self) -> &'static str {
+        match self {
+            TorqueTiming::Sampled => "sampled",
+            TorqueTiming::Held => "held",
+        }
+    }
+
     /// Where in the sample step the torque acts, as a fraction of the step
     /// after `t_k`: 0 for sampled torques, ½ for held commands.
     pub fn offset_steps(self) -> f64 {
@@ -69,6 +78,12 @@ impl TorqueTiming {
             TorqueTiming::Sampled => 0.0,
             TorqueTiming::Held => 0.5,
         }
+    }
+}
+
+impl std::fmt::Display for TorqueTiming {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 

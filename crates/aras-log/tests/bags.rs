@@ -456,3 +456,18 @@ fn a_damaged_chunk_size_is_an_error_not_an_abort() {
     assert!(e.to_string().contains("declares"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A bag's JointState efforts are measurements: sampled, unless the
+/// options say otherwise.
+#[test]
+fn bag_torques_are_sampled_unless_overridden() {
+    use aras_log::TorqueTiming;
+    let log = read_log(&bag("clean.mcap"), &ReadOptions::default()).unwrap();
+    assert_eq!(log.torque_timing(), TorqueTiming::Sampled);
+    let opts = ReadOptions {
+        torques: Some(TorqueTiming::Held),
+        ..ReadOptions::default()
+    };
+    let log = read_log(&bag("clean.mcap"), &opts).unwrap();
+    assert_eq!(log.torque_timing(), TorqueTiming::Held);
+}

@@ -397,3 +397,94 @@ fn a_missing_log_names_the_file_and_keeps_the_io_error_as_source() {
     assert_eq!(io_source_kind(&e), std::io::ErrorKind::NotFound);
     assert_source_not_repeated(&e);
 }
+
+/// `torques` in the sidecar: written and read back, the log's torque
+/// timing; a plain CSV's torques are sampled; `ReadOptions::torques`
+/// fills in what the sidecar does not state, agrees with it, or is refused
+/// naming both; an unknown value names the allowed ones.
+#[test]
+fn torque_timing_from_sidecar_and_options() {
+    use aras_log::{Sidecar, TorqueTiming};
+    let held = Sidecar {
+        format: Some(aras_log::FORMAT.into()),
+        torques: Some(TorqueTiming::Held),
+        ..Sidecar::default()
+    };
+    let json = serde_json::to_string(&held).unwrap();
+    assert_eq!(json, r#"{"format":"aras-log/1","torques":"held"}"#);
+    assert_eq!(Sidecar::parse(&json, "h.json").unwrap(), held);
+
+    let csv = synthetic(100, |_| 0.0);
+    let read = |sidecar: Option<&str>, torques| {
+        let opts = ReadOptions {
+            sidecar: sidecar.map_or(SidecarSource::None, |json| SidecarSource::Text {
+                name: "side.json".into(),
+                json: json.into(),
+            }),
+            torques,
+            ..ReadOptions::default()
+        };
+        read_log_from(csv.as_bytes(), "tt.csv", &opts)
+    };
+    let plain = read(None, None).unwrap();
+    assert_eq!(plain.torque_timing(), TorqueTiming::Sampled);
+    let unstated = r#"{"format": "aras-log/1"}"#;
+    assert_eq!(
+        read(Some(unstated), None).unwrap().torque_timing(),
+        TorqueTiming::Sampled
+    );
+    let overridden = read(Some(unstated), Some(TorqueTiming::Held)).unwrap();
+    assert_eq!(overridden.torque_timing(), TorqueTiming::Held);
+    assert!(
+        overridden
+            .notes
+            .iter()
+            .any(|n| n == "torques taken as held (from the options)"),
+        "{:?}",
+        overridden.notes
+    );
+    assert_eq!(
+        read(None, Some(TorqueTiming::Held))
+            .unwrap()
+            .torque_timing(),
+        TorqueTiming::Held
+    );
+    let stated = r#"{"format": "aras-log/1", "torques": "held"}"#;
+    assert_eq!(
+        read(Some(stated), None).unwrap().torque_timing(),
+        TorqueTiming::Held
+    );
+    assert_eq!(
+        read(Some(stated), Some(TorqueTiming::Held))
+            .unwrap()
+            .torque_timing(),
+        TorqueTiming::Held
+    );
+    let e = read(Some(stated), Some(TorqueTiming::Sampled))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("tt.csv: the torques are given as `sampled`")
+            && e.contains("the sidecar side.json states \"torques\": \"held\""),
+        "{e}"
+    );
+    // The streaming reader states the same.
+    let opts = ReadOptions {
+        sidecar: SidecarSource::Text {
+            name: "side.json".into(),
+            json: stated.into(),
+        },
+        ..ReadOptions::default()
+    };
+    let reader = LogReader::new(csv.as_bytes(), "tt.csv", &opts).unwrap();
+    assert_eq!(reader.torque_timing(), TorqueTiming::Held);
+
+    let e = read(Some(r#"{"format": "aras-log/1", "torques": "hold"}"#), None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("side.json:1:")
+            && e.contains("unknown variant `hold`, expected `sampled` or `held`"),
+        "{e}"
+    );
+}

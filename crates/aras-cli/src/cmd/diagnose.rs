@@ -103,10 +103,11 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
                 .iter()
                 .zip(&val_streams)
                 .map(|(p, &streamed)| {
-                    // The lab's column names hold for every log; period and
-                    // sidecar are TRAIN's.
+                    // The lab's column names and torque timing hold for
+                    // every log; period and sidecar are TRAIN's.
                     let own = LogArgs {
                         columns: args.log.columns.clone(),
+                        torques: args.log.torques,
                         ..LogArgs::default()
                     };
                     load(p, &own, streamed, bar)

@@ -42,7 +42,7 @@ pub struct Truth {
 }
 
 /// The `aras-log/1` sidecar of a simulated log: the sensors, the period of a
-/// periodic trajectory, and the ground truth ([`Truth`]) under `truth`.
+/// periodic trajectory, `"torques": "held"`, and the ground truth ([`Truth`]) under `truth`.
 pub(crate) fn sidecar(
     truth: &Params,
     traj: &dyn Trajectory,
@@ -65,6 +65,9 @@ pub(crate) fn sidecar(
     let mut sidecar = Sidecar {
         format: Some(aras_log::FORMAT.into()),
         truth: Some(serde_json::to_value(&truth).expect("the truth always serialises")),
+        // The logged torque is the controller's command, held over the
+        // step to the next tick (zero-order hold).
+        torques: Some(aras_log::TorqueTiming::Held),
         ..Sidecar::default()
     };
     sidecar.sensors.torque_constants = Some(s.torque_constants);

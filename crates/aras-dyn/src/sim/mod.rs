@@ -112,8 +112,19 @@ impl Default for Controller {
 /// Everything about a simulation run except the robot and the trajectory.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SimConfig {
-    /// Simulated time (s); the log has `floor(duration · rate)` samples.
+    /// Recorded time (s); the log has `floor(duration · rate)` samples
+    /// (fewer by the torque delay's rows when the lead-in is shorter than
+    /// the delay).
     pub duration_s: f64,
+    /// Time (s) the robot tracks the trajectory before the log starts:
+    /// the integration begins at trajectory time `−lead_in_s` (rounded to
+    /// whole samples), on the trajectory with the controller's first
+    /// torque, and rows are recorded from trajectory time 0 on, so the
+    /// first row is the trajectory's phase 0 whatever the lead-in. The
+    /// lead-in lets the PD loop settle from the start-up transient, as a
+    /// real experiment is logged after the robot is under way. 0: the log
+    /// starts with the start-up.
+    pub lead_in_s: f64,
     /// Controller and log rate (Hz).
     pub output_rate_hz: f64,
     /// RK4 steps per output sample (internal rate = output rate × substeps).
@@ -146,12 +157,16 @@ pub struct SimConfig {
 }
 
 impl Default for SimConfig {
-    /// 160 s (16 periods of the paper's 10 s excitation) at 1 kHz, 2 RK4
-    /// substeps, 2.4 N·m limit (8 A × 30.2 mN·m/A × 10), 0.03 rad/s friction
-    /// smoothing, default sensors, no delay, seed 1.
+    /// 160 s (16 periods of the paper's 10 s excitation) at 1 kHz after a
+    /// 2 s lead-in, 2 RK4 substeps, 2.4 N·m limit (8 A × 30.2 mN·m/A × 10),
+    /// 0.03 rad/s friction smoothing, default sensors, no delay, seed 1.
+    /// The lead-in: the start-up transient of the default PD loop decays
+    /// below the steady tracking error within 0.5 s (`docs/simulator.md`),
+    /// 2 s leaves a factor of four.
     fn default() -> Self {
         Self {
             duration_s: 160.0,
+            lead_in_s: 2.0,
             output_rate_hz: 1000.0,
             substeps: 2,
             controller: Controller::default(),
@@ -199,6 +214,14 @@ impl SimConfig {
     pub fn validate(&self) -> Result<(), SimError> {
         positive("duration_s", self.duration_s)?;
         positive("output_rate_hz", self.output_rate_hz)?;
+        non_negative("lead_in_s", self.lead_in_s)?;
+        if self.lead_in_s * self.output_rate_hz > 1e9 {
+            return Err(SimError::Config {
+                key: "lead_in_s",
+                value: self.lead_in_s,
+                reason: "must give at most 1e9 samples",
+            });
+        }
         if self.substeps == 0 || self.substeps > 1000 {
             return Err(SimError::Config {
                 key: "substeps",
@@ -216,7 +239,7 @@ impl SimConfig {
             });
         }
         let n = (self.duration_s * self.output_rate_hz).floor();
-        if !(2.0..=1e9).contains(&n) || self.delay_rows() as f64 >= n {
+        if !(2.0..=1e9).contains(&n) || self.dropped_rows() as f64 >= n {
             return Err(SimError::Config {
                 key: "duration_s",
                 value: self.duration_s,
@@ -251,6 +274,17 @@ impl SimConfig {
     /// the sample before).
     fn delay_rows(&self) -> usize {
         self.torque_delay_samples + usize::from(self.torque_delay_fraction > 0.0)
+    }
+
+    /// Whole samples of the lead-in, `round(lead_in_s · rate)`.
+    pub fn lead_in_samples(&self) -> usize {
+        (self.lead_in_s * self.output_rate_hz).round() as usize
+    }
+
+    /// Rows missing at the start of the log: the delay's rows that the
+    /// lead-in does not cover (the lead-in's torques fill the others).
+    fn dropped_rows(&self) -> usize {
+        self.delay_rows().saturating_sub(self.lead_in_samples())
     }
 }
 
@@ -334,11 +368,14 @@ impl Plant<'_> {
 
 /// Simulates the robot `truth` tracking `traj` and returns the log.
 ///
-/// The robot starts on the trajectory (`X(0) = X_d(0)`, `Ẋ(0) = Ẋ_d(0)`).
-/// Row `k` holds `t_k = k / rate`, the quantised angles at `t_k`, the
-/// measured torque of sample `k − delay` (rows before the delay are
-/// dropped), and the exact `θ̇`, `θ̈` at `t_k` (`θ̈` just after the
-/// controller's update).
+/// With `L` lead-in samples ([`SimConfig::lead_in_samples`]) the robot
+/// starts on the trajectory at `t_0 = −L / rate` (`X = X_d(t_0)`,
+/// `Ẋ = Ẋ_d(t_0)`), and the controller runs from there. Row `k ≥ 0` holds
+/// `t_k = k / rate` (trajectory time `t_k`), the quantised angles at `t_k`,
+/// the measured torque of sample `k − delay`, and the exact `θ̇`, `θ̈` at
+/// `t_k` (`θ̈` just after the controller's update). Rows whose delayed
+/// torque would fall before `t_0` are dropped (only when the lead-in is
+/// shorter than the delay).
 pub fn simulate(
     truth: &Params,
     traj: &dyn Trajectory,
@@ -377,7 +414,8 @@ pub fn simulate(
             source: e.into(),
         })
     };
-    let d0 = desired(0.0)?;
+    let lead = cfg.lead_in_samples() as i64;
+    let d0 = desired(-lead as f64 * dt)?;
     let mut state = State {
         x: d0.task.pos,
         v: d0.task.vel,
@@ -396,20 +434,23 @@ pub fn simulate(
     let mut vel_est = d0.joint.vel;
 
     let mut log = SimLog::with_capacity(n);
-    // (measured, noise-free) torque of every step, for the delayed rows.
-    let mut tau_hist: Vec<([f64; 2], [f64; 2])> = Vec::with_capacity(n);
-    for k in 0..n {
+    // (measured, noise-free) torque of every step from the first, for the
+    // delayed rows.
+    let mut tau_hist: Vec<([f64; 2], [f64; 2])> = Vec::with_capacity(n + lead as usize);
+    for k in -lead..n as i64 {
         let t = k as f64 * dt;
+        // Steps since the start.
+        let i = (k + lead) as usize;
         let at = |source| SimError::Dynamics { t, source };
         let s = evaluate(&g, &Motion::new(state.x, state.v, Vector2::zeros()))
             .map_err(|e| at(e.into()))?;
         let theta_meas = quantise(&s.joint.pos);
-        if k > 0 {
+        if i > 0 {
             let raw = (theta_meas - theta_prev) / dt;
             vel_est += (raw - vel_est) * alpha;
         }
         theta_prev = theta_meas;
-        let d = if k == 0 { d0 } else { desired(t)? };
+        let d = if i == 0 { d0 } else { desired(t)? };
         let mut tau = Vector2::zeros();
         if let Some(f) = &ff {
             tau += f.inverse(&d);
@@ -427,14 +468,14 @@ pub fn simulate(
             measured[j] = tau[j] + noise[j] * z;
         }
         tau_hist.push((measured, [tau[0], tau[1]]));
-        if k >= cfg.delay_rows() {
+        if k >= 0 && i >= cfg.delay_rows() {
             let d = cfg.torque_delay_samples;
-            let (mut measured, mut clean) = tau_hist[k - d];
+            let (mut measured, mut clean) = tau_hist[i - d];
             let phi = cfg.torque_delay_fraction;
             if phi > 0.0 {
                 // Linear interpolation towards the sample before; the
                 // noise is that sample's own draw.
-                let (_, before) = tau_hist[k - d - 1];
+                let (_, before) = tau_hist[i - d - 1];
                 for j in 0..2 {
                     let noise = measured[j] - clean[j];
                     clean[j] = (1.0 - phi) * clean[j] + phi * before[j];
