@@ -456,7 +456,7 @@ pub fn process(
     let every_row = opts.rows == OutputRows::EveryRow;
     // Held torques act over [t_k, t_k+1): the motion that balances τ_k is
     // the motion at the hold's midpoint (`aras_log::TorqueTiming`).
-    let timing = log.sidecar.torques.unwrap_or_default();
+    let timing = log.torque_timing();
     let shift = timing.offset_steps();
 
     // Logged derivatives, every row: the log as it is.
