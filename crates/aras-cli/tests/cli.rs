@@ -60,6 +60,12 @@ fn pipeline_identify_predict_end_to_end() {
     ] {
         assert!(out.join(f).is_file(), "missing {f}");
     }
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        report.contains("at 1000 Hz logged after a 2 s lead-in"),
+        "{report}"
+    );
+    assert_eq!(json(&out.join("log.json"))["torques"], "held");
     let s = json(&out.join("summary.json"));
     assert!(
         s.get("timings_s").is_none(),

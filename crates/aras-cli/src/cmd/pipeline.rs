@@ -60,7 +60,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
     out.write("config.toml", cfg.to_toml())?;
 
     let intro = format!(
-        "Simulated ARAS-Diamond ({}), {} periods of the designed excitation at {} Hz, seed {}. \
+        "Simulated ARAS-Diamond ({}), {} periods of the designed excitation at {} Hz logged after a {} s lead-in, seed {}. \
          Sensor noise: current σ = {:?} A → joint torque σ = [{:.4}, {:.4}] N·m, encoder resolution {:.3e} rad \
          (docs/simulator.md: a Maxon RE 35-class motor, 10 mA current-sense noise, 1024-line encoder, capstan 10:1). \
          PD control (Kp = {:?}, Kd = {:?}){}.",
@@ -71,6 +71,7 @@ pub fn run(args: &PipelineArgs) -> Result<()> {
         },
         cfg.simulation.periods,
         cfg.simulation.rate_hz,
+        sim.lead_in_samples() as f64 / sim.output_rate_hz,
         cfg.simulation.seed,
         cfg.simulation.current_noise_std_a,
         noise[0],
