@@ -31,7 +31,9 @@ pub struct ProcessingLoss {
 }
 
 /// A log processed on every row with `opts` and the model torque
-/// `Y(θ, θ̇, θ̈) β` on its samples, stacked (joint 1 first).
+/// `Y(θ, θ̇, θ̈) β` on its samples through the processing's band-limiting
+/// (`Processed::band_limited`), stacked (joint 1 first): the prediction that
+/// is compared with the log's raw torques.
 pub fn predict_route(
     log: &Log,
     opts: &ProcessOptions,
@@ -45,7 +47,9 @@ pub fn predict_route(
         .with_context(|| format!("processing {}", log.name))?;
     let w = aras_pipeline::robot::stack(model, geometry, &processed.samples)?;
     let tau = aras_ident::validate::predict(w.w.as_ref(), beta)?;
-    Ok((processed, tau))
+    let n = processed.samples.len();
+    let [a, b] = processed.band_limited([&tau[..n], &tau[n..]])?;
+    Ok((processed, [a, b].concat()))
 }
 
 /// The processing loss of the prediction `pl` on `logged` (the

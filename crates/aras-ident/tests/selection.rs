@@ -385,3 +385,70 @@ fn bad_input_is_refused() {
     };
     assert!(select(&acc, std::slice::from_ref(&acc), &bad).is_err());
 }
+
+/// Rows `[1 | x | y | target]` of one group: the target is `x` with noise;
+/// the column `y` is `x` plus `mix` times an independent draw plus `lean`
+/// times the target's own noise (a column that leans towards this draw's
+/// noise fits it a hair better).
+fn tie_rows(seed: u64, n: usize, mix: f64, lean: f64) -> Vec<f64> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut g = || -> f64 { StandardNormal.sample(&mut rng) };
+    (0..n)
+        .flat_map(|_| {
+            let x = g();
+            let e = 0.8 * g();
+            let y = x + mix * g() + lean * e;
+            [1.0, x, y, 0.8 * x + e]
+        })
+        .collect()
+}
+
+/// Two laws the training data cannot tell apart (ΔBIC within `bic_tie`):
+/// the one that predicts the held-out motions better is chosen, and the
+/// lowest ΔBIC alone (`bic_tie = 0`) would take the other.
+#[test]
+fn a_tie_on_training_data_is_broken_by_the_validation_gain() {
+    let l = Layout::new(
+        1,
+        vec![
+            CandidateSpec::columns("x", 1),
+            CandidateSpec::columns("y", 1),
+        ],
+        1,
+    )
+    .unwrap();
+    let acc = |rows: &[f64]| {
+        let mut a = Accumulator::new(&l);
+        a.push_rows(0, rows).unwrap();
+        a
+    };
+    // TRAIN: y is x leaning 0.2 % towards the noise: a slightly larger RSS drop.
+    let train = acc(&tie_rows(1, 400, 0.0, 0.002));
+    // Held out: y is x blurred by an independent 30 % draw.
+    let vals = [
+        acc(&tie_rows(2, 400, 0.3, 0.0)),
+        acc(&tie_rows(3, 400, 0.3, 0.0)),
+    ];
+    let run = |bic_tie| {
+        let s = select(
+            &train,
+            &vals,
+            &SelectionOptions {
+                bic_tie,
+                ..SelectionOptions::default()
+            },
+        )
+        .unwrap();
+        let round = &s.rounds[0];
+        let bic = |name: &str| round.iter().find(|e| e.name == name).unwrap().delta_bic;
+        let gain = |name: &str| round.iter().find(|e| e.name == name).unwrap().mean_gain;
+        assert!(
+            bic("y") < bic("x") && bic("x") < bic("y") + 2.0,
+            "{round:?}"
+        );
+        assert!(gain("x") > gain("y") + 1.0, "{round:?}");
+        s.steps[0].name.clone()
+    };
+    assert_eq!(run(2.0), "x");
+    assert_eq!(run(0.0), "y");
+}

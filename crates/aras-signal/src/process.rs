@@ -355,34 +355,39 @@ impl Processed {
         &self.band
     }
 
-    /// Pairs the log's raw torques with a per-sample prediction
-    /// (`predicted[j]` of length `samples.len()`) on every row that has a
-    /// sample: `(measured, predicted)` per joint. The prediction first
-    /// passes the processing's own band-limiting ([`band_limit`](Self::band_limit)),
-    /// as the angles did, so its inertial and friction parts see the same
-    /// bandwidth (`docs/processing.md`, "Parallel filtering"). For an
-    /// averaged block the prediction repeats on every period, settling and
-    /// tail included, so the fitness (78) of the pair is the paper's, on
-    /// all rows.
+    /// A per-sample prediction (`predicted[j]` of length `samples.len()`)
+    /// through the processing's own band-limiting
+    /// ([`band_limit`](Self::band_limit)), as the angles passed it, so that
+    /// its inertial and friction parts see the same bandwidth
+    /// (`docs/processing.md`, "Parallel filtering"): the model torque that
+    /// is compared with the log's.
     ///
     /// # Errors
     /// [`ProcessError`] when a prediction does not have one value per
     /// sample.
-    pub fn on_log_rows(
-        &self,
-        predicted: [&[f64]; 2],
-    ) -> Result<[(Vec<f64>, Vec<f64>); 2], ProcessError> {
+    pub fn band_limited(&self, predicted: [&[f64]; 2]) -> Result<[Vec<f64>; 2], ProcessError> {
         let mut limited = [predicted[0].to_vec(), predicted[1].to_vec()];
         for p in &mut limited {
-            if p.len() != self.samples.len() {
-                return Err(ProcessError::TooShort {
-                    what: "pairing a prediction with the log's rows".into(),
-                    have: p.len(),
-                    need: self.samples.len(),
-                    hint: "give one predicted torque per processed sample".into(),
-                });
-            }
+            self.check_per_sample(p.len())?;
             self.band.apply(p)?;
+        }
+        Ok(limited)
+    }
+
+    /// Pairs the log's raw torques with a per-sample series, as given, on
+    /// every row that has a sample: `(measured, series)` per joint. For an
+    /// averaged block the series repeats on every period, settling and tail
+    /// included, so the fitness (78) of the pair is the paper's, on all
+    /// rows.
+    ///
+    /// # Errors
+    /// [`ProcessError`] when a series does not have one value per sample.
+    pub fn paired_with_log_rows(
+        &self,
+        series: [&[f64]; 2],
+    ) -> Result<[(Vec<f64>, Vec<f64>); 2], ProcessError> {
+        for p in series {
+            self.check_per_sample(p.len())?;
         }
         Ok(std::array::from_fn(|j| {
             let rows = self.log_tau[j].len();
@@ -391,11 +396,39 @@ impl Processed {
             for r in 0..rows {
                 if let Some(i) = self.sample_of_row(r) {
                     m.push(self.log_tau[j][r]);
-                    p.push(limited[j][i]);
+                    p.push(series[j][i]);
                 }
             }
             (m, p)
         }))
+    }
+
+    /// [`band_limited`](Self::band_limited), then
+    /// [`paired_with_log_rows`](Self::paired_with_log_rows): a prediction
+    /// and the log's raw torques, ready for the fitness (78) on all rows.
+    ///
+    /// # Errors
+    /// [`ProcessError`] when a prediction does not have one value per
+    /// sample.
+    pub fn on_log_rows(
+        &self,
+        predicted: [&[f64]; 2],
+    ) -> Result<[(Vec<f64>, Vec<f64>); 2], ProcessError> {
+        let [a, b] = self.band_limited(predicted)?;
+        self.paired_with_log_rows([&a, &b])
+    }
+
+    fn check_per_sample(&self, have: usize) -> Result<(), ProcessError> {
+        if have == self.samples.len() {
+            Ok(())
+        } else {
+            Err(ProcessError::TooShort {
+                what: "pairing a prediction with the log's rows".into(),
+                have,
+                need: self.samples.len(),
+                hint: "give one predicted torque per processed sample".into(),
+            })
+        }
     }
 }
 
@@ -454,10 +487,16 @@ pub fn process(
         );
     }
     let every_row = opts.rows == OutputRows::EveryRow;
-    // Held torques act over [t_k, t_k+1): the motion that balances τ_k is
-    // the motion at the hold's midpoint (`aras_log::TorqueTiming`).
-    let timing = log.torque_timing();
-    let shift = timing.offset_steps();
+    // Held torques act over [t_k, t_k+1): the motion estimated from the
+    // angles (band-limited, so it averages the steps around t_k) balances
+    // τ_k at the hold's midpoint (`aras_log::TorqueTiming`). Logged
+    // derivatives are the instantaneous motion at t_k, which the torque held
+    // from t_k balances as it is: they are not moved.
+    let shift = if logged_vel.is_some() {
+        0.0
+    } else {
+        log.torque_timing().offset_steps()
+    };
 
     // Logged derivatives, every row: the log as it is.
     if let (Some(v), Some(a), true) = (logged_vel, logged_acc, every_row) {
@@ -973,7 +1012,7 @@ pub fn process(
         context: format!("designing the band-limiting of {}", log.name),
         source,
     })?;
-    if shift != 0.0 && !logged {
+    if shift != 0.0 {
         bandwidth.reason += "; torques held over each step (zero-order hold): the motion is \
                              evaluated at the hold's midpoint, half a step after each sample";
     }

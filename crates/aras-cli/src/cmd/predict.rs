@@ -41,7 +41,8 @@ struct PredictSummary {
 
 /// Runs `predict`: writes `t,tau1,tau2`, the model torque `Y(θ, θ̇, θ̈) β`
 /// on every row of the log (θ̇, θ̈ from the log's derivative columns as
-/// given, else from the angles with the data-chosen bandwidth), and prints
+/// given, else from the angles with the configured bandwidth, the
+/// prediction then band-limited as the angles were), and prints
 /// the per-joint fitness (78) of exactly that file against the log's raw
 /// torques on the same rows. A log with derivative columns also gets its
 /// processing loss (`crate::loss`): the same parameters predicted from the
@@ -78,8 +79,8 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     let n = samples.len();
     // The log's raw torques on the rows written (the processed samples'
     // torques are band-limited with the motion: not what the file is
-    // compared with).
-    let [(m1, p1), (m2, p2)] = processed.on_log_rows([&tau[..n], &tau[n..]])?;
+    // compared with); the prediction is already band-limited.
+    let [(m1, p1), (m2, p2)] = processed.paired_with_log_rows([&tau[..n], &tau[n..]])?;
     let fit = [
         aras_ident::validate::fitness(&m1, &p1)?,
         aras_ident::validate::fitness(&m2, &p2)?,

@@ -1,7 +1,7 @@
 //! Forward selection over the accumulated sums: every round each unused
 //! candidate is fitted with the current model; one that is significant on
 //! the training data *and* helps every validation set may be added (the
-//! lowest ΔBIC wins); repeat until none is.
+//! lowest ΔBIC wins, the held-out gain breaking a tie); repeat until none is.
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -45,6 +45,14 @@ pub struct SelectionOptions {
     /// many parameters and their training RSS drops agree to this relative
     /// tolerance (default 1e-3).
     pub alias_tolerance: f64,
+    /// Significant candidates whose ΔBIC on the training data lies within
+    /// this much of the lowest are tied on those data, and the largest mean
+    /// validation gain among them wins (default 2: a BIC difference below 2
+    /// is "not worth more than a bare mention", Kass & Raftery 1995). Two
+    /// different laws that the excitation cannot tell apart, such as a
+    /// Stribeck dip and quadratic damping over the same speed range, are
+    /// then told apart by the motions held out; 0 keeps the lowest ΔBIC.
+    pub bic_tie: f64,
 }
 
 impl Default for SelectionOptions {
@@ -57,6 +65,7 @@ impl Default for SelectionOptions {
             noise_gain: 1.0,
             rank_tolerance: 1e-6,
             alias_tolerance: 1e-3,
+            bic_tie: 2.0,
         }
     }
 }
@@ -103,6 +112,13 @@ impl SelectionOptions {
                 "rank_tolerance",
                 self.rank_tolerance,
                 "the relative rank tolerance must lie in (0, 1), e.g. 1e-6",
+            );
+        }
+        if !(self.bic_tie >= 0.0 && self.bic_tie.is_finite()) {
+            return bad(
+                "bic_tie",
+                self.bic_tie,
+                "the ΔBIC tie margin must be a finite number ≥ 0, e.g. 2",
             );
         }
         if !(self.alias_tolerance >= 0.0 && self.alias_tolerance.is_finite()) {
@@ -287,7 +303,8 @@ pub fn fit_model(
 /// per round while one is significant on `train` (nested-model F-test with
 /// `effective_fraction` of the rows, level `alpha / candidates tried`) and
 /// gains at least `min_gain` fitness points on every `validation` set; the
-/// lowest ΔBIC wins, and among its aliases the first in the layout's order.
+/// lowest ΔBIC wins (among those within `bic_tie` of it, the largest mean
+/// validation gain), and among its aliases the first in the layout's order.
 /// At most one candidate per family. Deterministic: the same sums give the
 /// same selection whatever the thread count.
 pub fn select(
@@ -406,13 +423,21 @@ pub fn select(
                 }
             })
             .collect();
-        let top = scored
-            .iter()
-            .filter(|x| x.0.status == EvaluationStatus::Significant)
-            .min_by(|a, b| {
-                a.0.delta_bic
-                    .total_cmp(&b.0.delta_bic)
-                    .then(a.0.candidate.cmp(&b.0.candidate))
+        let significant = || {
+            scored
+                .iter()
+                .filter(|x| x.0.status == EvaluationStatus::Significant)
+        };
+        let lowest = significant()
+            .map(|x| x.0.delta_bic)
+            .fold(f64::INFINITY, f64::min);
+        let top = significant()
+            .filter(|x| x.0.delta_bic <= lowest + opts.bic_tie)
+            .max_by(|a, b| {
+                a.0.mean_gain
+                    .total_cmp(&b.0.mean_gain)
+                    .then(b.0.delta_bic.total_cmp(&a.0.delta_bic))
+                    .then(b.0.candidate.cmp(&a.0.candidate))
             })
             .map(|x| x.0.clone());
         let alias_of = |x: &CandidateEvaluation, best: &CandidateEvaluation| {
