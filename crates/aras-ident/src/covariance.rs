@@ -30,7 +30,7 @@
 //! of the residual at the regressor's own frequencies (it sums to zero
 //! against every column, so wider windows do not help). On the ARAS-Diamond
 //! excitation the error of the estimates over noise seeds is 1.2–1.6 times
-//! the HAC σ (`hac_alone_is_low_and_the_floored_sigma_is_honest_over_50_noise_seeds` in
+//! the HAC σ (`hac_alone_is_low_and_the_floored_sigma_is_honest_over_100_noise_seeds` in
 //! `aras-pipeline`). [`OlsEstimate::with_sigma_floor`] combines it with the
 //! filter model, which holds for white noise before the filter when the
 //! regressor lies in the pass band.
