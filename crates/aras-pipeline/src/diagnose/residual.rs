@@ -131,7 +131,9 @@ pub struct ResidualAnalysis {
     pub dataset: String,
     /// Profiles per joint and axis.
     pub profiles: Vec<Profile>,
-    /// Whiteness per joint.
+    /// Whiteness per joint; in a diagnosis, of the residual of the model
+    /// refitted on this set, which leaves out the training estimate's own
+    /// error.
     pub whiteness: Vec<Whiteness>,
     /// Findings, systematic ones first.
     pub findings: Vec<Finding>,
