@@ -247,3 +247,50 @@ fn validate_reports_the_loss_per_frequency() {
         assert!(loss[j] > 0.0);
     }
 }
+
+/// A log the angles alone cannot process (its sidecar's period, 1/0.7 s,
+/// is no whole number of 1 ms samples, and two periods leave no block that
+/// is) still gets its logged-derivative prediction: the loss is `null` and
+/// a note says why.
+#[test]
+fn a_log_the_angles_cannot_process_gets_its_prediction_without_a_loss() {
+    let dir = scratch("loss", "no-angles");
+    let cfg = dir.join("short.toml");
+    std::fs::write(&cfg, "[simulation]\nperiods = 2\n").unwrap();
+    let sim = dir.join("sim.csv");
+    let r = aras(&[
+        "simulate",
+        "--frequency",
+        "0.7",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        sim.to_str().unwrap(),
+        "-q",
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let out = dir.join("pred.csv");
+    let json = dir.join("pred.json");
+    let r = aras(&[
+        "predict",
+        "--params",
+        fixture("robots/aras-diamond.json").to_str().unwrap(),
+        "--data",
+        sim.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--summary",
+        json.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    assert!(
+        err.contains("note: no processing loss") && err.contains("whole number"),
+        "{err}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["route"], "logged_derivatives");
+    assert!(v["processing_loss"].is_null(), "{v}");
+    assert_eq!(columns(&out)["t"].len(), 2 * 1000 * 10 / 7);
+}

@@ -85,6 +85,11 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         aras_ident::validate::fitness(&m1, &p1)?,
         aras_ident::validate::fitness(&m2, &p2)?,
     ];
+    // The loss is a second opinion on the file written: a log that the
+    // angles alone cannot process (e.g. a sidecar period that is no whole
+    // number of samples, which the logged route never needs) gets the
+    // prediction and a note on why it has no loss, not an error.
+    let mut loss_unavailable = None;
     let loss = processing_loss(
         &log,
         &opts,
@@ -92,7 +97,11 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         &geometry,
         &beta,
         Some((&processed, &tau)),
-    )?;
+    )
+    .unwrap_or_else(|e| {
+        loss_unavailable = Some(format!("{e:#}"));
+        None
+    });
     let mut csv = String::with_capacity(n * 48);
     csv.push_str("t,tau1,tau2\n");
     for i in 0..n {
@@ -135,6 +144,9 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         fit[0],
         fit[1]
     );
+    if let Some(why) = &loss_unavailable {
+        eprintln!("note: no processing loss: {why}");
+    }
     if let Some(l) = loss {
         println!(
             "processing loss (logged θ̇, θ̈ minus the angles alone, same parameters, the {} rows \
