@@ -67,6 +67,9 @@ SIM = {
     "gear_ratios": [10.0, 10.0],
     # Ideal encoder: 6e-10 rad joint resolution.
     "counts_per_rev": [1000000000, 1000000000],
+    # No lead-in: the MuJoCo twin starts from the trajectory's start at
+    # t = 0, as the logged run then does.
+    "lead_in_s": 0.0,
 }
 
 
@@ -106,6 +109,7 @@ def toml_config(params_path):
         f"torque_limit = {lst(s['torque_limit'])}\nfriction_smoothing = {s['friction_smoothing']}\n"
         f"current_noise_std_a = {lst(s['current_noise_std_a'])}\n"
         f"gear_ratios = {lst(s['gear_ratios'])}\ncounts_per_rev = {lst(s['counts_per_rev'])}\n"
+        f"lead_in_s = {s['lead_in_s']}\n"
         "[signal]\ncutoff_hz = 0\n"
     )
 
