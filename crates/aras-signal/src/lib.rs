@@ -98,7 +98,7 @@ pub use derivative::{DerivativeMethod, Derivatives, derivatives, resolve};
 pub use error::{FilterError, ProcessError};
 pub use periods::{MAX_BLOCK_MISMATCH, MAX_DRIFT, PeriodAverage, average_periods};
 pub use process::{
-    Bandwidth, BandwidthChoice, BandwidthMethod, FilterSpec, FilterSummary, OutputRows,
+    Bandwidth, BandwidthChoice, BandwidthMethod, FilterSpec, FilterSummary, OutputRows, Paired,
     PeriodSource, PeriodSummary, ProcessOptions, ProcessSummary, Processed, Samples, process,
 };
 pub use resample::{GAP_RATIO, Gap, MAX_GROWTH, ResampleOptions, Resampling, resample_log};

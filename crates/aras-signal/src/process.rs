@@ -382,10 +382,7 @@ impl Processed {
     ///
     /// # Errors
     /// [`ProcessError`] when a series does not have one value per sample.
-    pub fn paired_with_log_rows(
-        &self,
-        series: [&[f64]; 2],
-    ) -> Result<[(Vec<f64>, Vec<f64>); 2], ProcessError> {
+    pub fn paired_with_log_rows(&self, series: [&[f64]; 2]) -> Result<Paired, ProcessError> {
         for p in series {
             self.check_per_sample(p.len())?;
         }
@@ -410,10 +407,7 @@ impl Processed {
     /// # Errors
     /// [`ProcessError`] when a prediction does not have one value per
     /// sample.
-    pub fn on_log_rows(
-        &self,
-        predicted: [&[f64]; 2],
-    ) -> Result<[(Vec<f64>, Vec<f64>); 2], ProcessError> {
+    pub fn on_log_rows(&self, predicted: [&[f64]; 2]) -> Result<Paired, ProcessError> {
         let [a, b] = self.band_limited(predicted)?;
         self.paired_with_log_rows([&a, &b])
     }
@@ -431,6 +425,10 @@ impl Processed {
         }
     }
 }
+
+/// `(measured, predicted)` per joint on the log's rows
+/// ([`Processed::paired_with_log_rows`]).
+pub type Paired = [(Vec<f64>, Vec<f64>); 2];
 
 /// One series per joint.
 type Pair = [Vec<f64>; 2];
