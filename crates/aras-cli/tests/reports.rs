@@ -36,11 +36,16 @@ fn as_measured(csv: &Path) {
 }
 
 fn identify(data: &Path, out: &Path) -> String {
+    identify_with(data, out, &[])
+}
+
+fn identify_with(data: &Path, out: &Path, extra: &[&str]) -> String {
     let r = Command::new(env!("CARGO_BIN_EXE_aras"))
         .args(["identify", "--quiet", "--data"])
         .arg(data)
         .arg("--out")
         .arg(out)
+        .args(extra)
         .output()
         .unwrap();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
@@ -165,5 +170,31 @@ fn diagnosis_plots_steps_as_points_and_residuals_as_binned_clouds() {
     assert!(
         names.iter().any(|n| n.starts_with("hysteresis_")),
         "{names:?}"
+    );
+}
+
+/// The report says which rows were fitted: away from velocity reversals by
+/// default, every row with `identification.rows = "all"`.
+#[test]
+fn identify_report_says_which_rows_were_fitted() {
+    let dir = scratch("reports", "rows");
+    let exc = default_excitation();
+    let data = dir.join("run.csv");
+    log(&Params::aras_diamond(), &exc, 2.0 * exc.period(), &data);
+    let away = identify(&data, &dir.join("away"));
+    assert!(
+        away.contains("rows each, away from velocity reversals;"),
+        "{away}"
+    );
+    let cfg = dir.join("all.toml");
+    std::fs::write(&cfg, "[identification]\nrows = \"all\"\n").unwrap();
+    let all = identify_with(
+        &data,
+        &dir.join("all"),
+        &["--config", cfg.to_str().unwrap()],
+    );
+    assert!(
+        all.contains("rows each, every row, with the Coulomb transition widths refined;"),
+        "{all}"
     );
 }

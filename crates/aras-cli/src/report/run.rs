@@ -486,9 +486,18 @@ fn base_table(r: &mut Report, d: &RunData) {
             un.join(", ")
         ));
     }
+    let rows = d.measured.len() / 2;
+    let which = match id.rows_fitted.map(|n| n == rows) {
+        [true, true] => "every row, with the Coulomb transition widths refined",
+        [false, false] => "away from velocity reversals",
+        _ => {
+            "every row for a joint whose Coulomb transition width was refined, away from \
+               velocity reversals for the other"
+        }
+    };
     r.paragraph(format!(
         "Residual standard deviation σ_ρ = {:.3e} N·m (66); condition number of the base regressor {:.1}; largest σ% {:.2}. \
-         Fitted on {} (joint 1) and {} (joint 2) of {} rows each, away from velocity reversals; \
+         Fitted on {} (joint 1) and {} (joint 2) of {rows} rows each, {which}; \
          σ and σ% come from the HAC sandwich covariance (`aras_ident::covariance`), which \
          counts the filtered residual's correlation with a bandwidth from its own \
          autocorrelation time.",
@@ -497,7 +506,6 @@ fn base_table(r: &mut Report, d: &RunData) {
         id.ols.rel_std_percent.iter().cloned().fold(0.0, f64::max),
         id.rows_fitted[0],
         id.rows_fitted[1],
-        d.measured.len() / 2
     ));
 }
 
