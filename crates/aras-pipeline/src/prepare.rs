@@ -282,10 +282,16 @@ impl Prepared {
         self.stacked.w.as_ref()
     }
 
-    /// Noise power gain of the filter ([`record_noise_gain`]): what
+    /// Noise power gain of the operator the torques and columns passed:
+    /// the low-pass's ([`record_noise_gain`]) or, for an averaged block
+    /// projected on its harmonics, the projection's
+    /// (`aras_signal::HarmonicBand::noise_gain`). What
     /// `aras_ident::OlsEstimate::with_filtered_noise` corrects σ by.
     pub fn noise_gain(&self) -> Result<f64, IdentError> {
-        record_noise_gain(self.filter.as_ref(), self.n(), self.periodic())
+        match (self.filter.as_ref(), self.processed.band_limit()) {
+            (None, BandLimit::Harmonics(band)) if band.rows.is_none() => Ok(band.noise_gain()),
+            (filter, _) => record_noise_gain(filter, self.n(), self.periodic()),
+        }
     }
 
     /// Rows kept away from velocity reversals ([`record_keep_mask`]).

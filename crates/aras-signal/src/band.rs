@@ -120,6 +120,21 @@ impl HarmonicBand {
         }
     }
 
+    /// The fraction of white noise's power that the projection of one
+    /// block keeps: the trace of the projection over `per`, `(1 + 2 ×
+    /// harmonics kept) / per` (a harmonic on the Nyquist bin counts once).
+    /// It is the `Σ h²` of a low-pass for this operator: what a white-noise
+    /// σ and the independent fraction of the rows divide by after the
+    /// projection.
+    pub fn noise_gain(&self) -> f64 {
+        let (kp, per) = (self.periods_per_block.max(1), self.per.max(1));
+        let dims: usize = (1..=self.top_bin.min(per / 2))
+            .filter(|a| a.is_multiple_of(kp))
+            .map(|a| if 2 * a == per { 1 } else { 2 })
+            .sum();
+        (1 + dims) as f64 / per as f64
+    }
+
     /// Keeps the mean and the harmonics up to `top_bin` of one block.
     fn project(&self, f: &mut Fourier, x: &mut [f64]) {
         let (kp, top) = (self.periods_per_block.max(1), self.top_bin);
@@ -166,6 +181,33 @@ mod tests {
                     + 0.25
             })
             .collect()
+    }
+
+    /// The noise gain is the projection's `Σ h²`: applied to each unit
+    /// impulse of the block, the squared outputs sum to the trace.
+    #[test]
+    fn harmonic_noise_gain_is_the_projections_trace() {
+        for (per, kp, top) in [(96, 1, 7), (96, 3, 30), (64, 2, 32), (101, 1, 50)] {
+            let band = HarmonicBand {
+                per,
+                periods_per_block: kp,
+                top_bin: top,
+                rows: None,
+                remainder: None,
+            };
+            let mut sum = 0.0;
+            for i in 0..per {
+                let mut e = vec![0.0; per];
+                e[i] = 1.0;
+                band.apply(&mut e).unwrap();
+                sum += e.iter().map(|v| v * v).sum::<f64>();
+            }
+            let g = band.noise_gain();
+            assert!(
+                (sum / per as f64 - g).abs() < 1e-12,
+                "{per} {kp} {top}: {sum} vs {g}"
+            );
+        }
     }
 
     #[test]
