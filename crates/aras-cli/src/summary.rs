@@ -10,6 +10,31 @@ use aras_ident::SdpSolution;
 use serde::Serialize;
 
 use crate::identify::Identification;
+
+/// What `summary.json` records of the processing (`aras_signal::ProcessSummary`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProcessingRecord {
+    /// How the bandwidth was chosen.
+    pub bandwidth: aras_signal::BandwidthMethod,
+    /// The choice in one sentence, with the torque timing's handling.
+    pub reason: String,
+    /// The log's torque timing: `sampled` or `held`.
+    pub torque_timing: aras_log::TorqueTiming,
+    /// How far after each row the motion was evaluated (sample steps).
+    pub motion_shift_steps: f64,
+}
+
+impl ProcessingRecord {
+    /// The record of `summary`.
+    pub fn new(summary: &aras_signal::ProcessSummary) -> Self {
+        Self {
+            bandwidth: summary.bandwidth.method,
+            reason: summary.bandwidth.reason.clone(),
+            torque_timing: summary.torque_timing,
+            motion_shift_steps: summary.motion_shift_steps,
+        }
+    }
+}
 use crate::validate::{CrossValidation, ErrorSummary, PdSummary};
 
 /// Format tag of `summary.json`.
@@ -127,6 +152,11 @@ pub struct Summary {
     pub excitation_condition_number: Option<f64>,
     /// Samples used in the fit (per joint).
     pub samples: usize,
+    /// How the log was processed: the bandwidth's choice and why, the
+    /// torque timing and the motion's shift; absent on the streaming route,
+    /// whose blocks each have their own.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub processing: Option<ProcessingRecord>,
     /// What became of the log's logged derivative columns (`dtheta*`,
     /// `ddtheta*`) and why; absent when the log has none.
     #[serde(skip_serializing_if = "Option::is_none")]

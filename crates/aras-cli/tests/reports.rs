@@ -186,6 +186,16 @@ fn identify_report_says_which_rows_were_fitted() {
         away.contains("rows each, away from velocity reversals;"),
         "{away}"
     );
+    // summary.json records the processing: the simulator's held torques,
+    // the motion evaluated half a step after each row.
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("away").join("summary.json")).unwrap(),
+    )
+    .unwrap();
+    let p = &summary["processing"];
+    assert_eq!(p["torque_timing"], "held", "{p}");
+    assert_eq!(p["motion_shift_steps"], 0.5, "{p}");
+    assert!(p["reason"].as_str().unwrap().contains("midpoint"), "{p}");
     let cfg = dir.join("all.toml");
     std::fs::write(&cfg, "[identification]\nrows = \"all\"\n").unwrap();
     let all = identify_with(

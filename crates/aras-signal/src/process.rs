@@ -307,6 +307,12 @@ pub struct ProcessSummary {
     pub angle_source: String,
     /// Where torques came from.
     pub torque_source: String,
+    /// The log's torque timing (`aras_log::Log::torque_timing`).
+    pub torque_timing: aras_log::TorqueTiming,
+    /// How far after each row the motion was evaluated, in sample steps:
+    /// ½ for held torques with the motion from the angles, 0 for sampled
+    /// torques or logged derivatives.
+    pub motion_shift_steps: f64,
 }
 
 /// Which output sample stands for each row of the log.
@@ -532,6 +538,8 @@ pub fn process(
                 derivative_source: "logged dtheta/ddtheta columns".into(),
                 angle_source: log.summary.angle_source.clone(),
                 torque_source: log.summary.torque_source.clone(),
+                torque_timing: log.torque_timing(),
+                motion_shift_steps: 0.0,
             },
             samples: s,
             notes,
@@ -1031,6 +1039,8 @@ pub fn process(
             derivative_source: source.into(),
             angle_source: log.summary.angle_source.clone(),
             torque_source: log.summary.torque_source.clone(),
+            torque_timing: log.torque_timing(),
+            motion_shift_steps: shift,
         },
         samples: s,
         notes,

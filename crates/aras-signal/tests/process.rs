@@ -420,5 +420,12 @@ fn held_torques_move_the_motion_to_the_holds_midpoint() {
             "{}",
             held.summary.bandwidth.reason
         );
+        assert_eq!(held.summary.torque_timing, aras_log::TorqueTiming::Held);
+        assert_eq!(held.summary.motion_shift_steps, 0.5);
+        assert_eq!(
+            sampled.summary.torque_timing,
+            aras_log::TorqueTiming::Sampled
+        );
+        assert_eq!(sampled.summary.motion_shift_steps, 0.0);
     }
 }

@@ -189,6 +189,9 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         base_parameters: id.base.n_base(),
         excitation_condition_number: input.design.map(|d| d.condition_number),
         samples: prepared.n(),
+        processing: Some(crate::summary::ProcessingRecord::new(
+            &prepared.processed.summary,
+        )),
         logged_derivatives: logged_derivatives_note(input.log),
         torque_noise_std_nm: input.noise,
         fitness: fitness.clone(),

@@ -248,6 +248,7 @@ pub fn fit_and_write(
         base_parameters: base.n_base(),
         excitation_condition_number: None,
         samples: r.samples_used,
+        processing: None,
         logged_derivatives: None,
         torque_noise_std_nm: None,
         fitness,
