@@ -44,13 +44,18 @@ fn fitness(measured: &[f64], predicted: &[f64]) -> f64 {
 
 /// A simulated log with exact derivative columns (3 periods at 1 Hz).
 fn simulated(dir: &Path) -> std::path::PathBuf {
+    simulated_at(dir, "1", 3)
+}
+
+/// A simulated log of `periods` periods of (79) at `frequency` Hz.
+fn simulated_at(dir: &Path, frequency: &str, periods: usize) -> std::path::PathBuf {
     let cfg = dir.join("short.toml");
-    std::fs::write(&cfg, "[simulation]\nperiods = 3\n").unwrap();
+    std::fs::write(&cfg, format!("[simulation]\nperiods = {periods}\n")).unwrap();
     let sim = dir.join("sim.csv");
     let r = aras(&[
         "simulate",
         "--frequency",
-        "1",
+        frequency,
         "--config",
         cfg.to_str().unwrap(),
         "--out",
@@ -255,20 +260,7 @@ fn validate_reports_the_loss_per_frequency() {
 #[test]
 fn a_log_the_angles_cannot_process_gets_its_prediction_without_a_loss() {
     let dir = scratch("loss", "no-angles");
-    let cfg = dir.join("short.toml");
-    std::fs::write(&cfg, "[simulation]\nperiods = 2\n").unwrap();
-    let sim = dir.join("sim.csv");
-    let r = aras(&[
-        "simulate",
-        "--frequency",
-        "0.7",
-        "--config",
-        cfg.to_str().unwrap(),
-        "--out",
-        sim.to_str().unwrap(),
-        "-q",
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let sim = simulated_at(&dir, "0.7", 2);
     let out = dir.join("pred.csv");
     let json = dir.join("pred.json");
     let r = aras(&[
