@@ -11,7 +11,7 @@ use aras_excite::FourierTrajectory;
 
 mod common;
 
-use common::scratch;
+use common::{fitness, scratch};
 
 /// The committed default excitation (`fixtures/trajectories/`).
 fn default_excitation() -> FourierTrajectory {
@@ -452,18 +452,6 @@ fn diagnose_streams_a_long_log_as_in_memory() {
         0,
         "no staging directory stays"
     );
-}
-
-/// Fitness (78), two-pass, in percent.
-fn fitness(measured: &[f64], predicted: &[f64]) -> f64 {
-    let mean = measured.iter().sum::<f64>() / measured.len() as f64;
-    let err: f64 = measured
-        .iter()
-        .zip(predicted)
-        .map(|(m, p)| (m - p).powi(2))
-        .sum();
-    let var: f64 = measured.iter().map(|m| (m - mean).powi(2)).sum();
-    100.0 * (1.0 - (err / var).sqrt())
 }
 
 /// The step-0 validation fitness in `diagnosis.json` is the raw-torque

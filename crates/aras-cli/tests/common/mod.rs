@@ -1,6 +1,7 @@
-//! Helpers shared by the output-safety tests (`atomic.rs`, `force.rs`).
+//! Helpers shared by the command-line tests.
 #![allow(dead_code)]
 
+use std::collections::HashMap;
 use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
@@ -72,4 +73,36 @@ pub fn short_validate_config(dir: &Path) -> PathBuf {
     )
     .unwrap();
     cfg
+}
+
+/// Columns of a CSV by header name.
+pub fn columns(path: &Path) -> HashMap<String, Vec<f64>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let names: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_owned)
+        .collect();
+    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
+    for line in lines {
+        for (c, v) in cols.iter_mut().zip(line.split(',')) {
+            c.push(v.parse().unwrap());
+        }
+    }
+    names.into_iter().zip(cols).collect()
+}
+
+/// Fitness (78), two-pass, in percent: an independent check of the
+/// library's figure.
+pub fn fitness(measured: &[f64], predicted: &[f64]) -> f64 {
+    let mean = measured.iter().sum::<f64>() / measured.len() as f64;
+    let err: f64 = measured
+        .iter()
+        .zip(predicted)
+        .map(|(m, p)| (m - p).powi(2))
+        .sum();
+    let var: f64 = measured.iter().map(|m| (m - mean).powi(2)).sum();
+    100.0 * (1.0 - (err / var).sqrt())
 }

@@ -589,6 +589,23 @@ impl Context<'_> {
     /// `d` in its range, fitted or left out near a reversal, summarised in
     /// record order as the rows are computed: only the model's columns
     /// are built, and nothing proportional to the data set is held.
+    /// The coefficient of every layout column of `fit` (0 for a column
+    /// not in the model) and the candidates with a nonzero one whose
+    /// columns are computed from an effect model.
+    fn coefficients(&self, fit: &ModelFit) -> (Vec<f64>, Vec<usize>) {
+        let mut beta = vec![0.0; self.layout.width()];
+        for (c, v) in fit.columns.iter().zip(&fit.estimate) {
+            beta[*c] = *v;
+        }
+        let used = (0..self.cands.len())
+            .filter(|&k| {
+                self.effect_models[k].is_some()
+                    && self.layout.candidate_columns(k).any(|c| beta[c] != 0.0)
+            })
+            .collect();
+        (beta, used)
+    }
+
     fn residual_analysis(
         &self,
         d: &Dataset,
@@ -597,18 +614,8 @@ impl Context<'_> {
     ) -> Result<ResidualAnalysis, IdentError> {
         let (lo, hi) = self.range(d);
         let pb = self.layout.base_columns();
-        // Coefficient of every layout column (0 if not in the model).
-        let mut beta = vec![0.0; self.layout.width()];
-        for (c, v) in fit.columns.iter().zip(&fit.estimate) {
-            beta[*c] = *v;
-        }
+        let (beta, used) = self.coefficients(fit);
         let delay = self.fit_delay(fit);
-        let used: Vec<usize> = (0..self.cands.len())
-            .filter(|&k| {
-                self.effect_models[k].is_some()
-                    && self.layout.candidate_columns(k).any(|c| beta[c] != 0.0)
-            })
-            .collect();
         let mut summary = ResidualSummary::new(
             &d.name,
             hi - lo,
@@ -694,17 +701,8 @@ impl Context<'_> {
         let plan = Plan::new(&u, p.min_speed, WINDOW_TOL, 0)?;
         let n = u.len();
         let pb = self.layout.base_columns();
-        let mut beta = vec![0.0; self.layout.width()];
-        for (c, v) in fit.columns.iter().zip(&fit.estimate) {
-            beta[*c] = *v;
-        }
+        let (beta, used) = self.coefficients(fit);
         let delay = self.fit_delay(fit);
-        let used: Vec<usize> = (0..self.cands.len())
-            .filter(|&k| {
-                self.effect_models[k].is_some()
-                    && self.layout.candidate_columns(k).any(|c| beta[c] != 0.0)
-            })
-            .collect();
         let mut pred: [Vec<f64>; 2] = [Vec::with_capacity(n), Vec::with_capacity(n)];
         in_order(
             &u,
