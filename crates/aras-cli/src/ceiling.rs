@@ -12,7 +12,7 @@
 //!   the rows the fitness (78) of a prediction uses.
 //! * **Kept rows**: the noise-free torque is put through exactly the
 //!   processing of the measured one (period averaging, and the zero-phase
-//!   filter that both filtering modes apply to the torques) and compared with the processed measured
+//!   filter or harmonic projection that both filtering modes apply to the torques) and compared with the processed measured
 //!   torque on the rows away from velocity reversals, as the in-sample
 //!   fitness is. What keeps both below 100 % is the sensor noise alone.
 
@@ -83,11 +83,8 @@ pub fn noise_ceiling(
     let mut kept = [0.0; 2];
     for (j, k) in kept.iter_mut().enumerate() {
         let mut tau = twin.samples.tau[j].clone();
-        if let Some(sos) = &prep.filter {
-            tau = sos
-                .filtfilt_record(&tau, prep.periodic())
-                .context("filtering the noise-free torques")?;
-        }
+        prep.limit_torque(&mut tau)
+            .context("band-limiting the noise-free torques as the measured ones")?;
         let (m, p): (Vec<f64>, Vec<f64>) = (0..n)
             .filter(|&i| keep.get(j * n + i).copied().unwrap_or(false))
             .map(|i| (prep.t()[j * n + i], tau[i]))

@@ -291,6 +291,27 @@ pub fn friction_widths(
     Ok((refined, refinement, keep))
 }
 
+/// [`friction_widths`] on one log processed and stacked as `identify`
+/// processes it (`period` as `--period`): the model with the widths and
+/// what the refinement found. For commands that start from identify's
+/// model on a log they read themselves (`diagnose`).
+pub fn widths_on_log(
+    log: &Log,
+    period: Option<f64>,
+    model: &Model,
+    geometry: &Geometry,
+    cfg: &Config,
+) -> Result<(Model, WidthRefinement)> {
+    if cfg.identification.rows == FitRows::AwayFromReversals {
+        return Ok((model.clone(), WidthRefinement::not_refined()));
+    }
+    let opts = process_options(cfg, period, false);
+    let mut prepared = prepare(log, &opts, cfg.identification.filtering, model, geometry)?;
+    let base = base_parameters(model, geometry, cfg)?;
+    let (refined, refinement, _) = friction_widths(&mut prepared, &base, model, cfg)?;
+    Ok((refined, refinement))
+}
+
 /// OLS and SDP on prepared data, with `nominal` as the SDP's reference, on
 /// the rows `keep` (joint-major; [`friction_widths`]: every row, or a
 /// joint's rows away from its velocity reversals by

@@ -96,6 +96,43 @@ fn diagnose_names_the_hidden_effect() {
     // Without --force the same output directory is refused.
     let again = diagnose();
     assert!(!again.status.success());
+    // Every row, with the Coulomb widths refined with the named effects:
+    // the same single effect, and the widths of the simulated robot.
+    let cfg = dir.join("all.toml");
+    std::fs::write(
+        &cfg,
+        "[signal]\nbandwidth = \"auto\"\n[identification]\nrows = \"all\"\n",
+    )
+    .unwrap();
+    let all = dir.join("all");
+    let r = Command::new(env!("CARGO_BIN_EXE_aras"))
+        .args(["diagnose", "--quiet", "--data"])
+        .arg(&train)
+        .arg("--validate")
+        .arg(&val)
+        .arg("--config")
+        .arg(&cfg)
+        .arg("--out")
+        .arg(&all)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let j = json(&all.join("diagnosis.json"));
+    let ids: Vec<&str> = j["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["id"].as_str().unwrap())
+        .collect();
+    assert_eq!(ids, ["passive_joint_viscous"], "{}", j["conclusion"]);
+    let w_true = SimConfig::default().friction_smoothing;
+    for w in j["friction_width"]["joints"].as_array().unwrap() {
+        let (v, sd) = (w["w"].as_f64().unwrap(), w["std_dev"].as_f64().unwrap());
+        assert!(
+            sd > 0.0 && (v - w_true).abs() < 3.0 * sd,
+            "w {v} ± {sd} vs the simulator's {w_true}"
+        );
+    }
 }
 
 /// The extended model flows into `identify --effects`: a hidden constant
@@ -267,7 +304,8 @@ fn rows(v: &serde_json::Value) -> [u64; 2] {
 /// `--period` and `--sidecar`: with a raised `min_speed` and a wider reach
 /// both fit exactly the same TRAIN rows, fewer than with the defaults; the
 /// log is read with its sidecar moved elsewhere and its period given on the
-/// command line.
+/// command line. With `rows = "all"` both fit every row, with the same
+/// Coulomb widths.
 #[test]
 fn diagnose_fits_the_rows_identify_fits() {
     let dir = scratch("diagnose", "rows");
@@ -321,6 +359,42 @@ fn diagnose_fits_the_rows_identify_fits() {
     // The sidecar was found: identify reports the truth's parameter errors.
     let s = json(&dir.join("id/summary.json"));
     assert!(s["parameter_errors"].is_object(), "{s}");
+    // Every row with the Coulomb widths refined: both fit every row with
+    // the same widths (nothing is named on this log without a hidden
+    // effect, so the widths are refined once, on the same model).
+    std::fs::write(
+        &cfg,
+        "[signal]\nbandwidth = \"auto\"\n[identification]\nrows = \"all\"\nbase_samples = 300\n",
+    )
+    .unwrap();
+    run("identify", "id_all", true);
+    run("diagnose", "dg_all", true);
+    let id = rows(&json(&dir.join("id_all/base.json")));
+    let d = json(&dir.join("dg_all/diagnosis.json"));
+    assert_eq!(id, rows(&d), "identify and diagnose fit different rows");
+    assert_eq!(id[0], id[1]);
+    assert!(id[0] > id0[0] && id[1] > id0[1], "{id:?} vs {id0:?}");
+    assert_eq!(
+        d["steps"].as_array().unwrap().len(),
+        0,
+        "{}",
+        d["conclusion"]
+    );
+    let s = json(&dir.join("id_all/summary.json"));
+    for j in 0..2 {
+        let (a, b) = (
+            &s["friction_width"]["joints"][j],
+            &d["friction_width"]["joints"][j],
+        );
+        assert_eq!(a["status"], "refined", "{a}");
+        assert_eq!(
+            a["w"],
+            b["w"],
+            "joint {}: identify {a} vs diagnose {b}",
+            j + 1
+        );
+        assert!(b["all_rows"].as_bool().unwrap(), "{b}");
+    }
 }
 
 /// A lab's own column names (`--columns`): the same log with its header

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::prepare::Prepared;
 use crate::refine::minimise_profile;
-use crate::robot::{FilterMode, filter_columns};
+use crate::robot::FilterMode;
 
 /// Which rows identification fits (`identification.rows`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -253,17 +253,8 @@ fn coulomb_values(
     for (i, x) in v.iter().enumerate() {
         c[(j * n + i, 0)] = aras_dyn::coulomb_law(*x, w);
     }
-    let raw = c.clone();
-    if let (Some(sos), FilterMode::Parallel) = (&prepared.filter, mode) {
-        filter_columns(&mut c, n, sos, prepared.periodic())?;
-    }
-    Ok(
-        if prepared.filter.is_some() && mode == FilterMode::Parallel {
-            c
-        } else {
-            raw
-        },
-    )
+    prepared.limit_columns(&mut c, mode)?;
+    Ok(c)
 }
 
 /// Writes joint `j`'s Coulomb column at width `w` into `prepared`'s

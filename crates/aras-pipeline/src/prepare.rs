@@ -139,7 +139,6 @@ fn band_limit_stacked(
     band: &BandLimit,
     mode: FilterMode,
 ) -> Result<(), IdentError> {
-    use rayon::prelude::*;
     let n = stacked.groups.counts()[0];
     let err = |e| IdentError::external("band-limiting the stacked data", e);
     for g in 0..2 {
@@ -147,25 +146,33 @@ fn band_limit_stacked(
             .map_err(err)?;
     }
     if mode == FilterMode::Parallel {
-        let nc = stacked.w.ncols();
-        let cols: Vec<Vec<f64>> = (0..nc)
-            .into_par_iter()
-            .map(|c| {
-                let mut col: Vec<f64> = (0..2 * n).map(|i| stacked.w[(i, c)]).collect();
-                for g in 0..2 {
-                    let block = &mut col[g * n..(g + 1) * n];
-                    if block.iter().any(|v| *v != 0.0) {
-                        band.apply(block)
-                            .map_err(|e| IdentError::external("band-limiting a column", e))?;
-                    }
+        band_limit_columns(&mut stacked.w, n, band)?;
+    }
+    Ok(())
+}
+
+/// Applies `band` to each joint's block (`n` rows) of every column of the
+/// joint-major `w` that is not zero there, columns in parallel.
+fn band_limit_columns(w: &mut Mat<f64>, n: usize, band: &BandLimit) -> Result<(), IdentError> {
+    use rayon::prelude::*;
+    let nc = w.ncols();
+    let cols: Vec<Vec<f64>> = (0..nc)
+        .into_par_iter()
+        .map(|c| {
+            let mut col: Vec<f64> = (0..2 * n).map(|i| w[(i, c)]).collect();
+            for g in 0..2 {
+                let block = &mut col[g * n..(g + 1) * n];
+                if block.iter().any(|v| *v != 0.0) {
+                    band.apply(block)
+                        .map_err(|e| IdentError::external("band-limiting a column", e))?;
                 }
-                Ok(col)
-            })
-            .collect::<Result<_, IdentError>>()?;
-        for (c, col) in cols.into_iter().enumerate() {
-            for (i, v) in col.into_iter().enumerate() {
-                stacked.w[(i, c)] = v;
             }
+            Ok(col)
+        })
+        .collect::<Result<_, IdentError>>()?;
+    for (c, col) in cols.into_iter().enumerate() {
+        for (i, v) in col.into_iter().enumerate() {
+            w[(i, c)] = v;
         }
     }
     Ok(())
@@ -291,6 +298,44 @@ impl Prepared {
         match (self.filter.as_ref(), self.processed.band_limit()) {
             (None, BandLimit::Harmonics(band)) if band.rows.is_none() => Ok(band.noise_gain()),
             (filter, _) => record_noise_gain(filter, self.n(), self.periodic()),
+        }
+    }
+
+    /// Puts joint-major columns (`2N` rows, e.g. a regressor column at a
+    /// new setting) through the operator [`Self::stacked`]'s columns passed
+    /// with `mode`: the low-pass, the harmonic projection of an averaged
+    /// block, or nothing (torque-only filtering, no band-limiting), so a
+    /// column swapped into the fit is treated like its neighbours.
+    pub fn limit_columns(&self, w: &mut Mat<f64>, mode: FilterMode) -> Result<(), IdentError> {
+        if mode == FilterMode::TorqueOnly {
+            return Ok(());
+        }
+        let n = self.n();
+        if let Some(sos) = &self.filter {
+            return filter_columns(w, n, sos, self.periodic());
+        }
+        match self.processed.band_limit() {
+            band @ BandLimit::Harmonics(_) => band_limit_columns(w, n, band),
+            _ => Ok(()),
+        }
+    }
+
+    /// Puts one joint's per-sample torque series through the operator
+    /// [`Self::stacked`]'s torques passed (the low-pass or the harmonic
+    /// projection; either filtering mode applies it to the torques).
+    pub fn limit_torque(&self, tau: &mut [f64]) -> Result<(), IdentError> {
+        if let Some(sos) = &self.filter {
+            let y = sos
+                .filtfilt_record(tau, self.periodic())
+                .map_err(|e| IdentError::external("filtering a torque series", e))?;
+            tau.copy_from_slice(&y);
+            return Ok(());
+        }
+        match self.processed.band_limit() {
+            band @ BandLimit::Harmonics(_) => band
+                .apply(tau)
+                .map_err(|e| IdentError::external("band-limiting a torque series", e)),
+            _ => Ok(()),
         }
     }
 

@@ -5,15 +5,18 @@
 //! `diagnosis.json`, `diagnosis.md`, `diagnosis.html` and the plots.
 
 use anyhow::{Context, Result};
+use aras_dyn::Model;
+use aras_pipeline::diagnose::Candidate;
 use aras_pipeline::diagnose::residual::{ResidualAnalysis, RowSample, SampledRow};
 use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, RefinementStatus, diagnose};
+use aras_pipeline::friction_width::{FitRows, WidthRefinement, with_widths};
 
 use crate::cli::{DiagnoseArgs, LogArgs};
 use crate::identify::process_options;
 use crate::output::OutDir;
 use crate::report::Report;
 use crate::report::plots::{Binned, Series, StepPanel, binned_means, lines, scatter_binned, steps};
-use crate::robot::{effect_spec, nominal, paper_model};
+use crate::robot::{Extras, effect_spec, model_with_effects, nominal, paper_model};
 use crate::stages::Stages;
 use aras_pipeline::streaming::{StreamingOptions, spool_log};
 use indicatif::ProgressBar;
@@ -84,6 +87,43 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     };
     let label = |any: bool| if any { " (streamed)" } else { "" };
     let train_streams = streams(&args.data)?;
+    // The model identify fits (`identification.rows`): with `"all"` the
+    // friction's Coulomb widths refined on TRAIN and every row of a joint
+    // whose width was refined fitted and scored; a streamed TRAIN keeps
+    // the rows away from reversals with the sign law (49).
+    let train_log = if train_streams || cfg.identification.rows == FitRows::AwayFromReversals {
+        None
+    } else {
+        Some(stages.run("read TRAIN for the Coulomb widths", |_| {
+            super::load_log(&args.data, &args.log, &cfg)
+        })?)
+    };
+    let widths_with = |extras: &Extras| -> Result<(Model, WidthRefinement)> {
+        let Some(log) = &train_log else {
+            let w = if cfg.identification.rows == FitRows::All {
+                WidthRefinement::failed(
+                    "TRAIN is processed in bounded memory (streamed), where the widths are \
+                     not refined"
+                        .into(),
+                )
+            } else {
+                WidthRefinement::not_refined()
+            };
+            return Ok((model.clone(), w));
+        };
+        let delayed;
+        let log = match extras.torque_delay {
+            Some(d) => {
+                delayed = aras_signal::delay_torque(log, d)
+                    .with_context(|| format!("delaying the torques of TRAIN by {d} samples"))?;
+                &delayed
+            }
+            None => log,
+        };
+        let with = model_with_effects(&nominal, &extras.effects)?;
+        let (_, w) = crate::identify::widths_on_log(log, args.log.period, &with, &geometry, &cfg)?;
+        Ok((with_widths(&model, w.widths())?, w))
+    };
     let train = stages.run(
         &format!("read + process TRAIN{}", label(train_streams)),
         |bar| load(&args.data, &args.log, train_streams, bar),
@@ -128,9 +168,34 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         validation_reach_tol: cfg.validation.reversal_reach,
         ..DiagnoseOptions::default()
     };
-    let d = stages.run("diagnose (candidates × rounds)", |_| {
-        diagnose(&model, &geometry, &train, &vals, &opts)
-    })?;
+    // The widths are a setting of the starting model's friction, refined
+    // with the effects the diagnosis names: a width refined without a
+    // missing effect absorbs part of it and leaves the rest to a wrong
+    // candidate. So the diagnosis runs again with the widths refined with
+    // its named effects until it names the effects it was refined with (at
+    // most `WIDTH_PASSES` times; the last pass is kept).
+    let mut extras = Extras::default();
+    let mut pass = 0;
+    let (d, widths) = loop {
+        pass += 1;
+        let (start, widths) = stages
+            .run(&format!("Coulomb widths on TRAIN (pass {pass})"), |_| {
+                widths_with(&extras)
+            })?;
+        let opts = DiagnoseOptions {
+            all_rows: widths.joints.map(|j| j.all_rows),
+            ..opts.clone()
+        };
+        let d = stages.run(
+            &format!("diagnose (candidates × rounds, pass {pass})"),
+            |_| diagnose(&start, &geometry, &train, &vals, &opts),
+        )?;
+        let named = named_extras(&d);
+        if train_log.is_none() || named == extras || pass >= WIDTH_PASSES {
+            break (d, widths);
+        }
+        extras = named;
+    };
     let train_name = train.name.clone();
     // The scratch file of a streamed TRAIN goes before the outputs are
     // committed.
@@ -144,7 +209,15 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         .collect();
     drop(train);
     drop(vals);
-    out.write_json("diagnosis.json", &d)?;
+    // The diagnosis, with the starting model's Coulomb widths.
+    let mut json = serde_json::to_value(&d).context("serialising the diagnosis")?;
+    if let Some(o) = json.as_object_mut() {
+        o.insert(
+            "friction_width".into(),
+            serde_json::to_value(&widths).context("serialising the widths")?,
+        );
+    }
+    out.write_json("diagnosis.json", &json)?;
     // The predictions behind the raw-torque fitness of the starting and
     // the final model, per validation set: `row,tau1,tau2` on every log row
     // that has a sample.
@@ -163,13 +236,14 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
             out.write(&format!("pred_{tag}_{v}.csv"), csv)?;
         }
     }
-    let report = build(&d, &train_name)?;
+    let report = build(&d, &train_name, &widths)?;
     for (file, svg) in report.figures() {
         out.write(file, svg)?;
     }
     out.write("diagnosis.md", report.to_markdown())?;
     out.write("diagnosis.html", report.to_html())?;
     let dir = out.commit()?;
+    println!("{}", widths.sentence());
     println!("{}", d.conclusion);
     println!(
         "validation fitness (78) vs the raw torques on every row, τ1/τ2 (in brackets: filtered, \
@@ -191,13 +265,33 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     Ok(())
 }
 
+/// Most diagnosis passes with re-refined Coulomb widths.
+const WIDTH_PASSES: usize = 3;
+
+/// The effects (with refined settings) and torque delay `d` added, as
+/// `identify --effects` takes them.
+fn named_extras(d: &Diagnosis) -> Extras {
+    let mut out = Extras::default();
+    for s in &d.steps {
+        let c = s
+            .refinement
+            .as_ref()
+            .map_or(s.candidate, |f| s.candidate.with_setting(f.value));
+        match c {
+            Candidate::Effect { effect } => out.effects.push(effect),
+            Candidate::TimeDelay { samples } => out.torque_delay = Some(samples),
+        }
+    }
+    out
+}
+
 fn pct(x: f64) -> String {
     format!("{x:.2}")
 }
 
 /// The report: conclusion, effects added with evidence, fitness table and
 /// plot, residual findings and plots before/after, candidate scores.
-fn build(d: &Diagnosis, train: &str) -> Result<Report> {
+fn build(d: &Diagnosis, train: &str, widths: &WidthRefinement) -> Result<Report> {
     let mut r = Report::new("Diagnosis: where the model and the measurement disagree");
     let names: Vec<&str> = d.before.iter().map(|a| a.dataset.as_str()).collect();
     r.paragraph(format!(
@@ -211,6 +305,10 @@ fn build(d: &Diagnosis, train: &str) -> Result<Report> {
             .map(|n| format!("`{n}`"))
             .collect::<Vec<_>>()
             .join(", ")
+    ));
+    r.paragraph(format!(
+        "Starting model: identify's, on the rows it fits. {}",
+        widths.sentence()
     ));
     r.heading(2, "Conclusion").paragraph(d.conclusion.clone());
 

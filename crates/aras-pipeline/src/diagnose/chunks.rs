@@ -57,8 +57,11 @@ pub(crate) struct Plan {
     /// Joint `j`'s rows with `|θ̇_j|` below this (rad/s) are left out …
     pub min_speed: f64,
     /// … widened by this many samples each side (the filter's reach down
-    /// to the data set's tolerance, [`filter_reach`]; 0 unfiltered).
+    /// to the data set's tolerance, [`filter_reach`]; 0 unfiltered) …
     pub guard: usize,
+    /// … except on the joints marked here, whose every row is used
+    /// ([`super::DiagnoseOptions::all_rows`]).
+    pub all_rows: [bool; 2],
 }
 
 impl Plan {
@@ -82,6 +85,7 @@ impl Plan {
             chunk: n,
             min_speed,
             guard,
+            all_rows: [false; 2],
         };
         if data.periodic {
             return Ok(whole);
@@ -100,6 +104,11 @@ impl Plan {
             chunk: CHUNK,
             ..whole
         })
+    }
+
+    /// The same plan with every row of the joints in `all_rows` used.
+    pub(crate) fn with_all_rows(self, all_rows: [bool; 2]) -> Self {
+        Self { all_rows, ..self }
     }
 
     /// Chunks `[a, b)` covering `[lo, hi)`. A last chunk shorter than half
@@ -173,6 +182,12 @@ impl Window {
             plan.guard,
             data.periodic,
         )?;
+        let n = self.samples.len();
+        for (g, all) in plan.all_rows.iter().enumerate() {
+            if *all {
+                self.keep[g * n..(g + 1) * n].fill(true);
+            }
+        }
         Ok(())
     }
 

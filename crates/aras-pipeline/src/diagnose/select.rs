@@ -63,6 +63,13 @@ pub struct DiagnoseOptions {
     /// lobe only, so that fast validation motions keep rows; the
     /// identification's cross-validation uses the same).
     pub validation_reach_tol: f64,
+    /// Joint `j` is fitted and scored on every row, without the exclusion
+    /// above (default: neither). Set it where the starting model's Coulomb
+    /// law describes the reversals, i.e. its friction has a width refined
+    /// on every row (`crate::friction_width`, `Fc tanh(θ̇/w)`), as
+    /// identification's `rows = "all"` does; with the sign law (49) the
+    /// reversal misfit would be offered to the candidates.
+    pub all_rows: [bool; 2],
     /// Reference parameters (e.g. CAD) for the final physically consistent
     /// re-identification; `None` skips it.
     pub reference: Option<Params>,
@@ -80,6 +87,7 @@ impl Default for DiagnoseOptions {
             min_speed: 0.2,
             reach_tol: 1e-3,
             validation_reach_tol: 0.5,
+            all_rows: [false; 2],
             reference: None,
         }
     }
@@ -920,10 +928,14 @@ pub fn diagnose(
         layout,
         max_shift,
     };
-    let train_p = Plan::new(train, opts.min_speed, opts.reach_tol, max_shift)?;
+    let train_p =
+        Plan::new(train, opts.min_speed, opts.reach_tol, max_shift)?.with_all_rows(opts.all_rows);
     let vals_p: Vec<Plan> = validation
         .iter()
-        .map(|v| Plan::new(v, opts.min_speed, opts.validation_reach_tol, max_shift))
+        .map(|v| {
+            Plan::new(v, opts.min_speed, opts.validation_reach_tol, max_shift)
+                .map(|p| p.with_all_rows(opts.all_rows))
+        })
         .collect::<Result<_, _>>()?;
     let train_acc = ctx.accumulate(train, &train_p)?;
     check_rows(train_acc.rows())?;
