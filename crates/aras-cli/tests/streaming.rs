@@ -56,14 +56,54 @@ fn streaming_on_and_off_give_the_same_estimates() {
         .unwrap();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let log = sim.join("log.csv");
-    let mem = identify(&cfg, &log, &dir.join("off"), &["--streaming", "off"]);
+    same_estimates(&dir, &cfg, &log, "");
+    // Every row with the Coulomb widths refined on the averaged period, and
+    // the data-chosen bandwidth (a harmonic series, projected on both
+    // sides): the same widths, rows and estimates.
+    let all = dir.join("all.toml");
+    std::fs::write(
+        &all,
+        format!("{SHORT}[signal]\nbandwidth = \"auto\"\n[identification]\nrows = \"all\"\n"),
+    )
+    .unwrap();
+    let (mem, qr) = same_estimates(&dir, &all, &log, "all-");
+    let n = mem["rows_fitted"].clone();
+    assert_eq!(n[0], n[1], "{n}");
+    assert_eq!(qr["rows_fitted"], n);
+    let widths = |d: &str| {
+        let s: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(d).join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        s["friction_width"]["joints"].clone()
+    };
+    let (wm, wq) = (widths("all-off"), widths("all-qr"));
+    for j in 0..2 {
+        assert_eq!(wm[j]["status"], "refined", "{wm}");
+        // The same record up to the rounding of the period sums.
+        let (a, b) = (wm[j]["w"].as_f64().unwrap(), wq[j]["w"].as_f64().unwrap());
+        assert!((a - b).abs() < 1e-9 * a, "in memory {wm} vs streamed {wq}");
+    }
+}
+
+/// Identifies `log` with `cfg` in memory and streamed (QR and Gram) into
+/// `prefix`-named directories, checks that they agree, and returns the
+/// in-memory and the QR `base.json`.
+fn same_estimates(
+    dir: &Path,
+    cfg: &Path,
+    log: &Path,
+    prefix: &str,
+) -> (serde_json::Value, serde_json::Value) {
+    let out = |d: &str| dir.join(format!("{prefix}{d}"));
+    let mem = identify(cfg, log, &out("off"), &["--streaming", "off"]);
     let qr = identify(
-        &cfg,
-        &log,
-        &dir.join("qr"),
+        cfg,
+        log,
+        &out("qr"),
         &["--streaming", "on", "--accumulation", "qr"],
     );
-    let gram = identify(&cfg, &log, &dir.join("gram"), &["--streaming", "on"]);
+    let gram = identify(cfg, log, &out("gram"), &["--streaming", "on"]);
     // The same rows and operations up to rounding: QR agrees to ≈ κ ε.
     let (m, q, g) = (
         column(&mem, "ols"),
@@ -101,7 +141,8 @@ fn streaming_on_and_off_give_the_same_estimates() {
             "summary.json",
             "report.md",
         ] {
-            assert!(dir.join(d).join(f).is_file(), "{d}/{f} missing");
+            assert!(out(d).join(f).is_file(), "{d}/{f} missing");
         }
     }
+    (mem, qr)
 }

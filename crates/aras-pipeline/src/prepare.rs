@@ -179,18 +179,18 @@ fn band_limit_columns(w: &mut Mat<f64>, n: usize, band: &BandLimit) -> Result<()
 }
 
 /// What accumulating a block needs: its filtered regressor and torques,
-/// the rows kept away from velocity reversals, and the filter.
+/// the rows kept away from velocity reversals, and the noise gain of its
+/// band-limiting.
 pub(crate) struct BlockRows {
     /// Stacked regressor and torques, filtered.
     pub stacked: Stacked,
     /// Rows kept ([`Prepared::keep_mask`]), joint-major.
     pub keep: Vec<bool>,
-    /// The filter applied ([`Prepared::filter`]).
-    pub filter: Option<Sos>,
+    /// Noise power gain of the low-pass or harmonic projection applied
+    /// ([`Prepared::noise_gain`]); `None` when nothing was band-limited.
+    pub noise_gain: Option<f64>,
     /// Samples per joint.
     pub n: usize,
-    /// True when the block is one averaged period.
-    pub periodic: bool,
 }
 
 /// [`prepare`] for accumulating a block: stacks into `recycled` (a previous
@@ -222,16 +222,24 @@ pub(crate) fn prepare_block_rows(
         min_speed,
         reach_tol,
     )?;
+    // The operator's noise gain, as [`Prepared::noise_gain`] has it.
+    let noise_gain = match (&filter_sos, processed.band_limit()) {
+        (None, BandLimit::Harmonics(band)) if band.rows.is_none() => Some(band.noise_gain()),
+        (Some(sos), _) => Some(noise_gain(sos, n, periodic)?),
+        _ => None,
+    };
+    let band = processed.band_limit().clone();
     drop(processed);
     if let Some(sos) = &filter_sos {
         filter(&mut stacked, sos, mode, periodic)?;
+    } else if matches!(band, BandLimit::Harmonics(_)) {
+        band_limit_stacked(&mut stacked, &band, mode)?;
     }
     Ok(BlockRows {
         stacked,
         keep,
-        filter: filter_sos,
+        noise_gain,
         n,
-        periodic,
     })
 }
 

@@ -12,12 +12,14 @@ use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, RefinementSta
 use aras_pipeline::friction_width::{FitRows, WidthRefinement, with_widths};
 
 use crate::cli::{DiagnoseArgs, LogArgs};
+use crate::config::FilteringMode;
 use crate::identify::process_options;
 use crate::output::OutDir;
 use crate::report::Report;
 use crate::report::plots::{Binned, Series, StepPanel, binned_means, lines, scatter_binned, steps};
 use crate::robot::{Extras, effect_spec, model_with_effects, nominal, paper_model};
 use crate::stages::Stages;
+use aras_pipeline::robot::FilterMode;
 use aras_pipeline::streaming::{StreamingOptions, spool_log};
 use indicatif::ProgressBar;
 use std::path::Path;
@@ -90,7 +92,8 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     // The model identify fits (`identification.rows`): with `"all"` the
     // friction's Coulomb widths refined on TRAIN and every row of a joint
     // whose width was refined fitted and scored; a streamed TRAIN keeps
-    // the rows away from reversals with the sign law (49).
+    // the rows away from reversals with the sign law (49) unless it has a
+    // period (the streaming identification refines them on its average).
     let train_log = if train_streams || cfg.identification.rows == FitRows::AwayFromReversals {
         None
     } else {
@@ -99,29 +102,50 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         })?)
     };
     let widths_with = |extras: &Extras| -> Result<(Model, WidthRefinement)> {
-        let Some(log) = &train_log else {
-            let w = if cfg.identification.rows == FitRows::All {
-                WidthRefinement::failed(
-                    "TRAIN is processed in bounded memory (streamed), where the widths are \
-                     not refined"
-                        .into(),
-                )
-            } else {
-                WidthRefinement::not_refined()
-            };
-            return Ok((model.clone(), w));
-        };
-        let delayed;
-        let log = match extras.torque_delay {
-            Some(d) => {
-                delayed = aras_signal::delay_torque(log, d)
-                    .with_context(|| format!("delaying the torques of TRAIN by {d} samples"))?;
-                &delayed
-            }
-            None => log,
-        };
+        if cfg.identification.rows == FitRows::AwayFromReversals {
+            return Ok((model.clone(), WidthRefinement::not_refined()));
+        }
         let with = model_with_effects(&nominal, &extras.effects)?;
-        let (_, w) = crate::identify::widths_on_log(log, args.log.period, &with, &geometry, &cfg)?;
+        let w = match &train_log {
+            Some(log) => {
+                let delayed;
+                let log = match extras.torque_delay {
+                    Some(d) => {
+                        delayed = aras_signal::delay_torque(log, d).with_context(|| {
+                            format!("delaying the torques of TRAIN by {d} samples")
+                        })?;
+                        &delayed
+                    }
+                    None => log,
+                };
+                crate::identify::widths_on_log(log, args.log.period, &with, &geometry, &cfg)?.1
+            }
+            // Streamed: a bounded-memory pass of the streaming
+            // identification, which refines them on the averaged period.
+            None => {
+                let ic = &cfg.identification;
+                let opts = StreamingOptions {
+                    read: super::streaming_read_options(&args.log, &cfg)?,
+                    process: process_options(&cfg, args.log.period, false),
+                    filter_mode: match ic.filtering {
+                        FilteringMode::Parallel => FilterMode::Parallel,
+                        FilteringMode::TorqueOnly => FilterMode::TorqueOnly,
+                    },
+                    geometry,
+                    min_speed: ic.min_speed,
+                    reversal_reach: ic.reversal_reach,
+                    torque_delay: extras.torque_delay,
+                    widths: Some(ic.width),
+                    ..StreamingOptions::default()
+                };
+                let base = crate::identify::base_parameters(&with, &geometry, &cfg)?;
+                aras_pipeline::streaming::identify_log(&args.data, &with, &base, &opts)
+                    .with_context(|| {
+                        format!("streaming {} for the Coulomb widths", args.data.display())
+                    })?
+                    .widths
+            }
+        };
         Ok((with_widths(&model, w.widths())?, w))
     };
     let train = stages.run(
@@ -191,7 +215,10 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
             |_| diagnose(&start, &geometry, &train, &vals, &opts),
         )?;
         let named = named_extras(&d);
-        if train_log.is_none() || named == extras || pass >= WIDTH_PASSES {
+        if cfg.identification.rows == FitRows::AwayFromReversals
+            || named == extras
+            || pass >= WIDTH_PASSES
+        {
             break (d, widths);
         }
         extras = named;

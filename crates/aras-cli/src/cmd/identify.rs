@@ -177,12 +177,18 @@ fn run_streaming(args: &IdentifyArgs, extras: &Extras) -> Result<()> {
     })?;
     super::print_notes(&args.data, &r.log.notes);
     super::print_warnings(&args.data, &r.log.warnings);
+    for f in &r.widths.fallback {
+        eprintln!("note: {f}");
+    }
+    // The model with the widths refined on the averaged period, if any.
+    let model = aras_pipeline::friction_width::with_widths(&model, r.widths.widths())?;
     let intro = format!(
-        "Identification of `{}` ({} rows, streamed){}{}.",
+        "Identification of `{}` ({} rows, streamed){}{}. {}",
         args.data.display(),
         r.samples_read,
         extras.delay_clause(),
-        truth_clause(truth.is_some())
+        truth_clause(truth.is_some()),
+        r.widths.sentence()
     );
     let summary = fit_and_write(
         &r,

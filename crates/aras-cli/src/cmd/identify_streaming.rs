@@ -3,9 +3,11 @@
 //! with the same settings as the in-memory path (processing, parallel
 //! filter, reversal exclusion, filter-corrected σ, OLS/WLS, SDP) and the
 //! same output files. What a single bounded pass cannot give: the fitness
-//! (78) on *all* rows (only the fitted rows, away from reversals, are
-//! accumulated: both fitness columns report them) and the report's
-//! time-series figures.
+//! (78) on *all* rows (only the fitted rows are accumulated: both fitness
+//! columns report them) and the report's time-series figures. The Coulomb
+//! widths of `identification.rows = "all"` are refined on the period route
+//! only (its averaged period is in memory); a log without a period is
+//! fitted away from reversals with the sign law, and the report says so.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -14,6 +16,7 @@ use anyhow::{Context, Result};
 use aras_dyn::{Model, Params};
 use aras_ident::streaming::Accumulation;
 use aras_ident::{BaseParameters, NoiseVariances};
+use aras_pipeline::friction_width::FitRows;
 use aras_pipeline::robot::{FilterMode, params_from_solution};
 use aras_pipeline::streaming::{StreamingOptions, StreamingResult, identify_log_with_progress};
 use indicatif::ProgressBar;
@@ -47,6 +50,7 @@ pub fn options(args: &IdentifyArgs, cfg: &Config, nominal: &Params) -> Result<St
         },
         min_speed: cfg.identification.min_speed,
         reversal_reach: cfg.identification.reversal_reach,
+        widths: (cfg.identification.rows == FitRows::All).then_some(cfg.identification.width),
         ..StreamingOptions::default()
     })
 }
@@ -261,7 +265,7 @@ pub fn fit_and_write(
         parameter_errors: errors,
         sdp: SdpReport::new(&sdp),
         implausible: implausible.clone(),
-        friction_width: None,
+        friction_width: Some(r.widths.clone()),
         timings_s: None,
     };
     if !reproducible {
@@ -293,8 +297,8 @@ pub fn fit_and_write(
         format!(
             "# ARAS-Diamond identification report (`aras identify --streaming`)\n\n{intro}\n\n{warning}\
              Streaming identification in bounded memory (docs/scale.md): route {:?}, \
-             {} rows read, {} samples used, rows fitted away from velocity reversals \
-             {} / {} (joint 1 / 2), accumulation: {check}; filter noise gain {:.4}.\n\n\
+             {} rows read, {} samples used, rows fitted {} / {} (joint 1 / 2; the rest are \
+             near velocity reversals), accumulation: {check}; band-limit noise gain {:.4}.\n\n\
              | | τ1 | τ2 |\n|---|---|---|\n| fitness (78) OLS, fitted rows | {:.2} % | {:.2} % |\n\
              | fitness (78) SDP, fitted rows | {:.2} % | {:.2} % |\n\n\
              The fitness on all rows and the time-series figures need the whole log in \

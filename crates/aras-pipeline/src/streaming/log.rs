@@ -16,7 +16,8 @@ use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 use super::delayed::TorqueShift;
 use crate::TaskRegressor;
 use crate::diagnose::Dataset;
-use crate::prepare::{RegressorColumns, prepare_block_rows, processing_filter, record_noise_gain};
+use crate::friction_width::{WidthRefinement, WidthSearch};
+use crate::prepare::{RegressorColumns, prepare_block_rows, processing_filter};
 use crate::robot::{FilterMode, filter_reach, reversal_mask};
 use crate::spool::SpoolWriter;
 use faer::Mat;
@@ -59,6 +60,14 @@ pub struct StreamingOptions {
     /// exactly as [`aras_signal::delay_torque`] on the whole log (the rows
     /// without such a torque are left out).
     pub torque_delay: Option<f64>,
+    /// Refine the friction's Coulomb widths with this search and fit every
+    /// row of a joint whose width is refined ([`crate::friction_width`], as
+    /// identification's `rows = "all"` in memory; default `None`: the sign
+    /// law (49) on the rows `min_speed` keeps). Done on the period route,
+    /// whose averaged period is one record in memory; the other routes fall
+    /// back to `min_speed`'s rows with the sign law, said in
+    /// [`StreamingResult::widths`].
+    pub widths: Option<WidthSearch>,
 }
 
 impl Default for StreamingOptions {
@@ -74,6 +83,7 @@ impl Default for StreamingOptions {
             min_speed: 0.0,
             reversal_reach: 1e-3,
             torque_delay: None,
+            widths: None,
         }
     }
 }
@@ -153,6 +163,11 @@ pub struct StreamingResult {
     pub overlap: usize,
     /// Whole periods averaged (period route).
     pub periods: usize,
+    /// The friction's Coulomb widths ([`StreamingOptions::widths`]): the
+    /// model accumulated has them, and a refined joint's every row was
+    /// fitted; not refined without that option, and failed (rows away from
+    /// reversals, the sign law) on a route without a period.
+    pub widths: WidthRefinement,
     /// The reader's report (sampling, sources, saturation warnings).
     pub log: LogReport,
 }
@@ -260,6 +275,7 @@ pub fn identify_log_with_progress(
     let mut read = rows_reader(&name, options.torque_delay, progress)?;
     let mut out = Progress::default();
     let route;
+    let mut widths = WidthRefinement::not_refined();
     if period.is_none() && logged {
         route = StreamingRoute::LoggedDerivatives;
         let mut x = [vec![], vec![]];
@@ -322,10 +338,45 @@ pub fn identify_log_with_progress(
         out.read = averaged.rows;
         out.blocks = averaged.chunks;
         let popts = averaged.process;
+        // The averaged period is one record in memory: the widths are
+        // refined on it exactly as in memory.
+        let refinement = match &options.widths {
+            Some(search) => {
+                let mut prepared = crate::prepare::prepare(
+                    &log,
+                    &popts,
+                    model,
+                    &options.geometry,
+                    options.filter_mode,
+                    RegressorColumns::Standard,
+                    false,
+                )?;
+                crate::friction_width::refine_widths(
+                    &mut prepared,
+                    model,
+                    base,
+                    options.filter_mode,
+                    search,
+                )
+                .unwrap_or_else(|e| WidthRefinement::failed(e.to_string()))
+            }
+            None => WidthRefinement::not_refined(),
+        };
+        let refined = crate::friction_width::with_widths(model, refinement.widths())?;
         let used = accumulate_processed(
-            &log, &popts, options, model, base, &mut acc, None, &mut out, &mut None,
+            &log,
+            &popts,
+            options,
+            &refined,
+            base,
+            &mut acc,
+            None,
+            &mut out,
+            &mut None,
+            refinement.joints.map(|j| j.all_rows),
         )?;
         out.used = used;
+        widths = refinement;
     } else {
         route = StreamingRoute::OverlappingBlocks;
         let mut popts = options.process.clone();
@@ -358,6 +409,15 @@ pub fn identify_log_with_progress(
     }
     if route == StreamingRoute::LoggedDerivatives {
         acc = stage.accumulator();
+    }
+    if options.widths.is_some() && route != StreamingRoute::PeriodAverage {
+        widths = WidthRefinement::failed(format!(
+            "the log has no period, and the {} route does not refine the widths",
+            match route {
+                StreamingRoute::LoggedDerivatives => "logged-derivative",
+                _ => "overlapping-block",
+            }
+        ));
     }
     let report = reader
         .finish()
@@ -393,6 +453,7 @@ pub fn identify_log_with_progress(
         blocks: out.blocks,
         overlap: out.overlap,
         periods: out.periods,
+        widths,
         log: report,
     })
 }
@@ -848,6 +909,7 @@ fn process_blocks(
                     Some(*window),
                     &mut p,
                     spare,
+                    [false; 2],
                 )?;
                 Ok((a, p, used))
             },
@@ -1017,6 +1079,7 @@ fn accumulate_processed(
     window: Option<(usize, usize, usize)>,
     out: &mut Progress,
     spare: &mut Option<Mat<f64>>,
+    all_rows: [bool; 2],
 ) -> Result<usize, IdentError> {
     let block = prepare_block_rows(
         log,
@@ -1029,8 +1092,14 @@ fn accumulate_processed(
         spare.take(),
     )?;
     let n = block.n;
-    if block.filter.is_some() && out.gain.is_none() {
-        out.gain = Some(record_noise_gain(block.filter.as_ref(), n, block.periodic)?);
+    if out.gain.is_none() {
+        out.gain = block.noise_gain;
+    }
+    let mut block = block;
+    for (g, all) in all_rows.iter().enumerate() {
+        if *all {
+            block.keep[g * n..(g + 1) * n].fill(true);
+        }
     }
     let Range { start: i0, end: i1 } = window.map_or(0..n, |w| kept_range(w, log.len(), n));
     if i1 == i0 {
