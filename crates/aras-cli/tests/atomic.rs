@@ -39,7 +39,11 @@ fn a_run_that_fails_late_keeps_the_previous_outputs() {
     let log = dir.join("one_sine.csv");
     std::fs::copy(fixture("bad/logs/one_sine.csv"), &log).unwrap();
     let config = dir.join("filter10.toml");
-    std::fs::write(&config, "[signal]\ncutoff_hz = 10.0\n").unwrap();
+    std::fs::write(
+        &config,
+        "[signal]\nbandwidth = \"fixed\"\ncutoff_hz = 10.0\n",
+    )
+    .unwrap();
     let r = aras(&[
         "identify",
         "--data",

@@ -469,7 +469,11 @@ fn excitation_that_cannot_excite() {
     let dir = scratch("rank");
     let out = dir.join("o");
     let config = dir.join("filter10.toml");
-    std::fs::write(&config, "[signal]\ncutoff_hz = 10.0\n").unwrap();
+    std::fs::write(
+        &config,
+        "[signal]\nbandwidth = \"fixed\"\ncutoff_hz = 10.0\n",
+    )
+    .unwrap();
     fails_with(
         &[
             "identify",
@@ -683,7 +687,8 @@ fn messages_point_at_the_cause() {
     );
     let r = aras(&["pipeline", "--print-config"]);
     assert!(String::from_utf8_lossy(&r.stdout).contains("cutoff_hz = 10.0"));
-    // The default filter is the settings', not the user's.
+    // The default filter is the settings', not the user's; the data-chosen
+    // bandwidth says from what it was chosen.
     let plain = simulated_log(&dir, "plain.csv", 3000, |v| v.truncate(5));
     let r = aras(&strs(&predict_log(&plain, &dir)));
     let said = String::from_utf8_lossy(&r.stdout).into_owned();
@@ -693,6 +698,18 @@ fn messages_point_at_the_cause() {
         "{said}"
     );
     assert!(!said.contains("by the user"), "{said}");
+    let auto = dir.join("auto.toml");
+    std::fs::write(&auto, "[signal]\nbandwidth = \"auto\"\n").unwrap();
+    let mut args = predict_log(&plain, &dir);
+    args.extend(["--config".into(), auto.display().to_string()]);
+    let r = aras(&strs(&args));
+    let said = String::from_utf8_lossy(&r.stdout).into_owned();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(
+        said.contains("the angles' motion reaches") && said.contains("above the noise floor"),
+        "{said}"
+    );
+    assert!(!said.contains("from the settings"), "{said}");
 }
 
 /// Logged derivatives: `predict` uses them only when they are the angles'

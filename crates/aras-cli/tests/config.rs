@@ -34,11 +34,19 @@ fn invalid_values_name_key_and_line() {
         e.contains("cfg:2") && e.contains("`identification.sdp.mass_tolerance`"),
         "{e}"
     );
-    let e = err("[validation]\nfrequencies_hz = [0.5, 8.0]\n", Format::Toml);
+    // A validation frequency too close to a fixed cut-off; with the
+    // data-chosen bandwidth the band follows the motion.
+    let fast = "[validation]\nfrequencies_hz = [0.5, 8.0]\n";
+    let e = err(
+        &format!("[signal]\nbandwidth = \"fixed\"\n{fast}"),
+        Format::Toml,
+    );
     assert!(
         e.contains("`validation.frequencies_hz`") && e.contains("cut-off"),
         "{e}"
     );
+    let auto = format!("[signal]\nbandwidth = \"auto\"\n{fast}");
+    assert!(Config::parse(&auto, Format::Toml, "cfg").is_ok());
     let e = err("[robot]\nalpha_deg = 190.0\n", Format::Toml);
     assert!(e.contains("`robot.alpha_deg`"), "{e}");
 }

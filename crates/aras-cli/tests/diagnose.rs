@@ -456,22 +456,58 @@ fn diagnose_streams_a_long_log_as_in_memory() {
     let (train, val) = (dir.join("train.csv"), dir.join("val.csv"));
     log(&truth, &default_excitation(), 40.0, &train);
     log(&truth, &Sinusoid::paper_79(0.5).unwrap(), 10.0, &val);
-    let run = |mode: &str| {
-        let out = dir.join(format!("out-{mode}"));
-        let r = Command::new(env!("CARGO_BIN_EXE_aras"))
-            .args(["diagnose", "--data"])
+    let all_rows = dir.join("all.toml");
+    std::fs::write(
+        &all_rows,
+        "[signal]\nbandwidth = \"auto\"\n[identification]\nrows = \"all\"\n",
+    )
+    .unwrap();
+    let run = |mode: &str, config: Option<&Path>| {
+        let out = dir.join(format!(
+            "out-{mode}{}",
+            if config.is_some() { "-all" } else { "" }
+        ));
+        let mut c = Command::new(env!("CARGO_BIN_EXE_aras"));
+        c.args(["diagnose", "--data"])
             .arg(&train)
             .arg("--validate")
             .arg(&val)
             .args(["--streaming", mode, "--out"])
-            .arg(&out)
-            .output()
-            .unwrap();
+            .arg(&out);
+        if let Some(cfg) = config {
+            c.arg("--config").arg(cfg);
+        }
+        let r = c.output().unwrap();
         assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
         (out, String::from_utf8_lossy(&r.stderr).into_owned())
     };
-    let (on, log_on) = run("on");
-    let (off, log_off) = run("off");
+    // Every row: the streamed TRAIN's widths come from the streaming
+    // identification's averaged period, equal to the in-memory ones.
+    let (a, b) = (
+        json(&run("on", Some(&all_rows)).0.join("diagnosis.json")),
+        json(&run("off", Some(&all_rows)).0.join("diagnosis.json")),
+    );
+    assert_eq!(a["rows_fitted"], b["rows_fitted"]);
+    assert_eq!(
+        a["steps"].as_array().unwrap().len(),
+        b["steps"].as_array().unwrap().len()
+    );
+    for j in 0..2 {
+        let w = |d: &serde_json::Value| d["friction_width"]["joints"][j]["w"].as_f64().unwrap();
+        assert!(
+            b["friction_width"]["joints"][j]["all_rows"]
+                .as_bool()
+                .unwrap()
+        );
+        assert!(
+            (w(&a) - w(&b)).abs() < 1e-9 * w(&b),
+            "{} vs {}",
+            w(&a),
+            w(&b)
+        );
+    }
+    let (on, log_on) = run("on", None);
+    let (off, log_off) = run("off", None);
     assert!(
         log_on.contains("read + process TRAIN (streamed)"),
         "{log_on}"

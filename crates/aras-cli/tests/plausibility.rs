@@ -99,7 +99,7 @@ fn implausible_results_are_flagged_and_plausible_ones_are_not() {
 
     // Filtering switched off: the derivatives of raw encoder angles.
     let cfg = dir.join("nofilter.toml");
-    std::fs::write(&cfg, "[signal]\ncutoff_hz = 0\n").unwrap();
+    std::fs::write(&cfg, "[signal]\nbandwidth = \"fixed\"\ncutoff_hz = 0\n").unwrap();
     let (_, checks, _) = identify(
         &without_derivatives(&log, &dir),
         &dir.join("c0"),
