@@ -11,8 +11,8 @@ use std::hint::black_box;
 use aras_kin::{Geometry, inverse};
 use aras_log::{ReadOptions, read_log_from};
 use aras_signal::{
-    Autocorrelation, Butterworth, OutputRows, PeriodSource, ProcessOptions, SpectrumAccumulator,
-    process,
+    Autocorrelation, Bandwidth, Butterworth, OutputRows, PeriodSource, ProcessOptions,
+    SpectrumAccumulator, process,
 };
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Vector2;
@@ -95,6 +95,25 @@ fn processing(c: &mut Criterion) {
     let detected = ProcessOptions::default();
     c.bench_function("process 160 s @ 1 kHz, period detected", |b| {
         b.iter(|| black_box(process(&log, &detected, &aras_kin::task_motion(&g)).unwrap()))
+    });
+    // The data-chosen bandwidth: the harmonic series of the averaged
+    // period, and the spectrum-chosen Butterworth without a period.
+    let auto_periodic = ProcessOptions {
+        filter: Bandwidth::Auto,
+        ..periodic.clone()
+    };
+    c.bench_function(
+        "process 160 s @ 1 kHz, 16 periods averaged, bandwidth auto",
+        |b| {
+            b.iter(|| black_box(process(&log, &auto_periodic, &aras_kin::task_motion(&g)).unwrap()))
+        },
+    );
+    let auto_plain = ProcessOptions {
+        filter: Bandwidth::Auto,
+        ..plain.clone()
+    };
+    c.bench_function("process 160 s @ 1 kHz, no averaging, bandwidth auto", |b| {
+        b.iter(|| black_box(process(&log, &auto_plain, &aras_kin::task_motion(&g)).unwrap()))
     });
     // Prediction: θ, θ̇, θ̈ on every row (series + aperiodic remainder).
     let every = ProcessOptions {
