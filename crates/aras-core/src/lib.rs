@@ -8,6 +8,9 @@
 //!   the pseudo-inertia `𝒥` whose positive (semi)definiteness is physical
 //!   consistency (67)–(69). The model builds its dynamics from it and the
 //!   physically consistent identification constrains it.
+//! * [`LuGreLaw`] and [`stribeck_decay`]: the equations of LuGre friction
+//!   (presliding, Stribeck, hysteresis) of one joint, evaluated by the
+//!   simulator's plant and by the friction identification.
 //!
 //! They live here, apart from the kinematics and the model, so that the
 //! robot-agnostic crates (processing, identification, excitation design)
@@ -20,7 +23,9 @@
 #![warn(missing_docs)]
 
 mod inertia;
+mod lugre;
 mod motion;
 
 pub use inertia::Inertia;
+pub use lugre::{LuGreLaw, stribeck_decay};
 pub use motion::Motion;

@@ -98,19 +98,9 @@ pub fn sgn(v: f64) -> f64 {
     }
 }
 
-/// The Stribeck decay `e^{−|v/v_s|^δ}`, with the common exponents computed
-/// without `powf`.
-pub fn stribeck_decay(v: f64, vs: f64, delta: f64) -> f64 {
-    let x = (v / vs).abs();
-    let e = if delta == 2.0 {
-        x * x
-    } else if delta == 1.0 {
-        x
-    } else {
-        x.powf(delta)
-    };
-    (-e).exp()
-}
+/// The Stribeck decay `e^{−|v/v_s|^δ}` ([`aras_core::stribeck_decay`], the
+/// workspace's one home of the LuGre and Stribeck equations).
+pub use aras_core::stribeck_decay;
 
 /// What every friction model offers: its parameters and a prediction of the
 /// friction torque along a motion.
@@ -663,11 +653,18 @@ impl LuGre {
         Self::state_for(&self.structure(), motion)
     }
 
+    /// The state along `motion` for the structure `[κ, Fs/Fc, v_s, δ]`: the
+    /// law ([`aras_core::LuGreLaw`]) normalised by `Fc` (level `g/Fc`,
+    /// stiffness `κ = σ0/Fc`), whose bristle rate is the same.
     fn state_for(theta: &[f64], motion: &Track) -> (Vec<f64>, Vec<f64>) {
-        let (kappa, r, vs, delta) = (theta[0], theta[1], theta[2], theta[3]);
-        integrate_state(motion, kappa, |v| {
-            1.0 + (r - 1.0) * stribeck_decay(v, vs, delta)
-        })
+        let law = aras_core::LuGreLaw {
+            coulomb: 1.0,
+            static_level: theta[1],
+            stribeck_velocity: theta[2],
+            shape: theta[3],
+            stiffness: theta[0],
+        };
+        integrate_state(motion, law.stiffness, |v| law.level(v))
     }
 
     /// The steady-state (Stribeck) curve of this model.

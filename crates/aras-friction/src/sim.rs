@@ -16,7 +16,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{JointLog, LuGre, sgn, stribeck_decay};
+use crate::{JointLog, LuGre, sgn};
 
 /// One sine of the motion: amplitude (rad), frequency (Hz), phase (rad).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -244,15 +244,17 @@ impl JointSimulation {
         let times = self.sample_times(&mut rng);
         let f = &self.friction;
         let m = &f.lugre;
-        let g = |v: f64, t: f64| {
-            m.coulomb
-                + f.drift * t
-                + (m.static_friction - m.coulomb) * stribeck_decay(v, m.stribeck_velocity, m.shape)
+        // The law at time t: the Coulomb level drifts, the breakaway
+        // excess over it does not.
+        let law = |t: f64| aras_core::LuGreLaw {
+            coulomb: m.coulomb + f.drift * t,
+            static_level: m.static_friction + f.drift * t,
+            stribeck_velocity: m.stribeck_velocity,
+            shape: m.shape,
+            stiffness: m.sigma0,
         };
-        let zdot = |t: f64, z: f64| {
-            let v = self.kinematics(t).1;
-            v - m.sigma0 * v.abs() * z / g(v, t)
-        };
+        let g = |v: f64, t: f64| law(t).level(v);
+        let zdot = |t: f64, z: f64| law(t).rate(self.kinematics(t).1, z);
         // Torque is read at t − delay; integrate the state to those times.
         // Before t = 0 the motion is the same analytic function.
         let t0 = -f.delay.max(0.0);

@@ -17,8 +17,11 @@
 //! instead of letting it creep; after a reversal the friction follows the
 //! displacement over `≈ Fc / σ0` (rad), with hysteresis. None of this is a
 //! function of the current velocity alone, which is why it is simulated as
-//! a state and not evaluated as a regressor column.
+//! a state and not evaluated as a regressor column. The equations are
+//! [`aras_core::LuGreLaw`]'s; this module holds both joints' settings and
+//! the plant integrates the state with its motion.
 
+use aras_core::LuGreLaw;
 use serde::{Deserialize, Serialize};
 
 use crate::SimError;
@@ -74,24 +77,32 @@ impl LuGre {
         Ok(())
     }
 
+    /// Joint `j`'s law with Coulomb level `fc` (N·m): the workspace's one
+    /// LuGre law ([`aras_core::LuGreLaw`]), Gaussian Stribeck shape.
+    fn law(&self, j: usize, fc: f64) -> LuGreLaw {
+        LuGreLaw {
+            coulomb: fc,
+            static_level: self.static_level[j],
+            stribeck_velocity: self.stribeck_velocity[j],
+            shape: 2.0,
+            stiffness: self.stiffness[j],
+        }
+    }
+
     /// `g(θ̇)` of joint `j` with Coulomb level `fc` (N·m).
+    #[cfg(test)]
     fn level(&self, j: usize, fc: f64, v: f64) -> f64 {
-        let r = v / self.stribeck_velocity[j];
-        fc + (self.static_level[j] - fc) * (-r * r).exp()
+        self.law(j, fc).level(v)
     }
 
     /// The bristle deflection at steady sliding with rate `v`.
     pub(crate) fn steady_state(&self, j: usize, fc: f64, v: f64) -> f64 {
-        if v == 0.0 {
-            0.0
-        } else {
-            self.level(j, fc, v) * v.signum() / self.stiffness[j]
-        }
+        self.law(j, fc).steady_deflection(v)
     }
 
     /// `ż` of joint `j` at rate `v` and deflection `z`.
     pub(crate) fn rate(&self, j: usize, fc: f64, v: f64, z: f64) -> f64 {
-        v - self.stiffness[j] * v.abs() * z / self.level(j, fc, v)
+        self.law(j, fc).rate(v, z)
     }
 
     /// Friction torque of joint `j` (N·m) with Coulomb level `fc` and
@@ -104,7 +115,7 @@ impl LuGre {
     /// range for the bristle relaxation.
     pub(crate) fn check_step(&self, fc: [f64; 2], v: [f64; 2], h: f64) -> Result<(), f64> {
         for j in 0..2 {
-            let ratio = h * self.stiffness[j] * v[j].abs() / self.level(j, fc[j], v[j]);
+            let ratio = h * self.law(j, fc[j]).relaxation_rate(v[j]);
             if ratio > MAX_STEP_RATE {
                 return Err(ratio);
             }
