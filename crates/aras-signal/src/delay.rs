@@ -29,6 +29,33 @@ pub fn delayed_at(x: &[f64], i: usize, delay: f64) -> f64 {
     }
 }
 
+/// One period `x` of a periodic signal shifted by `delay` samples
+/// circularly, `y_i = x(i + delay)`, by its discrete Fourier series: every
+/// harmonic's phase moves by `2π k delay / n` (the Nyquist bin of an even
+/// `n` keeps its real part), so a fraction of a sample is an exact all-pass
+/// shift. [`delayed_at`]'s linear interpolation halfway between two samples
+/// averages them and halves the variance of white noise; on torques that
+/// are not low-passed a half-sample shift of either sign would then fit
+/// better by the noise it removes. A whole number of samples rotates `x`
+/// (to rounding).
+pub fn delayed_periodic(x: &[f64], delay: f64) -> Vec<f64> {
+    let mut y = x.to_vec();
+    let n = x.len();
+    if n == 0 || delay == 0.0 {
+        return y;
+    }
+    let mut f = crate::fourier::Fourier::new(n);
+    let w = std::f64::consts::TAU * delay / n as f64;
+    f.apply(&mut y, |k| {
+        if 2 * k as usize == n {
+            rustfft::num_complex::Complex64::new((w * k as f64).cos(), 0.0)
+        } else {
+            rustfft::num_complex::Complex64::from_polar(1.0, w * k as f64)
+        }
+    });
+    y
+}
+
 /// `log` with each torque sample replaced by the one logged `delay`
 /// samples later (`τ_i ← τ(i + delay)`, [`delayed_at`]), and the rows that
 /// have no such torque dropped: the last `⌈delay⌉` for a positive delay,
@@ -168,6 +195,44 @@ mod tests {
         assert_eq!(delayed_at(&x, 7, 1.0), 0.0);
         assert_eq!(delayed_at(&x, 0, -1.0), 7.0);
         assert_eq!(delayed_at(&x, 7, 0.5), 3.5);
+    }
+
+    /// The Fourier shift of one period: a whole delay rotates the record, a
+    /// fraction moves a sampled harmonic exactly and keeps white noise's
+    /// variance (where linear interpolation halves it at half a sample).
+    #[test]
+    fn periodic_shift_is_an_exact_all_pass() {
+        let n = 1000;
+        let x: Vec<f64> = (0..n)
+            .map(|i| (std::f64::consts::TAU * 7.0 * i as f64 / n as f64).sin())
+            .collect();
+        let y = delayed_periodic(&x, 3.0);
+        for i in 0..n {
+            assert!((y[i] - x[(i + 3) % n]).abs() < 1e-12);
+        }
+        let y = delayed_periodic(&x, -0.5);
+        for (i, v) in y.iter().enumerate() {
+            let want = (std::f64::consts::TAU * 7.0 * (i as f64 - 0.5) / n as f64).sin();
+            assert!((v - want).abs() < 1e-12, "{i}: {v} vs {want}");
+        }
+        // Noise: a deterministic pseudo-random sequence.
+        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        let noise: Vec<f64> = (0..4096)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect();
+        let var = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64;
+        let exact = delayed_periodic(&noise, 0.5);
+        let linear: Vec<f64> = (0..noise.len())
+            .map(|i| delayed_at(&noise, i, 0.5))
+            .collect();
+        let (v0, ve, vl) = (var(&noise), var(&exact), var(&linear));
+        assert!((ve / v0 - 1.0).abs() < 0.01, "{ve} vs {v0}");
+        assert!((vl / v0 - 0.5).abs() < 0.05, "{vl} vs {v0}");
     }
 
     #[test]

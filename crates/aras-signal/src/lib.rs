@@ -93,7 +93,7 @@ pub use bandwidth::{
 };
 pub use butterworth::{Butterworth, MAX_ORDER};
 pub use coordinates::{Coordinates, JointCoordinates, Motion};
-pub use delay::{delay_torque, delayed_at};
+pub use delay::{delay_torque, delayed_at, delayed_periodic};
 pub use derivative::{DerivativeMethod, Derivatives, derivatives, resolve};
 pub use error::{FilterError, ProcessError};
 pub use periods::{MAX_BLOCK_MISMATCH, MAX_DRIFT, PeriodAverage, average_periods};

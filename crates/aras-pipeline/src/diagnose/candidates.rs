@@ -241,15 +241,19 @@ pub struct CandidateGrid {
     /// Cogging harmonics (1–16, default 2). Each cycle count is tried with
     /// its fundamental alone and with this many harmonics.
     pub cogging_order: usize,
-    /// Torque-against-angle shifts in samples (both signs). Default ±1, 2,
-    /// 3, 5, 8, 12, 20 samples (1–20 ms at 1 kHz: amplifier and bus
-    /// latencies).
-    pub delays: Vec<i64>,
+    /// Torque-against-angle shifts in samples (both signs; fractions are
+    /// interpolated). Default ±0.5, 1, 2, 3, 5, 8, 12, 20 samples (0.5–20
+    /// ms at 1 kHz: a torque held over the sample step but logged as
+    /// sampled, amplifier and bus latencies). The half sample is on the
+    /// grid because a candidate's validation gain is judged at its grid
+    /// value, before the refinement: a shift of 0.6 samples loses
+    /// validation fitness at a whole sample.
+    pub delays: Vec<f64>,
 }
 
 impl Default for CandidateGrid {
     fn default() -> Self {
-        let d = [1, 2, 3, 5, 8, 12, 20];
+        let d = [0.5, 1.0, 2.0, 3.0, 5.0, 8.0, 12.0, 20.0];
         Self {
             ids: CANDIDATE_IDS.iter().map(|s| s.to_string()).collect(),
             stribeck_v_s: vec![0.05, 0.1, 0.2, 0.4],
@@ -303,9 +307,11 @@ impl CandidateGrid {
                 }
                 Ok(EffectId::QuadraticDamping) => out.push(eff(Effect::QuadraticDamping)),
                 Ok(EffectId::RigidLinks | EffectId::Friction | EffectId::Elasticity) => {}
-                Err(_) => out.extend(self.delays.iter().map(|&samples| Candidate::TimeDelay {
-                    samples: samples as f64,
-                })),
+                Err(_) => out.extend(
+                    self.delays
+                        .iter()
+                        .map(|&samples| Candidate::TimeDelay { samples }),
+                ),
             }
         }
         out

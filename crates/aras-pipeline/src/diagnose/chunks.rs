@@ -149,6 +149,11 @@ pub(crate) struct Window {
     pub tau: [Vec<f64>; 2],
     /// Joint-major: true where the row is used by fits and scores.
     keep: Vec<bool>,
+    /// The window is a whole period-averaged record: fractional torque
+    /// shifts are exact Fourier shifts ([`aras_signal::delayed_periodic`]).
+    periodic: bool,
+    /// Those shifts, per joint and delay, computed once per window.
+    shifted: std::sync::Mutex<Vec<(usize, u64, Vec<f64>)>>,
 }
 
 impl Window {
@@ -168,6 +173,15 @@ impl Window {
     ) -> Result<(), IdentError> {
         data.read(lo..hi, &mut self.samples)?;
         self.lo = lo;
+        self.periodic = data.periodic;
+        self.shifted
+            .get_mut()
+            .map_err(|_| IdentError::InvalidSetting {
+                name: "shifted torques of a window",
+                value: 0.0,
+                reason: "internal: a thread panicked while holding them",
+            })?
+            .clear();
         for g in 0..2 {
             self.tau[g] = match &data.filter {
                 None => self.samples.tau[g].clone(),
@@ -201,11 +215,29 @@ impl Window {
         (a..b).filter(|&i| self.kept(g, i)).collect()
     }
 
-    /// Joint `g`'s filtered torque `delay` samples after row `i`
-    /// ([`aras_signal::delayed_at`]: circular for a periodic record; the
-    /// window's reach and the passes' range keep other shifts inside).
+    /// Joint `g`'s filtered torque `delay` samples after row `i`: a whole
+    /// number of samples read as it is; a fraction interpolated
+    /// ([`aras_signal::delayed_at`], the window's reach and the passes'
+    /// range keep it inside), or on a period-averaged record shifted by its
+    /// Fourier series ([`aras_signal::delayed_periodic`]), where the
+    /// torques are not low-passed when the processing fitted a harmonic
+    /// series and an interpolation would smooth their noise.
     pub(crate) fn shifted(&self, g: usize, i: usize, delay: f64) -> f64 {
-        aras_signal::delayed_at(&self.tau[g], i - self.lo, delay)
+        if !self.periodic || delay == delay.floor() {
+            return aras_signal::delayed_at(&self.tau[g], i - self.lo, delay);
+        }
+        let key = delay.to_bits();
+        let mut cache = match self.shifted.lock() {
+            Ok(c) => c,
+            Err(poisoned) => poisoned.into_inner(),
+        };
+        if let Some((_, _, y)) = cache.iter().find(|(j, d, _)| *j == g && *d == key) {
+            return y[i - self.lo];
+        }
+        let y = aras_signal::delayed_periodic(&self.tau[g], delay);
+        let v = y[i - self.lo];
+        cache.push((g, key, y));
+        v
     }
 
     /// The kinematics of every sample of the window, shared by every model
