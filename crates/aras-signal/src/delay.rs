@@ -47,7 +47,7 @@ pub fn delayed_periodic(x: &[f64], delay: f64) -> Vec<f64> {
     let mut f = crate::fourier::Fourier::new(n);
     let w = std::f64::consts::TAU * delay / n as f64;
     f.apply(&mut y, |k| {
-        if 2 * k as usize == n {
+        if 2 * k == n as i64 {
             rustfft::num_complex::Complex64::new((w * k as f64).cos(), 0.0)
         } else {
             rustfft::num_complex::Complex64::from_polar(1.0, w * k as f64)
@@ -215,16 +215,10 @@ mod tests {
             let want = (std::f64::consts::TAU * 7.0 * (i as f64 - 0.5) / n as f64).sin();
             assert!((v - want).abs() < 1e-12, "{i}: {v} vs {want}");
         }
-        // Noise: a deterministic pseudo-random sequence.
-        let mut s = 0x9E37_79B9_7F4A_7C15u64;
-        let noise: Vec<f64> = (0..4096)
-            .map(|_| {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect();
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let noise: Vec<f64> = (0..4096).map(|_| StandardNormal.sample(&mut rng)).collect();
         let var = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64;
         let exact = delayed_periodic(&noise, 0.5);
         let linear: Vec<f64> = (0..noise.len())
