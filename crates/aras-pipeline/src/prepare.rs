@@ -115,17 +115,55 @@ pub fn prepare(
     let projected = matches!(processed.band_limit(), BandLimit::Harmonics(_));
     let unfiltered =
         (keep_unfiltered && (filter_sos.is_some() || projected)).then(|| stacked.clone());
-    if let Some(sos) = &filter_sos {
-        filter(&mut stacked, sos, mode, processed.summary.periods.is_some())?;
-    } else if projected {
-        band_limit_stacked(&mut stacked, processed.band_limit(), mode)?;
-    }
+    limit_stacked(
+        &mut stacked,
+        filter_sos.as_ref(),
+        processed.band_limit(),
+        mode,
+        processed.summary.periods.is_some(),
+    )?;
     Ok(Prepared {
         processed,
         stacked,
         filter: filter_sos,
         unfiltered,
     })
+}
+
+/// Applies the processing's band-limiting of θ to the stacked torques and
+/// (with [`FilterMode::Parallel`]) columns: the zero-phase low-pass
+/// `filter` (`periodic`: circular) when it applied one, else a harmonic
+/// `band`, else nothing.
+fn limit_stacked(
+    stacked: &mut Stacked,
+    filter_sos: Option<&Sos>,
+    band: &BandLimit,
+    mode: FilterMode,
+    periodic: bool,
+) -> Result<(), IdentError> {
+    match (filter_sos, band) {
+        (Some(sos), _) => filter(stacked, sos, mode, periodic),
+        (None, BandLimit::Harmonics(_)) => band_limit_stacked(stacked, band, mode),
+        _ => Ok(()),
+    }
+}
+
+/// Noise power gain of [`limit_stacked`]'s operator on a record of `n`
+/// samples: the low-pass's ([`noise_gain`]) or, for one averaged block
+/// projected on its harmonics, the projection's
+/// (`aras_signal::HarmonicBand::noise_gain`); `None` when nothing was
+/// band-limited.
+fn operator_noise_gain(
+    filter_sos: Option<&Sos>,
+    band: &BandLimit,
+    n: usize,
+    periodic: bool,
+) -> Result<Option<f64>, IdentError> {
+    match (filter_sos, band) {
+        (Some(sos), _) => noise_gain(sos, n, periodic).map(Some),
+        (None, BandLimit::Harmonics(h)) if h.rows.is_none() => Ok(Some(h.noise_gain())),
+        _ => Ok(None),
+    }
 }
 
 /// Applies a harmonic band ([`BandLimit::Harmonics`]) to each joint's block
@@ -222,19 +260,10 @@ pub(crate) fn prepare_block_rows(
         min_speed,
         reach_tol,
     )?;
-    // The operator's noise gain, as [`Prepared::noise_gain`] has it.
-    let noise_gain = match (&filter_sos, processed.band_limit()) {
-        (None, BandLimit::Harmonics(band)) if band.rows.is_none() => Some(band.noise_gain()),
-        (Some(sos), _) => Some(noise_gain(sos, n, periodic)?),
-        _ => None,
-    };
+    let noise_gain = operator_noise_gain(filter_sos.as_ref(), processed.band_limit(), n, periodic)?;
     let band = processed.band_limit().clone();
     drop(processed);
-    if let Some(sos) = &filter_sos {
-        filter(&mut stacked, sos, mode, periodic)?;
-    } else if matches!(band, BandLimit::Harmonics(_)) {
-        band_limit_stacked(&mut stacked, &band, mode)?;
-    }
+    limit_stacked(&mut stacked, filter_sos.as_ref(), &band, mode, periodic)?;
     Ok(BlockRows {
         stacked,
         keep,
@@ -303,10 +332,13 @@ impl Prepared {
     /// (`aras_signal::HarmonicBand::noise_gain`). What
     /// `aras_ident::OlsEstimate::with_filtered_noise` corrects σ by.
     pub fn noise_gain(&self) -> Result<f64, IdentError> {
-        match (self.filter.as_ref(), self.processed.band_limit()) {
-            (None, BandLimit::Harmonics(band)) if band.rows.is_none() => Ok(band.noise_gain()),
-            (filter, _) => record_noise_gain(filter, self.n(), self.periodic()),
-        }
+        operator_noise_gain(
+            self.filter.as_ref(),
+            self.processed.band_limit(),
+            self.n(),
+            self.periodic(),
+        )
+        .map(|g| g.unwrap_or(1.0))
     }
 
     /// Puts joint-major columns (`2N` rows, e.g. a regressor column at a

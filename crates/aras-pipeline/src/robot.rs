@@ -305,6 +305,18 @@ fn run_filter(sos: &Sos, x: &[f64], periodic: bool) -> Result<Vec<f64>, IdentErr
         .map_err(|e| dyn_err("filtering", e))
 }
 
+/// Marks every row of the joints in `all_rows` as kept in the joint-major
+/// mask `keep` (two equal halves): the joints fitted on every row (a
+/// refined Coulomb width) whatever [`reversal_mask`] left out.
+pub(crate) fn keep_every_row(keep: &mut [bool], all_rows: [bool; 2]) {
+    let n = keep.len() / 2;
+    for (g, all) in all_rows.iter().enumerate() {
+        if *all {
+            keep[g * n..(g + 1) * n].fill(true);
+        }
+    }
+}
+
 /// Rows to keep away from velocity reversals: joint `j`'s row of sample `i`
 /// is dropped if `|θ̇_j| < v_min` at any sample within `guard` samples of
 /// `i` (circularly when `periodic`). Joint-major mask for a [`Stacked`].

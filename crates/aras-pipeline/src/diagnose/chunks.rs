@@ -23,7 +23,7 @@ use aras_signal::Samples;
 use rayon::prelude::*;
 
 use super::data::Dataset;
-use crate::robot::{filter_reach, reversal_mask};
+use crate::robot::{filter_reach, keep_every_row, reversal_mask};
 use aras_ident::IdentError;
 
 /// Samples per chunk, a measured trade-off (`docs/scale.md`): a chunk's
@@ -174,14 +174,11 @@ impl Window {
         data.read(lo..hi, &mut self.samples)?;
         self.lo = lo;
         self.periodic = data.periodic;
-        self.shifted
-            .get_mut()
-            .map_err(|_| IdentError::InvalidSetting {
-                name: "shifted torques of a window",
-                value: 0.0,
-                reason: "internal: a thread panicked while holding them",
-            })?
-            .clear();
+        match self.shifted.get_mut() {
+            Ok(cache) => cache,
+            Err(poisoned) => poisoned.into_inner(),
+        }
+        .clear();
         for g in 0..2 {
             self.tau[g] = match &data.filter {
                 None => self.samples.tau[g].clone(),
@@ -196,12 +193,7 @@ impl Window {
             plan.guard,
             data.periodic,
         )?;
-        let n = self.samples.len();
-        for (g, all) in plan.all_rows.iter().enumerate() {
-            if *all {
-                self.keep[g * n..(g + 1) * n].fill(true);
-            }
-        }
+        keep_every_row(&mut self.keep, plan.all_rows);
         Ok(())
     }
 

@@ -18,7 +18,7 @@ use crate::TaskRegressor;
 use crate::diagnose::Dataset;
 use crate::friction_width::{WidthRefinement, WidthSearch};
 use crate::prepare::{RegressorColumns, prepare_block_rows, processing_filter};
-use crate::robot::{FilterMode, filter_reach, reversal_mask};
+use crate::robot::{FilterMode, filter_reach, keep_every_row, reversal_mask};
 use crate::spool::SpoolWriter;
 use faer::Mat;
 
@@ -1081,7 +1081,7 @@ fn accumulate_processed(
     spare: &mut Option<Mat<f64>>,
     all_rows: [bool; 2],
 ) -> Result<usize, IdentError> {
-    let block = prepare_block_rows(
+    let mut block = prepare_block_rows(
         log,
         popts,
         model,
@@ -1095,12 +1095,7 @@ fn accumulate_processed(
     if out.gain.is_none() {
         out.gain = block.noise_gain;
     }
-    let mut block = block;
-    for (g, all) in all_rows.iter().enumerate() {
-        if *all {
-            block.keep[g * n..(g + 1) * n].fill(true);
-        }
-    }
+    keep_every_row(&mut block.keep, all_rows);
     let Range { start: i0, end: i1 } = window.map_or(0..n, |w| kept_range(w, log.len(), n));
     if i1 == i0 {
         *spare = Some(block.stacked.w);
