@@ -347,6 +347,17 @@ pub enum FilteringMode {
     TorqueOnly,
 }
 
+impl FilteringMode {
+    /// The pipeline's filtering mode of this setting.
+    pub fn mode(self) -> aras_pipeline::robot::FilterMode {
+        use aras_pipeline::robot::FilterMode;
+        match self {
+            Self::Parallel => FilterMode::Parallel,
+            Self::TorqueOnly => FilterMode::TorqueOnly,
+        }
+    }
+}
+
 /// Row weighting of the least squares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

@@ -22,9 +22,7 @@ use aras_kin::{Geometry, Workspace};
 use aras_log::Log;
 use aras_pipeline::friction_width::{FitRows, WidthRefinement, apply_widths, refine_widths};
 use aras_pipeline::prepare::RegressorColumns;
-use aras_pipeline::robot::{
-    self, FilterMode, Stacked, consistent_problem, keep_rows, params_from_solution,
-};
+use aras_pipeline::robot::{self, Stacked, consistent_problem, keep_rows, params_from_solution};
 use aras_signal::{
     Bandwidth, DerivativeMethod, FilterSpec, OutputRows, PeriodSource, ProcessOptions, Processed,
 };
@@ -92,10 +90,7 @@ pub fn prepare(
     model: &Model,
     geometry: &Geometry,
 ) -> Result<Prepared> {
-    let mode = match mode {
-        FilteringMode::Parallel => FilterMode::Parallel,
-        FilteringMode::TorqueOnly => FilterMode::TorqueOnly,
-    };
+    let mode = mode.mode();
     let prepared = aras_pipeline::prepare::prepare(
         log,
         opts,
@@ -274,10 +269,7 @@ pub fn friction_widths(
     cfg: &Config,
 ) -> Result<(Model, WidthRefinement, Vec<bool>)> {
     let ic = &cfg.identification;
-    let mode = match ic.filtering {
-        FilteringMode::Parallel => FilterMode::Parallel,
-        FilteringMode::TorqueOnly => FilterMode::TorqueOnly,
-    };
+    let mode = ic.filtering.mode();
     let away = prepared.keep_mask(ic.min_speed, ic.reversal_reach)?;
     let refinement = match ic.rows {
         FitRows::AwayFromReversals => WidthRefinement::not_refined(),
@@ -292,24 +284,23 @@ pub fn friction_widths(
 }
 
 /// [`friction_widths`] on one log processed and stacked as `identify`
-/// processes it (`period` as `--period`): the model with the widths and
-/// what the refinement found. For commands that start from identify's
-/// model on a log they read themselves (`diagnose`).
+/// processes it (`period` as `--period`): what the refinement found. For
+/// commands that start from identify's model on a log they read themselves
+/// (`diagnose`).
 pub fn widths_on_log(
     log: &Log,
     period: Option<f64>,
     model: &Model,
     geometry: &Geometry,
     cfg: &Config,
-) -> Result<(Model, WidthRefinement)> {
+) -> Result<WidthRefinement> {
     if cfg.identification.rows == FitRows::AwayFromReversals {
-        return Ok((model.clone(), WidthRefinement::not_refined()));
+        return Ok(WidthRefinement::not_refined());
     }
     let opts = process_options(cfg, period, false);
     let mut prepared = prepare(log, &opts, cfg.identification.filtering, model, geometry)?;
     let base = base_parameters(model, geometry, cfg)?;
-    let (refined, refinement, _) = friction_widths(&mut prepared, &base, model, cfg)?;
-    Ok((refined, refinement))
+    Ok(friction_widths(&mut prepared, &base, model, cfg)?.1)
 }
 
 /// OLS and SDP on prepared data, with `nominal` as the SDP's reference, on

@@ -12,14 +12,12 @@ use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, RefinementSta
 use aras_pipeline::friction_width::{FitRows, WidthRefinement, with_widths};
 
 use crate::cli::{DiagnoseArgs, LogArgs};
-use crate::config::FilteringMode;
 use crate::identify::process_options;
 use crate::output::OutDir;
 use crate::report::Report;
 use crate::report::plots::{Binned, Series, StepPanel, binned_means, lines, scatter_binned, steps};
 use crate::robot::{Extras, effect_spec, model_with_effects, nominal, paper_model};
 use crate::stages::Stages;
-use aras_pipeline::robot::FilterMode;
 use aras_pipeline::streaming::{StreamingOptions, spool_log};
 use indicatif::ProgressBar;
 use std::path::Path;
@@ -58,7 +56,12 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     // `STREAMING_BYTES` (or every log with `--streaming on`) is processed in
     // bounded memory into a scratch file in the staging directory.
     let streams = |path: &Path| super::identify::streams_log(args.streaming, path, STREAMING_BYTES);
-    let load = |path: &Path, log_args: &LogArgs, streamed: bool, bar: &ProgressBar| {
+    // `read`: the log already read (TRAIN, for the Coulomb widths).
+    let load = |path: &Path,
+                log_args: &LogArgs,
+                streamed: bool,
+                read: Option<&aras_log::Log>,
+                bar: &ProgressBar| {
         let name = path.file_name().map_or_else(
             || path.display().to_string(),
             |f| f.to_string_lossy().into(),
@@ -78,9 +81,16 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
             return spool_log(path, &opts, &out.path(""), &mut progress)
                 .with_context(|| format!("processing {}", path.display()));
         }
-        let log = super::load_log(path, log_args, &cfg)?;
+        let owned;
+        let log = match read {
+            Some(log) => log,
+            None => {
+                owned = super::load_log(path, log_args, &cfg)?;
+                &owned
+            }
+        };
         let p = aras_signal::process(
-            &log,
+            log,
             &process_options(&cfg, log_args.period, false),
             &aras_kin::task_motion(&geometry),
         )
@@ -97,7 +107,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     let train_log = if train_streams || cfg.identification.rows == FitRows::AwayFromReversals {
         None
     } else {
-        Some(stages.run("read TRAIN for the Coulomb widths", |_| {
+        Some(stages.run("read TRAIN", |_| {
             super::load_log(&args.data, &args.log, &cfg)
         })?)
     };
@@ -118,25 +128,14 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
                     }
                     None => log,
                 };
-                crate::identify::widths_on_log(log, args.log.period, &with, &geometry, &cfg)?.1
+                crate::identify::widths_on_log(log, args.log.period, &with, &geometry, &cfg)?
             }
             // Streamed: a bounded-memory pass of the streaming
             // identification, which refines them on the averaged period.
             None => {
-                let ic = &cfg.identification;
                 let opts = StreamingOptions {
-                    read: super::streaming_read_options(&args.log, &cfg)?,
-                    process: process_options(&cfg, args.log.period, false),
-                    filter_mode: match ic.filtering {
-                        FilteringMode::Parallel => FilterMode::Parallel,
-                        FilteringMode::TorqueOnly => FilterMode::TorqueOnly,
-                    },
-                    geometry,
-                    min_speed: ic.min_speed,
-                    reversal_reach: ic.reversal_reach,
                     torque_delay: extras.torque_delay,
-                    widths: Some(ic.width),
-                    ..StreamingOptions::default()
+                    ..super::identify_streaming::log_options(&args.log, &cfg, geometry)?
                 };
                 let base = crate::identify::base_parameters(&with, &geometry, &cfg)?;
                 aras_pipeline::streaming::identify_log(&args.data, &with, &base, &opts)
@@ -150,7 +149,15 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     };
     let train = stages.run(
         &format!("read + process TRAIN{}", label(train_streams)),
-        |bar| load(&args.data, &args.log, train_streams, bar),
+        |bar| {
+            load(
+                &args.data,
+                &args.log,
+                train_streams,
+                train_log.as_ref(),
+                bar,
+            )
+        },
     )?;
     let val_streams = args
         .validate
@@ -174,7 +181,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
                         torques: args.log.torques,
                         ..LogArgs::default()
                     };
-                    load(p, &own, streamed, bar)
+                    load(p, &own, streamed, None, bar)
                 })
                 .collect::<Result<Vec<_>>>()
         },

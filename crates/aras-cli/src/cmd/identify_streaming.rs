@@ -16,13 +16,14 @@ use anyhow::{Context, Result};
 use aras_dyn::{Model, Params};
 use aras_ident::streaming::Accumulation;
 use aras_ident::{BaseParameters, NoiseVariances};
+use aras_kin::Geometry;
 use aras_pipeline::friction_width::FitRows;
-use aras_pipeline::robot::{FilterMode, params_from_solution};
+use aras_pipeline::robot::params_from_solution;
 use aras_pipeline::streaming::{StreamingOptions, StreamingResult, identify_log_with_progress};
 use indicatif::ProgressBar;
 
-use crate::cli::{AccumulationArg, IdentifyArgs};
-use crate::config::{Config, FilteringMode, Weighting};
+use crate::cli::{AccumulationArg, IdentifyArgs, LogArgs};
+use crate::config::{Config, Weighting};
 use crate::identify::{consistent_fit, process_options, with_standard};
 use crate::output::OutDir;
 use crate::stages::Stages;
@@ -32,25 +33,32 @@ use crate::summary::{
 };
 use crate::validate::{parameter_errors, pd_check, pseudo_inertia_min};
 
-/// The streaming options `identify` uses: the configuration's processing
-/// (logged derivatives ignored, as in memory), filtering mode and reversal
-/// exclusion.
+/// The streaming options `identify` uses: [`log_options`] with the
+/// command line's accumulation.
 pub fn options(args: &IdentifyArgs, cfg: &Config, nominal: &Params) -> Result<StreamingOptions> {
     Ok(StreamingOptions {
-        read: super::streaming_read_options(&args.log, cfg)?,
-        process: process_options(cfg, args.log.period, false),
-        filter_mode: match cfg.identification.filtering {
-            FilteringMode::Parallel => FilterMode::Parallel,
-            FilteringMode::TorqueOnly => FilterMode::TorqueOnly,
-        },
-        geometry: nominal.geometry()?,
         accumulation: match args.accumulation {
             AccumulationArg::Gram => Accumulation::Gram,
             AccumulationArg::Qr => Accumulation::Qr,
         },
-        min_speed: cfg.identification.min_speed,
-        reversal_reach: cfg.identification.reversal_reach,
-        widths: (cfg.identification.rows == FitRows::All).then_some(cfg.identification.width),
+        ..log_options(&args.log, cfg, nominal.geometry()?)?
+    })
+}
+
+/// The streaming identification of a log read with `log`'s settings: the
+/// configuration's processing (logged derivatives ignored, as in memory),
+/// filtering mode, reversal exclusion and Coulomb widths
+/// (`identification.rows`).
+pub fn log_options(log: &LogArgs, cfg: &Config, geometry: Geometry) -> Result<StreamingOptions> {
+    let ic = &cfg.identification;
+    Ok(StreamingOptions {
+        read: super::streaming_read_options(log, cfg)?,
+        process: process_options(cfg, log.period, false),
+        filter_mode: ic.filtering.mode(),
+        geometry,
+        min_speed: ic.min_speed,
+        reversal_reach: ic.reversal_reach,
+        widths: (ic.rows == FitRows::All).then_some(ic.width),
         ..StreamingOptions::default()
     })
 }
