@@ -496,6 +496,27 @@ fn identify_log_matches_the_in_memory_identification_on_every_route() {
     }
 }
 
+/// A period that is not a whole number of samples (10 s at a step of 3 ms
+/// is 3333.33 samples) is averaged while reading in whole blocks of 3
+/// periods (10 000 samples), as in memory: the same rows, estimate and σ.
+#[test]
+fn identify_log_averages_a_period_of_a_fractional_number_of_samples() {
+    let r = robot();
+    let dir = tempdir("fractional-period");
+    let fs = 1000.0 / 3.0;
+    let n = 21_000; // 63 s: 2 blocks of 3 periods, and a tail
+    let path = write(&dir, "run.csv", &r, n, fs);
+    let o = StreamingOptions {
+        chunk_samples: 4096,
+        min_speed: 0.2,
+        ..Default::default()
+    };
+    let [_, _, (periodic, route)] = route_options(&o);
+    check_route(&path, &r, &periodic, route);
+    let s = identify_log(&path, &r.model, &r.base, &periodic).unwrap();
+    assert_eq!(s.periods, 6);
+}
+
 /// Where five overlaps exceed `chunk_samples` (a low cut-off, or a high
 /// rate), a block is five overlaps long: no block re-reads more than 40 %
 /// of itself, and the result is still the in-memory identification's.

@@ -96,7 +96,10 @@ pub use coordinates::{Coordinates, JointCoordinates, Motion};
 pub use delay::{delay_torque, delayed_at, delayed_periodic};
 pub use derivative::{DerivativeMethod, Derivatives, derivatives, resolve};
 pub use error::{FilterError, ProcessError};
-pub use periods::{MAX_BLOCK_MISMATCH, MAX_DRIFT, PeriodAverage, average_periods};
+pub use periods::{
+    MAX_BLOCK_MISMATCH, MAX_DRIFT, MAX_STREAMED_BLOCK_SAMPLES, PeriodAverage, PeriodMean,
+    PeriodSums, average_periods,
+};
 pub use process::{
     Bandwidth, BandwidthChoice, BandwidthMethod, FilterSpec, FilterSummary, OutputRows, Paired,
     PeriodSource, PeriodSummary, ProcessOptions, ProcessSummary, Processed, Samples, process,

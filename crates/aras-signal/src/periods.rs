@@ -70,104 +70,45 @@ impl PeriodAverage {
 /// period, step or settling time, [`ProcessError::TooShort`] when not even
 /// one block (or a block of 3 samples) fits, [`ProcessError::PeriodNotWhole`]
 /// when no `k` fits the record.
+///
+/// The averages are [`PeriodSums`]'s, fed the record row by row, so a log
+/// averaged while it is read gives the same numbers.
 pub fn average_periods(
     channels: &[&[f64]],
     dt: f64,
     period_s: f64,
     settling_s: f64,
 ) -> Result<PeriodAverage, ProcessError> {
-    let bad = |name, value: f64, reason: &str| ProcessError::InvalidOption {
-        name,
-        value: value.to_string(),
-        reason: reason.into(),
-    };
-    if !(period_s.is_finite() && period_s > 0.0) {
-        return Err(bad(
-            "period",
-            period_s,
-            "the period must be a positive number of seconds",
-        ));
-    }
-    if !(settling_s.is_finite() && settling_s >= 0.0) {
-        return Err(bad(
-            "settling_s",
-            settling_s,
-            "the settling time must be ≥ 0 s",
-        ));
-    }
-    if !(dt.is_finite() && dt > 0.0) {
-        return Err(bad(
-            "sample step",
-            dt,
-            "the step must be a positive number of seconds",
-        ));
-    }
     let n = channels.first().map_or(0, |c| c.len());
-    let exact = period_s / dt;
-    if exact.round() < 3.0 {
-        return Err(ProcessError::TooShort {
-            what: "period averaging".into(),
-            have: exact.round() as usize,
-            need: 3,
-            hint: "a period must span at least 3 samples".into(),
-        });
-    }
-    let start = (settling_s / dt).round() as usize;
-    let available = n.saturating_sub(start);
-    let first = exact.round() as usize;
-    if available < first {
-        return Err(ProcessError::TooShort {
-            what: format!("period averaging (period {period_s} s after {settling_s} s settling)"),
-            have: n,
-            need: start + first,
-            hint: "record at least one whole period after the settling time".into(),
-        });
-    }
-    // The smallest k whose block is whole (k = 1 for a whole period).
-    let mut found = None;
-    for k in 1..=MAX_PERIODS_PER_BLOCK {
-        let block_exact = k as f64 * exact;
-        let block = block_exact.round() as usize;
-        if block > available {
-            break;
+    let mut sums = PeriodSums::new(channels.len(), dt, period_s, settling_s, Some(n))?;
+    let used = sums.start
+        + sums
+            .candidates
+            .first()
+            .map_or(0, |c| c.blocks_fit(n, sums.start) * c.per);
+    let mut row = vec![0.0; channels.len()];
+    for i in sums.start..used {
+        for (r, ch) in row.iter_mut().zip(channels) {
+            *r = ch[i];
         }
-        let mismatch = (block_exact - block as f64).abs();
-        let blocks = available / block;
-        if mismatch <= MAX_BLOCK_MISMATCH && mismatch * blocks as f64 <= MAX_DRIFT {
-            found = Some((k, block, blocks));
-            break;
-        }
+        sums.push_at(i, &row);
     }
-    let Some((k, per, blocks)) = found else {
-        let periods = available as f64 / exact;
-        return Err(ProcessError::PeriodNotWhole {
-            period_s,
-            samples: exact,
-            step_s: dt,
-            drift: (exact - exact.round()).abs() * periods.floor(),
-        });
-    };
+    sums.seen = n;
+    let mean = sums.finish()?;
+    let per = mean.samples_per_block;
     let mut out = PeriodAverage {
-        periods_per_block: k,
+        periods_per_block: mean.periods_per_block,
         samples_per_block: per,
-        blocks,
-        start,
-        tail: n - start - blocks * per,
+        blocks: mean.blocks,
+        start: mean.start,
+        tail: mean.tail,
         channels: Vec::with_capacity(channels.len()),
         spread_rms: Vec::new(),
         spread_relative: Vec::new(),
         worst_block: Vec::new(),
     };
-    let inv = 1.0 / blocks as f64;
-    for ch in channels {
-        let data = &ch[start..start + blocks * per];
-        let mut mean = vec![0.0; per];
-        for p in data.chunks_exact(per) {
-            for (m, v) in mean.iter_mut().zip(p) {
-                *m += v;
-            }
-        }
-        mean.iter_mut().for_each(|m| *m *= inv);
+    for (ch, mean) in channels.iter().zip(mean.channels) {
+        let data = &ch[out.start..out.start + out.blocks * per];
         let (mut worst, mut worst_k) = (0.0f64, 0);
         for (b, p) in data.chunks_exact(per).enumerate() {
             let ss: f64 = p.iter().zip(&mean).map(|(v, m)| (v - m).powi(2)).sum();
@@ -191,6 +132,312 @@ pub fn average_periods(
         out.worst_block.push(worst_k);
     }
     Ok(out)
+}
+
+/// The block [`average_periods`] averages: the smallest `k` (periods per
+/// block) whose block of `samples` is whole within [`MAX_BLOCK_MISMATCH`]
+/// and drifts at most [`MAX_DRIFT`] over the `blocks` that fit in
+/// `available` samples, as `(k, samples, blocks)`.
+fn choose_block(exact: f64, available: usize) -> Option<(usize, usize, usize)> {
+    for k in 1..=MAX_PERIODS_PER_BLOCK {
+        let block_exact = k as f64 * exact;
+        let block = block_exact.round() as usize;
+        if block > available {
+            return None;
+        }
+        let mismatch = (block_exact - block as f64).abs();
+        let blocks = available / block;
+        if mismatch <= MAX_BLOCK_MISMATCH && mismatch * blocks as f64 <= MAX_DRIFT {
+            return Some((k, block, blocks));
+        }
+    }
+    None
+}
+
+/// Samples of the candidate blocks [`PeriodSums`] holds at most while the
+/// record's length is unknown (per channel, twice: the sums and the block
+/// being read): 2²² samples, 70 min at 1 kHz.
+pub const MAX_STREAMED_BLOCK_SAMPLES: usize = 1 << 22;
+
+/// The average block of a record, without the spread (which needs the
+/// record twice): what [`PeriodSums::finish`] returns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PeriodMean {
+    /// Periods per block (see [`PeriodAverage::periods_per_block`]).
+    pub periods_per_block: usize,
+    /// Samples per block.
+    pub samples_per_block: usize,
+    /// Whole blocks averaged.
+    pub blocks: usize,
+    /// Index of the first sample used (after the settling time).
+    pub start: usize,
+    /// Samples after the last whole block, not used.
+    pub tail: usize,
+    /// The averaged block, per channel.
+    pub channels: Vec<Vec<f64>>,
+}
+
+/// Period averaging fed one row (every channel's sample) at a time: the
+/// rule of [`average_periods`] for a record too long to hold.
+///
+/// Until the record ends its length is unknown, and with it the block the
+/// rule picks (a block that is whole only to 0.03 samples is used on a
+/// short record and refused, for its drift, on a long one). So every block
+/// the rule could still pick is summed: the `k` whose mismatch is within
+/// [`MAX_BLOCK_MISMATCH`], up to the first that is whole (or the
+/// [`MAX_STREAMED_BLOCK_SAMPLES`] budget), each dropped once its drift
+/// exceeds [`MAX_DRIFT`]. For a period of a whole number of samples that is
+/// one period; for 0.7 Hz at 1 kHz one block of 7 periods.
+#[derive(Debug, Clone)]
+pub struct PeriodSums {
+    channels: usize,
+    exact: f64,
+    dt: f64,
+    period_s: f64,
+    settling_s: f64,
+    start: usize,
+    seen: usize,
+    /// The blocks still possible, smallest `k` first.
+    candidates: Vec<BlockSums>,
+    /// The smallest `k` the budget left out (0: none).
+    beyond_budget: usize,
+}
+
+/// One candidate block's sums.
+#[derive(Debug, Clone)]
+struct BlockSums {
+    k: usize,
+    per: usize,
+    mismatch: f64,
+    /// `sums[c·per + i]`: channel `c`'s sum at phase `i` over whole blocks.
+    sums: Vec<f64>,
+    /// The block being read, same layout.
+    current: Vec<f64>,
+    blocks: usize,
+}
+
+impl BlockSums {
+    fn new(k: usize, exact: f64, channels: usize) -> Self {
+        let block_exact = k as f64 * exact;
+        let per = block_exact.round() as usize;
+        Self {
+            k,
+            per,
+            mismatch: (block_exact - per as f64).abs(),
+            sums: vec![0.0; per * channels],
+            current: vec![0.0; per * channels],
+            blocks: 0,
+        }
+    }
+
+    /// Whole blocks in a record of `n` samples starting at `start`.
+    fn blocks_fit(&self, n: usize, start: usize) -> usize {
+        n.saturating_sub(start) / self.per
+    }
+
+    /// True while the rule can still pick this block.
+    fn drift_ok(&self) -> bool {
+        self.mismatch * self.blocks as f64 <= MAX_DRIFT
+    }
+}
+
+impl PeriodSums {
+    /// Sums for `channels` channels at step `dt` over the period `period_s`
+    /// after `settling_s` seconds. `total`, the record's length if known,
+    /// fixes the block at once (one candidate, as [`average_periods`]).
+    /// Errors as [`average_periods`] for bad settings (and, with `total`,
+    /// for a record without a block).
+    pub fn new(
+        channels: usize,
+        dt: f64,
+        period_s: f64,
+        settling_s: f64,
+        total: Option<usize>,
+    ) -> Result<Self, ProcessError> {
+        let bad = |name, value: f64, reason: &str| ProcessError::InvalidOption {
+            name,
+            value: value.to_string(),
+            reason: reason.into(),
+        };
+        if !(period_s.is_finite() && period_s > 0.0) {
+            return Err(bad(
+                "period",
+                period_s,
+                "the period must be a positive number of seconds",
+            ));
+        }
+        if !(settling_s.is_finite() && settling_s >= 0.0) {
+            return Err(bad(
+                "settling_s",
+                settling_s,
+                "the settling time must be ≥ 0 s",
+            ));
+        }
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(bad(
+                "sample step",
+                dt,
+                "the step must be a positive number of seconds",
+            ));
+        }
+        let exact = period_s / dt;
+        if exact.round() < 3.0 {
+            return Err(ProcessError::TooShort {
+                what: "period averaging".into(),
+                have: exact.round() as usize,
+                need: 3,
+                hint: "a period must span at least 3 samples".into(),
+            });
+        }
+        let mut sums = Self {
+            channels,
+            exact,
+            dt,
+            period_s,
+            settling_s,
+            start: (settling_s / dt).round() as usize,
+            seen: 0,
+            candidates: Vec::new(),
+            beyond_budget: 0,
+        };
+        if let Some(n) = total {
+            let (k, _, _) = sums.choice(n)?;
+            sums.candidates.push(BlockSums::new(k, exact, channels));
+            return Ok(sums);
+        }
+        let mut budget = MAX_STREAMED_BLOCK_SAMPLES;
+        for k in 1..=MAX_PERIODS_PER_BLOCK {
+            let block_exact = k as f64 * exact;
+            let per = block_exact.round() as usize;
+            let mismatch = (block_exact - per as f64).abs();
+            if mismatch > MAX_BLOCK_MISMATCH {
+                continue;
+            }
+            if per > budget {
+                sums.beyond_budget = k;
+                break;
+            }
+            budget -= per;
+            sums.candidates.push(BlockSums::new(k, exact, channels));
+            // A block whole to 1e-9 samples cannot drift half a sample
+            // over any record: no larger k is ever picked.
+            if mismatch <= 1e-9 {
+                break;
+            }
+        }
+        Ok(sums)
+    }
+
+    /// Channels per row.
+    pub fn channels(&self) -> usize {
+        self.channels
+    }
+
+    /// Index of the first row that is summed (after the settling time).
+    pub fn start(&self) -> usize {
+        self.start
+    }
+
+    /// Samples of the largest block still summed: the rows after
+    /// [`PeriodSums::start`] whose times the averaged block can need.
+    pub fn largest_block(&self) -> usize {
+        self.candidates.iter().map(|c| c.per).max().unwrap_or(0)
+    }
+
+    /// Adds the next row, one value per channel. Panics if `row` does not
+    /// have [`PeriodSums::channels`] values.
+    pub fn push(&mut self, row: &[f64]) {
+        let i = self.seen;
+        self.seen += 1;
+        if i >= self.start {
+            self.push_at(i, row);
+        }
+    }
+
+    fn push_at(&mut self, i: usize, row: &[f64]) {
+        assert_eq!(
+            row.len(),
+            self.channels,
+            "PeriodSums::push: one value per channel"
+        );
+        let g = i - self.start;
+        for c in &mut self.candidates {
+            let phase = g % c.per;
+            for (ch, v) in row.iter().enumerate() {
+                c.current[ch * c.per + phase] = *v;
+            }
+            if phase + 1 == c.per {
+                for (s, v) in c.sums.iter_mut().zip(&c.current) {
+                    *s += v;
+                }
+                c.blocks += 1;
+            }
+        }
+        // Smallest k first: once the first candidate drifts too far for a
+        // record of this length it never comes back.
+        self.candidates.retain(|c| c.drift_ok());
+    }
+
+    /// The rule of [`average_periods`] for a record of `n` rows.
+    fn choice(&self, n: usize) -> Result<(usize, usize, usize), ProcessError> {
+        let available = n.saturating_sub(self.start);
+        let first = self.exact.round() as usize;
+        if available < first {
+            return Err(ProcessError::TooShort {
+                what: format!(
+                    "period averaging (period {} s after {} s settling)",
+                    self.period_s, self.settling_s
+                ),
+                have: n,
+                need: self.start + first,
+                hint: "record at least one whole period after the settling time".into(),
+            });
+        }
+        choose_block(self.exact, available).ok_or_else(|| {
+            let periods = available as f64 / self.exact;
+            ProcessError::PeriodNotWhole {
+                period_s: self.period_s,
+                samples: self.exact,
+                step_s: self.dt,
+                drift: (self.exact - self.exact.round()).abs() * periods.floor(),
+            }
+        })
+    }
+
+    /// The average of the block [`average_periods`] would pick for the rows
+    /// pushed. Errors as [`average_periods`]; [`ProcessError::InvalidOption`]
+    /// when that block is longer than the streaming budget.
+    pub fn finish(self) -> Result<PeriodMean, ProcessError> {
+        let (k, per, blocks) = self.choice(self.seen)?;
+        let Some(c) = self.candidates.into_iter().find(|c| c.k == k) else {
+            return Err(ProcessError::InvalidOption {
+                name: "period",
+                value: self.period_s.to_string(),
+                reason: format!(
+                    "its whole block is {k} periods ({per} samples) at step {} s, more than \
+                     the {MAX_STREAMED_BLOCK_SAMPLES} samples averaged while reading (smallest \
+                     left out: {} periods); give the period to more digits, resample, or \
+                     process the log in memory",
+                    self.dt, self.beyond_budget
+                ),
+            });
+        };
+        debug_assert_eq!((c.per, c.blocks), (per, blocks));
+        let inv = 1.0 / c.blocks as f64;
+        let channels = c
+            .sums
+            .chunks_exact(per)
+            .map(|s| s.iter().map(|v| v * inv).collect())
+            .collect();
+        Ok(PeriodMean {
+            periods_per_block: k,
+            samples_per_block: per,
+            blocks,
+            start: self.start,
+            tail: self.seen - self.start - blocks * per,
+            channels,
+        })
+    }
 }
 
 #[cfg(test)]
@@ -291,6 +538,38 @@ mod tests {
         ));
     }
 
+    /// Streams `x` through [`PeriodSums`] without telling it the length.
+    fn streamed(x: &[f64], dt: f64, period: f64) -> Result<PeriodMean, ProcessError> {
+        let mut s = PeriodSums::new(1, dt, period, 0.0, None)?;
+        for v in x {
+            s.push(&[*v]);
+        }
+        s.finish()
+    }
+
+    #[test]
+    fn a_block_whole_only_to_a_few_hundredths_is_used_until_it_drifts() {
+        // 100.04 samples: one period is whole within 0.04, and drifts more
+        // than half a sample after 12 periods; 24 periods (2400.96 samples)
+        // are whole within 0.04 too. 1300 samples hold 13 periods and no
+        // block of 24; while reading, the one-period sums are dropped.
+        let x: Vec<f64> = (0..6000).map(|i| (i as f64 * 0.37).sin()).collect();
+        assert!(matches!(
+            streamed(&x[..1300], 0.01, 1.0004),
+            Err(ProcessError::PeriodNotWhole { .. })
+        ));
+        for (n, k) in [(1000, 1), (1200, 1), (2600, 24), (6000, 24)] {
+            let a = average_periods(&[&x[..n]], 0.01, 1.0004, 0.0).unwrap();
+            let s = streamed(&x[..n], 0.01, 1.0004).unwrap();
+            assert_eq!(a.periods_per_block, k, "{n} samples");
+            assert_eq!(
+                (s.periods_per_block, s.blocks, s.tail),
+                (a.periods_per_block, a.blocks, a.tail)
+            );
+            assert_eq!(s.channels, a.channels, "{n} samples: bit for bit");
+        }
+    }
+
     proptest::proptest! {
         /// For a period of `p/q` samples (`q` ≤ 12, in lowest terms), the
         /// block is exactly `q` periods (= `p` samples): no smaller `k`
@@ -309,6 +588,29 @@ mod tests {
                 (q, p, 3, 17)
             );
             proptest::prop_assert_eq!(a.spread_rms[0], 0.0);
+        }
+
+        /// Averaging while reading, without the length, gives the in-memory
+        /// average bit for bit, or the same error.
+        #[test]
+        fn streamed_sums_equal_the_in_memory_average(
+            samples in 3.0f64..400.0, n in 0usize..4000, seed in 0u64..1000
+        ) {
+            let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+            let x: Vec<f64> = (0..n).map(|_| StandardNormal.sample(&mut rng)).collect();
+            let dt = 1e-3;
+            let period = samples * dt;
+            match (average_periods(&[&x], dt, period, 0.0), streamed(&x, dt, period)) {
+                (Ok(a), Ok(s)) => {
+                    proptest::prop_assert_eq!(
+                        (s.periods_per_block, s.samples_per_block, s.blocks, s.tail),
+                        (a.periods_per_block, a.samples_per_block, a.blocks, a.tail)
+                    );
+                    proptest::prop_assert_eq!(&s.channels, &a.channels);
+                }
+                (Err(a), Err(s)) => proptest::prop_assert_eq!(a.to_string(), s.to_string()),
+                (a, s) => proptest::prop_assert!(false, "{:?} vs {:?}", a.is_ok(), s.is_ok()),
+            }
         }
     }
 }

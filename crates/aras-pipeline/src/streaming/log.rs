@@ -1147,17 +1147,13 @@ fn reach_of(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> 
     filter_reach(&sos, n, false, tol)
 }
 
-/// Running per-period sums of θ, τ (and logged θ̇, θ̈) for period
-/// averaging in one pass (memory: one period).
+/// The period averaging of a log being read: [`aras_signal::PeriodSums`]
+/// over θ, τ (and the logged derivatives), plus the times of the first
+/// block for the averaged log.
 struct PeriodSums {
-    per: usize,
-    settling: usize,
-    exact: f64,
+    sums: aras_signal::PeriodSums,
     logged: bool,
     seen: usize,
-    sums: Vec<Vec<f64>>,
-    cur: Vec<Vec<f64>>,
-    periods: usize,
     t0: Vec<f64>,
     dt: f64,
     period_s: f64,
@@ -1165,143 +1161,71 @@ struct PeriodSums {
 
 impl PeriodSums {
     fn new(period_s: f64, dt: f64, p: &ProcessOptions, logged: bool) -> Result<Self, IdentError> {
-        let bad = |name, value: f64, reason| IdentError::InvalidSetting {
-            name,
-            value,
-            reason,
-        };
-        if !(period_s.is_finite() && period_s > 0.0) {
-            return Err(bad(
-                "period",
-                period_s,
-                "the period must be a positive number of seconds",
-            ));
-        }
-        if !(p.settling_s.is_finite() && p.settling_s >= 0.0) {
-            return Err(bad(
-                "settling_s",
-                p.settling_s,
-                "the settling time must be ≥ 0 s",
-            ));
-        }
-        let exact = period_s / dt;
-        let per = exact.round() as usize;
-        if per < 3 {
-            return Err(bad(
-                "period",
-                period_s,
-                "a period must span at least 3 samples",
-            ));
-        }
         let channels = if logged { 8 } else { 4 };
+        let sums = aras_signal::PeriodSums::new(channels, dt, period_s, p.settling_s, None)
+            .map_err(|source| IdentError::External {
+                context: "period averaging while reading".into(),
+                source: Box::new(source),
+            })?;
         Ok(Self {
-            per,
-            settling: (p.settling_s / dt).round() as usize,
-            exact,
+            t0: Vec::with_capacity(sums.largest_block()),
+            sums,
             logged,
             seen: 0,
-            sums: vec![vec![0.0; per]; channels],
-            cur: vec![vec![0.0; per]; channels],
-            periods: 0,
-            t0: Vec::with_capacity(per),
             dt,
             period_s,
         })
     }
 
     fn add(&mut self, c: &Columns) {
+        let mut row = [0.0; 8];
+        let width = self.sums.channels();
         for i in 0..c.len() {
-            let g = self.seen + i;
-            if g < self.settling {
-                continue;
-            }
-            let k = (g - self.settling) % self.per;
-            if self.t0.len() < self.per {
+            if self.seen + i >= self.sums.start() && self.t0.len() < self.sums.largest_block() {
                 self.t0.push(c.t[i]);
             }
-            let mut vals = [
-                c.theta[0][i],
-                c.theta[1][i],
-                c.tau[0][i],
-                c.tau[1][i],
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-            ];
+            row[..4].copy_from_slice(&[c.theta[0][i], c.theta[1][i], c.tau[0][i], c.tau[1][i]]);
             if self.logged {
-                vals[4] = c.theta_dot[0][i];
-                vals[5] = c.theta_dot[1][i];
-                vals[6] = c.theta_ddot[0][i];
-                vals[7] = c.theta_ddot[1][i];
+                row[4..].copy_from_slice(&[
+                    c.theta_dot[0][i],
+                    c.theta_dot[1][i],
+                    c.theta_ddot[0][i],
+                    c.theta_ddot[1][i],
+                ]);
             }
-            for (s, v) in self.cur.iter_mut().zip(vals) {
-                s[k] = v;
-            }
-            if k + 1 == self.per {
-                // A whole period: add it (an incomplete last one never is).
-                for (s, c) in self.sums.iter_mut().zip(&self.cur) {
-                    for (a, b) in s.iter_mut().zip(c) {
-                        *a += b;
-                    }
-                }
-                self.periods += 1;
-            }
+            self.sums.push(&row[..width]);
         }
         self.seen += c.len();
     }
 
-    /// The averaged period as a one-period log (an incomplete last period
-    /// is dropped, as in memory).
+    /// The averaged block as a log of one block (an incomplete last block
+    /// is dropped, as in memory), and the periods averaged.
     fn finish(self, name: &str, rows: usize, sidecar: Sidecar) -> Result<(Log, usize), IdentError> {
-        let periods = self.periods;
-        if periods == 0 {
-            return Err(IdentError::InvalidData {
-                context: format!("period averaging of {name}"),
-                reason: format!(
-                    "{rows} rows hold no whole period of {} s ({} samples) after {} settling samples; \
-                     record at least one whole period",
-                    self.period_s, self.per, self.settling
-                ),
-            });
-        }
-        let drift = (self.exact - self.per as f64).abs() * periods as f64;
-        if drift > 0.5 {
-            return Err(IdentError::InvalidData {
-                context: format!("period averaging of {name}"),
-                reason: format!(
-                    "the period {} s is {:.4} samples at step {} s, not a whole number: it drifts \
-                     {drift:.2} samples over {periods} periods; give the exact period or resample",
-                    self.period_s, self.exact, self.dt
-                ),
-            });
-        }
-        let inv = 1.0 / periods as f64;
-        let mut ch: Vec<Vec<f64>> = self
-            .sums
-            .into_iter()
-            .map(|v| v.into_iter().map(|x| x * inv).collect())
-            .collect();
-        let pair = |a: Vec<f64>, b: Vec<f64>| [a, b];
-        let dd = if self.logged {
-            let a = ch.pop().unwrap_or_default();
-            let b = ch.pop().unwrap_or_default();
-            let c = ch.pop().unwrap_or_default();
-            let d = ch.pop().unwrap_or_default();
-            Some((pair(d, c), pair(b, a)))
+        let mean = self.sums.finish().map_err(|source| IdentError::External {
+            context: format!(
+                "period averaging of {name} ({rows} rows, period {} s)",
+                self.period_s
+            ),
+            source: Box::new(source),
+        })?;
+        let periods = mean.blocks * mean.periods_per_block;
+        let mut ch = mean.channels.into_iter();
+        let mut next = || ch.next().unwrap_or_default();
+        let (th0, th1, tau0, tau1) = (next(), next(), next(), next());
+        let (theta_dot, theta_ddot) = if self.logged {
+            let (a, b, c, d) = (next(), next(), next(), next());
+            ([a, b], [c, d])
         } else {
-            None
+            Default::default()
         };
-        let tau1 = ch.pop().unwrap_or_default();
-        let tau0 = ch.pop().unwrap_or_default();
-        let th1 = ch.pop().unwrap_or_default();
-        let th0 = ch.pop().unwrap_or_default();
+        let mut t = self.t0;
+        t.truncate(mean.samples_per_block);
         let cols = Columns {
-            t: self.t0,
+            t,
             theta: [th0, th1],
             tau: [tau0, tau1],
-            theta_dot: dd.as_ref().map_or([vec![], vec![]], |d| d.0.clone()),
-            theta_ddot: dd.map_or([vec![], vec![]], |d| d.1),
+            theta_dot,
+            theta_ddot,
         };
         Ok((block_log(name, &cols, self.dt, sidecar), periods))
     }
