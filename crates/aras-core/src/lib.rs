@@ -1,9 +1,11 @@
 //! The value types every ARAS crate speaks, with no robot in them.
 //!
-//! * [`Motion`]: position, rate and acceleration of two coordinates at one
-//!   instant — a task pose `X = [φ, γ]` with `Ẋ, Ẍ`, or joint angles
-//!   `θ, θ̇, θ̈`. Trajectories return it, kinematics map it between joint
-//!   and task space, processing hands it to the caller's coordinate map.
+//! * [`Motion`]: position, rate and acceleration of a robot's coordinates at
+//!   one instant — a task pose `X = [φ, γ]` with `Ẋ, Ẍ`, or joint angles
+//!   `θ, θ̇, θ̈`; two fixed coordinates by default, any fixed number, or a
+//!   number known at run time ([`DMotion`]). Trajectories return it,
+//!   kinematics map it between joint and task space, processing hands it
+//!   to the caller's coordinate map.
 //! * [`Inertia`]: a rigid link's inertial parameters about its pivot, and
 //!   the pseudo-inertia `𝒥` whose positive (semi)definiteness is physical
 //!   consistency (67)–(69). The model builds its dynamics from it and the
@@ -28,4 +30,4 @@ mod motion;
 
 pub use inertia::Inertia;
 pub use lugre::{LuGreLaw, stribeck_decay};
-pub use motion::Motion;
+pub use motion::{DMotion, Motion};

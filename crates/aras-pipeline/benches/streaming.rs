@@ -39,10 +39,10 @@ fn bench(c: &mut Criterion) {
     let n = 262_144;
     let s = synthetic::states(&model, &geo, &beta, n, 1000.0, 0.01).unwrap();
     let states = States {
-        x: [&s[0][0], &s[0][1]],
-        x_dot: [&s[1][0], &s[1][1]],
-        x_ddot: [&s[2][0], &s[2][1]],
-        tau: [&s[3][0], &s[3][1]],
+        x: &[&s[0][0], &s[0][1]],
+        x_dot: &[&s[1][0], &s[1][1]],
+        x_ddot: &[&s[2][0], &s[2][1]],
+        tau: &[&s[3][0], &s[3][1]],
     };
     let mut g = c.benchmark_group("streaming");
     g.throughput(Throughput::Elements(n as u64));

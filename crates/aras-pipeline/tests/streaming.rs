@@ -227,10 +227,10 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
         for c0 in (0..n).step_by(chunk) {
             let c1 = (c0 + chunk).min(n);
             let states = States {
-                x: [&s[0][0][c0..c1], &s[0][1][c0..c1]],
-                x_dot: [&s[1][0][c0..c1], &s[1][1][c0..c1]],
-                x_ddot: [&s[2][0][c0..c1], &s[2][1][c0..c1]],
-                tau: [&s[3][0][c0..c1], &s[3][1][c0..c1]],
+                x: &[&s[0][0][c0..c1], &s[0][1][c0..c1]],
+                x_dot: &[&s[1][0][c0..c1], &s[1][1][c0..c1]],
+                x_ddot: &[&s[2][0][c0..c1], &s[2][1][c0..c1]],
+                tau: &[&s[3][0][c0..c1], &s[3][1][c0..c1]],
             };
             stage.push(&states).unwrap();
         }
@@ -261,10 +261,10 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
         for c0 in (0..n).step_by(chunk) {
             let c1 = (c0 + chunk).min(n);
             let states = States {
-                x: [&s[0][0][c0..c1], &s[0][1][c0..c1]],
-                x_dot: [&s[1][0][c0..c1], &s[1][1][c0..c1]],
-                x_ddot: [&s[2][0][c0..c1], &s[2][1][c0..c1]],
-                tau: [&s[3][0][c0..c1], &s[3][1][c0..c1]],
+                x: &[&s[0][0][c0..c1], &s[0][1][c0..c1]],
+                x_dot: &[&s[1][0][c0..c1], &s[1][1][c0..c1]],
+                x_ddot: &[&s[2][0][c0..c1], &s[2][1][c0..c1]],
+                tau: &[&s[3][0][c0..c1], &s[3][1][c0..c1]],
             };
             stage.push(&states).unwrap();
         }
@@ -292,10 +292,10 @@ fn regressor_stage_names_the_failing_sample() {
     let mut gamma = s[0][1].clone();
     gamma[2500] = 0.0; // γ = 0 is a singularity
     let states = States {
-        x: [&s[0][0], &gamma],
-        x_dot: [&s[1][0], &s[1][1]],
-        x_ddot: [&s[2][0], &s[2][1]],
-        tau: [&s[3][0], &s[3][1]],
+        x: &[&s[0][0], &gamma],
+        x_dot: &[&s[1][0], &s[1][1]],
+        x_ddot: &[&s[2][0], &s[2][1]],
+        tau: &[&s[3][0], &s[3][1]],
     };
     let err = stage.push(&states).unwrap_err();
     let e = err.to_string();
@@ -324,7 +324,7 @@ fn regressor_stage_names_the_failing_sample() {
         "nothing of a failing push is accumulated"
     );
     let short = States {
-        tau: [&s[3][0][..10], &s[3][1]],
+        tau: &[&s[3][0][..10], &s[3][1]],
         ..states
     };
     assert!(stage.push(&short).unwrap_err().to_string().contains("tau1"));

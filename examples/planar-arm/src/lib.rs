@@ -444,10 +444,10 @@ pub fn run(settings: &Settings) -> Result<Outcome, Box<dyn std::error::Error>> {
 
     let mut stage = RegressorStage::new(model, &base)?;
     stage.push(&States {
-        x: [&s.x[0], &s.x[1]],
-        x_dot: [&s.x_dot[0], &s.x_dot[1]],
-        x_ddot: [&s.x_ddot[0], &s.x_ddot[1]],
-        tau: [&s.tau[0], &s.tau[1]],
+        x: &[&s.x[0], &s.x[1]],
+        x_dot: &[&s.x_dot[0], &s.x_dot[1]],
+        x_ddot: &[&s.x_ddot[0], &s.x_ddot[1]],
+        tau: &[&s.tau[0], &s.tau[1]],
     })?;
     let streaming = stage.accumulator().ols()?.estimate;
 

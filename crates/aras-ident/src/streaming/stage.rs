@@ -16,25 +16,26 @@ use crate::model::LinearModel;
 /// factorised.
 pub const STAGE_BLOCK_SAMPLES: usize = 2048;
 
-/// A run of consecutive samples in task space with their torques,
-/// structure-of-arrays (all slices of equal length), SI units: `X = [φ, γ]`
-/// (rad), `Ẋ` (rad/s), `Ẍ` (rad/s²), `τ` (N·m).
+/// A run of consecutive samples with their torques, structure-of-arrays,
+/// SI units: one slice per model coordinate for `q` (rad or m), `q̇`, `q̈`
+/// and one per output for `τ` (N·m or N), all of equal length. For
+/// ARAS-Diamond `q = X = [φ, γ]`; for a serial arm the joint angles.
 #[derive(Debug, Clone, Copy)]
 pub struct States<'a> {
-    /// `φ`, `γ`.
-    pub x: [&'a [f64]; 2],
-    /// `φ̇`, `γ̇`.
-    pub x_dot: [&'a [f64]; 2],
-    /// `φ̈`, `γ̈`.
-    pub x_ddot: [&'a [f64]; 2],
-    /// `τ1`, `τ2`.
-    pub tau: [&'a [f64]; 2],
+    /// Positions, one slice per coordinate.
+    pub x: &'a [&'a [f64]],
+    /// Rates, one slice per coordinate.
+    pub x_dot: &'a [&'a [f64]],
+    /// Accelerations, one slice per coordinate.
+    pub x_ddot: &'a [&'a [f64]],
+    /// Torques, one slice per output.
+    pub tau: &'a [&'a [f64]],
 }
 
 impl States<'_> {
     /// Number of samples (of `x[0]`; [`RegressorStage::push`] checks the rest).
     pub fn len(&self) -> usize {
-        self.x[0].len()
+        self.x.first().map_or(0, |x| x.len())
     }
 
     /// True if there are no samples.
@@ -42,24 +43,42 @@ impl States<'_> {
         self.len() == 0
     }
 
-    fn check(&self) -> Result<(), IdentError> {
+    /// Checks the numbers of slices against the model's and their lengths
+    /// against `x[0]`'s.
+    fn check(&self, coordinates: usize, outputs: usize) -> Result<(), IdentError> {
         let n = self.len();
-        for (what, v) in [
-            ("states: gamma", self.x[1]),
-            ("states: phi_dot", self.x_dot[0]),
-            ("states: gamma_dot", self.x_dot[1]),
-            ("states: phi_ddot", self.x_ddot[0]),
-            ("states: gamma_ddot", self.x_ddot[1]),
-            ("states: tau1", self.tau[0]),
-            ("states: tau2", self.tau[1]),
+        for (what, slices, want) in [
+            ("x", self.x, coordinates),
+            ("x_dot", self.x_dot, coordinates),
+            ("x_ddot", self.x_ddot, coordinates),
+            ("tau", self.tau, outputs),
         ] {
-            if v.len() != n {
-                return Err(IdentError::DimensionMismatch {
-                    what,
-                    expected: n,
-                    found: v.len(),
-                    hint: "all state and torque slices must have one entry per sample",
+            if slices.len() != want {
+                return Err(IdentError::InvalidData {
+                    context: "streaming stage: states".into(),
+                    reason: format!(
+                        "`{what}` has {} slices, the model has {want}: give one slice per {}",
+                        slices.len(),
+                        if what == "tau" {
+                            "output"
+                        } else {
+                            "coordinate"
+                        }
+                    ),
                 });
+            }
+            for (i, v) in slices.iter().enumerate() {
+                if v.len() != n {
+                    return Err(IdentError::InvalidData {
+                        context: "streaming stage: states".into(),
+                        reason: format!(
+                            "{what}{} has {} samples, x1 has {n}: all state and torque slices \
+                             must have one entry per sample",
+                            i + 1,
+                            v.len()
+                        ),
+                    });
+                }
             }
         }
         Ok(())
@@ -71,29 +90,30 @@ impl States<'_> {
 /// on the machine.
 const LANES: usize = 4;
 
-/// One lane's running sums per joint.
+/// One lane's running sums per output.
 enum Sums {
     /// Running factors; the block storage holds `[R_lane; new rows]`.
-    Qr(Box<[BlockQr; 2]>, [Mat<f64>; 2]),
+    Qr(Vec<BlockQr>, Vec<Mat<f64>>),
     /// Running Gram matrices; the block storage holds the new rows only,
     /// transposed (`c × samples`, a sample's row contiguous: filling it is
     /// a run of contiguous stores, not 24 strided ones).
-    Gram([Mat<f64>; 2], Box<[GramSum; 2]>),
+    Gram(Vec<Mat<f64>>, Vec<GramSum>),
 }
 
-/// One lane's storage: the block per joint and its running sums, the
-/// per-sample regressor buffer, rows kept per joint.
+/// One lane's storage: the block per output and its running sums, the
+/// per-sample buffers (regressor, state), rows kept per output.
 struct Work {
     sums: Sums,
     y: Vec<f64>,
-    rows: [usize; 2],
+    q: Vec<f64>,
+    rows: Vec<usize>,
     error: Option<IdentError>,
 }
 
-/// Turns states into the base regressor of a [`LinearModel`] with two
-/// coordinates and two outputs and accumulates `[W_b | T]` into a
-/// [`QrAccumulator`] (two row groups: joint 1, joint 2), the per-sample work
-/// of streaming identification.
+/// Turns states into the base regressor of a [`LinearModel`] (any number
+/// of coordinates and outputs) and accumulates `[W_b | T]` into a
+/// [`QrAccumulator`] (one row group per output), the per-sample work of
+/// streaming identification.
 ///
 /// Per sample: [`LinearModel::fill`] (into a reused buffer), the base
 /// columns `W_b = W E`
@@ -136,18 +156,14 @@ impl<M: LinearModel> RegressorStage<M> {
         base: &BaseParameters,
         accumulation: Accumulation,
     ) -> Result<Self, IdentError> {
-        for (what, found) in [
-            ("streaming stage: model coordinates", model.coordinates()),
-            ("streaming stage: model outputs", model.outputs()),
-        ] {
-            if found != 2 {
-                return Err(IdentError::DimensionMismatch {
-                    what,
-                    expected: 2,
-                    found,
-                    hint: "the streaming stage accumulates models with two coordinates and two actuators",
-                });
-            }
+        let (dims, outputs) = (model.coordinates(), model.outputs());
+        if dims == 0 || outputs == 0 {
+            return Err(IdentError::DimensionMismatch {
+                what: "streaming stage: model coordinates × outputs",
+                expected: 1,
+                found: dims.min(outputs),
+                hint: "a model has at least one coordinate and one output",
+            });
         }
         if base.standard_names() != model.names().as_slice() {
             return Err(IdentError::DimensionMismatch {
@@ -162,22 +178,19 @@ impl<M: LinearModel> RegressorStage<M> {
             .map(|_| Work {
                 sums: match accumulation {
                     Accumulation::Qr => Sums::Qr(
-                        Box::new([
-                            BlockQr::new(STAGE_BLOCK_SAMPLES + c, c),
-                            BlockQr::new(STAGE_BLOCK_SAMPLES + c, c),
-                        ]),
-                        [Mat::zeros(c, c), Mat::zeros(c, c)],
+                        (0..outputs)
+                            .map(|_| BlockQr::new(STAGE_BLOCK_SAMPLES + c, c))
+                            .collect(),
+                        vec![Mat::zeros(c, c); outputs],
                     ),
                     Accumulation::Gram => Sums::Gram(
-                        [
-                            Mat::zeros(c, STAGE_BLOCK_SAMPLES),
-                            Mat::zeros(c, STAGE_BLOCK_SAMPLES),
-                        ],
-                        Box::new([GramSum::new(c), GramSum::new(c)]),
+                        vec![Mat::zeros(c, STAGE_BLOCK_SAMPLES); outputs],
+                        vec![GramSum::new(c); outputs],
                     ),
                 },
-                y: vec![0.0; 2 * model.columns()],
-                rows: [0, 0],
+                y: vec![0.0; outputs * model.columns()],
+                q: vec![0.0; 3 * dims],
+                rows: vec![0; outputs],
                 error: None,
             })
             .collect();
@@ -202,10 +215,10 @@ impl<M: LinearModel> RegressorStage<M> {
     /// [`QrAccumulator::gram_check`] before trusting an ill-conditioned
     /// problem.
     pub fn accumulator(&self) -> QrAccumulator {
-        let mut acc =
-            QrAccumulator::new(&self.names, 2).expect("a base analysis has at least one parameter");
+        let mut acc = QrAccumulator::new(&self.names, self.model.outputs())
+            .expect("a base analysis has at least one parameter");
         for w in &self.works {
-            for j in 0..2 {
+            for j in 0..w.rows.len() {
                 if w.rows[j] == 0 {
                     continue;
                 }
@@ -229,13 +242,14 @@ impl<M: LinearModel> RegressorStage<M> {
         self.samples
     }
 
-    /// Rows accumulated per joint (samples minus the rows left out by
+    /// Rows accumulated per output (samples minus the rows left out by
     /// [`Self::push_selected`]).
-    pub fn rows(&self) -> [usize; 2] {
-        let mut r = [0, 0];
+    pub fn rows(&self) -> Vec<usize> {
+        let mut r = vec![0; self.model.outputs()];
         for w in &self.works {
-            r[0] += w.rows[0];
-            r[1] += w.rows[1];
+            for (r, w) in r.iter_mut().zip(&w.rows) {
+                *r += w;
+            }
         }
         r
     }
@@ -248,36 +262,38 @@ impl<M: LinearModel> RegressorStage<M> {
         self.push_selected(states, None)
     }
 
-    /// [`Self::push`] keeping only joint `j`'s rows where `keep[j]` is true
-    /// (e.g. away from velocity reversals);
-    /// `None` keeps every row. Every sample's kinematics are still
-    /// evaluated and checked, as in memory.
+    /// [`Self::push`] keeping only output `j`'s rows where `keep[j]` is
+    /// true (e.g. away from velocity reversals); `None` keeps every row.
+    /// Every sample's kinematics are still evaluated and checked, as in
+    /// memory.
     pub fn push_selected(
         &mut self,
         states: &States<'_>,
-        keep: Option<[&[bool]; 2]>,
+        keep: Option<&[&[bool]]>,
     ) -> Result<(), IdentError> {
-        states.check()?;
+        let outputs = self.model.outputs();
+        states.check(self.model.coordinates(), outputs)?;
         let n = states.len();
         if let Some(k) = keep {
-            for (j, m) in k.iter().enumerate() {
-                if m.len() != n {
-                    return Err(IdentError::DimensionMismatch {
-                        what: if j == 0 {
-                            "row mask of joint 1"
-                        } else {
-                            "row mask of joint 2"
-                        },
-                        expected: n,
-                        found: m.len(),
-                        hint: "give one keep flag per sample and joint",
-                    });
-                }
+            let bad = k.len() != outputs || k.iter().any(|m| m.len() != n);
+            if bad {
+                return Err(IdentError::InvalidData {
+                    context: "streaming stage: row masks".into(),
+                    reason: format!(
+                        "{} masks of lengths {:?} for {outputs} outputs of {n} samples: give \
+                         one keep flag per sample and output",
+                        k.len(),
+                        k.iter().map(|m| m.len()).collect::<Vec<_>>()
+                    ),
+                });
             }
         }
         let starts: Vec<usize> = (0..n).step_by(STAGE_BLOCK_SAMPLES).collect();
-        let saved: Vec<(Saved, [usize; 2])> =
-            self.works.iter().map(|w| (w.sums.save(), w.rows)).collect();
+        let saved: Vec<(Saved, Vec<usize>)> = self
+            .works
+            .iter()
+            .map(|w| (w.sums.save(), w.rows.clone()))
+            .collect();
         let (model, columns) = (&self.model, &self.columns[..]);
         let offset = self.samples;
         for wave in starts.chunks(LANES) {
@@ -311,8 +327,8 @@ impl<M: LinearModel> RegressorStage<M> {
 
 /// The running sums of a lane (to undo a failing push).
 enum Saved {
-    Qr([Mat<f64>; 2]),
-    Gram(Box<[GramSum; 2]>),
+    Qr(Vec<Mat<f64>>),
+    Gram(Vec<GramSum>),
 }
 
 impl Sums {
@@ -345,7 +361,7 @@ impl Sums {
 /// samples pushed before, for messages), with the optional row masks.
 struct Block<'s, 'a> {
     st: &'s States<'a>,
-    keep: Option<[&'s [bool]; 2]>,
+    keep: Option<&'s [&'s [bool]]>,
     start: usize,
     rows: usize,
     offset: usize,
@@ -358,25 +374,25 @@ impl Block<'_, '_> {
 }
 
 /// Writes the block's rows into `a[j]` from row `top` (masked rows as
-/// zeros, which add nothing to `AᵀA`); returns the rows kept per joint.
+/// zeros, which add nothing to `AᵀA`); returns the rows kept per output.
 fn fill_block<M: LinearModel>(
-    a: [MatMut<'_, f64>; 2],
+    a: &mut [MatMut<'_, f64>],
     top: usize,
-    y: &mut [f64],
+    w: &mut Buffers<'_>,
     model: &M,
     columns: &[usize],
     bl: &Block<'_, '_>,
-) -> Result<[usize; 2], IdentError> {
+) -> Result<Vec<usize>, IdentError> {
     let b = columns.len();
-    let mut kept = [0, 0];
-    let [mut a0, mut a1] = a;
+    let m = a.len();
+    let mut kept = vec![0; m];
     for i in 0..bl.rows {
         let k = bl.start + i;
-        fill_sample(model, bl.st, k, bl.offset, y)?;
-        for (j, a) in [&mut a0, &mut a1].into_iter().enumerate() {
+        fill_sample(model, bl.st, k, bl.offset, w)?;
+        for (j, a) in a.iter_mut().enumerate() {
             if bl.kept(j, k) {
                 for (jb, &col) in columns.iter().enumerate() {
-                    a[(top + i, jb)] = y[2 * col + j];
+                    a[(top + i, jb)] = w.y[m * col + j];
                 }
                 a[(top + i, b)] = bl.st.tau[j][k];
                 kept[j] += 1;
@@ -390,21 +406,29 @@ fn fill_block<M: LinearModel>(
     Ok(kept)
 }
 
+/// A lane's per-sample buffers: the regressor (`outputs × columns`) and
+/// the state `[q, q̇, q̈]`.
+struct Buffers<'w> {
+    y: &'w mut [f64],
+    q: &'w mut [f64],
+}
+
 /// [`fill_block`] into transposed blocks (`c × samples`, column `i` = row
 /// of sample `i`), through plain slices: the per-sample copy of the hot
 /// path.
 fn fill_block_transposed<M: LinearModel>(
-    a: &mut [Mat<f64>; 2],
-    y: &mut [f64],
+    a: &mut [Mat<f64>],
+    w: &mut Buffers<'_>,
     model: &M,
     columns: &[usize],
     bl: &Block<'_, '_>,
-) -> Result<[usize; 2], IdentError> {
+) -> Result<Vec<usize>, IdentError> {
     let b = columns.len();
-    let mut kept = [0, 0];
+    let m = a.len();
+    let mut kept = vec![0; m];
     for i in 0..bl.rows {
         let k = bl.start + i;
-        fill_sample(model, bl.st, k, bl.offset, y)?;
+        fill_sample(model, bl.st, k, bl.offset, w)?;
         for (j, a) in a.iter_mut().enumerate() {
             let col = a
                 .as_mut()
@@ -415,7 +439,7 @@ fn fill_block_transposed<M: LinearModel>(
             let (row, tau) = col.split_at_mut(b);
             if bl.kept(j, k) {
                 for (dst, &c) in row.iter_mut().zip(columns) {
-                    *dst = y[2 * c + j];
+                    *dst = w.y[m * c + j];
                 }
                 tau[0] = bl.st.tau[j][k];
                 kept[j] += 1;
@@ -438,37 +462,46 @@ fn run_block<M: LinearModel>(
     let b = columns.len();
     let c = b + 1;
     let rows = bl.rows;
+    let m = w.rows.len();
+    let mut buffers = Buffers {
+        y: &mut w.y,
+        q: &mut w.q,
+    };
     let kept = match &mut w.sums {
         Sums::Gram(blocks, grams) => {
-            let kept = fill_block_transposed(blocks, &mut w.y, model, columns, bl)?;
-            for j in 0..2 {
-                grams[j].add_transposed(blocks[j].as_ref().subcols(0, rows));
+            let kept = fill_block_transposed(blocks, &mut buffers, model, columns, bl)?;
+            for (g, a) in grams.iter_mut().zip(blocks.iter()) {
+                g.add_transposed(a.as_ref().subcols(0, rows));
             }
             kept
         }
         Sums::Qr(qr, r) => {
             let kept = {
-                let [q0, q1] = &mut **qr;
-                let mut a0 = q0.block_mut();
-                let mut a1 = q1.block_mut();
-                a0.as_mut().subrows_mut(0, c).copy_from(&r[0]);
-                a1.as_mut().subrows_mut(0, c).copy_from(&r[1]);
-                fill_block([a0, a1], c, &mut w.y, model, columns, bl)?
+                let mut a: Vec<MatMut<'_, f64>> = qr.iter_mut().map(|q| q.block_mut()).collect();
+                for (a, r) in a.iter_mut().zip(r.iter()) {
+                    a.as_mut().subrows_mut(0, c).copy_from(r);
+                }
+                fill_block(&mut a, c, &mut buffers, model, columns, bl)?
             };
-            for j in 0..2 {
+            for j in 0..m {
                 let lane = &r[j];
                 let refill = |mut a: MatMut<'_, f64>| {
                     // Rare path (the lane's first blocks, or data that do
                     // not excite every base parameter yet): recompute the
                     // rows.
                     a.as_mut().subrows_mut(0, c).copy_from(lane);
-                    let mut y = vec![0.0; 2 * model.columns()];
+                    let mut y = vec![0.0; m * model.columns()];
+                    let mut q = vec![0.0; 3 * model.coordinates()];
+                    let mut buffers = Buffers {
+                        y: &mut y,
+                        q: &mut q,
+                    };
                     for i in 0..rows {
                         let k = bl.start + i;
                         let ok = bl.kept(j, k)
-                            && fill_sample(model, bl.st, k, bl.offset, &mut y).is_ok();
+                            && fill_sample(model, bl.st, k, bl.offset, &mut buffers).is_ok();
                         for (jb, &col) in columns.iter().enumerate() {
-                            a[(c + i, jb)] = if ok { y[2 * col + j] } else { 0.0 };
+                            a[(c + i, jb)] = if ok { buffers.y[m * col + j] } else { 0.0 };
                         }
                         a[(c + i, b)] = if ok { bl.st.tau[j][k] } else { 0.0 };
                     }
@@ -479,8 +512,9 @@ fn run_block<M: LinearModel>(
             kept
         }
     };
-    w.rows[0] += kept[0];
-    w.rows[1] += kept[1];
+    for (r, k) in w.rows.iter_mut().zip(kept) {
+        *r += k;
+    }
     if !w.sums.is_finite() {
         return Err(IdentError::InvalidData {
             context: format!(
@@ -496,14 +530,15 @@ fn run_block<M: LinearModel>(
     Ok(())
 }
 
-/// The model's regressor of sample `k` into `y` (2 × n, column-major).
+/// The model's regressor of sample `k` into `w.y` (`outputs × columns`,
+/// column-major), through the state buffer `w.q`.
 #[inline]
 fn fill_sample<M: LinearModel>(
     model: &M,
     st: &States<'_>,
     k: usize,
     offset: usize,
-    y: &mut [f64],
+    w: &mut Buffers<'_>,
 ) -> Result<(), IdentError> {
     for (j, tau) in st.tau.iter().enumerate() {
         if !tau[k].is_finite() {
@@ -517,12 +552,15 @@ fn fill_sample<M: LinearModel>(
             });
         }
     }
+    let n = st.x.len();
+    let (q, rest) = w.q.split_at_mut(n);
+    let (q_dot, q_ddot) = rest.split_at_mut(n);
+    for i in 0..n {
+        q[i] = st.x[i][k];
+        q_dot[i] = st.x_dot[i][k];
+        q_ddot[i] = st.x_ddot[i][k];
+    }
     model
-        .fill(
-            &[st.x[0][k], st.x[1][k]],
-            &[st.x_dot[0][k], st.x_dot[1][k]],
-            &[st.x_ddot[0][k], st.x_ddot[1][k]],
-            y,
-        )
+        .fill(q, q_dot, q_ddot, w.y)
         .map_err(|e| IdentError::external(format!("streaming regressor, sample {}", offset + k), e))
 }

@@ -312,10 +312,10 @@ pub fn identify_log_with_progress(
                 }
             }
             let states = States {
-                x: [&x[0], &x[1]],
-                x_dot: [&xd[0], &xd[1]],
-                x_ddot: [&xdd[0], &xdd[1]],
-                tau: [&chunk.tau[0], &chunk.tau[1]],
+                x: &[&x[0], &x[1]],
+                x_dot: &[&xd[0], &xd[1]],
+                x_ddot: &[&xdd[0], &xdd[1]],
+                tau: &[&chunk.tau[0], &chunk.tau[1]],
             };
             let keep = reversal_mask(&chunk.theta_dot, options.min_speed, 0, false)?;
             let (k1, k2) = keep.split_at(n);
@@ -325,7 +325,7 @@ pub fn identify_log_with_progress(
                     out.tau[j][1] += t * t;
                 }
             }
-            stage.push_selected(&states, Some([k1, k2]))?;
+            stage.push_selected(&states, Some(&[k1, k2]))?;
             out.read += n;
             out.used += n;
             out.blocks += 1;
