@@ -14,6 +14,12 @@
 //!   base parameters, OLS in memory
 //!   and streaming, and the physically consistent SDP.
 //!
+//! [`chain`] does the identification part for a planar chain of any number
+//! of links (the test runs three): the regressor written once for `n`
+//! links, base parameters, OLS in memory and streamed through
+//! `aras-ident`'s stage with one row group per joint, and the SDP with one
+//! pseudo-inertia per link.
+//!
 //! The torques of the log come from an independent code path (recursive
 //! Newton–Euler on the rigid bodies, [`Arm::torques`]), not from the
 //! regressor. Noise-free, the base parameters are recovered to rounding
@@ -25,6 +31,8 @@
 //! ```
 
 use std::convert::Infallible;
+
+pub mod chain;
 
 use aras_excite::{DesignSettings, Dual, Limits, Regressor};
 use aras_ident::streaming::{RegressorStage, States};

@@ -1,0 +1,399 @@
+//! A planar serial chain of any number of links in a vertical plane, with
+//! Coulomb + viscous friction at every joint: the proof that identification
+//! (in memory, streaming and physically consistent) is not bound to two
+//! joints.
+//!
+//! The regressor is written once for `n` links from the Newton–Euler
+//! equations in their linear form: link `i`'s inertial wrench about its
+//! joint is linear in its standard parameters `(I_O, h = m c, m)`, and the
+//! torque at joint `j ≤ i` is that wrench carried to joint `j`. The torques
+//! the identification fits come from another code path, [`Chain::torques`]:
+//! a backward recursion over the links' centres of mass and central
+//! inertias, which never forms `h` or `I_O`.
+//!
+//! The motion is a sum of sines per joint with exact derivatives
+//! ([`Chain::motion`]); `aras-excite` designs for two coordinates so far, so
+//! the excitation of the chain is written out here.
+
+#![allow(clippy::needless_range_loop)] // index loops mirror the equations
+
+use std::convert::Infallible;
+
+use aras_ident::streaming::{RegressorStage, States};
+use aras_ident::{BaseParameters, ConsistentLs, LinearModel, LinkLayout, ReducedLs};
+use faer::Mat;
+
+use crate::{G, Link};
+
+/// Standard parameters per link: `Ixx, Ixy, Ixz, Iyy, Iyz, Izz` about the
+/// joint, `hx, hy, hz`, `m`.
+pub const LINK_COLUMNS: usize = 10;
+
+/// Friction parameters per joint: `Fc`, `Fv`.
+pub const JOINT_COLUMNS: usize = 2;
+
+/// A planar chain: link `i` turns about joint `i` (angle `q_i` relative to
+/// link `i − 1`) and carries joint `i + 1` at `length[i]` along its x axis.
+#[derive(Debug, Clone)]
+pub struct Chain {
+    /// The links, base first.
+    pub links: Vec<Link>,
+    /// Joint-to-joint length of each link (m); the last is unused.
+    pub length: Vec<f64>,
+    /// Coulomb level per joint (N·m).
+    pub coulomb: Vec<f64>,
+    /// Viscous coefficient per joint (N·m·s/rad).
+    pub viscous: Vec<f64>,
+}
+
+impl Chain {
+    /// A 3-link chain of decreasing links, used by the example's test.
+    pub fn three_links() -> Self {
+        Self {
+            links: vec![
+                Link {
+                    mass: 2.2,
+                    com: [0.14, 0.012, 0.0],
+                    central: [0.002, 0.017, 0.018],
+                },
+                Link {
+                    mass: 1.4,
+                    com: [0.11, -0.01, 0.0],
+                    central: [0.0012, 0.009, 0.0095],
+                },
+                Link {
+                    mass: 0.7,
+                    com: [0.07, 0.008, 0.0],
+                    central: [0.0006, 0.003, 0.0032],
+                },
+            ],
+            length: vec![0.3, 0.25, 0.15],
+            coulomb: vec![0.3, 0.2, 0.1],
+            viscous: vec![0.12, 0.08, 0.05],
+        }
+    }
+
+    /// Number of joints.
+    pub fn joints(&self) -> usize {
+        self.links.len()
+    }
+
+    /// The regressor of this chain's geometry (lengths only).
+    pub fn model(&self) -> ChainModel {
+        ChainModel {
+            length: self.length.clone(),
+        }
+    }
+
+    /// The standard parameter vector in [`ChainModel`]'s column order.
+    pub fn standard(&self) -> Vec<f64> {
+        let mut v = Vec::new();
+        for l in &self.links {
+            v.extend(l.standard());
+            v.push(l.mass);
+        }
+        for j in 0..self.joints() {
+            v.extend([self.coulomb[j], self.viscous[j]]);
+        }
+        v
+    }
+
+    /// Joint torques of the motion `q, q̇, q̈` by a backward recursion over
+    /// the centres of mass (independent of the regressor), plus friction.
+    pub fn torques(&self, q: &[f64], qd: &[f64], qdd: &[f64]) -> Vec<f64> {
+        let n = self.joints();
+        let k = kinematics(&self.length, q, qd, qdd);
+        let cross = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - a[1] * b[0];
+        let (mut f, mut moment) = ([0.0; 2], 0.0);
+        let mut tau = vec![0.0; n];
+        for i in (0..n).rev() {
+            let l = &self.links[i];
+            let (u, v) = (k.u[i], k.v[i]);
+            // Centre of mass relative to the joint, world frame.
+            let r = [
+                l.com[0] * u[0] + l.com[1] * v[0],
+                l.com[0] * u[1] + l.com[1] * v[1],
+            ];
+            let (w, wd) = (k.omega[i], k.alpha[i]);
+            let a_c = [
+                k.accel[i][0] - wd * r[1] - w * w * r[0],
+                k.accel[i][1] + wd * r[0] - w * w * r[1],
+            ];
+            let own = [l.mass * a_c[0], l.mass * a_c[1]];
+            // The child's force acts at joint i + 1.
+            let to_child = [k.pos[i + 1][0] - k.pos[i][0], k.pos[i + 1][1] - k.pos[i][1]];
+            moment = l.central[2] * wd + cross(r, own) + moment + cross(to_child, f);
+            f = [own[0] + f[0], own[1] + f[1]];
+            tau[i] = moment + self.coulomb[i] * qd[i].signum() + self.viscous[i] * qd[i];
+        }
+        tau
+    }
+
+    /// The chain's motion at `t`: per joint a sum of three sines of the
+    /// base frequency `omega` (rad/s), phases and amplitudes fixed per
+    /// joint; exact `q, q̇, q̈`.
+    pub fn motion(&self, omega: f64, t: f64) -> [Vec<f64>; 3] {
+        let n = self.joints();
+        let mut out = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        for j in 0..n {
+            for h in 1..=3 {
+                let w = omega * h as f64;
+                let amp = 0.9 / (h as f64 * (1.0 + 0.3 * j as f64));
+                let phase = 0.7 * (j * 3 + h) as f64;
+                let (s, c) = (w * t + phase).sin_cos();
+                out[0][j] += amp * s + if h == 1 { 0.2 * j as f64 } else { 0.0 };
+                out[1][j] += amp * w * c;
+                out[2][j] -= amp * w * w * s;
+            }
+        }
+        out
+    }
+}
+
+/// Positions, frames and accelerations of the joints of a planar chain.
+struct Kinematics {
+    /// Joint positions `p_i` (and the tip, `p_n`).
+    pos: Vec<[f64; 2]>,
+    /// Link x axes `u_i` and y axes `v_i` (world).
+    u: Vec<[f64; 2]>,
+    v: Vec<[f64; 2]>,
+    /// Absolute rates and accelerations of the links.
+    omega: Vec<f64>,
+    alpha: Vec<f64>,
+    /// Acceleration of each joint's origin plus gravity's upward one.
+    accel: Vec<[f64; 2]>,
+}
+
+fn kinematics(length: &[f64], q: &[f64], qd: &[f64], qdd: &[f64]) -> Kinematics {
+    let n = q.len();
+    let mut k = Kinematics {
+        pos: vec![[0.0; 2]],
+        u: Vec::with_capacity(n),
+        v: Vec::with_capacity(n),
+        omega: Vec::with_capacity(n),
+        alpha: Vec::with_capacity(n),
+        accel: vec![[0.0, G]],
+    };
+    let (mut theta, mut w, mut wd) = (0.0, 0.0, 0.0);
+    for i in 0..n {
+        theta += q[i];
+        w += qd[i];
+        wd += qdd[i];
+        let (s, c) = f64::sin_cos(theta);
+        let (u, v) = ([c, s], [-s, c]);
+        let (p, a) = (k.pos[i], k.accel[i]);
+        let l = length[i];
+        k.pos.push([p[0] + l * u[0], p[1] + l * u[1]]);
+        k.accel.push([
+            a[0] + l * (wd * v[0] - w * w * u[0]),
+            a[1] + l * (wd * v[1] - w * w * u[1]),
+        ]);
+        k.u.push(u);
+        k.v.push(v);
+        k.omega.push(w);
+        k.alpha.push(wd);
+    }
+    k
+}
+
+/// The regressor `τ = Y(q, q̇, q̈) β` of a planar chain, as `aras-ident`'s
+/// [`LinearModel`]: `n` coordinates, `n` outputs, [`LINK_COLUMNS`] per link
+/// then [`JOINT_COLUMNS`] per joint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChainModel {
+    length: Vec<f64>,
+}
+
+impl LinearModel for ChainModel {
+    type Error = Infallible;
+
+    fn coordinates(&self) -> usize {
+        self.length.len()
+    }
+
+    fn outputs(&self) -> usize {
+        self.length.len()
+    }
+
+    fn columns(&self) -> usize {
+        (LINK_COLUMNS + JOINT_COLUMNS) * self.length.len()
+    }
+
+    fn names(&self) -> Vec<String> {
+        let body = [
+            "Ixx", "Ixy", "Ixz", "Iyy", "Iyz", "Izz", "hx", "hy", "hz", "m",
+        ];
+        let n = self.length.len();
+        let mut names: Vec<String> = (1..=n)
+            .flat_map(|i| body.iter().map(move |b| format!("L{i}.{b}")))
+            .collect();
+        names.extend((1..=n).flat_map(|j| [format!("Fc{j}"), format!("Fv{j}")]));
+        names
+    }
+
+    fn fill(&self, q: &[f64], qd: &[f64], qdd: &[f64], y: &mut [f64]) -> Result<(), Infallible> {
+        let n = self.length.len();
+        let k = kinematics(&self.length, q, qd, qdd);
+        let cross = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - a[1] * b[0];
+        y.fill(0.0);
+        let mut set = |col: usize, j: usize, v: f64| y[n * col + j] = v;
+        for i in 0..n {
+            let (u, v, a) = (k.u[i], k.v[i], k.accel[i]);
+            let (w, wd) = (k.omega[i], k.alpha[i]);
+            // The force on link i per unit hx, hy and m.
+            let fx = [wd * v[0] - w * w * u[0], wd * v[1] - w * w * u[1]];
+            let fy = [-wd * u[0] - w * w * v[0], -wd * u[1] - w * w * v[1]];
+            let base = i * LINK_COLUMNS;
+            for j in 0..=i {
+                let r = [k.pos[i][0] - k.pos[j][0], k.pos[i][1] - k.pos[j][1]];
+                set(base + 5, j, wd);
+                set(base + 6, j, cross(u, a) + cross(r, fx));
+                set(base + 7, j, cross(v, a) + cross(r, fy));
+                set(base + 9, j, cross(r, a));
+            }
+        }
+        let friction = LINK_COLUMNS * n;
+        for j in 0..n {
+            set(friction + 2 * j, j, qd[j].signum());
+            set(friction + 2 * j + 1, j, qd[j]);
+        }
+        Ok(())
+    }
+}
+
+/// What [`identify`] found for a chain.
+#[derive(Debug)]
+pub struct ChainOutcome {
+    /// The base parameters' definitions.
+    pub base_names: Vec<String>,
+    /// True base parameters.
+    pub truth: Vec<f64>,
+    /// OLS on the stacked base regressor in memory.
+    pub ols: Vec<f64>,
+    /// OLS from the streaming accumulation of the same samples.
+    pub streaming: Vec<f64>,
+    /// Rows the streaming stage accumulated per joint.
+    pub streaming_rows: Vec<usize>,
+    /// The physically consistent estimate's base parameters.
+    pub sdp: Vec<f64>,
+    /// The SDP's solver status.
+    pub sdp_status: aras_ident::SolverStatus,
+    /// Smallest pseudo-inertia eigenvalue per link of the SDP estimate.
+    pub min_eigenvalues: Vec<f64>,
+}
+
+/// Base parameters of `model` from 400 pseudo-random states (the
+/// dependencies are structural, so any rich set of states finds them).
+pub fn base_parameters(model: &ChainModel) -> Result<BaseParameters, aras_ident::IdentError> {
+    let (n, m, cols) = (400, model.outputs(), model.columns());
+    let mut w = Mat::<f64>::zeros(m * n, cols);
+    let mut y = vec![0.0; m * cols];
+    let mut u = 0.5f64;
+    let mut next = || {
+        // A fixed additive-recurrence sequence: deterministic, no seed.
+        u = (u + 0.618_033_988_749_895) % 1.0;
+        2.0 * u - 1.0
+    };
+    let dims = model.coordinates();
+    for i in 0..n {
+        let q: Vec<f64> = (0..dims).map(|_| 1.5 * next()).collect();
+        let qd: Vec<f64> = (0..dims).map(|_| 3.0 * next()).collect();
+        let qdd: Vec<f64> = (0..dims).map(|_| 10.0 * next()).collect();
+        let Ok(()) = model.fill(&q, &qd, &qdd, &mut y);
+        for j in 0..m {
+            for c in 0..cols {
+                w[(j * n + i, c)] = y[m * c + j];
+            }
+        }
+    }
+    BaseParameters::from_regressor(w.as_ref(), &model.names(), 1e-8)
+}
+
+/// Identifies `chain` from `samples` samples of its motion over two periods
+/// of 5 s (noise-free torques from [`Chain::torques`]): base parameters,
+/// OLS in memory and streamed, and the SDP with one pseudo-inertia per link.
+pub fn identify(chain: &Chain, samples: usize) -> Result<ChainOutcome, Box<dyn std::error::Error>> {
+    let model = chain.model();
+    let (n, cols) = (chain.joints(), model.columns());
+    let names = model.names();
+    let beta = chain.standard();
+    let base = base_parameters(&model)?;
+    let omega = std::f64::consts::TAU / 5.0;
+    let dt = 10.0 / samples as f64;
+
+    // Structure-of-arrays samples: per joint q, q̇, q̈, τ.
+    let mut soa = vec![vec![vec![0.0; samples]; n]; 4];
+    for s in 0..samples {
+        let [q, qd, qdd] = chain.motion(omega, (s as f64 + 0.5) * dt);
+        let tau = chain.torques(&q, &qd, &qdd);
+        for j in 0..n {
+            for (k, v) in [q[j], qd[j], qdd[j], tau[j]].into_iter().enumerate() {
+                soa[k][j][s] = v;
+            }
+        }
+    }
+    let slices = |k: usize| -> Vec<&[f64]> { soa[k].iter().map(Vec::as_slice).collect() };
+    let (x, xd, xdd, tau) = (slices(0), slices(1), slices(2), slices(3));
+
+    // In memory: the stacked regressor, joint 1's rows, then joint 2's, ….
+    let mut w = Mat::<f64>::zeros(n * samples, cols);
+    let mut t = vec![0.0; n * samples];
+    let mut y = vec![0.0; n * cols];
+    let at = |v: &[&[f64]], s: usize| -> Vec<f64> { v.iter().map(|c| c[s]).collect() };
+    for s in 0..samples {
+        let Ok(()) = model.fill(&at(&x, s), &at(&xd, s), &at(&xdd, s), &mut y);
+        for j in 0..n {
+            for c in 0..cols {
+                w[(j * samples + s, c)] = y[n * c + j];
+            }
+            t[j * samples + s] = tau[j][s];
+        }
+    }
+    let truth = base.to_base(&beta)?;
+    let wb = base.base_regressor(w.as_ref())?;
+    let reduced = ReducedLs::new(wb.as_ref(), &t, &base.base_names())?;
+    let ols = reduced.ols()?.estimate;
+
+    // Streamed: the same samples through the stage, one row group per joint.
+    let mut stage = RegressorStage::new(model, &base)?;
+    stage.push(&States {
+        x: &x,
+        x_dot: &xd,
+        x_ddot: &xdd,
+        tau: &tau,
+    })?;
+    let streaming = stage.accumulator().ols()?.estimate;
+
+    // Physically consistent: each link's pseudo-inertia PSD (67)–(69), with
+    // a reference 10 % off the truth, each mass column within ±50 %,
+    // friction ≥ 0.
+    let reference: Vec<f64> = beta.iter().map(|v| 1.1 * v).collect();
+    let mut problem = ConsistentLs::new(&names, reference)?;
+    for (i, link) in chain.links.iter().enumerate() {
+        let c = i * LINK_COLUMNS;
+        problem
+            .link(LinkLayout::new(
+                format!("L{}", i + 1),
+                [c, c + 1, c + 2, c + 3, c + 4, c + 5],
+                [c + 6, c + 7, c + 8],
+                link.mass,
+            ))?
+            .bound(c + 9, 0.5 * link.mass, 1.5 * link.mass)?;
+    }
+    let friction: Vec<&str> = names[LINK_COLUMNS * n..]
+        .iter()
+        .map(String::as_str)
+        .collect();
+    problem.nonnegative(&friction)?;
+    let sol = problem.solve(&base, &reduced)?;
+    Ok(ChainOutcome {
+        base_names: base.expressions(),
+        truth,
+        ols,
+        streaming,
+        streaming_rows: stage.rows(),
+        sdp: sol.base.clone(),
+        sdp_status: sol.status,
+        min_eigenvalues: sol.links.iter().map(|l| l.min_eigenvalue).collect(),
+    })
+}
