@@ -101,7 +101,7 @@ proptest! {
 
     #[test]
     fn trajectory_parser(bytes in input(fixture("trajectories/default-excitation.json"))) {
-        if let Ok(t) = FourierTrajectory::from_json(&text(&bytes)) {
+        if let Ok(t) = <FourierTrajectory>::from_json(&text(&bytes)) {
             prop_assert!(t.period().is_finite() && t.period() > 0.0);
             prop_assert_eq!(FourierTrajectory::from_json(&t.to_json()).ok(), Some(t));
         }

@@ -13,7 +13,8 @@
 //! the continuous signal stays inside the original bounds. The design
 //! tightens by `1.01·q R` to absorb rounding.
 
-use nalgebra::Vector2;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, OVector, U2, Vector2};
 
 use crate::FourierTrajectory;
 use crate::error::{ExciteError, check_finite};
@@ -28,20 +29,27 @@ use crate::param::{Grid, Layout, dot};
 pub const DEFAULT_MAX_ACCEL_DEG: f64 = 800.0;
 
 /// The limits an excitation trajectory must respect at every instant: the
-/// box and rate limits (77) and an acceleration limit, per coordinate of `X`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Limits {
+/// box and rate limits (77) and an acceleration limit, per coordinate of `X`
+/// (for a serial arm, per joint). The number of coordinates is the type
+/// `D`, as for [`crate::Motion`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Limits<D: Dim = U2>
+where
+    DefaultAllocator: Allocator<D>,
+{
     /// Lower corner of the box, `min ≤ X` (rad).
-    pub min: Vector2<f64>,
+    pub min: OVector<f64, D>,
     /// Upper corner of the box, `X ≤ max` (rad).
-    pub max: Vector2<f64>,
+    pub max: OVector<f64, D>,
     /// Rate limit `|Ẋ_i| ≤ max_rate_i` (rad/s).
-    pub max_rate: Vector2<f64>,
+    pub max_rate: OVector<f64, D>,
     /// Acceleration limit `|Ẍ_i| ≤ max_accel_i` (rad/s²).
-    pub max_accel: Vector2<f64>,
+    pub max_accel: OVector<f64, D>,
 }
 
-impl Limits {
+impl Copy for Limits<U2> {}
+
+impl Limits<U2> {
     /// The paper's identification box and rates (77), φ ∈ [30°, 140°],
     /// γ ∈ [40°, 80°], |φ̇|, |γ̇| ≤ 200°/s, and [`DEFAULT_MAX_ACCEL_DEG`].
     pub fn paper() -> Self {
@@ -54,11 +62,21 @@ impl Limits {
             max_accel: Vector2::new(a, a),
         }
     }
+}
+
+impl<D: Dim> Limits<D>
+where
+    DefaultAllocator: Allocator<D>,
+{
+    /// Number of coordinates.
+    pub fn coordinates(&self) -> usize {
+        self.min.len()
+    }
 
     /// Errors if a bound is not finite, the box is empty, or a rate or
     /// acceleration limit is not positive; the message names the setting.
     pub fn validate(&self) -> Result<(), ExciteError> {
-        for i in 0..2 {
+        for i in 0..self.coordinates() {
             check_finite(|| format!("min[{i}]"), self.min[i])?;
             check_finite(|| format!("max[{i}]"), self.max[i])?;
             if self.min[i] >= self.max[i] {
@@ -92,17 +110,19 @@ impl Limits {
 
     /// Per coordinate and kind (0 = position, 1 = velocity, 2 = acceleration)
     /// the centre and half-width of the allowed range.
-    fn ranges(&self) -> [[(f64, f64); 3]; 2] {
-        std::array::from_fn(|i| {
-            [
-                (
-                    0.5 * (self.min[i] + self.max[i]),
-                    0.5 * (self.max[i] - self.min[i]),
-                ),
-                (0.0, self.max_rate[i]),
-                (0.0, self.max_accel[i]),
-            ]
-        })
+    fn ranges(&self) -> Vec<[(f64, f64); 3]> {
+        (0..self.coordinates())
+            .map(|i| {
+                [
+                    (
+                        0.5 * (self.min[i] + self.max[i]),
+                        0.5 * (self.max[i] - self.min[i]),
+                    ),
+                    (0.0, self.max_rate[i]),
+                    (0.0, self.max_accel[i]),
+                ]
+            })
+            .collect()
     }
 }
 
@@ -116,14 +136,17 @@ impl Default for Limits {
 ///
 /// Each margin is the smallest distance to the nearest bound over the grid
 /// (rad, rad/s, rad/s²): positive means inside, negative a violation.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Margins {
-    /// Position margins `[φ, γ]` (rad).
-    pub position: Vector2<f64>,
+#[derive(Debug, Clone, PartialEq)]
+pub struct Margins<D: Dim = U2>
+where
+    DefaultAllocator: Allocator<D>,
+{
+    /// Position margins per coordinate (for ARAS-Diamond `[φ, γ]`, rad).
+    pub position: OVector<f64, D>,
     /// Velocity margins (rad/s).
-    pub velocity: Vector2<f64>,
+    pub velocity: OVector<f64, D>,
     /// Acceleration margins (rad/s²).
-    pub acceleration: Vector2<f64>,
+    pub acceleration: OVector<f64, D>,
     /// The smallest margin relative to its allowed half-range
     /// (dimensionless; 0 = touching a limit, negative = violated).
     pub worst_relative: f64,
@@ -131,16 +154,22 @@ pub struct Margins {
     pub points: usize,
 }
 
-impl Margins {
+impl Copy for Margins<U2> {}
+
+impl<D: Dim> Margins<D>
+where
+    DefaultAllocator: Allocator<D>,
+{
     /// Measures the margins of `trajectory` on `points` equally spaced
     /// instants of one period (the trajectory is periodic, so one period
     /// covers all time).
-    pub fn measure(trajectory: &FourierTrajectory, limits: &Limits, points: usize) -> Self {
+    pub fn measure(trajectory: &FourierTrajectory<D>, limits: &Limits<D>, points: usize) -> Self {
         let ranges = limits.ranges();
-        let mut m = [[f64::INFINITY; 3]; 2];
+        let n = ranges.len();
+        let mut m = vec![[f64::INFINITY; 3]; n];
         for row in trajectory.sample(points.max(1), 1) {
-            let v = [row.state.pos, row.state.vel, row.state.acc];
-            for i in 0..2 {
+            let v = [&row.state.pos, &row.state.vel, &row.state.acc];
+            for i in 0..n {
                 for k in 0..3 {
                     let (c, r) = ranges[i][k];
                     m[i][k] = m[i][k].min(r - (v[k][i] - c).abs());
@@ -148,15 +177,20 @@ impl Margins {
             }
         }
         let mut worst = f64::INFINITY;
-        for i in 0..2 {
+        for i in 0..n {
             for k in 0..3 {
                 worst = worst.min(m[i][k] / ranges[i][k].1);
             }
         }
+        let column = |k: usize| {
+            let mut v = limits.min.clone();
+            v.iter_mut().zip(&m).for_each(|(v, m)| *v = m[k]);
+            v
+        };
         Self {
-            position: Vector2::new(m[0][0], m[1][0]),
-            velocity: Vector2::new(m[0][1], m[1][1]),
-            acceleration: Vector2::new(m[0][2], m[1][2]),
+            position: column(0),
+            velocity: column(1),
+            acceleration: column(2),
             worst_relative: worst,
             points,
         }
@@ -178,18 +212,25 @@ pub(crate) struct GridConstraints {
     pub lo: Vec<f64>,
     pub hi: Vec<f64>,
     /// Tightened `(centre, half-range)` per coordinate and kind.
-    tight: [[(f64, f64); 3]; 2],
+    tight: Vec<[(f64, f64); 3]>,
 }
 
 impl GridConstraints {
     /// Constraints on `points` instants of a period, tightened so that grid
     /// feasibility implies continuous feasibility.
-    pub fn new(layout: Layout, limits: &Limits, points: usize) -> Self {
+    pub fn new<D: Dim>(layout: Layout, limits: &Limits<D>, points: usize) -> Self
+    where
+        DefaultAllocator: Allocator<D>,
+    {
         let grid = Grid::new(layout, points, 0.0);
         let q = 1.01 * grid_factor(layout.harmonics, points);
-        let tight = limits.ranges().map(|r| r.map(|(c, h)| (c, h * (1.0 - q))));
-        let mut lo = Vec::with_capacity(6 * points);
-        let mut hi = Vec::with_capacity(6 * points);
+        let tight: Vec<[(f64, f64); 3]> = limits
+            .ranges()
+            .into_iter()
+            .map(|r| r.map(|(c, h)| (c, h * (1.0 - q))))
+            .collect();
+        let mut lo = Vec::with_capacity(3 * tight.len() * points);
+        let mut hi = Vec::with_capacity(3 * tight.len() * points);
         for coord in &tight {
             for &(c, h) in coord {
                 lo.extend(std::iter::repeat_n(c - h, points));
@@ -221,7 +262,7 @@ impl GridConstraints {
     pub fn map(&self, p: &[f64], out: &mut [f64]) {
         let n = self.grid.len();
         let w = self.grid.layout.per_coord();
-        for i in 0..2 {
+        for i in 0..self.tight.len() {
             let block = &p[i * w..(i + 1) * w];
             for k in 0..3 {
                 let b = self.basis(k);
@@ -238,7 +279,7 @@ impl GridConstraints {
         let n = self.grid.len();
         let w = self.grid.layout.per_coord();
         out.iter_mut().for_each(|v| *v = 0.0);
-        for i in 0..2 {
+        for i in 0..self.tight.len() {
             let g = &mut out[i * w..(i + 1) * w];
             for k in 0..3 {
                 let b = self.basis(k);
@@ -274,7 +315,7 @@ impl GridConstraints {
         let w = self.grid.layout.per_coord();
         let mut f = vec![0.0; self.len()];
         let mut smallest = f64::INFINITY;
-        for i in 0..2 {
+        for i in 0..self.tight.len() {
             self.map(p, &mut f);
             let block = |k: usize| &f[(3 * i + k) * n..(3 * i + k + 1) * n];
             let (c, r_pos) = self.tight[i][0];
@@ -320,6 +361,7 @@ mod tests {
         Layout {
             harmonics: 5,
             omega_f: std::f64::consts::TAU / 10.0,
+            coords: 2,
         }
     }
 
@@ -336,7 +378,7 @@ mod tests {
             let mut p = p;
             c.scale_to_fit(&mut p, true, true);
             prop_assert!(c.violation(&p) < 1e-12);
-            let f = layout().trajectory(&p).unwrap();
+            let f: FourierTrajectory = layout().trajectory(&p).unwrap();
             let m = Margins::measure(&f, &limits, 3000);
             prop_assert!(m.worst_relative >= 0.0, "{m:?}");
         }
@@ -370,7 +412,7 @@ mod tests {
 
     #[test]
     fn margins_see_a_violation() {
-        let f = FourierTrajectory::new(
+        let f: FourierTrajectory = FourierTrajectory::new(
             1.0,
             [1.5, 1.0],
             [vec![5.0], vec![0.0]],

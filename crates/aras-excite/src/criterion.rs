@@ -1,7 +1,8 @@
 //! Design criteria on the stacked base regressor and their exact gradients.
 //!
 //! Along a trajectory sampled at `t_1 … t_N` the regressor rows stack into
-//! `W` (`2N × n`, actuator-major: rows `0..N` actuator 1, `N..2N` actuator 2),
+//! `W` (`mN × n` for `m` actuators, actuator-major: rows `0..N` actuator 1,
+//! `N..2N` actuator 2, …),
 //! and the base regressor is `W_b = W E` for a base projection `E` (`n × b`,
 //! (59)–(61), `docs/model.md`).
 //!
@@ -21,11 +22,10 @@
 //! and chained through the linear maps from the decision vector.
 
 use faer::Mat;
-use nalgebra::{DMatrix, Vector2};
+use nalgebra::DMatrix;
 
 use aras_ident::BaseParameters;
 
-use crate::Motion;
 use crate::error::ExciteError;
 use crate::param::Grid;
 use crate::regressor::Regressor;
@@ -64,7 +64,9 @@ impl Assessment {
     }
 }
 
-/// Number of dual directions: `(φ, γ, φ̇, γ̇, φ̈, γ̈)`.
+/// Dual directions per evaluation of the rows: [`crate::Dual`]'s six. A
+/// model of `n` coordinates has `3n` inputs `(X, Ẋ, Ẍ)`, differentiated in
+/// `⌈3n/6⌉` passes (one for ARAS-Diamond's `φ, γ, φ̇, γ̇, φ̈, γ̈`).
 const DIRS: usize = 6;
 type D6 = crate::regressor::Dual;
 
@@ -89,13 +91,13 @@ pub(crate) fn check_projection<R: Regressor>(
         ("coordinates", regressor.coordinates()),
         ("outputs", regressor.outputs()),
     ] {
-        if n != 2 {
+        if n == 0 {
             return Err(ExciteError::InvalidSetting {
                 name: "regressor",
-                value: n as f64,
+                value: 0.0,
                 reason: format!(
-                    "the model has {n} {what}; the Fourier design moves two coordinates \
-                     driven by two actuators"
+                    "the model has no {what}; the Fourier design moves at least one \
+                     coordinate driven by at least one actuator"
                 ),
             });
         }
@@ -122,14 +124,22 @@ pub(crate) struct Evaluator<'a, R: Regressor> {
     e: Mat<f64>,
     /// Poses are clamped into this box before evaluation (the optimiser's
     /// intermediate iterates may leave it; inside it everything is exact).
-    clamp: Option<(Vector2<f64>, Vector2<f64>)>,
+    clamp: Option<(Vec<f64>, Vec<f64>)>,
     samples: usize,
+    /// Coordinates `n` and outputs `m` of the model.
+    coords: usize,
+    outputs: usize,
     w: Mat<f64>,
+    /// `∂W/∂z_k` for the `3n` inputs `z = (X, Ẋ, Ẍ)`.
     dw: Vec<Mat<f64>>,
     rows: Vec<f64>,
     drows: Vec<D6>,
-    /// Per sample and direction, `⟨∂c/∂W, ∂W/∂z_k⟩`.
-    pub contraction: Vec<[f64; DIRS]>,
+    /// One sample's `[X, Ẋ, Ẍ]` and its dual seeds.
+    state: Vec<f64>,
+    seeds: Vec<D6>,
+    clamped: Vec<bool>,
+    /// Per sample `s` and input `k`, `⟨∂c/∂W, ∂W/∂z_k⟩` at `3n·s + k`.
+    pub contraction: Vec<f64>,
 }
 
 /// The outcome of one analysis of `W_b`.
@@ -145,106 +155,126 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         e: &DMatrix<f64>,
         criterion: Criterion,
         samples: usize,
-        clamp: Option<(Vector2<f64>, Vector2<f64>)>,
+        clamp: Option<(Vec<f64>, Vec<f64>)>,
     ) -> Self {
         let n = reg.columns();
+        let (coords, outputs) = (reg.coordinates(), reg.outputs());
         Self {
             reg,
             criterion,
             e: Mat::from_fn(e.nrows(), e.ncols(), |i, j| e[(i, j)]),
             clamp,
             samples,
-            w: Mat::zeros(2 * samples, n),
-            dw: (0..DIRS).map(|_| Mat::zeros(2 * samples, n)).collect(),
-            rows: vec![0.0; 2 * n],
-            drows: vec![D6::from_re(0.0); 2 * n],
-            contraction: vec![[0.0; DIRS]; samples],
+            coords,
+            outputs,
+            w: Mat::zeros(outputs * samples, n),
+            dw: (0..3 * coords)
+                .map(|_| Mat::zeros(outputs * samples, n))
+                .collect(),
+            rows: vec![0.0; outputs * n],
+            drows: vec![D6::from_re(0.0); outputs * n],
+            state: vec![0.0; 3 * coords],
+            seeds: vec![D6::from_re(0.0); 3 * coords],
+            clamped: vec![false; coords],
+            contraction: vec![0.0; 3 * coords * samples],
         }
     }
 
-    fn clamped(&self, x: Vector2<f64>) -> (Vector2<f64>, [bool; 2]) {
-        match self.clamp {
-            None => (x, [false; 2]),
+    /// Clamps the positions of `self.state` into the box, noting which
+    /// were moved.
+    fn clamp_state(&mut self) {
+        let n = self.coords;
+        match &self.clamp {
+            None => self.clamped.fill(false),
             Some((lo, hi)) => {
-                let c = Vector2::new(x[0].clamp(lo[0], hi[0]), x[1].clamp(lo[1], hi[1]));
-                (c, [c[0] != x[0], c[1] != x[1]])
+                for i in 0..n {
+                    let x = self.state[i];
+                    let c = x.clamp(lo[i], hi[i]);
+                    self.state[i] = c;
+                    self.clamped[i] = c != x;
+                }
             }
         }
     }
 
-    fn fail(x: &Vector2<f64>, e: impl std::error::Error + Send + Sync + 'static) -> ExciteError {
+    fn fail(x: &[f64], e: impl std::error::Error + Send + Sync + 'static) -> ExciteError {
         ExciteError::Regressor {
-            at: [x[0], x[1]],
+            at: x.to_vec(),
             source: Box::new(e),
         }
     }
 
-    /// Fills `W` (values only) from the states of every sample.
-    pub fn fill_values(&mut self, state: impl Fn(usize) -> Motion) -> Result<(), ExciteError> {
+    /// Fills `W` (values only) from the states of every sample:
+    /// `state(s, out)` writes sample `s`'s `[X, Ẋ, Ẍ]` (`3n` entries).
+    pub fn fill_values(&mut self, state: impl Fn(usize, &mut [f64])) -> Result<(), ExciteError> {
         // Start the scalar loop clean whatever ran on this thread before
         // (see `aras_ident::simd`).
         aras_ident::simd::clear_upper_state();
-        let n = self.w.ncols();
-        let ns = self.samples;
+        let (n, m, ns, dims) = (self.w.ncols(), self.outputs, self.samples, self.coords);
         for s in 0..ns {
-            let Motion {
-                pos: x,
-                vel: xd,
-                acc: xdd,
-            } = state(s);
-            let (x, _) = self.clamped(x);
+            state(s, &mut self.state);
+            self.clamp_state();
+            let (x, rest) = self.state.split_at(dims);
+            let (xd, xdd) = rest.split_at(dims);
             self.rows.iter_mut().for_each(|v| *v = 0.0);
             self.reg
-                .fill(x.as_slice(), xd.as_slice(), xdd.as_slice(), &mut self.rows)
-                .map_err(|e| Self::fail(&x, e))?;
-            for r in 0..2 {
+                .fill(x, xd, xdd, &mut self.rows)
+                .map_err(|e| Self::fail(x, e))?;
+            for r in 0..m {
                 for c in 0..n {
-                    self.w[(r * ns + s, c)] = self.rows[2 * c + r];
+                    self.w[(r * ns + s, c)] = self.rows[m * c + r];
                 }
             }
         }
         Ok(())
     }
 
-    /// Fills `W` and its derivatives `∂W/∂z_k` by dual numbers.
-    pub fn fill_derivatives(&mut self, state: impl Fn(usize) -> Motion) -> Result<(), ExciteError> {
+    /// Fills `W` and its derivatives `∂W/∂z_k` by dual numbers, six
+    /// inputs per evaluation of the rows.
+    pub fn fill_derivatives(
+        &mut self,
+        state: impl Fn(usize, &mut [f64]),
+    ) -> Result<(), ExciteError> {
         // Start the scalar loop clean whatever ran on this thread before
         // (see `aras_ident::simd`).
         aras_ident::simd::clear_upper_state();
-        let n = self.w.ncols();
-        let ns = self.samples;
+        let (n, m, ns, dims) = (self.w.ncols(), self.outputs, self.samples, self.coords);
+        let inputs = 3 * dims;
         for s in 0..ns {
-            let Motion {
-                pos: x,
-                vel: xd,
-                acc: xdd,
-            } = state(s);
-            let (x, clamped) = self.clamped(x);
-            let seed = |v: f64, k: usize, fixed: bool| {
-                let d = D6::from_re(v);
-                if fixed { d } else { d.derivative(k) }
-            };
-            let xs = [seed(x[0], 0, clamped[0]), seed(x[1], 1, clamped[1])];
-            let xds = [seed(xd[0], 2, false), seed(xd[1], 3, false)];
-            let xdds = [seed(xdd[0], 4, false), seed(xdd[1], 5, false)];
-            self.drows.iter_mut().for_each(|v| *v = D6::from_re(0.0));
-            self.reg
-                .fill_dual(&xs, &xds, &xdds, &mut self.drows)
-                .map_err(|e| Self::fail(&x, e))?;
-            for r in 0..2 {
-                for c in 0..n {
-                    let d = &self.drows[2 * c + r];
-                    let row = r * ns + s;
-                    self.w[(row, c)] = d.re;
-                    match &d.eps.0 {
-                        Some(g) => {
-                            for k in 0..DIRS {
-                                self.dw[k][(row, c)] = g[k];
+            state(s, &mut self.state);
+            self.clamp_state();
+            for first in (0..inputs).step_by(DIRS) {
+                for (k, (d, &v)) in self.seeds.iter_mut().zip(&self.state).enumerate() {
+                    let fixed = k < dims && self.clamped[k];
+                    let slot = k.wrapping_sub(first);
+                    *d = if slot < DIRS && !fixed {
+                        D6::from_re(v).derivative(slot)
+                    } else {
+                        D6::from_re(v)
+                    };
+                }
+                let (x, rest) = self.seeds.split_at(dims);
+                let (xd, xdd) = rest.split_at(dims);
+                self.drows.iter_mut().for_each(|v| *v = D6::from_re(0.0));
+                self.reg
+                    .fill_dual(x, xd, xdd, &mut self.drows)
+                    .map_err(|e| Self::fail(&self.state[..dims], e))?;
+                let block = first..(first + DIRS).min(inputs);
+                for r in 0..m {
+                    for c in 0..n {
+                        let d = &self.drows[m * c + r];
+                        let row = r * ns + s;
+                        self.w[(row, c)] = d.re;
+                        match &d.eps.0 {
+                            Some(g) => {
+                                for k in block.clone() {
+                                    self.dw[k][(row, c)] = g[k - first];
+                                }
                             }
-                        }
-                        None => {
-                            for k in 0..DIRS {
-                                self.dw[k][(row, c)] = 0.0;
+                            None => {
+                                for k in block.clone() {
+                                    self.dw[k][(row, c)] = 0.0;
+                                }
                             }
                         }
                     }
@@ -326,19 +356,18 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
             };
             let a = aras_ident::linalg::product(g.as_ref(), self.e.transpose());
             let n = a.ncols();
+            let inputs = self.dw.len();
             for s in 0..ns {
-                let mut acc = [0.0; DIRS];
                 for (k, dk) in self.dw.iter().enumerate() {
                     let mut sum = 0.0;
-                    for r in 0..2 {
+                    for r in 0..self.outputs {
                         let row = r * ns + s;
                         for c in 0..n {
                             sum += a[(row, c)] * dk[(row, c)];
                         }
                     }
-                    acc[k] = sum;
+                    self.contraction[inputs * s + k] = sum;
                 }
-                self.contraction[s] = acc;
             }
         }
         Ok(Analysis {
@@ -349,7 +378,7 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
 
     /// Objective at a decision vector on `grid` (values only).
     pub fn objective(&mut self, grid: &Grid, p: &[f64]) -> Result<Analysis, ExciteError> {
-        self.fill_values(|s| grid.state(p, s))?;
+        self.fill_values(|s, out| grid.state(p, s, out))?;
         self.analyse(false)
     }
 
@@ -360,20 +389,21 @@ impl<'a, R: Regressor> Evaluator<'a, R> {
         p: &[f64],
         grad: &mut [f64],
     ) -> Result<Analysis, ExciteError> {
-        self.fill_derivatives(|s| grid.state(p, s))?;
+        self.fill_derivatives(|s, out| grid.state(p, s, out))?;
         let out = self.analyse(true)?;
         let w = grid.layout.per_coord();
+        let n = self.coords;
         grad.iter_mut().for_each(|v| *v = 0.0);
-        for (s, c) in self.contraction.iter().enumerate() {
+        for (s, c) in self.contraction.chunks_exact(3 * n).enumerate() {
             let (pos, vel, acc) = (
                 grid.row(&grid.pos, s),
                 grid.row(&grid.vel, s),
                 grid.row(&grid.acc, s),
             );
-            for i in 0..2 {
+            for i in 0..n {
                 let g = &mut grad[i * w..(i + 1) * w];
                 for m in 0..w {
-                    g[m] += c[i] * pos[m] + c[2 + i] * vel[m] + c[4 + i] * acc[m];
+                    g[m] += c[i] * pos[m] + c[n + i] * vel[m] + c[2 * n + i] * acc[m];
                 }
             }
         }
@@ -396,6 +426,7 @@ mod tests {
         let layout = Layout {
             harmonics: l,
             omega_f: std::f64::consts::TAU / 10.0,
+            coords: 2,
         };
         let cons = GridConstraints::new(layout, &Limits::paper(), 200);
         (layout, Grid::new(layout, 60, 0.5), cons)
@@ -446,8 +477,8 @@ mod tests {
             let (layout, grid, cons) = setup(l);
             let p = interior_point(&cons, seed);
             let box_ = Limits::paper();
-            let mut ev =
-                Evaluator::new(&reg, &e, criterion, grid.len(), Some((box_.min, box_.max)));
+            let clamp = (box_.min.as_slice().to_vec(), box_.max.as_slice().to_vec());
+            let mut ev = Evaluator::new(&reg, &e, criterion, grid.len(), Some(clamp));
             let mut g = vec![0.0; layout.dim()];
             let f0 = ev.gradient(&grid, &p, &mut g).unwrap().objective;
             let f0v = ev.objective(&grid, &p).unwrap().objective;
@@ -464,6 +495,118 @@ mod tests {
                 assert!(
                     (fd - g[k]).abs() < 1e-6 * scale.max(1.0),
                     "{criterion:?} L={l} k={k}: exact {} vs FD {fd}",
+                    g[k]
+                );
+            }
+        }
+    }
+
+    /// A smooth toy model of three coordinates and three outputs, 8
+    /// independent columns, in any number type.
+    struct Three;
+
+    impl Three {
+        fn rows<T: num_dual::DualNum<Primitive = f64> + Copy>(
+            x: &[T],
+            xd: &[T],
+            xdd: &[T],
+            y: &mut [T],
+        ) {
+            let z = T::from(0.0);
+            let cols = [
+                [xdd[0], z, z],
+                [x[0].sin(), z, z],
+                [z, xdd[1] + xdd[0], z],
+                [
+                    x[1].cos() * xdd[0],
+                    x[1].cos() * xdd[0] + x[1].sin() * xd[0] * xd[0],
+                    z,
+                ],
+                [z, (x[0] + x[1]).sin(), z],
+                [z, z, xdd[2] + x[0] * xd[1]],
+                [x[2].sin() * xdd[1], z, x[2].cos() * xd[0] * xd[1]],
+                [xd[0], xd[1] * x[2], xd[2]],
+            ];
+            for (c, col) in cols.iter().enumerate() {
+                y[3 * c..3 * c + 3].copy_from_slice(col);
+            }
+        }
+    }
+
+    impl LinearModel for Three {
+        type Error = std::convert::Infallible;
+        fn coordinates(&self) -> usize {
+            3
+        }
+        fn outputs(&self) -> usize {
+            3
+        }
+        fn names(&self) -> Vec<String> {
+            (0..8).map(|c| format!("c{c}")).collect()
+        }
+        fn fill(
+            &self,
+            q: &[f64],
+            qd: &[f64],
+            qdd: &[f64],
+            y: &mut [f64],
+        ) -> Result<(), Self::Error> {
+            Self::rows(q, qd, qdd, y);
+            Ok(())
+        }
+    }
+
+    impl Regressor for Three {
+        fn fill_dual(
+            &self,
+            q: &[Dual],
+            qd: &[Dual],
+            qdd: &[Dual],
+            y: &mut [Dual],
+        ) -> Result<(), Self::Error> {
+            Self::rows(q, qd, qdd, y);
+            Ok(())
+        }
+    }
+
+    /// With three coordinates the nine inputs are differentiated in two
+    /// passes of six: the exact gradient still matches central
+    /// differences (bound as for two coordinates).
+    #[test]
+    fn gradients_of_three_coordinates_match_finite_differences() {
+        let e = DMatrix::<f64>::identity(8, 8);
+        let limits = Limits::<nalgebra::Dyn> {
+            min: nalgebra::DVector::from_vec(vec![-0.8, -0.6, -1.0]),
+            max: nalgebra::DVector::from_vec(vec![0.9, 0.7, 0.8]),
+            max_rate: nalgebra::DVector::from_element(3, 2.0),
+            max_accel: nalgebra::DVector::from_element(3, 8.0),
+        };
+        for (criterion, seed) in [(Criterion::Condition, 5), (Criterion::DOptimal, 6)] {
+            let layout = Layout {
+                harmonics: 3,
+                omega_f: std::f64::consts::TAU / 5.0,
+                coords: 3,
+            };
+            let cons = GridConstraints::new(layout, &limits, 200);
+            let grid = Grid::new(layout, 40, 0.5);
+            let p = interior_point(&cons, seed);
+            let mut ev = Evaluator::new(&Three, &e, criterion, grid.len(), None);
+            let mut g = vec![0.0; layout.dim()];
+            let f0 = ev.gradient(&grid, &p, &mut g).unwrap().objective;
+            let f0v = ev.objective(&grid, &p).unwrap().objective;
+            assert!((f0 - f0v).abs() < 1e-12 * f0.abs().max(1.0));
+            let scale = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for k in 0..p.len() {
+                let h = 1e-6;
+                let mut pp = p.clone();
+                pp[k] += h;
+                let fp = ev.objective(&grid, &pp).unwrap().objective;
+                pp[k] -= 2.0 * h;
+                let fm = ev.objective(&grid, &pp).unwrap().objective;
+                let fd = (fp - fm) / (2.0 * h);
+                assert!(
+                    (fd - g[k]).abs() < 1e-6 * scale.max(1.0),
+                    "{criterion:?} k={k}: exact {} vs FD {fd}",
                     g[k]
                 );
             }
@@ -490,12 +633,12 @@ mod tests {
                 .to_string()
                 .contains("E[2, 1]")
         );
-        /// The stand-in claiming a third coordinate.
+        /// The stand-in claiming no coordinates.
         struct ThreeDof(StandIn);
         impl LinearModel for ThreeDof {
             type Error = <StandIn as LinearModel>::Error;
             fn coordinates(&self) -> usize {
-                3
+                0
             }
             fn outputs(&self) -> usize {
                 2
@@ -528,7 +671,7 @@ mod tests {
         let m = check_projection(&e, &ThreeDof(StandIn::default()))
             .unwrap_err()
             .to_string();
-        assert!(m.contains("3 coordinates"), "{m}");
+        assert!(m.contains("no coordinates"), "{m}");
     }
 
     /// Motionless trajectories cannot excite anything: a clear error.

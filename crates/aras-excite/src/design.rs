@@ -21,7 +21,8 @@ use std::cell::RefCell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
-use nalgebra::{DMatrix, Vector2};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DMatrix, DefaultAllocator, Dim, U2};
 use optimization_engine::alm::{
     AlmCache, AlmFactory, AlmOptimizer, AlmProblem, NO_JACOBIAN_MAPPING, NO_MAPPING,
 };
@@ -36,20 +37,23 @@ use rayon::prelude::*;
 use crate::constraints::{GridConstraints, Limits, Margins, grid_factor};
 use crate::criterion::{Assessment, Criterion, Evaluator, check_projection};
 use crate::error::{ExciteError, check_finite, with_causes};
-use crate::fourier::{COORDS, DEFAULT_HARMONICS, DEFAULT_OMEGA_F, check_omega};
+use crate::fourier::{DEFAULT_HARMONICS, DEFAULT_OMEGA_F, check_omega, coordinate_name};
 use crate::param::{Grid, Layout};
 use crate::{FourierTrajectory, Regressor};
 
 /// Settings of [`design`]. `Default` gives the paper's problem (L = 5,
 /// ω_f = 2π/10, box and rates (77)) with the documented defaults below.
 #[derive(Debug, Clone, PartialEq)]
-pub struct DesignSettings {
+pub struct DesignSettings<D: Dim = U2>
+where
+    DefaultAllocator: Allocator<D>,
+{
     /// Number of harmonics L ≥ 1 (default 5).
     pub harmonics: usize,
     /// Base frequency ω_f (rad/s, default 2π/10).
     pub omega_f: f64,
     /// Box, rate and acceleration limits (default [`Limits::paper`]).
-    pub limits: Limits,
+    pub limits: Limits<D>,
     /// What to minimise (default [`Criterion::Condition`]).
     pub criterion: Criterion,
     /// Constraint grid points per period (default 200; the limits are
@@ -84,11 +88,23 @@ pub struct DesignSettings {
 }
 
 impl Default for DesignSettings {
+    /// [`DesignSettings::new`] with the paper's limits ([`Limits::paper`]).
     fn default() -> Self {
+        Self::new(Limits::paper())
+    }
+}
+
+impl<D: Dim> DesignSettings<D>
+where
+    DefaultAllocator: Allocator<D>,
+{
+    /// The default settings (the paper's where it gives them,
+    /// `docs/excitation.md`) for a robot with the motion limits `limits`.
+    pub fn new(limits: Limits<D>) -> Self {
         Self {
             harmonics: DEFAULT_HARMONICS,
             omega_f: DEFAULT_OMEGA_F,
-            limits: Limits::paper(),
+            limits,
             criterion: Criterion::Condition,
             constraint_points: 200,
             criterion_points: 100,
@@ -105,7 +121,10 @@ impl Default for DesignSettings {
     }
 }
 
-impl DesignSettings {
+impl<D: Dim> DesignSettings<D>
+where
+    DefaultAllocator: Allocator<D>,
+{
     /// Checks every setting; errors name the setting, its value and the fix.
     pub fn validate(&self) -> Result<(), ExciteError> {
         if self.harmonics == 0 {
@@ -176,7 +195,9 @@ impl DesignSettings {
     /// of rate and acceleration: `2v/ω_f` and `2a/ω_f²` peak to peak.
     fn check_motion(&self) -> Result<(), ExciteError> {
         let l = &self.limits;
-        for (i, coordinate) in COORDS.into_iter().enumerate() {
+        let n = l.coordinates();
+        for i in 0..n {
+            let coordinate = coordinate_name(i, n);
             let width = l.max[i] - l.min[i];
             let (v, a) = (l.max_rate[i], l.max_accel[i]);
             let reach = width
@@ -201,31 +222,63 @@ impl DesignSettings {
         Layout {
             harmonics: self.harmonics,
             omega_f: self.omega_f,
+            coords: self.limits.coordinates(),
         }
     }
 }
 
-/// Errors if the regressor cannot be evaluated at some pose of the box (on a
-/// 41 × 41 grid including its edges and corners, at rest): an unreachable or
-/// singular pose would stop the design half-way.
-fn check_box<R: Regressor>(regressor: &R, limits: &Limits) -> Result<(), ExciteError> {
-    let (lo, hi) = (limits.min, limits.max);
+/// Errors if the regressor cannot be evaluated at some pose of the box (at
+/// rest): an unreachable or singular pose would stop the design half-way.
+/// Two coordinates are checked on a 41 × 41 grid including the box's edges
+/// and corners; more on the corners (up to 12 coordinates) and 1681
+/// quasi-random poses inside.
+fn check_box<R: Regressor, D: Dim>(regressor: &R, limits: &Limits<D>) -> Result<(), ExciteError>
+where
+    DefaultAllocator: Allocator<D>,
+{
+    let (lo, hi) = (limits.min.as_slice(), limits.max.as_slice());
+    let n = lo.len();
     const K: usize = 41;
-    let mut rows = vec![0.0; 2 * regressor.columns()];
-    let z = Vector2::<f64>::zeros();
-    for i in 0..K {
-        for j in 0..K {
-            let f = |k: usize, c: usize| lo[c] + (hi[c] - lo[c]) * k as f64 / (K - 1) as f64;
-            let x = Vector2::new(f(i, 0), f(j, 1));
-            rows.iter_mut().for_each(|v| *v = 0.0);
-            if let Err(e) = regressor.fill(x.as_slice(), z.as_slice(), z.as_slice(), &mut rows) {
-                return Err(ExciteError::InfeasibleBox {
-                    lo: [lo[0], lo[1]],
-                    hi: [hi[0], hi[1]],
-                    at: [x[0], x[1]],
-                    source: Box::new(e),
-                });
+    let mut rows = vec![0.0; regressor.outputs() * regressor.columns()];
+    let z = vec![0.0; n];
+    let mut poses: Vec<Vec<f64>> = Vec::new();
+    let at = |c: usize, u: f64| lo[c] + (hi[c] - lo[c]) * u;
+    if n == 2 {
+        for i in 0..K {
+            for j in 0..K {
+                let f = |k: usize| k as f64 / (K - 1) as f64;
+                poses.push(vec![at(0, f(i)), at(1, f(j))]);
             }
+        }
+    } else {
+        if n <= 12 {
+            for corner in 0..1usize << n {
+                poses.push((0..n).map(|c| at(c, ((corner >> c) & 1) as f64)).collect());
+            }
+        }
+        // A Kronecker sequence: coordinate c steps by the fractional part
+        // of √(c-th prime), so the poses fill the box evenly.
+        const PRIMES: [f64; 12] = [2., 3., 5., 7., 11., 13., 17., 19., 23., 29., 31., 37.];
+        for k in 0..K * K {
+            poses.push(
+                (0..n)
+                    .map(|c| {
+                        let a = PRIMES[c % 12].sqrt() + (c / 12) as f64;
+                        at(c, ((k as f64 + 0.5) * a).fract())
+                    })
+                    .collect(),
+            );
+        }
+    }
+    for x in poses {
+        rows.iter_mut().for_each(|v| *v = 0.0);
+        if let Err(e) = regressor.fill(&x, &z, &z, &mut rows) {
+            return Err(ExciteError::InfeasibleBox {
+                lo: lo.to_vec(),
+                hi: hi.to_vec(),
+                at: x,
+                source: Box::new(e),
+            });
         }
     }
     Ok(())
@@ -254,9 +307,12 @@ pub struct StartReport {
 
 /// The result of [`design`].
 #[derive(Debug, Clone, PartialEq)]
-pub struct Design {
+pub struct Design<D: Dim = U2>
+where
+    DefaultAllocator: Allocator<D>,
+{
     /// The best trajectory found (zero velocity at `t = 0`).
-    pub trajectory: FourierTrajectory,
+    pub trajectory: FourierTrajectory<D>,
     /// The criterion that was minimised.
     pub criterion: Criterion,
     /// Its value at `trajectory` (κ for [`Criterion::Condition`]).
@@ -266,7 +322,7 @@ pub struct Design {
     /// Full assessment of the base regressor at `trajectory`.
     pub assessment: Assessment,
     /// Limit margins on a grid 10× finer than the constraint grid.
-    pub margins: Margins,
+    pub margins: Margins<D>,
     /// Index of the winning start.
     pub best_start: usize,
     /// Every start, in order.
@@ -279,17 +335,33 @@ pub struct Design {
 /// `points` instants per period (offset by half a step), without clamping.
 ///
 /// `projection` is the base projection `E` (`n × b`, `W_b = W E`).
-pub fn assess<R: Regressor>(
+pub fn assess<R: Regressor, D: Dim>(
     regressor: &R,
     projection: &DMatrix<f64>,
-    trajectory: &FourierTrajectory,
+    trajectory: &FourierTrajectory<D>,
     points: usize,
 ) -> Result<Assessment, ExciteError> {
     check_projection(projection, regressor)?;
     let points = points.max(1);
     let mut ev = Evaluator::new(regressor, projection, Criterion::Condition, points, None);
     let h = trajectory.period() / points as f64;
-    ev.fill_values(|s| trajectory.eval((s as f64 + 0.5) * h))?;
+    if trajectory.coordinates() != regressor.coordinates() {
+        return Err(ExciteError::InvalidSetting {
+            name: "trajectory",
+            value: trajectory.coordinates() as f64,
+            reason: format!(
+                "the trajectory moves {} coordinates, the model has {}",
+                trajectory.coordinates(),
+                regressor.coordinates()
+            ),
+        });
+    }
+    let n = trajectory.coordinates();
+    ev.fill_values(|s, out| {
+        let (pos, rest) = out.split_at_mut(n);
+        let (vel, acc) = rest.split_at_mut(n);
+        trajectory.eval_into((s as f64 + 0.5) * h, pos, vel, acc);
+    })?;
     Ok(ev.analyse(false)?.assessment)
 }
 
@@ -298,11 +370,14 @@ pub fn assess<R: Regressor>(
 /// [−1, 1], then each coordinate centred in the box and scaled up until a
 /// limit is touched on the (tightened) constraint grid, so every one
 /// satisfies the limits in continuous time. Deterministic for a seed.
-pub fn random_feasible(
-    settings: &DesignSettings,
+pub fn random_feasible<D: Dim>(
+    settings: &DesignSettings<D>,
     count: usize,
     seed: u64,
-) -> Result<Vec<FourierTrajectory>, ExciteError> {
+) -> Result<Vec<FourierTrajectory<D>>, ExciteError>
+where
+    DefaultAllocator: Allocator<D>,
+{
     settings.validate()?;
     let layout = settings.layout();
     let cons = GridConstraints::new(layout, &settings.limits, settings.constraint_points);
@@ -336,11 +411,15 @@ pub(crate) fn random_point(cons: &GridConstraints, rng: &mut Xoshiro256PlusPlus)
 /// `projection` is the base projection `E` (`n × b`) from the base-parameter
 /// analysis. Runs `settings.starts` starts from random feasible points
 /// (in parallel, deterministically for `settings.seed`) and returns the best.
-pub fn design<R: Regressor>(
+pub fn design<R: Regressor, D: Dim>(
     regressor: &R,
     projection: &DMatrix<f64>,
-    settings: &DesignSettings,
-) -> Result<Design, ExciteError> {
+    settings: &DesignSettings<D>,
+) -> Result<Design<D>, ExciteError>
+where
+    DefaultAllocator: Allocator<D>,
+    Limits<D>: Sync,
+{
     design_with_progress(regressor, projection, settings, &|_| {})
 }
 
@@ -356,15 +435,31 @@ pub struct DesignProgress {
 /// [`design`], calling `progress` after each finished start (from the
 /// worker thread that ran it; the library draws nothing, a program shows
 /// the progress as it likes).
-pub fn design_with_progress<R: Regressor>(
+pub fn design_with_progress<R: Regressor, D: Dim>(
     regressor: &R,
     projection: &DMatrix<f64>,
-    settings: &DesignSettings,
+    settings: &DesignSettings<D>,
     progress: &(dyn Fn(DesignProgress) + Sync),
-) -> Result<Design, ExciteError> {
+) -> Result<Design<D>, ExciteError>
+where
+    DefaultAllocator: Allocator<D>,
+    Limits<D>: Sync,
+{
     let started = Instant::now();
     settings.validate()?;
     check_projection(projection, regressor)?;
+    if settings.limits.coordinates() != regressor.coordinates() {
+        return Err(ExciteError::InvalidSetting {
+            name: "limits",
+            value: settings.limits.coordinates() as f64,
+            reason: format!(
+                "the limits are for {} coordinates, the model has {}: give one limit per \
+                 coordinate",
+                settings.limits.coordinates(),
+                regressor.coordinates()
+            ),
+        });
+    }
     check_box(regressor, &settings.limits)?;
     let layout = settings.layout();
     let cons = GridConstraints::new(layout, &settings.limits, settings.constraint_points);
@@ -447,10 +542,10 @@ pub fn design_with_progress<R: Regressor>(
     })
 }
 
-/// Scales the motion of both coordinates by `s` about the box centre.
+/// Scales the motion of every coordinate by `s` about the box centre.
 fn scale_motion(cons: &GridConstraints, p: &mut [f64], s: f64) {
     let w = cons.grid.layout.per_coord();
-    for i in 0..2 {
+    for i in 0..cons.grid.layout.coords {
         let c = 0.5 * (cons.lo[3 * i * cons.grid.len()] + cons.hi[3 * i * cons.grid.len()]);
         let b = &mut p[i * w..(i + 1) * w];
         b[0] = c + s * (b[0] - c);
@@ -459,14 +554,17 @@ fn scale_motion(cons: &GridConstraints, p: &mut [f64], s: f64) {
 }
 
 /// One start: ALM/PANOC from `p`, then exact repair onto the tightened bounds.
-fn run_start<R: Regressor>(
+fn run_start<R: Regressor, D: Dim>(
     regressor: &R,
     projection: &DMatrix<f64>,
-    settings: &DesignSettings,
+    settings: &DesignSettings<D>,
     cons: &GridConstraints,
     grid: &Grid,
     mut p: Vec<f64>,
-) -> (Vec<f64>, StartReport) {
+) -> (Vec<f64>, StartReport)
+where
+    DefaultAllocator: Allocator<D>,
+{
     let t0 = Instant::now();
     let limits = &settings.limits;
     let ev = RefCell::new(Evaluator::new(
@@ -474,7 +572,10 @@ fn run_start<R: Regressor>(
         projection,
         settings.criterion,
         grid.len(),
-        Some((limits.min, limits.max)),
+        Some((
+            limits.min.as_slice().to_vec(),
+            limits.max.as_slice().to_vec(),
+        )),
     ));
     let failure: RefCell<Option<ExciteError>> = RefCell::new(None);
     let mut report = StartReport {
@@ -525,7 +626,7 @@ fn run_start<R: Regressor>(
     let n1 = cons.len();
     let w = cons.grid.layout.per_coord();
     let (mut umin, mut umax) = (vec![0.0; dim], vec![0.0; dim]);
-    for i in 0..2 {
+    for i in 0..limits.coordinates() {
         let v = 2.0 * limits.max_rate[i];
         for m in 0..w {
             let k = i * w + m;

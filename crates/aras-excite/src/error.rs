@@ -47,20 +47,18 @@ pub enum ExciteError {
     /// The box contains poses the model cannot be evaluated at (unreachable
     /// or numerically singular), so no trajectory inside it can be designed.
     #[error(
-        "the box X1 ∈ [{phi_lo:.3}°, {phi_hi:.3}°], X2 ∈ [{gamma_lo:.3}°, {gamma_hi:.3}°] is \
-         infeasible: at X = [{phi:.3}°, {gamma:.3}°] the regressor fails; shrink the \
-         box so it stays inside the reachable, non-singular region",
-        phi_lo = lo[0].to_degrees(), phi_hi = hi[0].to_degrees(),
-        gamma_lo = lo[1].to_degrees(), gamma_hi = hi[1].to_degrees(),
-        phi = at[0].to_degrees(), gamma = at[1].to_degrees()
+        "the box {} is infeasible: at X = {} the regressor fails; shrink the box so it \
+         stays inside the reachable, non-singular region",
+        box_degrees(lo, hi),
+        degrees(at)
     )]
     InfeasibleBox {
         /// Lower corner (rad).
-        lo: [f64; 2],
+        lo: Vec<f64>,
         /// Upper corner (rad).
-        hi: [f64; 2],
+        hi: Vec<f64>,
         /// The failing pose (rad).
-        at: [f64; 2],
+        at: Vec<f64>,
         /// What the regressor reported.
         source: Box<dyn std::error::Error + Send + Sync + 'static>,
     },
@@ -75,8 +73,8 @@ pub enum ExciteError {
         width = width.to_degrees(), need = required.to_degrees()
     )]
     TooLittleMotion {
-        /// `"phi"` or `"gamma"`.
-        coordinate: &'static str,
+        /// `"phi"` or `"gamma"` for two coordinates, `"x1"` … otherwise.
+        coordinate: String,
         /// Largest peak-to-peak excursion the limits allow (rad).
         reach: f64,
         /// The velocity limit (rad/s).
@@ -112,11 +110,10 @@ pub enum ExciteError {
         source: Box<dyn std::error::Error + Send + Sync + 'static>,
     },
     /// The user's regressor failed at a sample.
-    #[error("the regressor failed at φ = {phi:.4}°, γ = {gamma:.4}°",
-        phi = at[0].to_degrees(), gamma = at[1].to_degrees())]
+    #[error("the regressor failed at {}", pose_degrees(at))]
     Regressor {
         /// Pose of the failing sample (rad).
-        at: [f64; 2],
+        at: Vec<f64>,
         /// The regressor's own error.
         source: Box<dyn std::error::Error + Send + Sync + 'static>,
     },
@@ -192,5 +189,51 @@ fn position(line: usize, column: usize) -> String {
         String::new()
     } else {
         format!("line {line}, column {column}: ")
+    }
+}
+
+/// `[a°, b°, …]` to 3 decimals.
+fn degrees(v: &[f64]) -> String {
+    let parts: Vec<String> = v
+        .iter()
+        .map(|x| format!("{:.3}°", x.to_degrees()))
+        .collect();
+    format!("[{}]", parts.join(", "))
+}
+
+/// `X1 ∈ [lo°, hi°], X2 ∈ …` of a box.
+fn box_degrees(lo: &[f64], hi: &[f64]) -> String {
+    let parts: Vec<String> = lo
+        .iter()
+        .zip(hi)
+        .enumerate()
+        .map(|(i, (l, h))| {
+            format!(
+                "X{} ∈ [{:.3}°, {:.3}°]",
+                i + 1,
+                l.to_degrees(),
+                h.to_degrees()
+            )
+        })
+        .collect();
+    parts.join(", ")
+}
+
+/// `φ = a°, γ = b°` for ARAS-Diamond's two task coordinates, `X = [a°, …]`
+/// otherwise, to 4 decimals.
+fn pose_degrees(at: &[f64]) -> String {
+    match at {
+        [phi, gamma] => format!(
+            "φ = {:.4}°, γ = {:.4}°",
+            phi.to_degrees(),
+            gamma.to_degrees()
+        ),
+        _ => {
+            let parts: Vec<String> = at
+                .iter()
+                .map(|x| format!("{:.4}°", x.to_degrees()))
+                .collect();
+            format!("X = [{}]", parts.join(", "))
+        }
     }
 }

@@ -1,4 +1,4 @@
-//! Optimal excitation trajectories for identifying the dynamics of any 2-DOF
+//! Optimal excitation trajectories for identifying the dynamics of any
 //! robot whose model is linear in its parameters, equations (74)–(77)
 //! (`docs/excitation.md`). ARAS-Diamond is one such robot (feature
 //! `aras-diamond`); another brings its own [`Regressor`].

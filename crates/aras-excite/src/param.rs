@@ -4,18 +4,23 @@
 //! Zero velocity at the period boundary, `Ẋ_i(0) = Σ_l a_l^i = 0`, is
 //! eliminated by parametrisation: `a_L^i = −Σ_{l<L} a_l^i`. Per coordinate the
 //! free variables are `[X_i0, a_1 … a_{L−1}, b_1 … b_L]` (2L numbers), and the
-//! decision vector is `[φ block, γ block]` (4L numbers). Every sample of `X`,
+//! decision vector is the coordinates' blocks in order (`2L·n` numbers; for
+//! ARAS-Diamond `[φ block, γ block]`). Every sample of `X`,
 //! `Ẋ`, `Ẍ` is then an exact linear function of the decision vector, which is
 //! what makes the constraint Jacobians and the chain rule of the criterion
 //! gradient exact and cheap.
 
-use crate::{ExciteError, FourierTrajectory, Motion};
+use nalgebra::Dim;
 
-/// Layout of the decision vector for `L` harmonics at base frequency ω_f.
+use crate::{ExciteError, FourierTrajectory};
+
+/// Layout of the decision vector for `L` harmonics at base frequency ω_f
+/// and `coords` coordinates.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Layout {
     pub harmonics: usize,
     pub omega_f: f64,
+    pub coords: usize,
 }
 
 impl Layout {
@@ -24,9 +29,9 @@ impl Layout {
         2 * self.harmonics
     }
 
-    /// Length of the decision vector (4L).
+    /// Length of the decision vector (2L·n).
     pub fn dim(&self) -> usize {
-        4 * self.harmonics
+        self.per_coord() * self.coords
     }
 
     /// Fills the rows mapping one coordinate's block to `X_i(t)`, `Ẋ_i(t)`,
@@ -55,13 +60,13 @@ impl Layout {
     }
 
     /// The trajectory a decision vector stands for.
-    pub fn trajectory(&self, p: &[f64]) -> Result<FourierTrajectory, ExciteError> {
+    pub fn trajectory<D: Dim>(&self, p: &[f64]) -> Result<FourierTrajectory<D>, ExciteError> {
         let n = self.per_coord();
         let l_max = self.harmonics;
-        let mut offset = [0.0; 2];
-        let mut a = [vec![0.0; l_max], vec![0.0; l_max]];
-        let mut b = [vec![0.0; l_max], vec![0.0; l_max]];
-        for i in 0..2 {
+        let mut offset = vec![0.0; self.coords];
+        let mut a = vec![vec![0.0; l_max]; self.coords];
+        let mut b = vec![vec![0.0; l_max]; self.coords];
+        for i in 0..self.coords {
             let block = &p[i * n..(i + 1) * n];
             offset[i] = block[0];
             let mut sum = 0.0;
@@ -128,17 +133,18 @@ impl Grid {
         &m[j * w..(j + 1) * w]
     }
 
-    /// `(X, Ẋ, Ẍ)` at grid point `j` for decision vector `p`.
-    pub fn state(&self, p: &[f64], j: usize) -> Motion {
+    /// `[X, Ẋ, Ẍ]` at grid point `j` for decision vector `p`, into `out`
+    /// (`3n` entries: the positions, then the rates, then the
+    /// accelerations).
+    pub fn state(&self, p: &[f64], j: usize, out: &mut [f64]) {
         let w = self.layout.per_coord();
-        let mut out = Motion::default();
-        for i in 0..2 {
+        let n = self.layout.coords;
+        for i in 0..n {
             let block = &p[i * w..(i + 1) * w];
-            out.pos[i] = dot(self.row(&self.pos, j), block);
-            out.vel[i] = dot(self.row(&self.vel, j), block);
-            out.acc[i] = dot(self.row(&self.acc, j), block);
+            out[i] = dot(self.row(&self.pos, j), block);
+            out[n + i] = dot(self.row(&self.vel, j), block);
+            out[2 * n + i] = dot(self.row(&self.acc, j), block);
         }
-        out
     }
 }
 
@@ -160,18 +166,20 @@ mod tests {
             p in proptest::collection::vec(-1.0..1.0f64, 20),
             t in 0.0..10.0f64,
         ) {
-            let layout = Layout { harmonics: 5, omega_f: 0.628 };
-            let f = layout.trajectory(&p).unwrap();
+            let layout = Layout { harmonics: 5, omega_f: 0.628, coords: 2 };
+            let f: FourierTrajectory = layout.trajectory(&p).unwrap();
             let g = Grid { layout, times: vec![t], pos: vec![0.0; 10], vel: vec![0.0; 10], acc: vec![0.0; 10] };
             let mut g = g;
             let (mut a, mut b, mut c) = (vec![0.0; 10], vec![0.0; 10], vec![0.0; 10]);
             layout.basis(t, &mut a, &mut b, &mut c);
             g.pos = a; g.vel = b; g.acc = c;
             let s = f.eval(t);
-            let Motion { pos: x, vel: xd, acc: xdd } = g.state(&p, 0);
-            prop_assert!((x - s.pos).norm() < 1e-12);
-            prop_assert!((xd - s.vel).norm() < 1e-12);
-            prop_assert!((xdd - s.acc).norm() < 1e-12);
+            let mut v = [0.0; 6];
+            g.state(&p, 0, &mut v);
+            let at = |k: usize| nalgebra::Vector2::new(v[2 * k], v[2 * k + 1]);
+            prop_assert!((at(0) - s.pos).norm() < 1e-12);
+            prop_assert!((at(1) - s.vel).norm() < 1e-12);
+            prop_assert!((at(2) - s.acc).norm() < 1e-12);
             // Zero velocity at the period boundary, by construction.
             prop_assert!(f.eval(0.0).vel.norm() < 1e-12);
         }
@@ -182,8 +190,9 @@ mod tests {
         let layout = Layout {
             harmonics: 1,
             omega_f: 1.0,
+            coords: 2,
         };
-        let f = layout.trajectory(&[1.0, 0.3, 0.9, -0.2]).unwrap();
+        let f: FourierTrajectory = layout.trajectory(&[1.0, 0.3, 0.9, -0.2]).unwrap();
         assert_eq!(f.a(0), &[0.0]);
         assert_eq!(f.b(1), &[-0.2]);
         assert_eq!(f.offset(), nalgebra::Vector2::new(1.0, 0.9));

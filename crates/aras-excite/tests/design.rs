@@ -192,7 +192,7 @@ fn bad_settings_are_clear_errors() {
 #[test]
 fn a_missing_trajectory_file_keeps_the_io_error_as_source() {
     let path = std::env::temp_dir().join(format!("aras-absent-{}.csv", std::process::id()));
-    let e = aras_excite::FourierTrajectory::load(&path).unwrap_err();
+    let e = <aras_excite::FourierTrajectory>::load(&path).unwrap_err();
     assert_eq!(
         e.to_string(),
         format!("cannot read or write {}", path.display())

@@ -11,17 +11,20 @@
 //! a backward recursion over the links' centres of mass and central
 //! inertias, which never forms `h` or `I_O`.
 //!
-//! The motion is a sum of sines per joint with exact derivatives
-//! ([`Chain::motion`]); `aras-excite` designs for two coordinates so far, so
-//! the excitation of the chain is written out here.
+//! The excitation is designed by `aras-excite` for the chain's joints (one
+//! Fourier series per joint, per-joint box, rate and acceleration limits),
+//! and the identification samples it exactly.
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the equations
 
 use std::convert::Infallible;
 
+use aras_excite::{DesignSettings, Dual, Limits, Regressor};
 use aras_ident::streaming::{RegressorStage, States};
 use aras_ident::{BaseParameters, ConsistentLs, LinearModel, LinkLayout, ReducedLs};
 use faer::Mat;
+use nalgebra::{DVector, Dyn};
+use num_dual::DualNum;
 
 use crate::{G, Link};
 
@@ -128,65 +131,52 @@ impl Chain {
         }
         tau
     }
-
-    /// The chain's motion at `t`: per joint a sum of three sines of the
-    /// base frequency `omega` (rad/s), phases and amplitudes fixed per
-    /// joint; exact `q, q̇, q̈`.
-    pub fn motion(&self, omega: f64, t: f64) -> [Vec<f64>; 3] {
-        let n = self.joints();
-        let mut out = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
-        for j in 0..n {
-            for h in 1..=3 {
-                let w = omega * h as f64;
-                let amp = 0.9 / (h as f64 * (1.0 + 0.3 * j as f64));
-                let phase = 0.7 * (j * 3 + h) as f64;
-                let (s, c) = (w * t + phase).sin_cos();
-                out[0][j] += amp * s + if h == 1 { 0.2 * j as f64 } else { 0.0 };
-                out[1][j] += amp * w * c;
-                out[2][j] -= amp * w * w * s;
-            }
-        }
-        out
-    }
 }
 
-/// Positions, frames and accelerations of the joints of a planar chain.
-struct Kinematics {
+/// Positions, frames and accelerations of the joints of a planar chain, in
+/// any number type (dual numbers for the excitation design's derivatives).
+struct Kinematics<T> {
     /// Joint positions `p_i` (and the tip, `p_n`).
-    pos: Vec<[f64; 2]>,
+    pos: Vec<[T; 2]>,
     /// Link x axes `u_i` and y axes `v_i` (world).
-    u: Vec<[f64; 2]>,
-    v: Vec<[f64; 2]>,
+    u: Vec<[T; 2]>,
+    v: Vec<[T; 2]>,
     /// Absolute rates and accelerations of the links.
-    omega: Vec<f64>,
-    alpha: Vec<f64>,
+    omega: Vec<T>,
+    alpha: Vec<T>,
     /// Acceleration of each joint's origin plus gravity's upward one.
-    accel: Vec<[f64; 2]>,
+    accel: Vec<[T; 2]>,
 }
 
-fn kinematics(length: &[f64], q: &[f64], qd: &[f64], qdd: &[f64]) -> Kinematics {
+fn kinematics<T: DualNum<Primitive = f64> + Copy>(
+    length: &[f64],
+    q: &[T],
+    qd: &[T],
+    qdd: &[T],
+) -> Kinematics<T> {
     let n = q.len();
+    let zero = T::from(0.0);
     let mut k = Kinematics {
-        pos: vec![[0.0; 2]],
+        pos: vec![[zero; 2]],
         u: Vec::with_capacity(n),
         v: Vec::with_capacity(n),
         omega: Vec::with_capacity(n),
         alpha: Vec::with_capacity(n),
-        accel: vec![[0.0, G]],
+        accel: vec![[zero, T::from(G)]],
     };
-    let (mut theta, mut w, mut wd) = (0.0, 0.0, 0.0);
+    let (mut theta, mut w, mut wd) = (zero, zero, zero);
     for i in 0..n {
         theta += q[i];
         w += qd[i];
         wd += qdd[i];
-        let (s, c) = f64::sin_cos(theta);
+        let (s, c) = (theta.sin(), theta.cos());
         let (u, v) = ([c, s], [-s, c]);
         let (p, a) = (k.pos[i], k.accel[i]);
         let l = length[i];
-        k.pos.push([p[0] + l * u[0], p[1] + l * u[1]]);
+        k.pos.push([p[0] + u[0] * l, p[1] + u[1] * l]);
         k.accel.push([
-            a[0] + l * (wd * v[0] - w * w * u[0]),
-            a[1] + l * (wd * v[1] - w * w * u[1]),
+            a[0] + (wd * v[0] - w * w * u[0]) * l,
+            a[1] + (wd * v[1] - w * w * u[1]) * l,
         ]);
         k.u.push(u);
         k.v.push(v);
@@ -232,11 +222,34 @@ impl LinearModel for ChainModel {
     }
 
     fn fill(&self, q: &[f64], qd: &[f64], qdd: &[f64], y: &mut [f64]) -> Result<(), Infallible> {
+        self.rows(q, qd, qdd, y);
+        Ok(())
+    }
+}
+
+/// For `aras-excite`: the same rows in dual numbers.
+impl Regressor for ChainModel {
+    fn fill_dual(
+        &self,
+        q: &[Dual],
+        qd: &[Dual],
+        qdd: &[Dual],
+        y: &mut [Dual],
+    ) -> Result<(), Infallible> {
+        self.rows(q, qd, qdd, y);
+        Ok(())
+    }
+}
+
+impl ChainModel {
+    /// Every entry of `Y` (column-major `n × columns`) in any number type;
+    /// the Coulomb columns' sign has zero derivative.
+    fn rows<T: DualNum<Primitive = f64> + Copy>(&self, q: &[T], qd: &[T], qdd: &[T], y: &mut [T]) {
         let n = self.length.len();
         let k = kinematics(&self.length, q, qd, qdd);
-        let cross = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - a[1] * b[0];
-        y.fill(0.0);
-        let mut set = |col: usize, j: usize, v: f64| y[n * col + j] = v;
+        let cross = |a: [T; 2], b: [T; 2]| a[0] * b[1] - a[1] * b[0];
+        y.fill(T::from(0.0));
+        let mut set = |col: usize, j: usize, v: T| y[n * col + j] = v;
         for i in 0..n {
             let (u, v, a) = (k.u[i], k.v[i], k.accel[i]);
             let (w, wd) = (k.omega[i], k.alpha[i]);
@@ -254,16 +267,19 @@ impl LinearModel for ChainModel {
         }
         let friction = LINK_COLUMNS * n;
         for j in 0..n {
-            set(friction + 2 * j, j, qd[j].signum());
+            set(friction + 2 * j, j, T::from(qd[j].re().signum()));
             set(friction + 2 * j + 1, j, qd[j]);
         }
-        Ok(())
     }
 }
 
 /// What [`identify`] found for a chain.
 #[derive(Debug)]
 pub struct ChainOutcome {
+    /// Condition number of the designed excitation's scaled base regressor.
+    pub condition_number: f64,
+    /// The median of the same over random feasible trajectories.
+    pub random_condition_median: f64,
     /// The base parameters' definitions.
     pub base_names: Vec<String>,
     /// True base parameters.
@@ -309,22 +325,53 @@ pub fn base_parameters(model: &ChainModel) -> Result<BaseParameters, aras_ident:
     BaseParameters::from_regressor(w.as_ref(), &model.names(), 1e-8)
 }
 
-/// Identifies `chain` from `samples` samples of its motion over two periods
-/// of 5 s (noise-free torques from [`Chain::torques`]): base parameters,
-/// OLS in memory and streamed, and the SDP with one pseudo-inertia per link.
+/// The excitation's limits for `joints` joints: every joint within
+/// ±0.9 rad of its offset (the first from −0.6 to 1.2 rad), 3 rad/s,
+/// 12 rad/s².
+pub fn limits(joints: usize) -> Limits<Dyn> {
+    let v = |f: &dyn Fn(usize) -> f64| DVector::from_fn(joints, |i, _| f(i));
+    Limits {
+        min: v(&|i| if i == 0 { -0.6 } else { -0.9 }),
+        max: v(&|i| if i == 0 { 1.2 } else { 0.9 }),
+        max_rate: v(&|_| 3.0),
+        max_accel: v(&|_| 12.0),
+    }
+}
+
+/// Designs the excitation of `chain` (3 harmonics, 5 s period, 6 starts) and
+/// identifies the chain from `samples` samples of two periods of it
+/// (noise-free torques from [`Chain::torques`]): base parameters, OLS in
+/// memory and streamed, and the SDP with one pseudo-inertia per link.
 pub fn identify(chain: &Chain, samples: usize) -> Result<ChainOutcome, Box<dyn std::error::Error>> {
     let model = chain.model();
     let (n, cols) = (chain.joints(), model.columns());
     let names = model.names();
     let beta = chain.standard();
     let base = base_parameters(&model)?;
-    let omega = std::f64::consts::TAU / 5.0;
-    let dt = 10.0 / samples as f64;
 
-    // Structure-of-arrays samples: per joint q, q̇, q̈, τ.
+    // 1. The excitation, and random feasible ones to compare it with.
+    let projection = aras_excite::base_projection(&base);
+    let settings = DesignSettings {
+        harmonics: 3,
+        omega_f: std::f64::consts::TAU / 5.0,
+        starts: 6,
+        ..DesignSettings::new(limits(n))
+    };
+    let design = aras_excite::design(&model, &projection, &settings)?;
+    let traj = &design.trajectory;
+    let mut random: Vec<f64> = aras_excite::random_feasible(&settings, 31, 7)?
+        .iter()
+        .map(|t| aras_excite::assess(&model, &projection, t, settings.criterion_points))
+        .map(|a| a.map(|a| a.condition_number))
+        .collect::<Result<_, _>>()?;
+    random.sort_by(f64::total_cmp);
+    let dt = 2.0 * traj.period() / samples as f64;
+
+    // 2. Structure-of-arrays samples: per joint q, q̇, q̈, τ.
     let mut soa = vec![vec![vec![0.0; samples]; n]; 4];
+    let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     for s in 0..samples {
-        let [q, qd, qdd] = chain.motion(omega, (s as f64 + 0.5) * dt);
+        traj.eval_into((s as f64 + 0.5) * dt, &mut q, &mut qd, &mut qdd);
         let tau = chain.torques(&q, &qd, &qdd);
         for j in 0..n {
             for (k, v) in [q[j], qd[j], qdd[j], tau[j]].into_iter().enumerate() {
@@ -335,7 +382,7 @@ pub fn identify(chain: &Chain, samples: usize) -> Result<ChainOutcome, Box<dyn s
     let slices = |k: usize| -> Vec<&[f64]> { soa[k].iter().map(Vec::as_slice).collect() };
     let (x, xd, xdd, tau) = (slices(0), slices(1), slices(2), slices(3));
 
-    // In memory: the stacked regressor, joint 1's rows, then joint 2's, ….
+    // 3. In memory: the stacked regressor, joint 1's rows, then joint 2's, ….
     let mut w = Mat::<f64>::zeros(n * samples, cols);
     let mut t = vec![0.0; n * samples];
     let mut y = vec![0.0; n * cols];
@@ -354,7 +401,7 @@ pub fn identify(chain: &Chain, samples: usize) -> Result<ChainOutcome, Box<dyn s
     let reduced = ReducedLs::new(wb.as_ref(), &t, &base.base_names())?;
     let ols = reduced.ols()?.estimate;
 
-    // Streamed: the same samples through the stage, one row group per joint.
+    // 4. Streamed: the same samples through the stage, one row group per joint.
     let mut stage = RegressorStage::new(model, &base)?;
     stage.push(&States {
         x: &x,
@@ -364,7 +411,7 @@ pub fn identify(chain: &Chain, samples: usize) -> Result<ChainOutcome, Box<dyn s
     })?;
     let streaming = stage.accumulator().ols()?.estimate;
 
-    // Physically consistent: each link's pseudo-inertia PSD (67)–(69), with
+    // 5. Physically consistent: each link's pseudo-inertia PSD (67)–(69), with
     // a reference 10 % off the truth, each mass column within ±50 %,
     // friction ≥ 0.
     let reference: Vec<f64> = beta.iter().map(|v| 1.1 * v).collect();
@@ -387,6 +434,8 @@ pub fn identify(chain: &Chain, samples: usize) -> Result<ChainOutcome, Box<dyn s
     problem.nonnegative(&friction)?;
     let sol = problem.solve(&base, &reduced)?;
     Ok(ChainOutcome {
+        condition_number: design.assessment.condition_number,
+        random_condition_median: random[random.len() / 2],
         base_names: base.expressions(),
         truth,
         ols,

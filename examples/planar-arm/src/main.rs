@@ -28,8 +28,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .fold(0.0, f64::max)
     };
     println!(
-        "3-link chain: {} base parameters; largest relative error OLS {:.1e}, streamed {:.1e}, \
-         SDP {:.1e} ({}); pseudo-inertia min eigenvalues {:?}",
+        "3-link chain: excitation κ = {:.1} (random feasible median {:.1}); {} base parameters; \
+         largest relative error OLS {:.1e}, streamed {:.1e}, SDP {:.1e} ({}); pseudo-inertia \
+         min eigenvalues {:?}",
+        c.condition_number,
+        c.random_condition_median,
         c.truth.len(),
         worst(&c.ols),
         worst(&c.streaming),

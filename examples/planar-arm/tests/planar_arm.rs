@@ -198,13 +198,21 @@ fn chain_regressor_times_parameters_equals_the_recursion_for_any_number_of_links
     }
 }
 
-/// Three joints, identified in memory, streamed and physically consistent:
-/// noise-free, the base parameters come back to rounding error.
+/// Three joints, excited by `aras-excite`, identified in memory, streamed
+/// and physically consistent: noise-free, the base parameters come back to
+/// rounding error.
 #[test]
 fn three_link_chain_base_parameters_are_recovered_noise_free() {
     use planar_arm::chain::{Chain, identify};
     let samples = 2000;
     let o = identify(&Chain::three_links(), samples).unwrap();
+    // The design does better than the typical random feasible trajectory.
+    assert!(
+        o.condition_number.is_finite() && o.condition_number < o.random_condition_median,
+        "κ {} vs random median {}",
+        o.condition_number,
+        o.random_condition_median
+    );
     // Izz, hx, hy of every link (the masses of links 2 and 3 grouped into
     // their predecessors) and 6 friction levels.
     assert_eq!(o.truth.len(), 15, "{:#?}", o.base_names);
