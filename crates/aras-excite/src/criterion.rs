@@ -459,6 +459,35 @@ mod tests {
         assert!(a.condition_number.is_finite() && a.condition_number > 1.0);
     }
 
+    /// The exact gradient at `p` against central differences of the
+    /// objective (bound: see the test below).
+    fn check_gradient<R: Regressor>(
+        ev: &mut Evaluator<'_, R>,
+        grid: &Grid,
+        p: &[f64],
+        label: &str,
+    ) {
+        let mut g = vec![0.0; p.len()];
+        let f0 = ev.gradient(grid, p, &mut g).unwrap().objective;
+        let f0v = ev.objective(grid, p).unwrap().objective;
+        assert!((f0 - f0v).abs() < 1e-12 * f0.abs().max(1.0));
+        let scale = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for k in 0..p.len() {
+            let h = 1e-6;
+            let mut pp = p.to_vec();
+            pp[k] += h;
+            let fp = ev.objective(grid, &pp).unwrap().objective;
+            pp[k] -= 2.0 * h;
+            let fm = ev.objective(grid, &pp).unwrap().objective;
+            let fd = (fp - fm) / (2.0 * h);
+            assert!(
+                (fd - g[k]).abs() < 1e-6 * scale.max(1.0),
+                "{label} k={k}: exact {} vs FD {fd}",
+                g[k]
+            );
+        }
+    }
+
     /// Exact gradients agree with central differences. Step 1e-6 on
     /// coefficients of order 0.1–1: truncation ~h²·|c'''| ≈ 1e-11, rounding
     /// ~1e-16·|c|/h ≈ 1e-9 (the SVD is accurate to ~1e-15 relative), so a
@@ -474,30 +503,12 @@ mod tests {
             (Criterion::DOptimal, 5, 3),
             (Criterion::DOptimal, 1, 4),
         ] {
-            let (layout, grid, cons) = setup(l);
+            let (_, grid, cons) = setup(l);
             let p = interior_point(&cons, seed);
             let box_ = Limits::paper();
             let clamp = (box_.min.as_slice().to_vec(), box_.max.as_slice().to_vec());
             let mut ev = Evaluator::new(&reg, &e, criterion, grid.len(), Some(clamp));
-            let mut g = vec![0.0; layout.dim()];
-            let f0 = ev.gradient(&grid, &p, &mut g).unwrap().objective;
-            let f0v = ev.objective(&grid, &p).unwrap().objective;
-            assert!((f0 - f0v).abs() < 1e-12 * f0.abs().max(1.0));
-            let scale = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for k in 0..p.len() {
-                let h = 1e-6;
-                let mut pp = p.clone();
-                pp[k] += h;
-                let fp = ev.objective(&grid, &pp).unwrap().objective;
-                pp[k] -= 2.0 * h;
-                let fm = ev.objective(&grid, &pp).unwrap().objective;
-                let fd = (fp - fm) / (2.0 * h);
-                assert!(
-                    (fd - g[k]).abs() < 1e-6 * scale.max(1.0),
-                    "{criterion:?} L={l} k={k}: exact {} vs FD {fd}",
-                    g[k]
-                );
-            }
+            check_gradient(&mut ev, &grid, &p, &format!("{criterion:?} L={l}"));
         }
     }
 
@@ -591,25 +602,7 @@ mod tests {
             let grid = Grid::new(layout, 40, 0.5);
             let p = interior_point(&cons, seed);
             let mut ev = Evaluator::new(&Three, &e, criterion, grid.len(), None);
-            let mut g = vec![0.0; layout.dim()];
-            let f0 = ev.gradient(&grid, &p, &mut g).unwrap().objective;
-            let f0v = ev.objective(&grid, &p).unwrap().objective;
-            assert!((f0 - f0v).abs() < 1e-12 * f0.abs().max(1.0));
-            let scale = g.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            for k in 0..p.len() {
-                let h = 1e-6;
-                let mut pp = p.clone();
-                pp[k] += h;
-                let fp = ev.objective(&grid, &pp).unwrap().objective;
-                pp[k] -= 2.0 * h;
-                let fm = ev.objective(&grid, &pp).unwrap().objective;
-                let fd = (fp - fm) / (2.0 * h);
-                assert!(
-                    (fd - g[k]).abs() < 1e-6 * scale.max(1.0),
-                    "{criterion:?} k={k}: exact {} vs FD {fd}",
-                    g[k]
-                );
-            }
+            check_gradient(&mut ev, &grid, &p, &format!("{criterion:?}, 3 coordinates"));
         }
     }
 

@@ -361,6 +361,7 @@ impl PeriodSums {
             "PeriodSums::push: one value per channel"
         );
         let g = i - self.start;
+        let mut completed = false;
         for c in &mut self.candidates {
             let phase = g % c.per;
             for (ch, v) in row.iter().enumerate() {
@@ -371,11 +372,15 @@ impl PeriodSums {
                     *s += v;
                 }
                 c.blocks += 1;
+                completed = true;
             }
         }
-        // Smallest k first: once the first candidate drifts too far for a
-        // record of this length it never comes back.
-        self.candidates.retain(|c| c.drift_ok());
+        // A candidate's drift grows only when one of its blocks completes;
+        // once it is too far for a record of this length it never comes
+        // back.
+        if completed {
+            self.candidates.retain(|c| c.drift_ok());
+        }
     }
 
     /// The rule of [`average_periods`] for a record of `n` rows.

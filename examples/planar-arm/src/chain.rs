@@ -21,7 +21,7 @@ use std::convert::Infallible;
 
 use aras_excite::{DesignSettings, Dual, Limits, Regressor};
 use aras_ident::streaming::{RegressorStage, States};
-use aras_ident::{BaseParameters, ConsistentLs, LinearModel, LinkLayout, ReducedLs};
+use aras_ident::{ConsistentLs, LinearModel, LinkLayout, ReducedLs};
 use faer::Mat;
 use nalgebra::{DVector, Dyn};
 use num_dual::DualNum;
@@ -298,33 +298,6 @@ pub struct ChainOutcome {
     pub min_eigenvalues: Vec<f64>,
 }
 
-/// Base parameters of `model` from 400 pseudo-random states (the
-/// dependencies are structural, so any rich set of states finds them).
-pub fn base_parameters(model: &ChainModel) -> Result<BaseParameters, aras_ident::IdentError> {
-    let (n, m, cols) = (400, model.outputs(), model.columns());
-    let mut w = Mat::<f64>::zeros(m * n, cols);
-    let mut y = vec![0.0; m * cols];
-    let mut u = 0.5f64;
-    let mut next = || {
-        // A fixed additive-recurrence sequence: deterministic, no seed.
-        u = (u + 0.618_033_988_749_895) % 1.0;
-        2.0 * u - 1.0
-    };
-    let dims = model.coordinates();
-    for i in 0..n {
-        let q: Vec<f64> = (0..dims).map(|_| 1.5 * next()).collect();
-        let qd: Vec<f64> = (0..dims).map(|_| 3.0 * next()).collect();
-        let qdd: Vec<f64> = (0..dims).map(|_| 10.0 * next()).collect();
-        let Ok(()) = model.fill(&q, &qd, &qdd, &mut y);
-        for j in 0..m {
-            for c in 0..cols {
-                w[(j * n + i, c)] = y[m * c + j];
-            }
-        }
-    }
-    BaseParameters::from_regressor(w.as_ref(), &model.names(), 1e-8)
-}
-
 /// The excitation's limits for `joints` joints: every joint within
 /// ±0.9 rad of its offset (the first from −0.6 to 1.2 rad), 3 rad/s,
 /// 12 rad/s².
@@ -347,7 +320,7 @@ pub fn identify(chain: &Chain, samples: usize) -> Result<ChainOutcome, Box<dyn s
     let (n, cols) = (chain.joints(), model.columns());
     let names = model.names();
     let beta = chain.standard();
-    let base = base_parameters(&model)?;
+    let base = crate::base_parameters_of(&model, 400)?;
 
     // 1. The excitation, and random feasible ones to compare it with.
     let projection = aras_excite::base_projection(&base);

@@ -349,27 +349,36 @@ pub fn limits() -> Limits {
 /// Base parameters of the arm from 300 pseudo-random states (the
 /// dependencies are structural, so any rich set of states finds them).
 pub fn base_parameters() -> Result<BaseParameters, aras_ident::IdentError> {
-    let n = 300;
-    let mut w = Mat::<f64>::zeros(2 * n, COLUMNS);
-    let mut y = vec![0.0; 2 * COLUMNS];
+    base_parameters_of(&PlanarArm, 300)
+}
+
+/// Base parameters of any of this example's models from `samples`
+/// pseudo-random states: `q` within ±1.5 rad, `q̇` ±3 rad/s, `q̈` ±10 rad/s².
+pub fn base_parameters_of<M: LinearModel<Error = Infallible>>(
+    model: &M,
+    samples: usize,
+) -> Result<BaseParameters, aras_ident::IdentError> {
+    let (m, cols, dims) = (model.outputs(), model.columns(), model.coordinates());
+    let mut w = Mat::<f64>::zeros(m * samples, cols);
+    let mut y = vec![0.0; m * cols];
     let mut u = 0.5f64;
     let mut next = || {
         // A fixed additive-recurrence sequence: deterministic, no seed.
         u = (u + 0.618_033_988_749_895) % 1.0;
         2.0 * u - 1.0
     };
-    for i in 0..n {
-        let q = [1.5 * next(), 1.5 * next()];
-        let qd = [3.0 * next(), 3.0 * next()];
-        let qdd = [10.0 * next(), 10.0 * next()];
-        PlanarArm::fill_rows(q, qd, qdd, &mut y);
-        for j in 0..2 {
-            for c in 0..COLUMNS {
-                w[(j * n + i, c)] = y[2 * c + j];
+    for i in 0..samples {
+        let q: Vec<f64> = (0..dims).map(|_| 1.5 * next()).collect();
+        let qd: Vec<f64> = (0..dims).map(|_| 3.0 * next()).collect();
+        let qdd: Vec<f64> = (0..dims).map(|_| 10.0 * next()).collect();
+        let Ok(()) = model.fill(&q, &qd, &qdd, &mut y);
+        for j in 0..m {
+            for c in 0..cols {
+                w[(j * samples + i, c)] = y[m * c + j];
             }
         }
     }
-    BaseParameters::from_regressor(w.as_ref(), &LinearModel::names(&PlanarArm), 1e-8)
+    BaseParameters::from_regressor(w.as_ref(), &model.names(), 1e-8)
 }
 
 /// Designs the excitation, logs the arm along it (angles and Newton–Euler
