@@ -316,6 +316,8 @@ impl LogArgs {
         let s = self.settings(cfg);
         let defaults = ReadOptions::default();
         Ok(ReadOptions {
+            // ARAS-Diamond's two joints: columns of others are ignored.
+            joints: Some(2),
             time_unit: s.time_unit,
             torques: s.torques,
             step_tolerance: if s.resample {
@@ -337,7 +339,17 @@ impl LogArgs {
             bag: BagOptions {
                 topic: self.topic.clone(),
                 joints: match &self.joints {
-                    Some(spec) => JointNames::parse(spec).context("option --joints")?,
+                    Some(spec) => {
+                        let names = JointNames::parse(spec).context("option --joints")?;
+                        if names.names.len() != 2 {
+                            anyhow::bail!(
+                                "option --joints: `{spec}` names {} joint(s) but ARAS-Diamond \
+                                 has two: give both theta1=JOINT and theta2=JOINT",
+                                names.names.len()
+                            );
+                        }
+                        names
+                    }
                     None => JointNames::default(),
                 },
                 stamps: match self.stamps {

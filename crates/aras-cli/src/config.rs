@@ -277,7 +277,7 @@ impl Default for LogConfig {
             time_unit: None,
             glitches: g.action,
             glitch_threshold: g.threshold,
-            torque_limit: g.torque_limit,
+            torque_limit: g.torque_limit.and_then(|l| l.try_into().ok()),
             torque_limit_factor: g.limit_factor,
             resample: false,
             max_gap_s: aras_signal::ResampleOptions::default().max_gap_s,
@@ -292,7 +292,7 @@ impl LogConfig {
         aras_log::GlitchOptions {
             action: self.glitches,
             threshold: self.glitch_threshold,
-            torque_limit: self.torque_limit,
+            torque_limit: self.torque_limit.map(|l| l.to_vec()),
             limit_factor: self.torque_limit_factor,
         }
     }

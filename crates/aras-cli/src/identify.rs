@@ -198,10 +198,10 @@ pub fn fitness_on_log_rows(
 /// log's raw torques on every row that has a sample.
 pub fn raw_fitness(processed: &Processed, predicted: &[f64]) -> Result<[f64; 2]> {
     let n = processed.samples.len();
-    let [a, b] = processed.on_log_rows([&predicted[..n], &predicted[n..]])?;
+    let pairs = processed.on_log_rows(&[&predicted[..n], &predicted[n..]])?;
     Ok([
-        aras_ident::validate::fitness(&a.0, &a.1)?,
-        aras_ident::validate::fitness(&b.0, &b.1)?,
+        aras_ident::validate::fitness(&pairs[0].0, &pairs[0].1)?,
+        aras_ident::validate::fitness(&pairs[1].0, &pairs[1].1)?,
     ])
 }
 
@@ -328,8 +328,9 @@ pub fn identify(
             .processed
             .samples
             .theta_dot
-            .each_ref()
-            .map(|v| v.iter().fold(0.0f64, |m, x| m.max(x.abs())));
+            .iter()
+            .map(|v| v.iter().fold(0.0f64, |m, x| m.max(x.abs())))
+            .collect::<Vec<_>>();
         bail!(
             "only {n1} (joint 1) and {n2} (joint 2) samples are away from velocity reversals \
              (identification.min_speed = {} rad/s, widened by the filter's reach at \

@@ -48,8 +48,8 @@ pub fn predict_route(
     let w = aras_pipeline::robot::stack(model, geometry, &processed.samples)?;
     let tau = aras_ident::validate::predict(w.w.as_ref(), beta)?;
     let n = processed.samples.len();
-    let [a, b] = processed.band_limited([&tau[..n], &tau[n..]])?;
-    Ok((processed, [a, b].concat()))
+    let limited = processed.band_limited(&[&tau[..n], &tau[n..]])?;
+    Ok((processed, limited.concat()))
 }
 
 /// The processing loss of the prediction `pl` on `logged` (the

@@ -172,7 +172,7 @@ fn out_of_scale(ratio: f64) -> bool {
 }
 
 /// The largest |τ| per joint of a log's torques.
-pub fn torque_peak(tau: &[Vec<f64>; 2]) -> [f64; 2] {
+pub fn torque_peak(tau: &[Vec<f64>]) -> [f64; 2] {
     [0, 1].map(|j| tau[j].iter().fold(0.0_f64, |m, v| m.max(v.abs())))
 }
 

@@ -35,80 +35,87 @@ pub enum Stamps {
     Log,
 }
 
-/// Which joint of the `JointState` messages is θ1 and which θ2. Both or
-/// neither: with neither, a topic whose first message names exactly two
-/// joints takes them in that message's order.
+/// Which joints of the `JointState` messages are θ1, θ2, …, in order. All
+/// or none: with none, the joints of the first message in its order (as
+/// many as [`ReadOptions::joints`](crate::ReadOptions::joints) says, if it
+/// says).
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(transparent)]
 pub struct JointNames {
-    /// Joint name of θ1 (its effort is τ1).
-    pub theta1: Option<String>,
-    /// Joint name of θ2 (its effort is τ2).
-    pub theta2: Option<String>,
+    /// Joint names of θ1, θ2, … (their efforts are τ1, τ2, …).
+    pub names: Vec<String>,
 }
 
 impl JointNames {
-    /// Parses `theta1=NAME,theta2=NAME` (joint names are matched exactly,
-    /// as ROS names are case-sensitive).
+    /// Parses `theta1=NAME,theta2=NAME,…` (joint names are matched exactly,
+    /// as ROS names are case-sensitive; every role from `theta1` up to the
+    /// highest given).
     pub fn parse(spec: &str) -> Result<Self, LogError> {
         let bad = |reason: String| LogError::InvalidOption {
             name: "joints",
             value: spec.into(),
             reason,
         };
-        let mut out = Self::default();
+        let mut given: Vec<Option<String>> = Vec::new();
         for item in spec.split(',').map(str::trim).filter(|i| !i.is_empty()) {
             let Some((role, name)) = item.split_once('=') else {
                 return Err(bad(format!(
-                    "`{item}` is not ROLE=JOINT: write theta1=JOINT,theta2=JOINT"
+                    "`{item}` is not ROLE=JOINT: write theta1=JOINT,theta2=JOINT,…"
                 )));
             };
-            let name = name.trim();
+            let (role, name) = (role.trim(), name.trim());
             if name.is_empty() {
+                return Err(bad(format!("role `{role}` has an empty joint name")));
+            }
+            let lower = role.to_ascii_lowercase();
+            let Some(crate::header::Field::Joint(crate::header::Role::Theta, j)) =
+                crate::header::Field::parse(&lower)
+            else {
                 return Err(bad(format!(
-                    "role `{}` has an empty joint name",
-                    role.trim()
+                    "unknown role `{lower}`: the roles are theta1, theta2, …"
+                )));
+            };
+            if given.len() <= j {
+                given.resize(j + 1, None);
+            }
+            if given[j].is_some() {
+                return Err(bad(format!("role `{role}` is given twice")));
+            }
+            if let Some(k) = given.iter().position(|g| g.as_deref() == Some(name)) {
+                return Err(bad(format!(
+                    "theta{} and theta{} are both joint `{name}`: give different joints",
+                    k + 1,
+                    j + 1
                 )));
             }
-            let slot = match role.trim().to_ascii_lowercase().as_str() {
-                "theta1" => &mut out.theta1,
-                "theta2" => &mut out.theta2,
-                other => {
-                    return Err(bad(format!(
-                        "unknown role `{other}`: the roles are theta1 and theta2"
-                    )));
-                }
-            };
-            if slot.is_some() {
-                return Err(bad(format!("role `{}` is given twice", role.trim())));
-            }
-            *slot = Some(name.to_string());
+            given[j] = Some(name.to_string());
         }
-        match (&out.theta1, &out.theta2) {
-            (Some(a), Some(b)) if a == b => Err(bad(format!(
-                "theta1 and theta2 are both joint `{a}`: give two different joints"
-            ))),
-            (Some(_), None) | (None, Some(_)) => Err(bad(
-                "give both theta1=JOINT and theta2=JOINT, or neither".into(),
-            )),
-            _ => Ok(out),
+        if let Some(j) = given.iter().position(Option::is_none) {
+            return Err(bad(format!(
+                "theta{} is not given: name every joint from theta1 to theta{}, or none",
+                j + 1,
+                given.len()
+            )));
         }
+        Ok(Self {
+            names: given.into_iter().flatten().collect(),
+        })
     }
 
-    /// True if no joint is named (the two-joint default applies).
+    /// True if no joint is named (the first message's joints apply).
     pub fn is_empty(&self) -> bool {
-        self.theta1.is_none() && self.theta2.is_none()
+        self.names.is_empty()
     }
 }
 
 /// How a ROS 2 bag is read. `Default`: the only `JointState` topic, the
-/// two-joint default mapping, header stamps.
+/// first message's joints in its order, header stamps.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct BagOptions {
     /// The `JointState` topic to read (needed when the bag has several).
     pub topic: Option<String>,
-    /// Which joints are θ1 and θ2.
+    /// Which joints are θ1, θ2, ….
     pub joints: JointNames,
     /// Which time the samples take.
     pub stamps: Stamps,
@@ -304,12 +311,15 @@ fn ms(ns: i64) -> String {
 
 /// Which joints a reading takes.
 pub(crate) struct Wanted<'a> {
-    /// Their roles, for messages (`θ1`, `θ2`; `q`).
-    pub roles: &'a [&'a str],
+    /// The role of the `k`-th joint, for messages (`θ1`, `θ2`; `q`).
+    pub role: &'a dyn Fn(usize) -> String,
     /// Their names; `None`: the first message's joints, if it names exactly
-    /// as many.
+    /// [`count`](Self::count).
     pub names: Option<Vec<String>>,
-    /// "are θ1 and θ2", for messages.
+    /// How many joints when no names are given (`None`: as many as the
+    /// first message names).
+    pub count: Option<usize>,
+    /// "are θ1, θ2, …", for messages.
     pub which: &'a str,
     /// The option that names them, with its form.
     pub flag: &'a str,
@@ -329,34 +339,52 @@ pub(crate) struct JointRows {
 }
 
 #[cfg(feature = "bags")]
-/// Reads the two log joints of the MCAP file `bytes` into log rows; `file`
-/// names it in messages.
-pub(crate) fn read(bytes: &[u8], file: &str, opts: &BagOptions) -> Result<BagRows, LogError> {
+/// Reads the log joints of the MCAP file `bytes` into log rows (`joints`
+/// of them if given, as [`ReadOptions::joints`](crate::ReadOptions::joints));
+/// `file` names it in messages.
+pub(crate) fn read(
+    bytes: &[u8],
+    file: &str,
+    opts: &BagOptions,
+    joints: Option<usize>,
+) -> Result<BagRows, LogError> {
+    if let Some(n) = joints
+        && !opts.joints.is_empty()
+        && opts.joints.names.len() != n
+    {
+        return Err(LogError::InvalidOption {
+            name: "joints",
+            value: opts.joints.names.join(","),
+            reason: format!(
+                "{} joints are named but the robot has {n}: name one per joint",
+                opts.joints.names.len()
+            ),
+        });
+    }
+    let role = |k: usize| format!("θ{}", k + 1);
+    let which = match joints {
+        Some(1) => "is θ1".to_string(),
+        Some(2) => "are θ1 and θ2".to_string(),
+        Some(n) => format!("are θ1 … θ{n}"),
+        None => "are θ1, θ2, …".to_string(),
+    };
     let wanted = Wanted {
-        roles: &["θ1", "θ2"],
-        names: opts
-            .joints
-            .theta1
-            .clone()
-            .zip(opts.joints.theta2.clone())
-            .map(|(a, b)| vec![a, b]),
-        which: "are θ1 and θ2",
-        flag: "--joints theta1=JOINT,theta2=JOINT (BagOptions::joints)",
+        role: &role,
+        names: (!opts.joints.is_empty()).then(|| opts.joints.names.clone()),
+        count: joints,
+        which: &which,
+        flag: "--joints theta1=JOINT,theta2=JOINT,… (BagOptions::joints)",
     };
     let r = read_joints(bytes, file, opts.topic.as_deref(), opts.stamps, wanted)?;
-    let pair = |mut v: Vec<Vec<f64>>| {
-        let b = v.pop().unwrap_or_default();
-        let a = v.pop().unwrap_or_default();
-        [a, b]
-    };
     let has_velocity = r.velocity.is_some();
+    let n = r.position.len();
     Ok(BagRows {
         cols: Columns {
             t: r.t,
-            theta: pair(r.position),
-            tau: pair(r.effort),
-            theta_dot: r.velocity.map(pair).unwrap_or_default(),
-            theta_ddot: Default::default(),
+            theta: r.position,
+            tau: r.effort,
+            theta_dot: r.velocity.unwrap_or_else(|| vec![Vec::new(); n]),
+            theta_ddot: vec![Vec::new(); n],
         },
         has_velocity,
         topic: r.topic,
@@ -400,9 +428,11 @@ pub fn read_bag_joint(
         file: file.clone(),
         source,
     })?;
+    let role = |_: usize| "q".to_string();
     let wanted = Wanted {
-        roles: &["q"],
+        role: &role,
         names: joint.map(|j| vec![j.to_string()]),
+        count: Some(1),
         which: "is the joint",
         flag: "--joint NAME",
     };
@@ -633,11 +663,14 @@ pub(crate) fn read_joints(
         )));
     }
     // Pass 2: decode the topic's messages.
-    let count = wanted.roles.len();
+    let mut count = wanted
+        .names
+        .as_ref()
+        .map_or(wanted.count, |n| Some(n.len()));
     let mut t_out = Vec::new();
-    let mut pos_out = vec![Vec::new(); count];
-    let mut vel_out = vec![Vec::new(); count];
-    let mut eff_out = vec![Vec::new(); count];
+    let mut pos_out = vec![Vec::new(); count.unwrap_or(0)];
+    let mut vel_out = vec![Vec::new(); count.unwrap_or(0)];
+    let mut eff_out = vec![Vec::new(); count.unwrap_or(0)];
     let mut has_velocity = true;
     let mut notes = Vec::new();
     let mut joints = wanted.names.clone();
@@ -668,7 +701,7 @@ pub(crate) fn read_joints(
         };
         let names = &state.names;
         if joints.is_none() {
-            if names.len() != count {
+            if count.is_some_and(|c| names.len() != c) || names.is_empty() {
                 return Err(LogError::BagJoints {
                     file: file.into(),
                     topic: topic.clone(),
@@ -681,16 +714,20 @@ pub(crate) fn read_joints(
                     ),
                 });
             }
-            let roles: Vec<String> = wanted
-                .roles
+            let c = names.len();
+            count = Some(c);
+            for out in [&mut pos_out, &mut vel_out, &mut eff_out] {
+                out.resize(c, Vec::new());
+            }
+            let roles: Vec<String> = names
                 .iter()
-                .zip(names)
-                .map(|(r, n)| format!("{r} = joint `{n}`"))
+                .enumerate()
+                .map(|(k, n)| format!("{} = joint `{n}`", (wanted.role)(k)))
                 .collect();
             notes.push(format!(
                 "{}: {} (choose with {})",
                 roles.join(", "),
-                match count {
+                match c {
                     1 => "the only joint of the first message".to_string(),
                     2 => "the two joints in the order of the first message".to_string(),
                     n => format!("the {n} joints in the order of the first message"),
@@ -699,13 +736,16 @@ pub(crate) fn read_joints(
             ));
             joints = Some(names.iter().map(|n| n.to_string()).collect());
         }
-        let chosen = joints.as_ref().expect("set above");
+        let Some(chosen) = joints.as_ref() else {
+            continue;
+        };
+        let count = chosen.len();
         let mut index = vec![0usize; count];
         for (k, j) in chosen.iter().enumerate() {
             index[k] = names.iter().position(|n| *n == j.as_str()).ok_or_else(|| {
                 at(format!(
                     "joint `{j}` ({}) is not in the message, which names: {}; check {}",
-                    wanted.roles[k],
+                    (wanted.role)(k),
                     if names.is_empty() {
                         "no joints".to_string()
                     } else {
@@ -954,14 +994,11 @@ mod tests {
     #[test]
     fn joint_names_parse() {
         let j = JointNames::parse("theta1=motor_left, theta2=Motor_Right").unwrap();
-        assert_eq!(j.theta1.as_deref(), Some("motor_left"));
-        assert_eq!(j.theta2.as_deref(), Some("Motor_Right"));
-        for bad in [
-            "theta1=a",
-            "theta1=a,theta2=a",
-            "theta3=a,theta2=b",
-            "theta1",
-        ] {
+        assert_eq!(j.names, ["motor_left", "Motor_Right"]);
+        let j = JointNames::parse("theta3=c,theta1=a,theta2=b").unwrap();
+        assert_eq!(j.names, ["a", "b", "c"]);
+        assert_eq!(JointNames::parse("theta1=a").unwrap().names, ["a"]);
+        for bad in ["q1=a", "theta1=a,theta2=a", "theta3=a,theta2=b", "theta1"] {
             assert!(JointNames::parse(bad).is_err(), "{bad}");
         }
     }

@@ -53,7 +53,7 @@ pub enum Extreme {
 pub enum Warning {
     /// A torque sits flat at its extreme (actuator or sensor saturation).
     Saturation {
-        /// Channel name (`tau1` or `tau2`).
+        /// Channel name (`tau1`, `tau2`, …).
         channel: String,
         /// Which extreme.
         extreme: Extreme,
@@ -348,9 +348,9 @@ pub(crate) struct Checks {
     jitter_n: usize,
     jitter_max: f64,
     worst: Option<StepDeviation>,
-    angles: [AngleStat; 2],
-    tau_range: [[f64; 2]; 2],
-    flat: [[FlatAtExtreme; 2]; 2],
+    angles: Vec<AngleStat>,
+    tau_range: Vec<[f64; 2]>,
+    flat: Vec<[FlatAtExtreme; 2]>,
     saturation_samples: usize,
 }
 
@@ -361,13 +361,13 @@ pub(crate) struct CheckResult {
     pub duration: f64,
     pub jitter_rms: f64,
     pub jitter_max: f64,
-    pub theta_range: [[f64; 2]; 2],
-    pub tau_range: [[f64; 2]; 2],
+    pub theta_range: Vec<[f64; 2]>,
+    pub tau_range: Vec<[f64; 2]>,
     pub warnings: Vec<Warning>,
 }
 
 impl Checks {
-    pub fn new(nominal: Option<f64>, saturation_samples: usize) -> Self {
+    pub fn new(nominal: Option<f64>, saturation_samples: usize, joints: usize) -> Self {
         let angle = AngleStat {
             min: f64::INFINITY,
             max: f64::NEG_INFINITY,
@@ -388,9 +388,9 @@ impl Checks {
             jitter_n: 0,
             jitter_max: 0.0,
             worst: None,
-            angles: [angle; 2],
-            tau_range: [[f64::INFINITY, f64::NEG_INFINITY]; 2],
-            flat: [flat(), flat()],
+            angles: vec![angle; joints],
+            tau_range: vec![[f64::INFINITY, f64::NEG_INFINITY]; joints],
+            flat: (0..joints).map(|_| flat()).collect(),
             saturation_samples,
         }
     }
@@ -440,8 +440,8 @@ impl Checks {
         line: u64,
         t_column: usize,
         t: f64,
-        theta: [f64; 2],
-        tau: [f64; 2],
+        theta: &[f64],
+        tau: &[f64],
     ) -> Result<(), LogError> {
         if self.rows == 0 {
             self.first_t = t;
@@ -467,7 +467,7 @@ impl Checks {
             }
         }
         self.prev_t = t;
-        for (a, &v) in self.angles.iter_mut().zip(&theta) {
+        for (a, &v) in self.angles.iter_mut().zip(theta) {
             a.min = a.min.min(v);
             a.max = a.max.max(v);
             if v.abs() > a.max_abs {
@@ -475,7 +475,7 @@ impl Checks {
                 a.line_of_max_abs = line;
             }
         }
-        for ((r, flat), &v) in self.tau_range.iter_mut().zip(&mut self.flat).zip(&tau) {
+        for ((r, flat), &v) in self.tau_range.iter_mut().zip(&mut self.flat).zip(tau) {
             r[0] = r[0].min(v);
             r[1] = r[1].max(v);
             for f in flat {
@@ -571,8 +571,8 @@ impl Checks {
                 max_s: self.jitter_max,
             });
         }
-        let [f1, f2] = self.flat;
-        for (c, pair) in [f1, f2].into_iter().enumerate() {
+        let flat = std::mem::take(&mut self.flat);
+        for (c, pair) in flat.into_iter().enumerate() {
             let [hi, lo] = pair;
             // A constant channel is flat at both extremes: report it once.
             let constant = self.tau_range[c][0] == self.tau_range[c][1];
@@ -597,10 +597,7 @@ impl Checks {
             duration: span,
             jitter_rms,
             jitter_max: self.jitter_max,
-            theta_range: [
-                [self.angles[0].min, self.angles[0].max],
-                [self.angles[1].min, self.angles[1].max],
-            ],
+            theta_range: self.angles.iter().map(|a| [a.min, a.max]).collect(),
             tau_range: self.tau_range,
             warnings,
         })

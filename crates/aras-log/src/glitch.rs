@@ -27,6 +27,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::header::{Field, Role};
 use crate::{Log, LogError, Warning};
 
 /// Default [`GlitchOptions::threshold`]: 10 robust standard deviations. For
@@ -84,7 +85,7 @@ impl GlitchAction {
 
 /// Options of [`find_glitches`] and [`apply_glitches`]. `Default` gives the
 /// documented defaults.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GlitchOptions {
     /// What to do (default [`GlitchAction::Warn`]).
@@ -93,9 +94,9 @@ pub struct GlitchOptions {
     /// an isolated sample is a glitch (default
     /// [`DEFAULT_GLITCH_THRESHOLD`]).
     pub threshold: f64,
-    /// The robot's torque limits (N·m), if known: a torque beyond
-    /// `limit_factor` times its limit is a glitch too.
-    pub torque_limit: Option<[f64; 2]>,
+    /// The robot's torque limits (N·m), one per joint, if known: a torque
+    /// beyond `limit_factor` times its limit is a glitch too.
+    pub torque_limit: Option<Vec<f64>>,
     /// Factor on [`torque_limit`](Self::torque_limit) (default 1.5: a
     /// controller saturates at its limit, so half as much again is not a
     /// real torque).
@@ -132,8 +133,8 @@ pub struct Glitch {
     pub line: Option<u64>,
     /// 1-based file column of the channel's field (0 if unknown).
     pub column: usize,
-    /// `theta1`, `theta2`, `tau1` or `tau2`.
-    pub channel: &'static str,
+    /// `theta1`, `theta2`, …, `tau1`, `tau2`, ….
+    pub channel: String,
     /// The sample (rad or N·m).
     pub value: f64,
     /// What its neighbours say it should be (the repair value).
@@ -164,8 +165,6 @@ impl std::fmt::Display for Glitch {
         }
     }
 }
-
-const CHANNELS: [&str; 4] = ["theta1", "theta2", "tau1", "tau2"];
 
 /// Median of a small slice (sorted in place).
 fn median(v: &mut [f64]) -> f64 {
@@ -270,13 +269,20 @@ pub fn find_glitches(log: &Log, opts: &GlitchOptions) -> Vec<Glitch> {
     if opts.action == GlitchAction::Off || log.len() < 7 {
         return out;
     }
-    for c in 0..4 {
-        let x: &[f64] = if c < 2 {
+    let joints = log.joints();
+    for c in 0..2 * joints {
+        let angle = c < joints;
+        let x: &[f64] = if angle {
             &log.theta[c]
         } else {
-            &log.tau[c - 2]
+            &log.tau[c - joints]
         };
-        let (res, reach) = if c < 2 {
+        let channel = if angle {
+            format!("theta{}", c + 1)
+        } else {
+            format!("tau{}", c - joints + 1)
+        };
+        let (res, reach) = if angle {
             let a = angle_residuals(&log.t, x);
             (a.into_iter().map(|(e, r)| (e, r, r)).collect::<Vec<_>>(), 2)
         } else {
@@ -289,9 +295,9 @@ pub fn find_glitches(log: &Log, opts: &GlitchOptions) -> Vec<Glitch> {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
                 (l.min(v), h.max(v))
             });
-        let floor_share = if c < 2 { ANGLE_FLOOR } else { TORQUE_FLOOR };
+        let floor_share = if angle { ANGLE_FLOOR } else { TORQUE_FLOOR };
         let mut scale = mad_scale(&for_scale).max(floor_share * (hi - lo));
-        if c < 2 {
+        if angle {
             let q = quantum(x);
             if q.is_finite() {
                 scale = scale.max(q);
@@ -304,8 +310,10 @@ pub fn find_glitches(log: &Log, opts: &GlitchOptions) -> Vec<Glitch> {
         let floor = 1e-9 * top.max(1e-12);
         let limit = opts
             .torque_limit
-            .filter(|_| c >= 2)
-            .map(|l| l[c - 2].abs() * opts.limit_factor);
+            .as_deref()
+            .filter(|_| !angle)
+            .and_then(|l| l.get(c - joints))
+            .map(|l| l.abs() * opts.limit_factor);
         for i in 0..x.len() {
             let (expected, ri, _) = res[i];
             let beyond = limit.is_some_and(|l| x[i].abs() > l);
@@ -320,8 +328,8 @@ pub fn find_glitches(log: &Log, opts: &GlitchOptions) -> Vec<Glitch> {
                 out.push(Glitch {
                     row: i,
                     line: log.summary.lines.line(i),
-                    column: log.summary.channel_columns[c],
-                    channel: CHANNELS[c],
+                    column: log.summary.channel_columns.get(c).copied().unwrap_or(0),
+                    channel: channel.clone(),
                     value: x[i],
                     expected,
                     score: if scale > 0.0 {
@@ -338,7 +346,7 @@ pub fn find_glitches(log: &Log, opts: &GlitchOptions) -> Vec<Glitch> {
             }
         }
     }
-    out.sort_by_key(|g| (g.row, g.channel));
+    out.sort_by(|a, b| (a.row, &a.channel).cmp(&(b.row, &b.channel)));
     out
 }
 
@@ -373,13 +381,16 @@ pub fn apply_glitches(mut log: Log, opts: &GlitchOptions) -> Result<(Log, Vec<Gl
             reason: "give a factor of at least 1 such as 1.5".into(),
         });
     }
-    if let Some(l) = opts.torque_limit
-        && !l.iter().all(|v| v.is_finite() && *v > 0.0)
+    if let Some(l) = &opts.torque_limit
+        && (l.len() != log.joints() || !l.iter().all(|v| v.is_finite() && *v > 0.0))
     {
         return Err(LogError::InvalidOption {
             name: "torque limit",
             value: format!("{l:?}"),
-            reason: "give two positive torques (N·m)".into(),
+            reason: format!(
+                "give {} positive torques (N·m), one per joint of the log",
+                log.joints()
+            ),
         });
     }
     let glitches = find_glitches(&log, opts);
@@ -399,11 +410,10 @@ pub fn apply_glitches(mut log: Log, opts: &GlitchOptions) -> Result<(Log, Vec<Gl
         GlitchAction::Warn => "kept as logged (--glitches warn)",
         GlitchAction::Repair => {
             for g in &glitches {
-                let ch = match g.channel {
-                    "theta1" => &mut log.theta[0],
-                    "theta2" => &mut log.theta[1],
-                    "tau1" => &mut log.tau[0],
-                    _ => &mut log.tau[1],
+                let ch = match crate::header::Field::parse(&g.channel) {
+                    Some(Field::Joint(Role::Theta, j)) => &mut log.theta[j],
+                    Some(Field::Joint(Role::Tau, j)) => &mut log.tau[j],
+                    _ => continue,
                 };
                 ch[g.row] = g.expected;
             }
@@ -417,13 +427,14 @@ pub fn apply_glitches(mut log: Log, opts: &GlitchOptions) -> Result<(Log, Vec<Gl
             let keep: Vec<usize> = (0..log.len()).filter(|&i| !drop[i]).collect();
             let pick = |v: &Vec<f64>| keep.iter().map(|&i| v[i]).collect::<Vec<f64>>();
             log.t = pick(&log.t);
-            log.theta = [pick(&log.theta[0]), pick(&log.theta[1])];
-            log.tau = [pick(&log.tau[0]), pick(&log.tau[1])];
+            let pick_all = |v: &mut Vec<Vec<f64>>| v.iter_mut().for_each(|c| *c = pick(c));
+            pick_all(&mut log.theta);
+            pick_all(&mut log.tau);
             if let Some(d) = &mut log.theta_dot {
-                *d = [pick(&d[0]), pick(&d[1])];
+                pick_all(d);
             }
             if let Some(d) = &mut log.theta_ddot {
-                *d = [pick(&d[0]), pick(&d[1])];
+                pick_all(d);
             }
             log.summary.lines = log.summary.lines.filtered(keep.iter().copied());
             log.summary.rows = log.t.len();

@@ -1,39 +1,105 @@
 //! Header parsing: which column holds what, and how raw sensor values become
 //! SI angles and torques.
+//!
+//! A log has `n ≥ 1` joints, numbered from 1 in its column names
+//! (`theta1 … thetaN`); `n` is read from the header, or fixed by
+//! [`ReadOptions::joints`](crate::ReadOptions::joints).
 
 use std::f64::consts::TAU;
 
 use super::sidecar::Sensors;
 use crate::error::LogError;
 
-/// Number of value slots a row is parsed into.
-pub(crate) const SLOTS: usize = 13;
+/// A per-joint column of the format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Role {
+    /// `thetaJ`: joint angle (rad).
+    Theta = 0,
+    /// `tauJ`: joint torque (N·m).
+    Tau = 1,
+    /// `iJ`: motor current (A).
+    Current = 2,
+    /// `encJ`: encoder counts.
+    Enc = 3,
+    /// `dthetaJ`: logged joint rate (rad/s).
+    Dtheta = 4,
+    /// `ddthetaJ`: logged joint acceleration (rad/s²).
+    Ddtheta = 5,
+}
 
-/// Slot indices: `t`, θ, τ, currents, encoder counts, θ̇, θ̈.
-pub(crate) const T: usize = 0;
-pub(crate) const THETA: [usize; 2] = [1, 2];
-pub(crate) const TAU_: [usize; 2] = [3, 4];
-pub(crate) const CURRENT: [usize; 2] = [5, 6];
-pub(crate) const ENC: [usize; 2] = [7, 8];
-pub(crate) const DTHETA: [usize; 2] = [9, 10];
-pub(crate) const DDTHETA: [usize; 2] = [11, 12];
-
-/// Column names of the slots, in slot order.
-pub(crate) const NAMES: [&str; SLOTS] = [
-    "t", "theta1", "theta2", "tau1", "tau2", "i1", "i2", "enc1", "enc2", "dtheta1", "dtheta2",
-    "ddtheta1", "ddtheta2",
+/// The roles in slot order, with their column-name prefixes.
+const ROLES: [(Role, &str); 6] = [
+    (Role::Theta, "theta"),
+    (Role::Tau, "tau"),
+    (Role::Current, "i"),
+    (Role::Enc, "enc"),
+    (Role::Dtheta, "dtheta"),
+    (Role::Ddtheta, "ddtheta"),
 ];
 
+/// A column of the format: time, or a role of joint `j` (0-based).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Field {
+    /// `t`: time.
+    T,
+    /// A per-joint column.
+    Joint(Role, usize),
+}
+
+impl Field {
+    /// The field a standard column name stands for (`t`, `theta3`, `i1`, …;
+    /// joint numbers from 1, without leading zeros).
+    pub(crate) fn parse(name: &str) -> Option<Self> {
+        if name == "t" {
+            return Some(Self::T);
+        }
+        let digits = name.len() - name.trim_end_matches(|c: char| c.is_ascii_digit()).len();
+        let (prefix, number) = name.split_at(name.len() - digits);
+        if number.is_empty() || number.starts_with('0') || number.len() > 6 {
+            return None;
+        }
+        let j: usize = number.parse().ok()?;
+        let role = ROLES.iter().find(|(_, p)| *p == prefix)?.0;
+        Some(Self::Joint(role, j - 1))
+    }
+
+    /// The standard column name (`t`, `theta1`, …).
+    pub(crate) fn name(self) -> String {
+        match self {
+            Self::T => "t".into(),
+            Self::Joint(role, j) => format!("{}{}", ROLES[role as usize].1, j + 1),
+        }
+    }
+
+    /// The slot of this field in a row of a log of `joints` joints.
+    pub(crate) fn slot(self, joints: usize) -> usize {
+        match self {
+            Self::T => 0,
+            Self::Joint(role, j) => 1 + role as usize * joints + j,
+        }
+    }
+}
+
+/// Number of value slots a row of a log of `joints` joints is parsed into.
+pub(crate) fn slots(joints: usize) -> usize {
+    1 + ROLES.len() * joints
+}
+
+/// The standard names of the roles, for messages.
+fn role_list() -> String {
+    "t, thetaJ, tauJ, iJ, encJ, dthetaJ, ddthetaJ (J = 1, 2, …: the joint)".into()
+}
+
 /// A lab's own column names: which header name holds which column of the
-/// format (`t`, `theta1`, `theta2`, `tau1`, `tau2`, `i1`, `i2`, `enc1`,
-/// `enc2`, `dtheta1`, `dtheta2`, `ddtheta1`, `ddtheta2`). Roles not renamed
-/// keep their standard name; a standard name whose role was given another
-/// column is an ordinary, ignored column. Matching ignores case and
-/// surrounding quotes, like the header itself.
+/// format (`t`, and per joint J = 1, 2, …: `thetaJ`, `tauJ`, `iJ`, `encJ`,
+/// `dthetaJ`, `ddthetaJ`). Roles not renamed keep their standard name; a
+/// standard name whose role was given another column is an ordinary,
+/// ignored column. Matching ignores case and surrounding quotes, like the
+/// header itself.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct ColumnNames {
-    /// `(slot, header name)`, cleaned like header names.
-    renamed: Vec<(usize, String)>,
+    /// `(field, header name)`, cleaned like header names.
+    renamed: Vec<(Field, String)>,
 }
 
 impl ColumnNames {
@@ -49,7 +115,7 @@ impl ColumnNames {
             let Some((role, name)) = item.split_once('=') else {
                 return Err(bad(format!(
                     "`{item}` is not ROLE=NAME: write e.g. theta1=q1 (roles: {})",
-                    NAMES.join(", ")
+                    role_list()
                 )));
             };
             out.rename(role, name).map_err(&bad)?;
@@ -61,25 +127,25 @@ impl ColumnNames {
     fn rename(&mut self, role: &str, name: &str) -> Result<(), String> {
         let role = clean(role);
         let name = clean(name);
-        let Some(slot) = NAMES.iter().position(|n| *n == role) else {
+        let Some(field) = Field::parse(&role) else {
             return Err(format!(
                 "unknown role `{role}`: the roles are {}",
-                NAMES.join(", ")
+                role_list()
             ));
         };
         if name.is_empty() {
             return Err(format!("role `{role}` has an empty column name"));
         }
-        if self.renamed.iter().any(|(s, _)| *s == slot) {
+        if self.renamed.iter().any(|(f, _)| *f == field) {
             return Err(format!("role `{role}` is named twice"));
         }
-        if let Some((s, _)) = self.renamed.iter().find(|(_, n)| *n == name) {
+        if let Some((f, _)) = self.renamed.iter().find(|(_, n)| *n == name) {
             return Err(format!(
                 "column `{name}` is given to both `{}` and `{role}`",
-                NAMES[*s]
+                f.name()
             ));
         }
-        self.renamed.push((slot, name));
+        self.renamed.push((field, name));
         Ok(())
     }
 
@@ -88,47 +154,47 @@ impl ColumnNames {
         self.renamed.is_empty()
     }
 
-    /// The slot a (cleaned) header name holds, if any.
-    fn slot_of(&self, name: &str) -> Option<usize> {
-        if let Some((s, _)) = self.renamed.iter().find(|(_, n)| n == name) {
-            return Some(*s);
+    /// The field a (cleaned) header name holds, if any.
+    fn field_of(&self, name: &str) -> Option<Field> {
+        if let Some((f, _)) = self.renamed.iter().find(|(_, n)| n == name) {
+            return Some(*f);
         }
-        NAMES
-            .iter()
-            .position(|n| *n == name)
-            .filter(|s| !self.renamed.iter().any(|(r, _)| r == s))
+        Field::parse(name).filter(|f| !self.renamed.iter().any(|(r, _)| r == f))
     }
 
-    /// How messages name a slot: `theta1`, or `q1 (theta1)` when renamed.
-    fn label(&self, slot: usize) -> String {
-        match self.renamed.iter().find(|(s, _)| *s == slot) {
-            Some((_, n)) => format!("{n} ({})", NAMES[slot]),
-            None => NAMES[slot].to_string(),
+    /// How messages name a field: `theta1`, or `q1 (theta1)` when renamed.
+    fn label(&self, field: Field) -> String {
+        match self.renamed.iter().find(|(f, _)| *f == field) {
+            Some((_, n)) => format!("{n} ({})", field.name()),
+            None => field.name(),
         }
     }
 }
 
 /// Where the joint angles come from.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) enum AngleSource {
-    /// `theta1, theta2` in radians.
+    /// `thetaJ` in radians.
     Theta,
-    /// `θ = counts · scale` with `scale = 2π/(counts_per_rev · gear_ratio)`.
-    Encoder { scale: [f64; 2] },
+    /// `θ = counts · scale` with `scale = 2π/(counts_per_rev · gear_ratio)`,
+    /// per joint.
+    Encoder { scale: Vec<f64> },
 }
 
 /// Where the joint torques come from.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) enum TorqueSource {
-    /// `tau1, tau2` in N·m.
+    /// `tauJ` in N·m.
     Tau,
-    /// `τ = i · torque_constant · gear_ratio`.
-    Current { scale: [f64; 2] },
+    /// `τ = i · torque_constant · gear_ratio`, per joint.
+    Current { scale: Vec<f64> },
 }
 
 /// The resolved meaning of every column.
 #[derive(Debug, Clone)]
 pub(crate) struct Layout {
+    /// Number of joints.
+    pub joints: usize,
     /// Number of fields every row must have.
     pub fields: usize,
     /// Column names as written (trimmed).
@@ -136,7 +202,9 @@ pub(crate) struct Layout {
     /// For each column, the slot it is parsed into, or `None` if ignored.
     pub slot_of: Vec<Option<usize>>,
     /// 1-based column of each slot (0 if absent).
-    pub column_of: [usize; SLOTS],
+    pub column_of: Vec<usize>,
+    /// The standard name of each slot, for messages.
+    pub slot_names: Vec<String>,
     pub angles: AngleSource,
     pub torques: TorqueSource,
     pub has_velocity: bool,
@@ -154,10 +222,50 @@ fn clean(name: &str) -> String {
     n.trim().to_ascii_lowercase()
 }
 
+/// `theta1, theta2`, `enc1 … enc7`: the columns of a role, for messages.
+fn columns_of(role: Role, joints: usize) -> String {
+    let name = |j: usize| Field::Joint(role, j).name();
+    match joints {
+        1 => name(0),
+        2 => format!("{}, {}", name(0), name(1)),
+        n => format!("{} … {}", name(0), name(n - 1)),
+    }
+}
+
+/// A per-joint sensor constant of the sidecar, checked to cover every joint.
+fn per_joint<'a>(
+    values: Option<&'a [f64]>,
+    key: &str,
+    role: Role,
+    joints: usize,
+    file: &str,
+    sidecar: &str,
+) -> Result<&'a [f64], LogError> {
+    let v = values.ok_or_else(|| LogError::MissingSensor {
+        file: file.into(),
+        columns: columns_of(role, joints),
+        key: format!("sensors.{key}"),
+        sidecar: sidecar.into(),
+    })?;
+    if v.len() != joints {
+        return Err(LogError::SidecarValue {
+            file: sidecar.into(),
+            key: format!("sensors.{key}"),
+            value: format!("{v:?}"),
+            reason: format!(
+                "it has {} values but the log has {joints} joints: give one per joint",
+                v.len()
+            ),
+        });
+    }
+    Ok(v)
+}
+
 impl Layout {
     /// Resolves a header line against the format; `sensors` are the
     /// effective constants (sidecar with overrides), `sidecar_name` where the
-    /// sidecar was (for messages).
+    /// sidecar was (for messages), `joints` the expected joint count (`None`:
+    /// as many as the header's highest joint number).
     pub fn parse(
         header: &str,
         file: &str,
@@ -165,6 +273,7 @@ impl Layout {
         sensors: &Sensors,
         sidecar_name: &str,
         columns: &ColumnNames,
+        joints: Option<usize>,
     ) -> Result<Self, LogError> {
         if header.contains(';') {
             return Err(LogError::Semicolon {
@@ -179,8 +288,7 @@ impl Layout {
             });
         }
         let names: Vec<String> = header.split(',').map(clean).collect();
-        let mut column_of = [0usize; SLOTS];
-        let mut extra = Vec::new();
+        let mut fields = Vec::with_capacity(names.len());
         for (j, name) in names.iter().enumerate() {
             if name.is_empty() {
                 return Err(LogError::EmptyColumnName {
@@ -198,12 +306,33 @@ impl Layout {
                     name: name.clone(),
                 });
             }
-            match columns.slot_of(name) {
-                Some(slot) => column_of[slot] = j + 1,
+            fields.push(columns.field_of(name));
+        }
+        // Joints: as told, else the highest joint number of the header.
+        let n = joints.unwrap_or_else(|| {
+            fields
+                .iter()
+                .filter_map(|f| match f {
+                    Some(Field::Joint(_, j)) => Some(j + 1),
+                    _ => None,
+                })
+                .max()
+                .unwrap_or(2)
+        });
+        let fields: Vec<Option<Field>> = fields
+            .into_iter()
+            .map(|f| f.filter(|f| !matches!(f, Field::Joint(_, j) if *j >= n)))
+            .collect();
+        let slot_count = slots(n);
+        let mut column_of = vec![0usize; slot_count];
+        let mut extra = Vec::new();
+        for (j, (name, field)) in names.iter().zip(&fields).enumerate() {
+            match field {
+                Some(f) => column_of[f.slot(n)] = j + 1,
                 None => extra.push(name.clone()),
             }
         }
-        let has = |slot: usize| column_of[slot] != 0;
+        let has = |f: Field| column_of[f.slot(n)] != 0;
         let header_list = names.join(", ");
         let missing = |name: &str, hint: &str| LogError::MissingColumn {
             file: file.into(),
@@ -212,112 +341,132 @@ impl Layout {
             header: header_list.clone(),
             hint: hint.into(),
         };
-        let pair = |slots: [usize; 2]| -> Result<bool, LogError> {
-            match (has(slots[0]), has(slots[1])) {
-                (true, true) => Ok(true),
-                (false, false) => Ok(false),
-                (a, _) => {
-                    let (p, m) = if a { (0, 1) } else { (1, 0) };
-                    Err(LogError::UnpairedColumn {
-                        file: file.into(),
-                        line,
-                        present: columns.label(slots[p]),
-                        missing: columns.label(slots[m]),
-                    })
-                }
+        // A role is given for every joint or for none.
+        let all = |role: Role| -> Result<bool, LogError> {
+            let present: Vec<bool> = (0..n).map(|j| has(Field::Joint(role, j))).collect();
+            match (
+                present.iter().position(|p| *p),
+                present.iter().position(|p| !p),
+            ) {
+                (None, _) => Ok(false),
+                (Some(_), None) => Ok(true),
+                (Some(p), Some(m)) => Err(LogError::UnpairedColumn {
+                    file: file.into(),
+                    line,
+                    present: columns.label(Field::Joint(role, p)),
+                    missing: columns.label(Field::Joint(role, m)),
+                }),
             }
         };
-        if !has(T) {
+        if !has(Field::T) {
             return Err(missing(
-                &columns.label(T),
+                &columns.label(Field::T),
                 "name the time column `t` (seconds), or map yours with columns t=NAME",
             ));
         }
         let mut notes = Vec::new();
-        let mut used = [false; SLOTS];
-        used[T] = true;
+        let mut used = vec![false; slot_count];
+        used[Field::T.slot(n)] = true;
+        let mut use_role = |role: Role| {
+            for j in 0..n {
+                used[Field::Joint(role, j).slot(n)] = true;
+            }
+        };
+        let any = |role: Role| (0..n).any(|j| has(Field::Joint(role, j)));
+        let first_missing = |role: Role| {
+            (0..n)
+                .map(|j| Field::Joint(role, j))
+                .find(|f| !has(*f))
+                .map_or_else(String::new, |f| columns.label(f))
+        };
 
         // Angles: theta columns, else encoder counts.
-        let has_enc = pair(ENC)?;
-        let angles = if has(THETA[0]) || has(THETA[1]) {
-            for s in THETA {
-                if !has(s) {
-                    return Err(missing(
-                        &columns.label(s),
-                        "give both joint angles theta1, theta2 (rad)",
-                    ));
-                }
+        let has_enc = all(Role::Enc)?;
+        let thetas = columns_of(Role::Theta, n);
+        let angles = if any(Role::Theta) {
+            if !all(Role::Theta).unwrap_or(false) {
+                return Err(missing(
+                    &first_missing(Role::Theta),
+                    &format!("give every joint angle {thetas} (rad)"),
+                ));
             }
-            used[THETA[0]] = true;
-            used[THETA[1]] = true;
+            use_role(Role::Theta);
             if has_enc {
-                notes.push("columns enc1, enc2 ignored: theta1, theta2 are given".to_string());
+                notes.push(format!(
+                    "columns {} ignored: {thetas} are given",
+                    columns_of(Role::Enc, n)
+                ));
             }
             AngleSource::Theta
         } else if has_enc {
-            let cpr = sensors
-                .counts_per_rev
-                .ok_or_else(|| LogError::MissingSensor {
-                    file: file.into(),
-                    columns: "enc1, enc2".into(),
-                    key: "sensors.counts_per_rev".into(),
-                    sidecar: sidecar_name.into(),
-                })?;
-            let gear = sensors.gear_ratios.ok_or_else(|| LogError::MissingSensor {
-                file: file.into(),
-                columns: "enc1, enc2".into(),
-                key: "sensors.gear_ratios".into(),
-                sidecar: sidecar_name.into(),
-            })?;
-            used[ENC[0]] = true;
-            used[ENC[1]] = true;
+            let cpr = per_joint(
+                sensors.counts_per_rev.as_deref(),
+                "counts_per_rev",
+                Role::Enc,
+                n,
+                file,
+                sidecar_name,
+            )?;
+            let gear = per_joint(
+                sensors.gear_ratios.as_deref(),
+                "gear_ratios",
+                Role::Enc,
+                n,
+                file,
+                sidecar_name,
+            )?;
+            use_role(Role::Enc);
             notes.push(format!(
                 "joint angles from encoder counts: theta = 2π·enc/(counts_per_rev·gear_ratio), \
                  counts_per_rev = {cpr:?}, gear_ratios = {gear:?}"
             ));
             AngleSource::Encoder {
-                scale: [TAU / (cpr[0] * gear[0]), TAU / (cpr[1] * gear[1])],
+                scale: cpr.iter().zip(gear).map(|(c, g)| TAU / (c * g)).collect(),
             }
         } else {
             return Err(missing(
                 "theta1",
-                "give joint angles theta1, theta2 (rad), or encoder counts enc1, enc2 with \
-                 sensors.counts_per_rev and sensors.gear_ratios",
+                &format!(
+                    "give joint angles {thetas} (rad), or encoder counts {} with \
+                     sensors.counts_per_rev and sensors.gear_ratios",
+                    columns_of(Role::Enc, n)
+                ),
             ));
         };
 
         // Torques: tau columns, else motor currents.
-        let has_i = pair(CURRENT)?;
-        let torques = if has(TAU_[0]) || has(TAU_[1]) {
-            for s in TAU_ {
-                if !has(s) {
-                    return Err(missing(
-                        &columns.label(s),
-                        "give both joint torques tau1, tau2 (N·m)",
-                    ));
-                }
+        let has_i = all(Role::Current)?;
+        let taus = columns_of(Role::Tau, n);
+        let currents = columns_of(Role::Current, n);
+        let torques = if any(Role::Tau) {
+            if !all(Role::Tau).unwrap_or(false) {
+                return Err(missing(
+                    &first_missing(Role::Tau),
+                    &format!("give every joint torque {taus} (N·m)"),
+                ));
             }
-            used[TAU_[0]] = true;
-            used[TAU_[1]] = true;
+            use_role(Role::Tau);
             if has_i {
-                notes.push("columns i1, i2 ignored: tau1, tau2 are given".to_string());
+                notes.push(format!("columns {currents} ignored: {taus} are given"));
             }
             TorqueSource::Tau
         } else if has_i {
-            let kt = sensors
-                .torque_constants
-                .ok_or_else(|| LogError::MissingSensor {
-                    file: file.into(),
-                    columns: "i1, i2".into(),
-                    key: "sensors.torque_constants".into(),
-                    sidecar: sidecar_name.into(),
-                })?;
-            let gear = sensors.gear_ratios.ok_or_else(|| LogError::MissingSensor {
-                file: file.into(),
-                columns: "i1, i2".into(),
-                key: "sensors.gear_ratios".into(),
-                sidecar: sidecar_name.into(),
-            })?;
+            let kt = per_joint(
+                sensors.torque_constants.as_deref(),
+                "torque_constants",
+                Role::Current,
+                n,
+                file,
+                sidecar_name,
+            )?;
+            let gear = per_joint(
+                sensors.gear_ratios.as_deref(),
+                "gear_ratios",
+                Role::Current,
+                n,
+                file,
+                sidecar_name,
+            )?;
             for (i, k) in kt.iter().enumerate() {
                 if *k == 0.0 {
                     return Err(LogError::SidecarValue {
@@ -330,45 +479,110 @@ impl Layout {
                     });
                 }
             }
-            used[CURRENT[0]] = true;
-            used[CURRENT[1]] = true;
+            use_role(Role::Current);
             notes.push(format!(
                 "joint torques from motor currents: tau = i·torque_constant·gear_ratio, \
                  torque_constants = {kt:?} N·m/A, gear_ratios = {gear:?}"
             ));
             TorqueSource::Current {
-                scale: [kt[0] * gear[0], kt[1] * gear[1]],
+                scale: kt.iter().zip(gear).map(|(k, g)| k * g).collect(),
             }
         } else {
             return Err(missing(
                 "tau1",
-                "give joint torques tau1, tau2 (N·m), or motor currents i1, i2 with \
-                 sensors.torque_constants and sensors.gear_ratios",
+                &format!(
+                    "give joint torques {taus} (N·m), or motor currents {currents} with \
+                     sensors.torque_constants and sensors.gear_ratios"
+                ),
             ));
         };
 
-        let has_velocity = pair(DTHETA)?;
-        let has_acceleration = pair(DDTHETA)?;
-        for s in DTHETA.iter().chain(DDTHETA.iter()) {
-            used[*s] = has(*s);
+        let has_velocity = all(Role::Dtheta)?;
+        let has_acceleration = all(Role::Ddtheta)?;
+        if has_velocity {
+            use_role(Role::Dtheta);
+        }
+        if has_acceleration {
+            use_role(Role::Ddtheta);
         }
         if !extra.is_empty() {
             notes.push(format!("extra columns ignored: {}", extra.join(", ")));
         }
-        let slot_of = names
+        let slot_of = fields
             .iter()
-            .map(|n| columns.slot_of(n).filter(|&slot| used[slot]))
+            .map(|f| f.map(|f| f.slot(n)).filter(|&slot| used[slot]))
             .collect();
+        let mut slot_names = vec![String::new(); slot_count];
+        slot_names[0] = Field::T.name();
+        for (role, _) in ROLES {
+            for j in 0..n {
+                let f = Field::Joint(role, j);
+                slot_names[f.slot(n)] = f.name();
+            }
+        }
         Ok(Self {
+            joints: n,
             fields: names.len(),
             names,
             slot_of,
             column_of,
+            slot_names,
             angles,
             torques,
             has_velocity,
             has_acceleration,
             notes,
         })
+    }
+
+    /// 1-based column of `field` (0 if absent).
+    pub fn column(&self, field: Field) -> usize {
+        self.column_of[field.slot(self.joints)]
+    }
+
+    /// 1-based file columns of the angle channels, then the torque
+    /// channels, as read (0 if unknown).
+    pub fn channel_columns(&self) -> Vec<usize> {
+        let angle = match self.angles {
+            AngleSource::Theta => Role::Theta,
+            AngleSource::Encoder { .. } => Role::Enc,
+        };
+        let torque = match self.torques {
+            TorqueSource::Tau => Role::Tau,
+            TorqueSource::Current { .. } => Role::Current,
+        };
+        [angle, torque]
+            .into_iter()
+            .flat_map(|r| (0..self.joints).map(move |j| Field::Joint(r, j)))
+            .map(|f| self.column(f))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fields_parse_and_name_round_trip() {
+        for name in ["t", "theta1", "tau7", "i2", "enc12", "dtheta3", "ddtheta1"] {
+            assert_eq!(Field::parse(name).unwrap().name(), name);
+        }
+        for name in ["theta", "theta0", "theta01", "x1", "thetax", "tau-1", ""] {
+            assert_eq!(Field::parse(name), None, "{name}");
+        }
+        // Slots are distinct and dense for any joint count.
+        for n in 1..5 {
+            let mut seen = vec![false; slots(n)];
+            seen[Field::T.slot(n)] = true;
+            for (role, _) in ROLES {
+                for j in 0..n {
+                    let s = Field::Joint(role, j).slot(n);
+                    assert!(!seen[s]);
+                    seen[s] = true;
+                }
+            }
+            assert!(seen.iter().all(|s| *s));
+        }
     }
 }

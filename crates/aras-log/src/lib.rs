@@ -13,7 +13,8 @@
 //!
 //! The reader validates everything a log can get wrong: every defect is a
 //! [`LogError`] naming file, line, column and value, with the fix. No robot
-//! is assumed: a log is two joints' signals.
+//! is assumed: a log is the signals of its joints, as many as its header
+//! names (`theta1 … thetaN`).
 //!
 //! # Dependencies
 //!
@@ -129,6 +130,11 @@ impl TimeUnit {
 pub struct ReadOptions {
     /// Sidecar location (default [`SidecarSource::Auto`]).
     pub sidecar: SidecarSource,
+    /// Number of joints the log must have (default `None`: as many as the
+    /// header's highest joint number, `theta3` → 3). With `Some(n)`,
+    /// columns of joints beyond `n` are ignored (with a note) and a log
+    /// with fewer is refused: a robot's tool states its joint count.
+    pub joints: Option<usize>,
     /// Sensor constants that override the sidecar's (the command line).
     pub sensors: Sensors,
     /// Fewest data rows accepted (default 16; at least 2).
@@ -166,6 +172,7 @@ impl Default for ReadOptions {
     fn default() -> Self {
         Self {
             sidecar: SidecarSource::Auto,
+            joints: None,
             sensors: Sensors::default(),
             min_rows: 16,
             step_tolerance: 0.5,
@@ -187,6 +194,13 @@ impl ReadOptions {
             value,
             reason: reason.into(),
         };
+        if self.joints == Some(0) {
+            return Err(bad(
+                "joints",
+                "0".into(),
+                "a log has at least one joint: give the robot's joint count, or none",
+            ));
+        }
         if self.min_rows < 2 {
             return Err(bad(
                 "min_rows",
@@ -228,14 +242,14 @@ pub struct Log {
     pub name: String,
     /// Time (s), strictly increasing, nearly uniform.
     pub t: Vec<f64>,
-    /// Joint angles (rad).
-    pub theta: [Vec<f64>; 2],
-    /// Joint torques (N·m).
-    pub tau: [Vec<f64>; 2],
+    /// Joint angles (rad), one column per joint.
+    pub theta: Vec<Vec<f64>>,
+    /// Joint torques (N·m), one column per joint.
+    pub tau: Vec<Vec<f64>>,
     /// Logged joint rates (rad/s), if present.
-    pub theta_dot: Option<[Vec<f64>; 2]>,
+    pub theta_dot: Option<Vec<Vec<f64>>>,
     /// Logged joint accelerations (rad/s²), if present.
-    pub theta_ddot: Option<[Vec<f64>; 2]>,
+    pub theta_ddot: Option<Vec<Vec<f64>>>,
     /// The sidecar (default if none); its `torques` is the log's torque
     /// timing, from the file or, when the file does not state it, from
     /// [`ReadOptions::torques`].
@@ -257,6 +271,11 @@ impl Log {
     /// True if there are no samples (never, for a log that was read).
     pub fn is_empty(&self) -> bool {
         self.t.is_empty()
+    }
+
+    /// Number of joints (angle channels).
+    pub fn joints(&self) -> usize {
+        self.theta.len()
     }
 
     /// How the logged torques relate to the sample times: the sidecar's
@@ -282,6 +301,7 @@ pub fn read_log_from<R: Read>(src: R, name: &str, opts: &ReadOptions) -> Result<
 fn collect<R: Read>(mut reader: LogReader<R>) -> Result<Log, LogError> {
     let mut cols = Columns::default();
     reader.read_rows(&mut cols, usize::MAX)?;
+    cols.resize_joints(reader.joints());
     let sidecar = reader.sidecar().clone();
     let (vel, acc) = (reader.has_velocity(), reader.has_acceleration());
     let report = reader.finish()?;

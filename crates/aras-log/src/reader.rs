@@ -11,29 +11,29 @@ use serde::Serialize;
 use super::ReadOptions;
 use super::TimeUnit;
 use super::checks::{Checks, StepDeviation, Warning};
-use super::header::{
-    AngleSource, CURRENT, DDTHETA, DTHETA, ENC, Layout, NAMES, SLOTS, T, TAU_, THETA, TorqueSource,
-};
+use super::header::{AngleSource, Field, Layout, Role, TorqueSource, slots};
 use super::number::parse_f64;
 use super::sidecar::Sidecar;
 use crate::error::LogError;
 
 /// Rows of a log in SI units, structure-of-arrays.
 ///
-/// Filled by [`LogReader::read_rows`], which appends; `theta_dot` and
+/// Filled by [`LogReader::read_rows`], which appends and gives every
+/// channel group one column per joint; the columns of `theta_dot` and
 /// `theta_ddot` stay empty when the log has no such columns.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Columns {
     /// Time (s).
     pub t: Vec<f64>,
-    /// Joint angles θ1, θ2 (rad).
-    pub theta: [Vec<f64>; 2],
-    /// Joint torques τ1, τ2 (N·m).
-    pub tau: [Vec<f64>; 2],
-    /// Logged joint rates (rad/s), if the log has `dtheta1, dtheta2`.
-    pub theta_dot: [Vec<f64>; 2],
-    /// Logged joint accelerations (rad/s²), if the log has `ddtheta1, ddtheta2`.
-    pub theta_ddot: [Vec<f64>; 2],
+    /// Joint angles θ1 … θn (rad), one column per joint.
+    pub theta: Vec<Vec<f64>>,
+    /// Joint torques τ1 … τn (N·m).
+    pub tau: Vec<Vec<f64>>,
+    /// Logged joint rates (rad/s), if the log has `dtheta1 … dthetaN`.
+    pub theta_dot: Vec<Vec<f64>>,
+    /// Logged joint accelerations (rad/s²), if the log has
+    /// `ddtheta1 … ddthetaN`.
+    pub theta_ddot: Vec<Vec<f64>>,
 }
 
 impl Columns {
@@ -45,6 +45,24 @@ impl Columns {
     /// True if there are no rows.
     pub fn is_empty(&self) -> bool {
         self.t.is_empty()
+    }
+
+    /// Number of joints (angle channels).
+    pub fn joints(&self) -> usize {
+        self.theta.len()
+    }
+
+    /// Gives every channel group `joints` columns (new ones empty, extra
+    /// ones dropped), as [`LogReader::read_rows`] does before appending.
+    pub fn resize_joints(&mut self, joints: usize) {
+        for g in [
+            &mut self.theta,
+            &mut self.tau,
+            &mut self.theta_dot,
+            &mut self.theta_ddot,
+        ] {
+            g.resize_with(joints, Vec::new);
+        }
     }
 
     /// Removes all rows, keeping the allocations.
@@ -137,10 +155,10 @@ pub struct LogSummary {
     pub angle_source: String,
     /// `"tau columns (N·m)"` or `"motor currents"`.
     pub torque_source: String,
-    /// `[min, max]` of θ1 and θ2 (rad).
-    pub theta_range: [[f64; 2]; 2],
-    /// `[min, max]` of τ1 and τ2 (N·m).
-    pub tau_range: [[f64; 2]; 2],
+    /// `[min, max]` of each joint angle θ1 … θn (rad).
+    pub theta_range: Vec<[f64; 2]>,
+    /// `[min, max]` of each joint torque τ1 … τn (N·m).
+    pub tau_range: Vec<[f64; 2]>,
     /// Where the sidecar came from, if any.
     pub sidecar: Option<String>,
     /// Time unit, epoch offset and jitter.
@@ -148,10 +166,10 @@ pub struct LogSummary {
     /// File line of each row.
     #[serde(skip)]
     pub lines: RowLines,
-    /// 1-based file columns of the fields θ1, θ2, τ1, τ2 come from (0 if
-    /// unknown).
+    /// 1-based file columns of the fields θ1 … θn, then τ1 … τn come from
+    /// (0 if unknown).
     #[serde(skip)]
-    pub channel_columns: [usize; 4],
+    pub channel_columns: Vec<usize>,
 }
 
 /// Summary, notes and warnings from [`LogReader::finish`].
@@ -274,6 +292,26 @@ pub struct LogReader<R> {
     offset: Option<f64>,
     lines_of_rows: RowLines,
     offset_warning: Option<Warning>,
+    /// One parsed row, and its angles and torques in SI (reused).
+    row: Row,
+}
+
+/// Scratch of one row, allocated once per reader.
+#[derive(Debug, Clone, Default)]
+struct Row {
+    vals: Vec<f64>,
+    theta: Vec<f64>,
+    tau: Vec<f64>,
+}
+
+impl Row {
+    fn new(joints: usize) -> Self {
+        Self {
+            vals: vec![0.0; slots(joints)],
+            theta: vec![0.0; joints],
+            tau: vec![0.0; joints],
+        }
+    }
 }
 
 impl LogReader<File> {
@@ -319,7 +357,7 @@ impl LogReader<File> {
                 value: format!("{:?}", opts.columns),
                 reason: format!(
                     "{name} is a ROS 2 bag: its joints are mapped by name with --joints \
-                     theta1=JOINT,theta2=JOINT, not with --columns"
+                     theta1=JOINT,theta2=JOINT,…, not with --columns"
                 ),
             });
         }
@@ -327,16 +365,27 @@ impl LogReader<File> {
             file: name.clone(),
             source,
         })?;
-        let bag = crate::bag::read(&bytes, &name, &opts.bag)?;
+        let bag = crate::bag::read(&bytes, &name, &opts.bag, opts.joints)?;
         drop(bytes);
-        let header: &[u8] = if bag.has_velocity {
-            b"t,theta1,theta2,tau1,tau2,dtheta1,dtheta2"
-        } else {
-            b"t,theta1,theta2,tau1,tau2"
+        let joints = bag.cols.joints();
+        let mut roles = vec![Role::Theta, Role::Tau];
+        if bag.has_velocity {
+            roles.push(Role::Dtheta);
+        }
+        let mut header = String::from("t");
+        for role in roles {
+            for j in 0..joints {
+                header.push(',');
+                header.push_str(&Field::Joint(role, j).name());
+            }
+        }
+        let opts = &crate::ReadOptions {
+            joints: Some(joints),
+            ..opts.clone()
         };
         // Messages are numbered on their topic: the "line" of a row.
         let label = format!("{name}#{}", bag.topic);
-        let r = LogReader::with_sidecar(header, label, opts, found)?;
+        let r = LogReader::with_sidecar(header.as_bytes(), label, opts, found)?;
         let mut layout = r.layout;
         layout.notes.splice(0..0, bag.notes);
         Ok(LogReader {
@@ -356,6 +405,7 @@ impl LogReader<File> {
             offset: None,
             lines_of_rows: r.lines_of_rows,
             offset_warning: None,
+            row: r.row,
         })
     }
 
@@ -443,6 +493,7 @@ impl<R: Read> LogReader<R> {
                 &sensors,
                 &where_sidecar,
                 &opts.columns,
+                opts.joints,
             )?;
         };
         let mut notes = layout.notes.clone();
@@ -451,7 +502,8 @@ impl<R: Read> LogReader<R> {
             notes.push("sensor constants from ReadOptions override the sidecar".into());
         }
         notes.extend(timing_note);
-        let checks = Checks::new(opts.nominal_step, opts.saturation_samples);
+        let checks = Checks::new(opts.nominal_step, opts.saturation_samples, layout.joints);
+        let row = Row::new(layout.joints);
         let mut layout = layout;
         layout.notes = notes;
         Ok(Self {
@@ -467,6 +519,7 @@ impl<R: Read> LogReader<R> {
             offset: None,
             lines_of_rows: RowLines::default(),
             offset_warning: None,
+            row,
         })
     }
 
@@ -493,12 +546,17 @@ impl<R: Read> LogReader<R> {
         &self.layout.names
     }
 
-    /// True if the log has `dtheta1, dtheta2`.
+    /// Number of joints of the log.
+    pub fn joints(&self) -> usize {
+        self.layout.joints
+    }
+
+    /// True if the log has `dtheta1 … dthetaN`.
     pub fn has_velocity(&self) -> bool {
         self.layout.has_velocity
     }
 
-    /// True if the log has `ddtheta1, ddtheta2`.
+    /// True if the log has `ddtheta1 … ddthetaN`.
     pub fn has_acceleration(&self) -> bool {
         self.layout.has_acceleration
     }
@@ -515,7 +573,9 @@ impl<R: Read> LogReader<R> {
             return self.read_bag_rows(out, max_rows);
         };
         let mut count = 0;
-        let mut vals = [0.0f64; SLOTS];
+        let n = self.layout.joints;
+        out.resize_joints(n);
+        let row = &mut self.row;
         while count < max_rows && !self.done {
             let Some(r) = lines.next().map_err(|source| LogError::Io {
                 file: self.name.clone(),
@@ -530,8 +590,9 @@ impl<R: Read> LogReader<R> {
             if bytes.is_empty() || bytes[0] == b'#' {
                 continue;
             }
-            parse_row(bytes, &self.layout, &self.name, line, &mut vals)?;
-            let raw_t = vals[T];
+            parse_row(bytes, &self.layout, &self.name, line, &mut row.vals)?;
+            let vals = &row.vals;
+            let raw_t = vals[0];
             // A clock epoch: subtract the first stamp in the file's own unit
             // (exact for stamps within a factor of 2 of it, Sterbenz).
             let offset = *self.offset.get_or_insert_with(|| {
@@ -553,30 +614,35 @@ impl<R: Read> LogReader<R> {
                 }
                 (raw_t - offset) * self.unit_s
             };
-            let theta = match self.layout.angles {
-                AngleSource::Theta => [vals[THETA[0]], vals[THETA[1]]],
-                AngleSource::Encoder { scale } => {
-                    [vals[ENC[0]] * scale[0], vals[ENC[1]] * scale[1]]
-                }
-            };
-            let tau = match self.layout.torques {
-                TorqueSource::Tau => [vals[TAU_[0]], vals[TAU_[1]]],
-                TorqueSource::Current { scale } => {
-                    [vals[CURRENT[0]] * scale[0], vals[CURRENT[1]] * scale[1]]
-                }
-            };
-            self.checks
-                .row(&self.name, line, self.layout.column_of[T], t, theta, tau)?;
+            let at = |role: Role, j: usize| vals[Field::Joint(role, j).slot(n)];
+            for j in 0..n {
+                row.theta[j] = match &self.layout.angles {
+                    AngleSource::Theta => at(Role::Theta, j),
+                    AngleSource::Encoder { scale } => at(Role::Enc, j) * scale[j],
+                };
+                row.tau[j] = match &self.layout.torques {
+                    TorqueSource::Tau => at(Role::Tau, j),
+                    TorqueSource::Current { scale } => at(Role::Current, j) * scale[j],
+                };
+            }
+            self.checks.row(
+                &self.name,
+                line,
+                self.layout.column(Field::T),
+                t,
+                &row.theta,
+                &row.tau,
+            )?;
             self.lines_of_rows.push(self.checks.rows - 1, line);
             out.t.push(t);
-            for c in 0..2 {
-                out.theta[c].push(theta[c]);
-                out.tau[c].push(tau[c]);
+            for j in 0..n {
+                out.theta[j].push(row.theta[j]);
+                out.tau[j].push(row.tau[j]);
                 if self.layout.has_velocity {
-                    out.theta_dot[c].push(vals[DTHETA[c]]);
+                    out.theta_dot[j].push(at(Role::Dtheta, j));
                 }
                 if self.layout.has_acceleration {
-                    out.theta_ddot[c].push(vals[DDTHETA[c]]);
+                    out.theta_ddot[j].push(at(Role::Ddtheta, j));
                 }
             }
             count += 1;
@@ -592,17 +658,22 @@ impl<R: Read> LogReader<R> {
         };
         let start = *next;
         let end = rows.len().min(start.saturating_add(max_rows));
+        let n = self.layout.joints;
+        out.resize_joints(n);
+        let row = &mut self.row;
         for i in start..end {
-            let theta = [rows.theta[0][i], rows.theta[1][i]];
-            let tau = [rows.tau[0][i], rows.tau[1][i]];
+            for j in 0..n {
+                row.theta[j] = rows.theta[j][i];
+                row.tau[j] = rows.tau[j][i];
+            }
             self.checks
-                .row(&self.name, i as u64 + 1, 1, rows.t[i], theta, tau)?;
+                .row(&self.name, i as u64 + 1, 1, rows.t[i], &row.theta, &row.tau)?;
             out.t.push(rows.t[i]);
-            for c in 0..2 {
-                out.theta[c].push(theta[c]);
-                out.tau[c].push(tau[c]);
+            for j in 0..n {
+                out.theta[j].push(row.theta[j]);
+                out.tau[j].push(row.tau[j]);
                 if self.layout.has_velocity {
-                    out.theta_dot[c].push(rows.theta_dot[c][i]);
+                    out.theta_dot[j].push(rows.theta_dot[j][i]);
                 }
             }
             *next = i + 1;
@@ -630,25 +701,7 @@ impl<R: Read> LogReader<R> {
             self.opts.time_unit.is_some(),
             self.opts.nominal_step.is_some(),
         )?;
-        let column = |slot: usize| self.layout.column_of[slot];
-        let channel_columns = [
-            match self.layout.angles {
-                AngleSource::Theta => column(THETA[0]),
-                AngleSource::Encoder { .. } => column(ENC[0]),
-            },
-            match self.layout.angles {
-                AngleSource::Theta => column(THETA[1]),
-                AngleSource::Encoder { .. } => column(ENC[1]),
-            },
-            match self.layout.torques {
-                TorqueSource::Tau => column(TAU_[0]),
-                TorqueSource::Current { .. } => column(CURRENT[0]),
-            },
-            match self.layout.torques {
-                TorqueSource::Tau => column(TAU_[1]),
-                TorqueSource::Current { .. } => column(CURRENT[1]),
-            },
-        ];
+        let channel_columns = self.layout.channel_columns();
         let mut warnings = res.warnings;
         if let Some(w) = self.offset_warning.take() {
             warnings.insert(0, w);
@@ -772,7 +825,7 @@ fn parse_row(
     layout: &Layout,
     file: &str,
     line: u64,
-    vals: &mut [f64; SLOTS],
+    vals: &mut [f64],
 ) -> Result<(), LogError> {
     let mut found = 0;
     for (j, field) in (Fields { rest: Some(bytes) }).enumerate() {
@@ -787,13 +840,13 @@ fn parse_row(
         match parse_f64(f) {
             // Time may be a clock epoch in ms or ns (1.7e12, 1.7e18): its
             // offset is removed later; the magnitude limit is for values.
-            Some(v) if v.abs() <= MAX_MAGNITUDE || (slot == T && v.is_finite()) => vals[slot] = v,
+            Some(v) if v.abs() <= MAX_MAGNITUDE || (slot == 0 && v.is_finite()) => vals[slot] = v,
             Some(v) if v.is_finite() => {
                 return Err(LogError::OutOfRange {
                     file: file.into(),
                     line,
                     column: j + 1,
-                    name: NAMES[slot].into(),
+                    name: layout.slot_names[slot].clone(),
                     text: String::from_utf8_lossy(f).into_owned(),
                     limit: MAX_MAGNITUDE,
                 });
@@ -803,7 +856,7 @@ fn parse_row(
                     file: file.into(),
                     line,
                     column: j + 1,
-                    name: NAMES[slot].into(),
+                    name: layout.slot_names[slot].clone(),
                     text: String::from_utf8_lossy(f).into_owned(),
                 });
             }
@@ -819,7 +872,7 @@ fn parse_row(
                     file: file.into(),
                     line,
                     column: j + 1,
-                    name: NAMES[slot].into(),
+                    name: layout.slot_names[slot].clone(),
                     text: String::from_utf8_lossy(f).into_owned(),
                     hint: hint.into(),
                 });

@@ -87,33 +87,34 @@ impl std::fmt::Display for TorqueTiming {
     }
 }
 
-/// Sensor constants, per actuator `[motor 1, motor 2]`.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+/// Sensor constants, one per actuator `[motor 1, motor 2, …]` (as many as
+/// the log has joints).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Sensors {
     /// Motor torque constants (N·m/A at the motor shaft).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub torque_constants: Option<[f64; 2]>,
+    pub torque_constants: Option<Vec<f64>>,
     /// Gear ratios: motor turns per joint turn (capstan drive).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub gear_ratios: Option<[f64; 2]>,
+    pub gear_ratios: Option<Vec<f64>>,
     /// Encoder counts per motor revolution (written as integers when whole).
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
         serialize_with = "whole_as_integer"
     )]
-    pub counts_per_rev: Option<[f64; 2]>,
+    pub counts_per_rev: Option<Vec<f64>>,
 }
 
 /// Writes whole counts as JSON integers (`4096`, not `4096.0`), as a person
 /// would write them.
-fn whole_as_integer<S: serde::Serializer>(v: &Option<[f64; 2]>, s: S) -> Result<S::Ok, S::Error> {
+fn whole_as_integer<S: serde::Serializer>(v: &Option<Vec<f64>>, s: S) -> Result<S::Ok, S::Error> {
     use serde::ser::SerializeSeq;
     let Some(pair) = v else {
         return s.serialize_none();
     };
-    let mut seq = s.serialize_seq(Some(2))?;
+    let mut seq = s.serialize_seq(Some(pair.len()))?;
     for x in pair {
         if x.fract() == 0.0 && x.abs() < 9.0e15 {
             seq.serialize_element(&(*x as i64))?;
@@ -321,7 +322,7 @@ impl Sensors {
     /// revolution positive. Torque constants may be zero here (a placeholder
     /// when the log has torque columns); they are checked when used.
     pub(crate) fn validate(&self, file: &str) -> Result<(), LogError> {
-        let check = |key: &str, v: Option<[f64; 2]>, positive: bool| {
+        let check = |key: &str, v: &Option<Vec<f64>>, positive: bool| {
             for (i, x) in v.iter().flatten().enumerate() {
                 let ok = x.is_finite() && (!positive || *x > 0.0);
                 if !ok {
@@ -339,17 +340,26 @@ impl Sensors {
             }
             Ok(())
         };
-        check("torque_constants", self.torque_constants, false)?;
-        check("gear_ratios", self.gear_ratios, true)?;
-        check("counts_per_rev", self.counts_per_rev, true)
+        check("torque_constants", &self.torque_constants, false)?;
+        check("gear_ratios", &self.gear_ratios, true)?;
+        check("counts_per_rev", &self.counts_per_rev, true)
     }
 
     /// These constants with every value present in `over` replacing ours.
     pub(crate) fn overridden_by(&self, over: &Sensors) -> Sensors {
         Sensors {
-            torque_constants: over.torque_constants.or(self.torque_constants),
-            gear_ratios: over.gear_ratios.or(self.gear_ratios),
-            counts_per_rev: over.counts_per_rev.or(self.counts_per_rev),
+            torque_constants: over
+                .torque_constants
+                .clone()
+                .or_else(|| self.torque_constants.clone()),
+            gear_ratios: over
+                .gear_ratios
+                .clone()
+                .or_else(|| self.gear_ratios.clone()),
+            counts_per_rev: over
+                .counts_per_rev
+                .clone()
+                .or_else(|| self.counts_per_rev.clone()),
         }
     }
 }
@@ -368,8 +378,8 @@ mod tests {
             "x.json",
         )
         .unwrap();
-        assert_eq!(s.sensors.gear_ratios, Some([10.0, 12.0]));
-        assert_eq!(s.sensors.counts_per_rev, Some([4096.0, 4096.0]));
+        assert_eq!(s.sensors.gear_ratios, Some(vec![10.0, 12.0]));
+        assert_eq!(s.sensors.counts_per_rev, Some(vec![4096.0, 4096.0]));
         assert_eq!(s.excitation.period_s, Some(10.0));
         assert_eq!(Sidecar::parse("{}", "e.json").unwrap(), Sidecar::default());
     }

@@ -12,9 +12,10 @@ pub fn sidecar_path(csv: &Path) -> PathBuf {
     csv.with_extension("json")
 }
 
-/// Writes `columns` to `csv` (header `t,theta1,theta2,tau1,tau2`, plus
-/// `dtheta1,dtheta2,ddtheta1,ddtheta2` when the columns hold logged
-/// derivatives) and `sidecar` to [`sidecar_path`]`(csv)`.
+/// Writes `columns` to `csv` (header `t,theta1,…,thetaN,tau1,…,tauN` for
+/// the `N = columns.theta.len()` joints, plus `dtheta1,…,ddthetaN` when the
+/// columns hold logged derivatives) and `sidecar` to
+/// [`sidecar_path`]`(csv)`.
 ///
 /// Each file is written to a new temporary file beside it and renamed into
 /// place, so a reader never sees half a log and no other file is touched. An
@@ -22,48 +23,59 @@ pub fn sidecar_path(csv: &Path) -> PathBuf {
 /// allowed is the caller's decision (the `aras` tools replace only files they
 /// wrote). Numbers use Rust's shortest
 /// round-trip formatting: the reader gets back exactly these `f64`s, and the
-/// same data always gives the same bytes. Columns of unequal lengths are an
-/// error, nothing is written then.
+/// same data always gives the same bytes. Columns of unequal lengths, or a
+/// joint count that differs between channels, are an error; nothing is
+/// written then.
 pub fn write_log(csv: &Path, columns: &Columns, sidecar: &Sidecar) -> Result<(), LogError> {
     let n = columns.len();
-    let derivatives = !columns.theta_dot[0].is_empty();
-    let mut lengths = vec![
-        ("theta1", columns.theta[0].len()),
-        ("theta2", columns.theta[1].len()),
-        ("tau1", columns.tau[0].len()),
-        ("tau2", columns.tau[1].len()),
-    ];
+    let joints = columns.theta.len();
+    let derivatives = columns.theta_dot.iter().any(|c| !c.is_empty());
+    let mut groups = vec![("theta", &columns.theta), ("tau", &columns.tau)];
     if derivatives {
-        lengths.extend([
-            ("dtheta1", columns.theta_dot[0].len()),
-            ("dtheta2", columns.theta_dot[1].len()),
-            ("ddtheta1", columns.theta_ddot[0].len()),
-            ("ddtheta2", columns.theta_ddot[1].len()),
+        groups.extend([
+            ("dtheta", &columns.theta_dot),
+            ("ddtheta", &columns.theta_ddot),
         ]);
     }
-    if let Some(&(column, len)) = lengths.iter().find(|(_, len)| *len != n) {
-        return Err(LogError::InvalidOption {
-            name: "columns",
-            value: format!("{column}: {len} values"),
-            reason: format!("every column must have as many values as `t` ({n})"),
-        });
+    let invalid = |value: String, reason: String| LogError::InvalidOption {
+        name: "columns",
+        value,
+        reason,
+    };
+    if joints == 0 {
+        return Err(invalid(
+            "theta: no channel".into(),
+            "a log needs at least one joint".into(),
+        ));
+    }
+    for (name, group) in &groups {
+        if group.len() != joints {
+            return Err(invalid(
+                format!("{name}: {} channels", group.len()),
+                format!("every channel group must have one column per joint ({joints})"),
+            ));
+        }
+        if let Some((j, c)) = group.iter().enumerate().find(|(_, c)| c.len() != n) {
+            return Err(invalid(
+                format!("{name}{}: {} values", j + 1, c.len()),
+                format!("every column must have as many values as `t` ({n})"),
+            ));
+        }
     }
     write_atomic(csv, |w| {
-        write!(w, "t,theta1,theta2,tau1,tau2")?;
-        if derivatives {
-            write!(w, ",dtheta1,dtheta2,ddtheta1,ddtheta2")?;
+        write!(w, "t")?;
+        for (name, _) in &groups {
+            for j in 1..=joints {
+                write!(w, ",{name}{j}")?;
+            }
         }
         writeln!(w)?;
-        let (th, tau) = (&columns.theta, &columns.tau);
         for i in 0..n {
-            write!(
-                w,
-                "{},{},{},{},{}",
-                columns.t[i], th[0][i], th[1][i], tau[0][i], tau[1][i]
-            )?;
-            if derivatives {
-                let (d, dd) = (&columns.theta_dot, &columns.theta_ddot);
-                write!(w, ",{},{},{},{}", d[0][i], d[1][i], dd[0][i], dd[1][i])?;
+            write!(w, "{}", columns.t[i])?;
+            for (_, group) in &groups {
+                for c in group.iter() {
+                    write!(w, ",{}", c[i])?;
+                }
             }
             writeln!(w)?;
         }
@@ -146,10 +158,10 @@ mod tests {
         };
         let d = |k: f64| if derivatives { f(k) } else { Vec::new() };
         Columns {
-            theta: [f(1.0), f(2.0)],
-            tau: [f(3.0), f(4.0)],
-            theta_dot: [d(5.0), d(6.0)],
-            theta_ddot: [d(7.0), d(8.0)],
+            theta: vec![f(1.0), f(2.0)],
+            tau: vec![f(3.0), f(4.0)],
+            theta_dot: vec![d(5.0), d(6.0)],
+            theta_ddot: vec![d(7.0), d(8.0)],
             t,
         }
     }
@@ -167,7 +179,7 @@ mod tests {
                 truth: Some(serde_json::json!({"seed": 7})),
                 ..Sidecar::default()
             };
-            sidecar.sensors.counts_per_rev = Some([4096.0, 16384.0]);
+            sidecar.sensors.counts_per_rev = Some(vec![4096.0, 16384.0]);
             sidecar.excitation.period_s = Some(0.02);
             write_log(&path, &c, &sidecar).unwrap();
             let log = read_log(&path, &ReadOptions::default()).unwrap();
@@ -184,6 +196,46 @@ mod tests {
             let text = std::fs::read_to_string(sidecar_path(&path)).unwrap();
             assert!(text.contains("4096,") || text.contains("4096\n"), "{text}");
         }
+        // Any number of joints: three channels each, read back as three.
+        let mut three = columns(true);
+        for group in [
+            &mut three.theta,
+            &mut three.tau,
+            &mut three.theta_dot,
+            &mut three.theta_ddot,
+        ] {
+            let extra = group[1].iter().map(|v| 0.5 * v - 0.1).collect();
+            group.push(extra);
+        }
+        let path = dir.join("three.csv");
+        write_log(&path, &three, &Sidecar::default()).unwrap();
+        let header = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            header.starts_with(
+                "t,theta1,theta2,theta3,tau1,tau2,tau3,dtheta1,dtheta2,dtheta3,\
+                 ddtheta1,ddtheta2,ddtheta3\n"
+            ),
+            "{}",
+            &header[..80]
+        );
+        let log = read_log(&path, &ReadOptions::default()).unwrap();
+        assert_eq!(log.joints(), 3);
+        assert_eq!((&log.theta, &log.tau), (&three.theta, &three.tau));
+        assert_eq!(log.theta_ddot.as_ref(), Some(&three.theta_ddot));
+        assert_eq!(log.summary.theta_range.len(), 3);
+        // A reader told to expect two joints reads the first two and
+        // ignores the third's columns, with a note.
+        let opts = ReadOptions {
+            joints: Some(2),
+            ..ReadOptions::default()
+        };
+        let two = read_log(&path, &opts).unwrap();
+        assert_eq!(two.theta, three.theta[..2].to_vec());
+        assert!(
+            two.notes.iter().any(|n| n.contains("theta3")),
+            "{:?}",
+            two.notes
+        );
         // A file that merely looks like a temporary file is left alone.
         let bystander = dir.join("runfalse.csv.tmp");
         std::fs::write(&bystander, "mine").unwrap();

@@ -17,9 +17,11 @@ fn bag(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// The reading of a two-joint robot's tool (ARAS-Diamond's): two joints.
 fn with_bag(bag: BagOptions) -> ReadOptions {
     ReadOptions {
         bag,
+        joints: Some(2),
         ..ReadOptions::default()
     }
 }
@@ -110,8 +112,9 @@ fn joints_are_mapped_by_name_and_a_missing_joint_is_named() {
 
 #[test]
 fn reordered_names_and_extra_joints_read_as_the_clean_csv() {
-    // Its first message names three joints: no default mapping.
-    let e = err(&bag("reordered.mcap"), &ReadOptions::default());
+    // Its first message names three joints: no default mapping for a
+    // two-joint robot.
+    let e = err(&bag("reordered.mcap"), &with_bag(BagOptions::default()));
     assert!(
         e.contains("the first message names 3 joints (motor_left, motor_right, gripper)"),
         "{e}"
@@ -132,7 +135,7 @@ fn reordered_names_and_extra_joints_read_as_the_clean_csv() {
 #[test]
 fn two_joint_state_topics_need_a_topic() {
     let path = bag("two_topics.mcap");
-    let e = err(&path, &ReadOptions::default());
+    let e = err(&path, &with_bag(BagOptions::default()));
     assert!(
         e.contains("the bag has 2 sensor_msgs/msg/JointState topics: choose one with --topic"),
         "{e}"
@@ -158,6 +161,20 @@ fn two_joint_state_topics_need_a_topic() {
     assert!(
         e.contains("topic /arm/joint_states: the first message names 3 joints (a1, a2, a3): say which are θ1 and θ2 with --joints"),
         "{e}"
+    );
+    // A reader not told the joint count takes all three, in message order.
+    let all = ReadOptions {
+        bag: arm.clone(),
+        ..ReadOptions::default()
+    };
+    let log = read_log(&path, &all).unwrap();
+    assert_eq!((log.joints(), log.len()), (3, 120));
+    assert!(
+        log.notes
+            .iter()
+            .any(|n| n.contains("θ3 = joint `a3`: the 3 joints in the order")),
+        "{:?}",
+        log.notes
     );
     arm.joints = JointNames::parse("theta1=a1,theta2=a2").unwrap();
     let log = read_log(&path, &with_bag(arm)).unwrap();

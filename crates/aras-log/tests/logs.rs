@@ -252,7 +252,7 @@ fn encoder_counts_and_currents_convert_with_sidecar_constants() {
     // Command-line constants override the sidecar.
     let opts = ReadOptions {
         sensors: Sensors {
-            torque_constants: Some([0.1, 0.1]),
+            torque_constants: Some(vec![0.1, 0.1]),
             ..Sensors::default()
         },
         ..ReadOptions::default()

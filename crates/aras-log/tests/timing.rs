@@ -269,7 +269,7 @@ fn a_torque_spike_and_a_torque_beyond_the_limit_are_found() {
     let g = find_glitches(&log, &GlitchOptions::default());
     assert_eq!(g.len(), 1, "{g:?}");
     assert_eq!(
-        (g[0].channel, g[0].line, g[0].column),
+        (g[0].channel.as_str(), g[0].line, g[0].column),
         ("tau2", Some(2502), 5)
     );
     // Stated limits: 0.8 N·m; a sustained 1.3 N·m (1.6×) is beyond 1.5×.
@@ -279,7 +279,7 @@ fn a_torque_spike_and_a_torque_beyond_the_limit_are_found() {
     }
     let log = read(&text, &Default::default()).unwrap();
     let opts = GlitchOptions {
-        torque_limit: Some([0.8, 0.8]),
+        torque_limit: Some(vec![0.8, 0.8]),
         ..Default::default()
     };
     let g = find_glitches(&log, &opts);

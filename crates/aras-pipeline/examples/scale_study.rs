@@ -35,10 +35,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let rich = synthetic::states(&model, &geo, &beta, 2000, 200.0, 0.0)?;
             let samples = aras_signal::Samples {
                 t: (0..2000).map(|i| i as f64 / 200.0).collect(),
-                x: rich[0].clone(),
-                x_dot: rich[1].clone(),
-                x_ddot: rich[2].clone(),
-                tau: rich[3].clone(),
+                x: rich[0].to_vec(),
+                x_dot: rich[1].to_vec(),
+                x_ddot: rich[2].to_vec(),
+                tau: rich[3].to_vec(),
                 ..Default::default()
             };
             let st = stack(&model, &geo, &samples)?;

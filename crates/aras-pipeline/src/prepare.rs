@@ -411,7 +411,7 @@ pub fn record_noise_gain(
 /// peak ([`filter_reach`]; no widening unfiltered), because filtering
 /// spreads the misfit at a reversal in time. Joint-major.
 pub fn record_keep_mask(
-    theta_dot: &[Vec<f64>; 2],
+    theta_dot: &[Vec<f64>],
     filter: Option<&Sos>,
     periodic: bool,
     min_speed: f64,

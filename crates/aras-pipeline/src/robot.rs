@@ -330,7 +330,7 @@ pub(crate) fn keep_every_row(keep: &mut [bool], all_rows: [bool; 2]) {
 /// ([`filter_reach`]) when the data were filtered, because filtering spreads
 /// the mismatch in time.
 pub fn reversal_mask(
-    theta_dot: &[Vec<f64>; 2],
+    theta_dot: &[Vec<f64>],
     v_min: f64,
     guard: usize,
     periodic: bool,

@@ -24,42 +24,61 @@ pub const CHANNELS: usize = 15;
 const RECORD: usize = CHANNELS * 8;
 
 /// The channels of `s` in record order (every channel of
-/// [`aras_signal::Samples`]).
+/// [`aras_signal::Samples`]). The samples are of a two-joint robot: the
+/// processing refuses any other joint count for two coordinates.
 pub(crate) fn channels(s: &Samples) -> [&Vec<f64>; CHANNELS] {
-    [
-        &s.t,
-        &s.theta[0],
-        &s.theta[1],
-        &s.theta_dot[0],
-        &s.theta_dot[1],
-        &s.theta_ddot[0],
-        &s.theta_ddot[1],
-        &s.x[0],
-        &s.x[1],
-        &s.x_dot[0],
-        &s.x_dot[1],
-        &s.x_ddot[0],
-        &s.x_ddot[1],
-        &s.tau[0],
-        &s.tau[1],
-    ]
+    let all: Vec<&Vec<f64>> = std::iter::once(&s.t)
+        .chain(&s.theta)
+        .chain(&s.theta_dot)
+        .chain(&s.theta_ddot)
+        .chain(&s.x)
+        .chain(&s.x_dot)
+        .chain(&s.x_ddot)
+        .chain(&s.tau)
+        .collect();
+    all.try_into().unwrap_or_else(|a: Vec<_>| {
+        panic!(
+            "two-joint samples have {CHANNELS} channels, not {}",
+            a.len()
+        )
+    })
 }
 
 /// [`channels`], to write.
 pub(crate) fn channels_mut(s: &mut Samples) -> [&mut Vec<f64>; CHANNELS] {
     let Samples {
         t,
-        theta: [th1, th2],
-        theta_dot: [td1, td2],
-        theta_ddot: [tdd1, tdd2],
-        x: [x1, x2],
-        x_dot: [xd1, xd2],
-        x_ddot: [xdd1, xdd2],
-        tau: [tau1, tau2],
+        theta,
+        theta_dot,
+        theta_ddot,
+        x,
+        x_dot,
+        x_ddot,
+        tau,
     } = s;
-    [
-        t, th1, th2, td1, td2, tdd1, tdd2, x1, x2, xd1, xd2, xdd1, xdd2, tau1, tau2,
-    ]
+    let two = |g: &mut Vec<Vec<f64>>| g.resize_with(2, Vec::new);
+    for g in [
+        &mut *theta,
+        &mut *theta_dot,
+        &mut *theta_ddot,
+        &mut *x,
+        &mut *x_dot,
+        &mut *x_ddot,
+        &mut *tau,
+    ] {
+        two(g);
+    }
+    let all: Vec<&mut Vec<f64>> = std::iter::once(t)
+        .chain(theta.iter_mut())
+        .chain(theta_dot.iter_mut())
+        .chain(theta_ddot.iter_mut())
+        .chain(x.iter_mut())
+        .chain(x_dot.iter_mut())
+        .chain(x_ddot.iter_mut())
+        .chain(tau.iter_mut())
+        .collect();
+    all.try_into()
+        .unwrap_or_else(|_: Vec<_>| unreachable!("every group holds two channels"))
 }
 
 fn io(context: String, e: std::io::Error) -> IdentError {

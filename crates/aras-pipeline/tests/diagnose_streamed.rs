@@ -218,13 +218,13 @@ fn scratch_files_never_replace_a_file_and_go_on_error() {
     let ch = |k: usize| -> Vec<f64> { (0..10).map(|i| (100 * k + i) as f64 + 0.25).collect() };
     let s = Samples {
         t: ch(0),
-        theta: [ch(1), ch(2)],
-        theta_dot: [ch(3), ch(4)],
-        theta_ddot: [ch(5), ch(6)],
-        x: [ch(7), ch(8)],
-        x_dot: [ch(9), ch(10)],
-        x_ddot: [ch(11), ch(12)],
-        tau: [ch(13), ch(14)],
+        theta: vec![ch(1), ch(2)],
+        theta_dot: vec![ch(3), ch(4)],
+        theta_ddot: vec![ch(5), ch(6)],
+        x: vec![ch(7), ch(8)],
+        x_dot: vec![ch(9), ch(10)],
+        x_ddot: vec![ch(11), ch(12)],
+        tau: vec![ch(13), ch(14)],
     };
     w.append(&s, 2..7).unwrap();
     let spooled = w.finish().unwrap();
@@ -232,7 +232,7 @@ fn scratch_files_never_replace_a_file_and_go_on_error() {
     let mut back = Samples::default();
     spooled.read(1..4, &mut back).unwrap();
     // Rows 1..4 of the spool are samples 3..6, every channel in place.
-    let mut want = Samples::default();
+    let mut want = Samples::with_joints(2);
     let pick = |v: &Vec<f64>| v[3..6].to_vec();
     want.t = pick(&s.t);
     for j in 0..2 {

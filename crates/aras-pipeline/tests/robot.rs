@@ -154,7 +154,7 @@ fn trajectory(model: &Model, beta: &[f64]) -> Samples {
         [(d(12.0), 1.3, 0.5), (d(5.0), 3.1, 0.2), (d(3.0), 5.3, 1.7)],
     ];
     let centre = [d(85.0), d(60.0)];
-    let mut s = Samples::default();
+    let mut s = Samples::with_joints(2);
     for i in 0..n {
         let t = i as f64 / fs;
         s.t.push(t);

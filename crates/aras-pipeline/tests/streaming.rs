@@ -186,10 +186,10 @@ fn robot() -> Robot {
     let s = synthetic::states(&model, &geo, &beta, 2000, 200.0, 0.0).unwrap();
     let samples = aras_signal::Samples {
         t: (0..2000).map(|i| i as f64 / 200.0).collect(),
-        x: s[0].clone(),
-        x_dot: s[1].clone(),
-        x_ddot: s[2].clone(),
-        tau: s[3].clone(),
+        x: s[0].to_vec(),
+        x_dot: s[1].to_vec(),
+        x_ddot: s[2].to_vec(),
+        tau: s[3].to_vec(),
         ..Default::default()
     };
     let st = stack(&model, &geo, &samples).unwrap();
@@ -209,10 +209,10 @@ fn regressor_stage_matches_in_memory_stacking_and_is_deterministic() {
     let s = synthetic::states(&r.model, &r.geo, &r.beta, n, 1000.0, 0.01).unwrap();
     let samples = aras_signal::Samples {
         t: (0..n).map(|i| i as f64 / 1000.0).collect(),
-        x: s[0].clone(),
-        x_dot: s[1].clone(),
-        x_ddot: s[2].clone(),
-        tau: s[3].clone(),
+        x: s[0].to_vec(),
+        x_dot: s[1].to_vec(),
+        x_ddot: s[2].to_vec(),
+        tau: s[3].to_vec(),
         ..Default::default()
     };
     let st = stack(&r.model, &r.geo, &samples).unwrap();

@@ -96,8 +96,8 @@ impl PeriodDetection {
 /// of it within half the record (the error divides by that multiple). Declines (with the reason) when the record holds fewer than
 /// two repeats, the angles never decorrelate (no motion, or drift only), or
 /// the best repeat correlates below [`MIN_PERIOD_CORRELATION`].
-pub fn detect_period(theta: [&[f64]; 2], dt: f64) -> PeriodDetection {
-    let n = theta[0].len().min(theta[1].len());
+pub fn detect_period(theta: &[&[f64]], dt: f64) -> PeriodDetection {
+    let n = theta.iter().map(|x| x.len()).min().unwrap_or(0);
     if n < 64 || !(dt.is_finite() && dt > 0.0) {
         return PeriodDetection::decline(0.0, format!("{n} samples are too few to find a period"));
     }
@@ -107,7 +107,7 @@ pub fn detect_period(theta: [&[f64]; 2], dt: f64) -> PeriodDetection {
     let inv = planner.plan_fft_inverse(m);
     let mut acf = vec![0.0; n];
     // Prefix sums of y² per joint, for the mean squared difference.
-    let mut sq = vec![vec![0.0; n + 1]; 2];
+    let mut sq = vec![vec![0.0; n + 1]; theta.len()];
     for (j, x) in theta.iter().enumerate() {
         let x = &x[..n];
         let (a, b) = linear_fit(x);
@@ -127,7 +127,7 @@ pub fn detect_period(theta: [&[f64]; 2], dt: f64) -> PeriodDetection {
             *r += buf[l].re / m as f64;
         }
     }
-    let total = sq[0][n] + sq[1][n];
+    let total: f64 = sq.iter().map(|s| s[n]).sum();
     if total <= 0.0 || !total.is_finite() {
         return PeriodDetection::decline(0.0, "the angles do not move".into());
     }
@@ -136,9 +136,7 @@ pub fn detect_period(theta: [&[f64]; 2], dt: f64) -> PeriodDetection {
     let var = total / n as f64;
     let r: Vec<f64> = (0..n)
         .map(|l| {
-            let ss: f64 = (0..2)
-                .map(|j| sq[j][n - l] + (sq[j][n] - sq[j][l]))
-                .sum::<f64>();
+            let ss: f64 = sq.iter().map(|s| s[n - l] + (s[n] - s[l])).sum::<f64>();
             1.0 - (ss - 2.0 * acf[l]) / (n - l) as f64 / (2.0 * var)
         })
         .collect();
@@ -317,15 +315,15 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// The cut-off the angle spectrum asks for (non-periodic records).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SpectrumCutoff {
     /// The chosen cut-off (Hz).
     pub cutoff_hz: f64,
     /// Per joint: highest frequency whose power stands above the floor (Hz).
-    pub motion_top_hz: [f64; 2],
+    pub motion_top_hz: Vec<f64>,
     /// Per joint: the white-noise level the floor stands for, as the RMS
     /// angle per sample (rad).
-    pub noise_rms: [f64; 2],
+    pub noise_rms: Vec<f64>,
     /// Welch segment length (samples) and segments averaged.
     pub segments: [usize; 2],
 }
@@ -333,15 +331,16 @@ pub struct SpectrumCutoff {
 /// Chooses a zero-phase low-pass cut-off from the angles' spectrum
 /// (uniform step `dt`), by the rule of the module documentation. Records
 /// shorter than 256 samples get `0.4 fs` (no spectrum to judge).
-pub fn spectrum_cutoff(theta: [&[f64]; 2], dt: f64) -> SpectrumCutoff {
+pub fn spectrum_cutoff(theta: &[&[f64]], dt: f64) -> SpectrumCutoff {
     let fs = 1.0 / dt;
-    let n = theta[0].len().min(theta[1].len());
+    let joints = theta.len();
+    let n = theta.iter().map(|x| x.len()).min().unwrap_or(0);
     let max_cut = 0.4 * fs;
     if n < 256 {
         return SpectrumCutoff {
             cutoff_hz: max_cut,
-            motion_top_hz: [max_cut; 2],
-            noise_rms: [0.0; 2],
+            motion_top_hz: vec![max_cut; joints],
+            noise_rms: vec![0.0; joints],
             segments: [0, 0],
         };
     }
@@ -358,8 +357,8 @@ pub fn spectrum_cutoff(theta: [&[f64]; 2], dt: f64) -> SpectrumCutoff {
     let wss: f64 = window.iter().map(|w| w * w).sum();
     let mut out = SpectrumCutoff {
         cutoff_hz: 0.0,
-        motion_top_hz: [0.0; 2],
-        noise_rms: [0.0; 2],
+        motion_top_hz: vec![0.0; joints],
+        noise_rms: vec![0.0; joints],
         segments: [len, count],
     };
     let mut segment = vec![0.0; len];
@@ -388,7 +387,10 @@ pub fn spectrum_cutoff(theta: [&[f64]; 2], dt: f64) -> SpectrumCutoff {
         out.noise_rms[j] = (c / (4.0 * wss * count as f64)).sqrt();
     }
     let lowest = 2.0 / (n as f64 * dt);
-    let top = out.motion_top_hz[0].max(out.motion_top_hz[1]);
+    let top = out
+        .motion_top_hz
+        .iter()
+        .fold(f64::NEG_INFINITY, |a, b| a.max(*b));
     out.cutoff_hz = (CUTOFF_MARGIN * top).clamp(lowest.min(max_cut), max_cut);
     out
 }
@@ -502,7 +504,7 @@ mod tests {
                     .collect()
             })
             .collect();
-        let d = detect_period([&th[0], &th[1]], dt);
+        let d = detect_period(&[&th[0], &th[1]], dt);
         let p = d.period_s.unwrap();
         // 7 periods must land within 0.05 samples of 10 000 for the
         // averaging to accept them: 7 µs over 10 s, 5e-6 of the period.
@@ -514,7 +516,7 @@ mod tests {
     fn declines_noise_and_a_ramp() {
         let mut rng = rand::rngs::StdRng::seed_from_u64(3);
         let noise: Vec<f64> = (0..5000).map(|_| StandardNormal.sample(&mut rng)).collect();
-        let d = detect_period([&noise, &noise], 1e-3);
+        let d = detect_period(&[&noise, &noise], 1e-3);
         assert!(d.period_s.is_none() && d.declined.is_some(), "{d:?}");
         // A chirp does not repeat.
         let chirp: Vec<f64> = (0..8000)
@@ -523,7 +525,7 @@ mod tests {
                 (TAU * (0.5 + 0.5 * t) * t).sin()
             })
             .collect();
-        let d = detect_period([&chirp, &chirp], 1e-3);
+        let d = detect_period(&[&chirp, &chirp], 1e-3);
         assert!(d.period_s.is_none(), "{d:?}");
     }
 
@@ -586,7 +588,7 @@ mod tests {
                     0.3 * (TAU * f0 * t).sin() + 0.01 * (3.0 * TAU * f0 * t).sin() + sigma * e
                 })
                 .collect();
-            let c = spectrum_cutoff([&x, &x], dt);
+            let c = spectrum_cutoff(&[&x, &x], dt);
             // The third harmonic is 0.01 rad, 50 dB above the floor; the
             // Hann window's leakage keeps it above the floor for ≈ 1.5–2 Hz
             // (Welch resolution 0.24 Hz): the motion ends within 3 f0 + 2 Hz.

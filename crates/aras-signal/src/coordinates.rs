@@ -7,41 +7,64 @@
 
 use std::convert::Infallible;
 
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, U2};
+
 pub use aras_core::Motion;
 
-/// Maps joint motion `[θ, θ̇, θ̈]` to the model's coordinates `[X, Ẋ, Ẍ]`.
+/// Maps joint motion `[θ, θ̇, θ̈]` to the model's coordinates `[X, Ẋ, Ẍ]`,
+/// both of dimension `D` (two by default; [`nalgebra::Dyn`] for a number of
+/// joints known at run time).
 ///
 /// Implemented by [`JointCoordinates`] (the model is written in joint
-/// coordinates) and by every closure `Fn(Motion) -> Result<Motion, E>`, e.g.
-/// a robot's forward kinematics with their derivatives.
-pub trait Coordinates {
+/// coordinates, any dimension) and by every closure
+/// `Fn(Motion<f64, D>) -> Result<Motion<f64, D>, E>`, e.g. a robot's
+/// forward kinematics with their derivatives.
+pub trait Coordinates<D: Dim = U2>
+where
+    DefaultAllocator: Allocator<D>,
+{
     /// Why a sample cannot be mapped (e.g. an unreachable or singular pose).
     type Error: std::error::Error + Send + Sync + 'static;
 
     /// `[X, Ẋ, Ẍ]` of the joint motion `[θ, θ̇, θ̈]`.
-    fn map(&self, joint: Motion) -> Result<Motion, Self::Error>;
+    fn map(&self, joint: Motion<f64, D>) -> Result<Motion<f64, D>, Self::Error>;
+
+    /// True if [`map`](Self::map) is the identity, so the processing copies
+    /// the joint columns instead of mapping sample by sample.
+    fn is_identity(&self) -> bool {
+        false
+    }
 }
 
 /// The identity: the model's coordinates are the joint angles.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct JointCoordinates;
 
-impl Coordinates for JointCoordinates {
+impl<D: Dim> Coordinates<D> for JointCoordinates
+where
+    DefaultAllocator: Allocator<D>,
+{
     type Error = Infallible;
 
-    fn map(&self, joint: Motion) -> Result<Motion, Infallible> {
+    fn map(&self, joint: Motion<f64, D>) -> Result<Motion<f64, D>, Infallible> {
         Ok(joint)
+    }
+
+    fn is_identity(&self) -> bool {
+        true
     }
 }
 
-impl<F, E> Coordinates for F
+impl<F, E, D: Dim> Coordinates<D> for F
 where
-    F: Fn(Motion) -> Result<Motion, E>,
+    F: Fn(Motion<f64, D>) -> Result<Motion<f64, D>, E>,
     E: std::error::Error + Send + Sync + 'static,
+    DefaultAllocator: Allocator<D>,
 {
     type Error = E;
 
-    fn map(&self, joint: Motion) -> Result<Motion, E> {
+    fn map(&self, joint: Motion<f64, D>) -> Result<Motion<f64, D>, E> {
         self(joint)
     }
 }
@@ -53,7 +76,8 @@ mod tests {
     #[test]
     fn joint_coordinates_are_the_identity_and_closures_map() {
         let m = Motion::from_arrays([[0.1, -0.2], [1.0, 2.0], [-3.0, 4.0]]);
-        assert_eq!(JointCoordinates.map(m).unwrap(), m);
+        assert_eq!(Coordinates::<U2>::map(&JointCoordinates, m).unwrap(), m);
+        assert!(Coordinates::<U2>::is_identity(&JointCoordinates));
         let doubled = |m: Motion| -> Result<Motion, Infallible> {
             Ok(Motion::new(m.pos * 2.0, m.vel * 2.0, m.acc * 2.0))
         };
@@ -61,5 +85,6 @@ mod tests {
             doubled.map(m).unwrap().acc,
             nalgebra::Vector2::new(-6.0, 8.0)
         );
+        assert!(!doubled.is_identity());
     }
 }

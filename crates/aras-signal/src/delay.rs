@@ -91,18 +91,19 @@ pub fn delay_torque(log: &Log, delay: f64) -> Result<Log, ProcessError> {
     }
     let (lo, hi) = (lo as usize, hi as usize);
     let keep = |v: &[f64]| v[lo..hi].to_vec();
-    let tau: [Vec<f64>; 2] = std::array::from_fn(|j| {
-        (lo..hi)
-            .map(|i| delayed_at(&log.tau[j], i, delay))
-            .collect()
-    });
+    let tau: Vec<Vec<f64>> = log
+        .tau
+        .iter()
+        .map(|c| (lo..hi).map(|i| delayed_at(c, i, delay)).collect())
+        .collect();
+    let keep_all = |v: &[Vec<f64>]| v.iter().map(|c| keep(c)).collect::<Vec<_>>();
     let mut out = Log {
         name: log.name.clone(),
         t: keep(&log.t),
-        theta: [keep(&log.theta[0]), keep(&log.theta[1])],
+        theta: keep_all(&log.theta),
         tau,
-        theta_dot: log.theta_dot.as_ref().map(|v| [keep(&v[0]), keep(&v[1])]),
-        theta_ddot: log.theta_ddot.as_ref().map(|v| [keep(&v[0]), keep(&v[1])]),
+        theta_dot: log.theta_dot.as_deref().map(keep_all),
+        theta_ddot: log.theta_ddot.as_deref().map(keep_all),
         sidecar: log.sidecar.clone(),
         summary: log.summary.clone(),
         notes: log.notes.clone(),
@@ -110,13 +111,16 @@ pub fn delay_torque(log: &Log, delay: f64) -> Result<Log, ProcessError> {
     };
     out.summary.rows = out.t.len();
     out.summary.duration_s = out.t[out.t.len() - 1] - out.t[0];
-    out.summary.tau_range = std::array::from_fn(|j| {
-        out.tau[j]
-            .iter()
-            .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], &x| {
-                [a.min(x), b.max(x)]
-            })
-    });
+    out.summary.tau_range = out
+        .tau
+        .iter()
+        .map(|c| {
+            c.iter()
+                .fold([f64::INFINITY, f64::NEG_INFINITY], |[a, b], &x| {
+                    [a.min(x), b.max(x)]
+                })
+        })
+        .collect();
     out.notes.push(format!(
         "torque taken {delay} samples after the angles (time delay); {} row(s) without such a \
          torque dropped",

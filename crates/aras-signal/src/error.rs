@@ -143,7 +143,7 @@ pub enum ProcessError {
     , relative_percent = relative * 100.0, limit_percent = limit * 100.0)]
     PeriodsDisagree {
         /// Channel name.
-        channel: &'static str,
+        channel: String,
         /// 0-based index of the period.
         index: usize,
         /// Its first time.
@@ -172,6 +172,21 @@ pub enum ProcessError {
         list: String,
         /// The limit (s).
         max_gap_s: f64,
+    },
+    /// The log has another number of joints than the model's coordinates
+    /// take.
+    #[error(
+        "{log} has {joints} joint(s) but the model's coordinates take {expected}: give a log of \
+         this robot (columns theta1 … theta{expected}), or read it with \
+         ReadOptions::joints = Some({expected})"
+    )]
+    Joints {
+        /// The log's name.
+        log: String,
+        /// Its joints.
+        joints: usize,
+        /// The coordinates' dimension.
+        expected: usize,
     },
     /// The model's coordinates could not be computed at a sample
     /// ([`Coordinates`](crate::Coordinates), e.g. a pose the kinematics reject).

@@ -103,6 +103,7 @@ pub use periods::{
 pub use process::{
     Bandwidth, BandwidthChoice, BandwidthMethod, FilterSpec, FilterSummary, OutputRows, Paired,
     PeriodSource, PeriodSummary, ProcessOptions, ProcessSummary, Processed, Samples, process,
+    process_in,
 };
 pub use resample::{GAP_RATIO, Gap, MAX_GROWTH, ResampleOptions, Resampling, resample_log};
 pub use sos::{FILTER_LANES, Sos, TransferFunction};

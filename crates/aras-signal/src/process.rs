@@ -14,7 +14,8 @@
 //!    sample, so joint-space terms (friction on θ̇) and task-space terms agree,
 //!    and logged θ̇ columns are used as they are.
 
-use nalgebra::Vector2;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, OVector, U1};
 use serde::Serialize;
 
 use crate::bandwidth::{
@@ -140,33 +141,54 @@ impl Default for ProcessOptions {
     }
 }
 
-/// Processed samples, structure-of-arrays, SI units (rad, rad/s, rad/s², N·m).
-/// All vectors have the same length.
+/// Processed samples, structure-of-arrays, SI units (rad, rad/s, rad/s², N·m),
+/// one column per joint (coordinate). All columns have the same length.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Samples {
     /// Time (s).
     pub t: Vec<f64>,
-    /// Joint angles θ1, θ2.
-    pub theta: [Vec<f64>; 2],
+    /// Joint angles θ1 … θn.
+    pub theta: Vec<Vec<f64>>,
     /// Joint rates θ̇.
-    pub theta_dot: [Vec<f64>; 2],
+    pub theta_dot: Vec<Vec<f64>>,
     /// Joint accelerations θ̈.
-    pub theta_ddot: [Vec<f64>; 2],
-    /// Task pose X = [φ, γ].
-    pub x: [Vec<f64>; 2],
-    /// Task rates Ẋ.
-    pub x_dot: [Vec<f64>; 2],
-    /// Task accelerations Ẍ.
-    pub x_ddot: [Vec<f64>; 2],
-    /// Joint torques τ1, τ2: raw or averaged over periods, and low-passed
+    pub theta_ddot: Vec<Vec<f64>>,
+    /// The model's coordinates X (ARAS-Diamond: the task pose [φ, γ]).
+    pub x: Vec<Vec<f64>>,
+    /// Their rates Ẋ.
+    pub x_dot: Vec<Vec<f64>>,
+    /// Their accelerations Ẍ.
+    pub x_ddot: Vec<Vec<f64>>,
+    /// Joint torques τ1 … τn: raw or averaged over periods, and low-passed
     /// by the same Butterworth as θ when one is applied (a fit then filters
     /// torques and regressor alike once more, so both sides of `T = W β`
     /// pass the same filters). The log's raw torques stay available for the
     /// fitness on every row ([`Processed::on_log_rows`]).
-    pub tau: [Vec<f64>; 2],
+    pub tau: Vec<Vec<f64>>,
 }
 
 impl Samples {
+    /// No samples, with one (empty) column per joint in every group, to be
+    /// filled by pushing.
+    pub fn with_joints(joints: usize) -> Self {
+        let group = vec![Vec::new(); joints];
+        Self {
+            t: Vec::new(),
+            theta: group.clone(),
+            theta_dot: group.clone(),
+            theta_ddot: group.clone(),
+            x: group.clone(),
+            x_dot: group.clone(),
+            x_ddot: group.clone(),
+            tau: group,
+        }
+    }
+
+    /// Number of joints (coordinates).
+    pub fn joints(&self) -> usize {
+        self.theta.len()
+    }
+
     /// Number of samples.
     pub fn len(&self) -> usize {
         self.t.len()
@@ -177,30 +199,35 @@ impl Samples {
         self.t.is_empty()
     }
 
-    /// Sample `i`'s joint motion `θ, θ̇, θ̈`. Panics if `i ≥ len()`, as
-    /// indexing does.
-    pub fn joint(&self, i: usize) -> Motion {
-        Motion::new(
-            column(&self.theta, i),
-            column(&self.theta_dot, i),
-            column(&self.theta_ddot, i),
-        )
+    /// Sample `i`'s joint motion `θ, θ̇, θ̈` (dimension `D`: two by
+    /// default, [`nalgebra::Dyn`] for any). Panics if `i ≥ len()`, as
+    /// indexing does, or if `D` is a fixed dimension other than
+    /// [`joints`](Self::joints).
+    pub fn joint<D: Dim>(&self, i: usize) -> Motion<f64, D>
+    where
+        DefaultAllocator: Allocator<D>,
+    {
+        motion_at(&self.theta, &self.theta_dot, &self.theta_ddot, i)
     }
 
-    /// Sample `i`'s motion in the model's coordinates `X, Ẋ, Ẍ`. Panics if
-    /// `i ≥ len()`, as indexing does.
-    pub fn task(&self, i: usize) -> Motion {
-        Motion::new(
-            column(&self.x, i),
-            column(&self.x_dot, i),
-            column(&self.x_ddot, i),
-        )
+    /// Sample `i`'s motion in the model's coordinates `X, Ẋ, Ẍ` (as
+    /// [`joint`](Self::joint)).
+    pub fn task<D: Dim>(&self, i: usize) -> Motion<f64, D>
+    where
+        DefaultAllocator: Allocator<D>,
+    {
+        motion_at(&self.x, &self.x_dot, &self.x_ddot, i)
     }
 }
 
-/// Entry `i` of a pair of per-coordinate columns.
-fn column(v: &[Vec<f64>; 2], i: usize) -> Vector2<f64> {
-    Vector2::new(v[0][i], v[1][i])
+/// Entry `i` of per-coordinate columns, as a motion of dimension `D`.
+fn motion_at<D: Dim>(p: &[Vec<f64>], v: &[Vec<f64>], a: &[Vec<f64>], i: usize) -> Motion<f64, D>
+where
+    DefaultAllocator: Allocator<D>,
+{
+    let d = D::from_usize(p.len());
+    let at = |c: &[Vec<f64>]| OVector::<f64, D>::from_fn_generic(d, U1, |r, _| c[r][i]);
+    Motion::new(at(p), at(v), at(a))
 }
 
 /// The Butterworth filter that was applied to θ (and that a fit must apply
@@ -234,10 +261,11 @@ pub struct PeriodSummary {
     pub settling_samples: usize,
     /// Samples after the last whole period.
     pub tail_samples: usize,
-    /// Relative RMS spread of θ1, θ2, τ1, τ2 (see [`crate::PeriodAverage`]).
-    pub spread_relative: [f64; 4],
-    /// Absolute RMS spread of θ1, θ2 (rad), τ1, τ2 (N·m).
-    pub spread_rms: [f64; 4],
+    /// Relative RMS spread of θ1 … θn, then τ1 … τn (see
+    /// [`crate::PeriodAverage`]).
+    pub spread_relative: Vec<f64>,
+    /// Absolute RMS spread of θ1 … θn (rad), then τ1 … τn (N·m).
+    pub spread_rms: Vec<f64>,
 }
 
 /// How θ was smoothed and differentiated.
@@ -266,7 +294,7 @@ pub struct BandwidthChoice {
     /// The detector's verdict, when it ran.
     pub detection: Option<PeriodDetection>,
     /// Per joint, the harmonic series kept ([`BandwidthMethod::HarmonicSeries`]).
-    pub harmonics: Option<[HarmonicSelection; 2]>,
+    pub harmonics: Option<Vec<HarmonicSelection>>,
     /// The Butterworth applied ([`BandwidthMethod::Butterworth`]).
     pub filter: Option<FilterSpec>,
     /// The spectrum that chose the automatic cut-off.
@@ -335,8 +363,8 @@ pub struct Processed {
     pub notes: Vec<String>,
     /// Warnings (the log's and processing's).
     pub warnings: Vec<Warning>,
-    /// The log's raw torques τ1, τ2, every row.
-    pub log_tau: [Vec<f64>; 2],
+    /// The log's raw torques τ1 … τn, every row.
+    pub log_tau: Vec<Vec<f64>>,
     map: RowMap,
     band: BandLimit,
 }
@@ -369,10 +397,11 @@ impl Processed {
     /// is compared with the log's.
     ///
     /// # Errors
-    /// [`ProcessError`] when a prediction does not have one value per
-    /// sample.
-    pub fn band_limited(&self, predicted: [&[f64]; 2]) -> Result<[Vec<f64>; 2], ProcessError> {
-        let mut limited = [predicted[0].to_vec(), predicted[1].to_vec()];
+    /// [`ProcessError`] when a prediction does not have one series per
+    /// joint and one value per sample.
+    pub fn band_limited(&self, predicted: &[&[f64]]) -> Result<Vec<Vec<f64>>, ProcessError> {
+        self.check_joints(predicted.len())?;
+        let mut limited: Vec<Vec<f64>> = predicted.iter().map(|p| p.to_vec()).collect();
         for p in &mut limited {
             self.check_per_sample(p.len())?;
             self.band.apply(p)?;
@@ -387,23 +416,30 @@ impl Processed {
     /// rows.
     ///
     /// # Errors
-    /// [`ProcessError`] when a series does not have one value per sample.
-    pub fn paired_with_log_rows(&self, series: [&[f64]; 2]) -> Result<Paired, ProcessError> {
+    /// [`ProcessError`] when there is not one series per joint with one
+    /// value per sample.
+    pub fn paired_with_log_rows(&self, series: &[&[f64]]) -> Result<Paired, ProcessError> {
+        self.check_joints(series.len())?;
         for p in series {
             self.check_per_sample(p.len())?;
         }
-        Ok(std::array::from_fn(|j| {
-            let rows = self.log_tau[j].len();
-            let mut m = Vec::with_capacity(rows);
-            let mut p = Vec::with_capacity(rows);
-            for r in 0..rows {
-                if let Some(i) = self.sample_of_row(r) {
-                    m.push(self.log_tau[j][r]);
-                    p.push(series[j][i]);
+        Ok(self
+            .log_tau
+            .iter()
+            .zip(series)
+            .map(|(tau, series)| {
+                let rows = tau.len();
+                let mut m = Vec::with_capacity(rows);
+                let mut p = Vec::with_capacity(rows);
+                for (r, &measured) in tau.iter().enumerate() {
+                    if let Some(i) = self.sample_of_row(r) {
+                        m.push(measured);
+                        p.push(series[i]);
+                    }
                 }
-            }
-            (m, p)
-        }))
+                (m, p)
+            })
+            .collect())
     }
 
     /// [`band_limited`](Self::band_limited), then
@@ -411,11 +447,25 @@ impl Processed {
     /// and the log's raw torques, ready for the fitness (78) on all rows.
     ///
     /// # Errors
-    /// [`ProcessError`] when a prediction does not have one value per
-    /// sample.
-    pub fn on_log_rows(&self, predicted: [&[f64]; 2]) -> Result<Paired, ProcessError> {
-        let [a, b] = self.band_limited(predicted)?;
-        self.paired_with_log_rows([&a, &b])
+    /// [`ProcessError`] when a prediction does not have one series per
+    /// joint and one value per sample.
+    pub fn on_log_rows(&self, predicted: &[&[f64]]) -> Result<Paired, ProcessError> {
+        let limited = self.band_limited(predicted)?;
+        let views: Vec<&[f64]> = limited.iter().map(Vec::as_slice).collect();
+        self.paired_with_log_rows(&views)
+    }
+
+    fn check_joints(&self, have: usize) -> Result<(), ProcessError> {
+        if have == self.log_tau.len() {
+            Ok(())
+        } else {
+            Err(ProcessError::TooShort {
+                what: "pairing a prediction with the log's joints".into(),
+                have,
+                need: self.log_tau.len(),
+                hint: "give one predicted torque series per joint".into(),
+            })
+        }
     }
 
     fn check_per_sample(&self, have: usize) -> Result<(), ProcessError> {
@@ -434,12 +484,20 @@ impl Processed {
 
 /// `(measured, predicted)` per joint on the log's rows
 /// ([`Processed::paired_with_log_rows`]).
-pub type Paired = [(Vec<f64>, Vec<f64>); 2];
+pub type Paired = Vec<(Vec<f64>, Vec<f64>)>;
 
 /// One series per joint.
-type Pair = [Vec<f64>; 2];
+type Pair = Vec<Vec<f64>>;
 
-const CHANNELS: [&str; 4] = ["theta1", "theta2", "tau1", "tau2"];
+/// The name of channel `c` of the processing's inputs: the `joints` angles,
+/// then the torques, then logged derivatives.
+fn channel_name(c: usize, joints: usize) -> String {
+    match c / joints {
+        0 => format!("theta{}", c + 1),
+        1 => format!("tau{}", c - joints + 1),
+        _ => "a logged derivative".into(),
+    }
+}
 
 /// Largest relative deviation of a time step from the nominal one that is
 /// still treated as uniform (rounding of printed times).
@@ -459,11 +517,55 @@ const MAX_UNUSED_SILENT: f64 = 0.25;
 /// or none;
 /// (3) derivatives; (4) kinematics. Logged derivative columns, when used,
 /// are taken as given and nothing is filtered.
+///
+/// The model's coordinates are two-dimensional here (ARAS-Diamond's task
+/// pose, or a two-joint robot's angles); [`process_in`] takes any number.
 pub fn process(
     log: &Log,
     opts: &ProcessOptions,
     coordinates: &impl Coordinates,
 ) -> Result<Processed, ProcessError> {
+    process_in::<nalgebra::U2>(log, opts, coordinates)
+}
+
+/// [`process`] for a model whose coordinates have dimension `D`: a fixed
+/// one (`U2`, `U7`) checked against the log's joints, or
+/// [`nalgebra::Dyn`], the log's joint count. Every step runs per joint; the
+/// bandwidth and the period are shared by all joints.
+///
+/// ```
+/// use aras_log::{read_log_from, ReadOptions};
+/// use aras_signal::{process_in, JointCoordinates, ProcessOptions};
+///
+/// let mut csv = String::from("t,theta1,theta2,theta3,tau1,tau2,tau3\n");
+/// for i in 0..2000 {
+///     let t = i as f64 * 1e-3;
+///     let s = (std::f64::consts::TAU * t).sin();
+///     csv += &format!("{t},{},{},{},{},{},{}\n", 0.1 * s, 0.2 * s, -0.1 * s, s, 0.5 * s, 0.2);
+/// }
+/// let log = read_log_from(csv.as_bytes(), "arm.csv", &ReadOptions::default())?;
+/// let out = process_in::<nalgebra::Dyn>(&log, &ProcessOptions::default(), &JointCoordinates)?;
+/// assert_eq!((out.samples.joints(), out.samples.len()), (3, 2000));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn process_in<D: Dim>(
+    log: &Log,
+    opts: &ProcessOptions,
+    coordinates: &impl Coordinates<D>,
+) -> Result<Processed, ProcessError>
+where
+    DefaultAllocator: Allocator<D>,
+{
+    let nj = log.joints();
+    if let Some(expected) = D::try_to_usize()
+        && expected != nj
+    {
+        return Err(ProcessError::Joints {
+            log: log.name.clone(),
+            joints: nj,
+            expected,
+        });
+    }
     let dt = log.summary.nominal_step_s;
     let fs = 1.0 / dt;
     let mut notes = log.notes.clone();
@@ -564,13 +666,12 @@ pub fn process(
         let span = log.t[log.len() - 1] - t0;
         let n = (span / dt + 1e-9).floor() as usize + 1;
         t_uniform = (0..n).map(|k| t0 + k as f64 * dt).collect();
-        let mut chans: Vec<&[f64]> = vec![&log.theta[0], &log.theta[1], &log.tau[0], &log.tau[1]];
-        if let Some(v) = logged_vel {
-            chans.extend([v[0].as_slice(), v[1].as_slice()]);
-        }
-        if let Some(a) = logged_acc {
-            chans.extend([a[0].as_slice(), a[1].as_slice()]);
-        }
+        let chans = log
+            .theta
+            .iter()
+            .chain(&log.tau)
+            .chain(logged_vel.into_iter().flatten())
+            .chain(logged_acc.into_iter().flatten());
         for c in chans {
             push(&resample(&log.t, c, t0, dt, n));
         }
@@ -583,16 +684,14 @@ pub fn process(
         ));
     } else {
         t_uniform = log.t.clone();
-        for c in [&log.theta[0], &log.theta[1], &log.tau[0], &log.tau[1]] {
+        let chans = log
+            .theta
+            .iter()
+            .chain(&log.tau)
+            .chain(logged_vel.into_iter().flatten())
+            .chain(logged_acc.into_iter().flatten());
+        for c in chans {
             push(c);
-        }
-        if let Some(v) = logged_vel {
-            push(&v[0]);
-            push(&v[1]);
-        }
-        if let Some(a) = logged_acc {
-            push(&a[0]);
-            push(&a[1]);
         }
         resampling = None;
     }
@@ -606,7 +705,8 @@ pub fn process(
         PeriodSource::FromSidecar => match log.sidecar.excitation.period_s {
             Some(p) => (Some(p), Some(PeriodOrigin::Sidecar)),
             None if logged_vel.is_none() && opts.filter == Bandwidth::Auto => {
-                let d = detect_period([&raw[0], &raw[1]], dt);
+                let angles: Vec<&[f64]> = raw[..nj].iter().map(Vec::as_slice).collect();
+                let d = detect_period(&angles, dt);
                 let p = d.period_s;
                 detection = Some(d);
                 (p, p.map(|_| PeriodOrigin::Detected))
@@ -620,13 +720,13 @@ pub fn process(
     if let Some(p) = period {
         match average_periods(&views, dt, p, opts.settling_s) {
             Ok(avg) => {
-                let worst = (0..2).find(|&c| avg.spread_relative[c] > opts.max_period_spread);
+                let worst = (0..nj).find(|&c| avg.spread_relative[c] > opts.max_period_spread);
                 match worst {
                     Some(c) if !detected => {
                         let k = avg.worst_block[c];
                         let i0 = avg.start + k * avg.samples_per_block;
                         return Err(ProcessError::PeriodsDisagree {
-                            channel: CHANNELS[c],
+                            channel: channel_name(c, nj),
                             index: k,
                             t_start: t_uniform[i0],
                             t_end: t_uniform[i0 + avg.samples_per_block - 1],
@@ -638,7 +738,7 @@ pub fn process(
                     Some(c) => notes.push(format!(
                         "detected period {p:.6} s not used: {} spreads {:.1} % between periods \
                          (limit {:.1} %)",
-                        CHANNELS[c],
+                        channel_name(c, nj),
                         100.0 * avg.spread_relative[c],
                         100.0 * opts.max_period_spread
                     )),
@@ -660,17 +760,17 @@ pub fn process(
         && !irregular
         && logged_vel.is_none()
         && opts.filter == Bandwidth::Auto)
-        .then(|| [raw[0].clone(), raw[1].clone()]);
+        .then(|| raw[..nj].to_vec());
     let mut rejected = 0;
     if let (Some(avg), Some(_)) = (&mut averaged, &aperiodic_input) {
-        rejected = reject_outlier_blocks(avg, &raw);
+        rejected = reject_outlier_blocks(avg, &raw, nj);
     }
     let (mut data, t, period_summary, mut dropped, map) = match averaged {
         Some(avg) => {
-            for (c, channel) in CHANNELS.iter().enumerate().skip(2) {
+            for c in nj..2 * nj {
                 if avg.spread_relative[c] > opts.max_period_spread {
                     warnings.push(Warning::PeriodSpread {
-                        channel: (*channel).into(),
+                        channel: channel_name(c, nj),
                         relative: avg.spread_relative[c],
                     });
                 }
@@ -695,8 +795,8 @@ pub fn process(
                 periods_averaged: avg.periods(),
                 settling_samples: avg.start,
                 tail_samples: avg.tail,
-                spread_relative: std::array::from_fn(|c| avg.spread_relative[c]),
-                spread_rms: std::array::from_fn(|c| avg.spread_rms[c]),
+                spread_relative: avg.spread_relative[..2 * nj].to_vec(),
+                spread_rms: avg.spread_rms[..2 * nj].to_vec(),
             };
             let dropped = nu - avg.samples_per_block * avg.blocks;
             let map = RowMap::Periodic {
@@ -719,13 +819,11 @@ pub fn process(
     let mut derivs: Option<(Pair, Pair, usize)> = None;
     if logged {
         // Nothing is filtered; θ̈ from the logged θ̇ when it is not logged.
-        let vel = [data[4].clone(), data[5].clone()];
-        let acc = if logged_acc.is_some() {
-            [data[6].clone(), data[7].clone()]
+        let vel: Pair = data[2 * nj..3 * nj].to_vec();
+        let acc: Pair = if logged_acc.is_some() {
+            data[3 * nj..4 * nj].to_vec()
         } else {
-            let a0 = uniform_derivatives(&vel[0], dt).0;
-            let a1 = uniform_derivatives(&vel[1], dt).0;
-            [a0, a1]
+            vel.iter().map(|v| uniform_derivatives(v, dt).0).collect()
         };
         derivs = Some((vel, acc, 0));
     } else {
@@ -733,9 +831,9 @@ pub fn process(
             (Bandwidth::Auto, Some(f)) => {
                 let kp = period_summary.as_ref().map_or(1, |p| p.periods_per_block);
                 let mut sel = Vec::new();
-                let mut vel = [vec![0.0; n], vec![0.0; n]];
-                let mut acc = [vec![0.0; n], vec![0.0; n]];
-                for j in 0..2 {
+                let mut vel = vec![vec![0.0; n]; nj];
+                let mut acc = vec![vec![0.0; n]; nj];
+                for j in 0..nj {
                     sel.push(harmonic_fit(
                         f,
                         &mut data[j],
@@ -745,7 +843,7 @@ pub fn process(
                         dt,
                     ));
                 }
-                harmonics = Some([sel[0], sel[1]]);
+                harmonics = Some(sel);
                 if opts.derivative == DerivativeMethod::Auto
                     || opts.derivative == DerivativeMethod::Spectral
                 {
@@ -753,8 +851,9 @@ pub fn process(
                 }
             }
             (Bandwidth::Auto, None) => {
-                let c = spectrum_cutoff([&data[0], &data[1]], dt);
-                spectrum = Some(c);
+                let angles: Vec<&[f64]> = data[..nj].iter().map(Vec::as_slice).collect();
+                let c = spectrum_cutoff(&angles, dt);
+                spectrum = Some(c.clone());
                 spec_used = Some(FilterSpec {
                     order: FilterSpec::default().order,
                     cutoff_hz: c.cutoff_hz,
@@ -773,7 +872,14 @@ pub fn process(
                     source,
                 }
             })?;
-            filter_all(&sos, spec, fs, &mut data[..4], fourier.as_mut(), &log.name)?;
+            filter_all(
+                &sos,
+                spec,
+                fs,
+                &mut data[..2 * nj],
+                fourier.as_mut(),
+                &log.name,
+            )?;
             Some(FilterSummary {
                 order: spec.order,
                 cutoff_hz: spec.cutoff_hz,
@@ -798,13 +904,15 @@ pub fn process(
         None if method == DerivativeMethod::Auto => {
             // Non-periodic, automatic: central differences, one-sided at
             // the ends, so no row is lost.
-            let (v0, a0) = uniform_derivatives(&data[0], dt);
-            let (v1, a1) = uniform_derivatives(&data[1], dt);
-            ([v0, v1], [a0, a1], 0)
+            let (v, a) = data[..nj]
+                .iter()
+                .map(|x| uniform_derivatives(x, dt))
+                .unzip();
+            (v, a, 0)
         }
         None => {
             let mut out = Vec::new();
-            for ch in &data[..2] {
+            for ch in &data[..nj] {
                 match (&mut fourier, method) {
                     (Some(f), DerivativeMethod::Spectral) => {
                         let (mut a, mut b) = (ch.clone(), ch.clone());
@@ -817,11 +925,9 @@ pub fn process(
                     }
                 }
             }
-            let e = out[0].2;
-            let mut it = out.into_iter();
-            let (a0, b0, _) = it.next().expect("two channels");
-            let (a1, b1, _) = it.next().expect("two channels");
-            ([a0, a1], [b0, b1], e)
+            let e = out.first().map_or(0, |o| o.2);
+            let (first, second) = out.into_iter().map(|(a, b, _)| (a, b)).unzip();
+            (first, second, e)
         }
     };
     let source = if logged {
@@ -831,7 +937,7 @@ pub fn process(
     };
     let bandwidth = describe(
         logged,
-        harmonics,
+        harmonics.clone(),
         spec_used,
         spectrum,
         period_used,
@@ -844,17 +950,17 @@ pub fn process(
     // Output rows.
     let mut aperiodic = None;
     let keep = edge..n - edge;
-    let theta: [Vec<f64>; 2] = [
-        data[0][keep.clone()].to_vec(),
-        data[1][keep.clone()].to_vec(),
-    ];
+    let theta: Pair = data[..nj]
+        .iter()
+        .map(|c| c[keep.clone()].to_vec())
+        .collect();
     let mut s;
     let map = if every_row && (irregular || periodic) {
         // Evaluate at the logged times: exact indices on a uniform grid,
         // cubic Hermite (with the derivatives as slopes) between grid points.
         let rows = log.len();
-        let mut out: [[Vec<f64>; 2]; 3] = Default::default();
-        for j in 0..2 {
+        let mut out: [Pair; 3] = std::array::from_fn(|_| vec![Vec::new(); nj]);
+        for j in 0..nj {
             let (x, v, a) = (&theta[j], &theta_dot[j], &theta_ddot[j]);
             let jerk = periodic_slopes(a, dt, periodic);
             out[0][j] = Vec::with_capacity(rows);
@@ -897,14 +1003,15 @@ pub fn process(
         if let Some(th) = &aperiodic_input {
             // The aperiodic remainder θ − series, low-passed where its own
             // spectrum meets the noise, differentiated and added back.
-            let r: Vec<Vec<f64>> = (0..2)
+            let r: Vec<Vec<f64>> = (0..nj)
                 .map(|j| th[j].iter().zip(&x[j]).map(|(a, b)| a - b).collect())
                 .collect();
-            let mut c = spectrum_cutoff([&r[0], &r[1]], dt);
+            let views: Vec<&[f64]> = r.iter().map(Vec::as_slice).collect();
+            let mut c = spectrum_cutoff(&views, dt);
             // Above the band of the series (the smallest highest harmonic
             // of the joints that move, `band_of`) the angles hold noise for
             // the torque.
-            if let Some(h) = harmonics {
+            if let Some(h) = &harmonics {
                 let top = h
                     .iter()
                     .map(|s| s.highest_hz)
@@ -926,7 +1033,7 @@ pub fn process(
             })?;
             let mut r = r;
             filter_all(&sos, spec, fs, &mut r, None, &log.name)?;
-            for j in 0..2 {
+            for j in 0..nj {
                 let (dv, da) = uniform_derivatives(&r[j], dt);
                 for i in 0..x[j].len() {
                     x[j][i] += r[j][i];
@@ -947,15 +1054,15 @@ pub fn process(
             // Every row of the log again, with its raw torque.
             log.tau.clone()
         } else {
-            [
-                data[2][keep.clone()].to_vec(),
-                data[3][keep.clone()].to_vec(),
-            ]
+            data[nj..2 * nj]
+                .iter()
+                .map(|c| c[keep.clone()].to_vec())
+                .collect()
         };
         if irregular && !periodic {
-            let mut out: [[Vec<f64>; 2]; 3] = Default::default();
+            let mut out: [Pair; 3] = std::array::from_fn(|_| vec![Vec::new(); nj]);
             let at: Vec<f64> = log.t.iter().map(|ti| ti + shift * dt).collect();
-            for j in 0..2 {
+            for j in 0..nj {
                 let jerk = periodic_slopes(&theta_ddot[j], dt, false);
                 out[0][j] = hermite_at(&t[keep.clone()], &theta[j], &theta_dot[j], &at);
                 out[1][j] = hermite_at(&t[keep.clone()], &theta_dot[j], &theta_ddot[j], &at);
@@ -992,6 +1099,7 @@ pub fn process(
              than {OUTLIER_BLOCK}× the median block)"
         );
     }
+    let remainder_hz = aperiodic.as_ref().map(|c| c.cutoff_hz);
     if let Some(c) = aperiodic {
         bandwidth.reason += &format!(
             "; the aperiodic remainder (θ − series, e.g. a start-up transient) low-passed at \
@@ -1004,9 +1112,9 @@ pub fn process(
     // The operator the angles passed, for whatever is computed from them.
     let band = band_of(BandInputs {
         logged,
-        harmonics,
+        harmonics: harmonics.as_deref(),
         spec_used,
-        remainder_hz: aperiodic.map(|c| c.cutoff_hz),
+        remainder_hz,
         periods: period_summary.as_ref(),
         every_row,
         irregular,
@@ -1054,7 +1162,7 @@ pub fn process(
 /// What [`band_of`] needs to know about a processing run.
 struct BandInputs<'a> {
     logged: bool,
-    harmonics: Option<[crate::HarmonicSelection; 2]>,
+    harmonics: Option<&'a [crate::HarmonicSelection]>,
     spec_used: Option<FilterSpec>,
     remainder_hz: Option<f64>,
     periods: Option<&'a PeriodSummary>,
@@ -1121,7 +1229,7 @@ fn shift_motion(x: &mut Pair, v: &mut Pair, a: &mut Pair, u: f64, dt: f64, perio
         -2.0 * u3 + 3.0 * u2,
         u3 - u2,
     );
-    for j in 0..2 {
+    for j in 0..x.len() {
         let m = x[j].len();
         if m < 2 {
             continue;
@@ -1151,24 +1259,23 @@ fn shift_motion(x: &mut Pair, v: &mut Pair, a: &mut Pair, u: f64, dt: f64, perio
     }
 }
 
-fn samples_from(
-    t: Vec<f64>,
-    theta: [Vec<f64>; 2],
-    theta_dot: [Vec<f64>; 2],
-    theta_ddot: [Vec<f64>; 2],
-    tau: [Vec<f64>; 2],
-) -> Samples {
-    let m = t.len();
+fn samples_from(t: Vec<f64>, theta: Pair, theta_dot: Pair, theta_ddot: Pair, tau: Pair) -> Samples {
+    let zeros = vec![vec![0.0; t.len()]; theta.len()];
     Samples {
         t,
         theta,
         theta_dot,
         theta_ddot,
-        x: [vec![0.0; m], vec![0.0; m]],
-        x_dot: [vec![0.0; m], vec![0.0; m]],
-        x_ddot: [vec![0.0; m], vec![0.0; m]],
+        x: zeros.clone(),
+        x_dot: zeros.clone(),
+        x_ddot: zeros,
         tau,
     }
+}
+
+/// `a / b / c`: one figure per joint, as the reports write them.
+fn per_joint(values: impl IntoIterator<Item = String>) -> String {
+    values.into_iter().collect::<Vec<_>>().join(" / ")
 }
 
 /// Slopes of a uniformly sampled series (central differences; wrapping
@@ -1189,7 +1296,7 @@ fn periodic_slopes(y: &[f64], dt: f64, periodic: bool) -> Vec<f64> {
 #[allow(clippy::too_many_arguments)]
 fn describe(
     logged: bool,
-    harmonics: Option<[HarmonicSelection; 2]>,
+    harmonics: Option<Vec<HarmonicSelection>>,
     spec: Option<FilterSpec>,
     spectrum: Option<SpectrumCutoff>,
     period_s: Option<f64>,
@@ -1203,42 +1310,41 @@ fn describe(
         .and_then(|d| d.declined.clone())
         .map(|r| format!(" (no period: {r})"))
         .unwrap_or_default();
+    let spectrum_used = spectrum.as_ref();
     let (method, reason) = if logged {
         (
             BandwidthMethod::LoggedDerivatives,
             "the log's derivative columns are used as given; nothing is filtered".to_string(),
         )
-    } else if let Some(h) = harmonics {
+    } else if let Some(h) = &harmonics {
         (
             BandwidthMethod::HarmonicSeries,
             format!(
-                "periodic record ({} period {:.6} s): Fourier series with {} / {} harmonics \
-                 (up to {:.1} / {:.1} Hz), the highest whose power exceeds {:.1}× the noise floor \
-                 (≈ {:.2e} / {:.2e} rad RMS per sample); θ̇, θ̈ are the series' derivatives",
+                "periodic record ({} period {:.6} s): Fourier series with {} harmonics \
+                 (up to {} Hz), the highest whose power exceeds {:.1}× the noise floor \
+                 (≈ {} rad RMS per sample); θ̇, θ̈ are the series' derivatives",
                 match period_origin {
                     Some(PeriodOrigin::Detected) => "detected",
                     Some(PeriodOrigin::Sidecar) => "sidecar",
                     _ => "given",
                 },
                 period_s.unwrap_or(0.0),
-                h[0].harmonics,
-                h[1].harmonics,
-                h[0].highest_hz,
-                h[1].highest_hz,
-                h[0].threshold,
-                h[0].noise_rms,
-                h[1].noise_rms
+                per_joint(h.iter().map(|s| s.harmonics.to_string())),
+                per_joint(h.iter().map(|s| format!("{:.1}", s.highest_hz))),
+                h.first().map_or(0.0, |s| s.threshold),
+                per_joint(h.iter().map(|s| format!("{:.2e}", s.noise_rms))),
             ),
         )
     } else if let Some(s) = spec {
-        let why = match (asked, spectrum) {
+        let why = match (asked, spectrum_used) {
             (Bandwidth::Fixed(_), _) => {
                 "a fixed cut-off from the settings, not chosen from the data".to_string()
             }
             (_, Some(c)) => format!(
-                "the angles' motion reaches {:.2} / {:.2} Hz above the noise floor \
-                 (≈ {:.2e} / {:.2e} rad RMS per sample); cut-off {CUTOFF_MARGIN}× that{declined}",
-                c.motion_top_hz[0], c.motion_top_hz[1], c.noise_rms[0], c.noise_rms[1]
+                "the angles' motion reaches {} Hz above the noise floor \
+                 (≈ {} rad RMS per sample); cut-off {CUTOFF_MARGIN}× that{declined}",
+                per_joint(c.motion_top_hz.iter().map(|f| format!("{f:.2}"))),
+                per_joint(c.noise_rms.iter().map(|r| format!("{r:.2e}"))),
             ),
             _ => String::new(),
         };
@@ -1276,11 +1382,11 @@ const OUTLIER_BLOCK: f64 = 3.0;
 /// Re-averages `avg` without the blocks whose θ deviates by more than
 /// [`OUTLIER_BLOCK`] times the median block (the median block always
 /// stays, so at least half remain). Returns the number left out.
-fn reject_outlier_blocks(avg: &mut crate::PeriodAverage, raw: &[Vec<f64>]) -> usize {
+fn reject_outlier_blocks(avg: &mut crate::PeriodAverage, raw: &[Vec<f64>], angles: usize) -> usize {
     let (per, blocks, start) = (avg.samples_per_block, avg.blocks, avg.start);
     let dev: Vec<f64> = (0..blocks)
         .map(|b| {
-            (0..2)
+            (0..angles)
                 .map(|c| {
                     let x = &raw[c][start + b * per..start + (b + 1) * per];
                     x.iter()
@@ -1333,6 +1439,7 @@ fn filter_all(
     fourier: Option<&mut Fourier>,
     name: &str,
 ) -> Result<(), ProcessError> {
+    let joints = (data.len() / 2).max(1);
     match fourier {
         Some(f) => {
             for ch in data.iter_mut() {
@@ -1345,10 +1452,7 @@ fn filter_all(
             for (c, ch) in data.iter_mut().enumerate() {
                 sos.filtfilt_in_place_padded(ch, pad, &mut scratch)
                     .map_err(|source| ProcessError::Filter {
-                        context: format!(
-                            "filtering {} of {name}",
-                            CHANNELS.get(c).copied().unwrap_or("a logged derivative")
-                        ),
+                        context: format!("filtering {} of {name}", channel_name(c, joints)),
                         source,
                     })?;
             }
@@ -1357,15 +1461,25 @@ fn filter_all(
     Ok(())
 }
 
-/// Fills the model's coordinates X, Ẋ, Ẍ from θ, θ̇, θ̈ at every sample.
-fn model_coordinates(s: &mut Samples, c: &impl Coordinates) -> Result<(), ProcessError> {
+/// Fills the model's coordinates X, Ẋ, Ẍ from θ, θ̇, θ̈ at every sample
+/// (copies for the identity).
+fn model_coordinates<D: Dim>(s: &mut Samples, c: &impl Coordinates<D>) -> Result<(), ProcessError>
+where
+    DefaultAllocator: Allocator<D>,
+{
+    if c.is_identity() {
+        s.x.clone_from(&s.theta);
+        s.x_dot.clone_from(&s.theta_dot);
+        s.x_ddot.clone_from(&s.theta_ddot);
+        return Ok(());
+    }
     for i in 0..s.len() {
         let task = c.map(s.joint(i)).map_err(|e| ProcessError::Coordinates {
             index: i,
             t: s.t[i],
             source: Box::new(e),
         })?;
-        for j in 0..2 {
+        for j in 0..s.x.len() {
             s.x[j][i] = task.pos[j];
             s.x_dot[j][i] = task.vel[j];
             s.x_ddot[j][i] = task.acc[j];
@@ -1380,11 +1494,11 @@ fn model_coordinates(s: &mut Samples, c: &impl Coordinates) -> Result<(), Proces
 /// given.
 fn check_logged_derivatives(
     log: &Log,
-    vel: &[Vec<f64>; 2],
-    acc: Option<&[Vec<f64>; 2]>,
+    vel: &[Vec<f64>],
+    acc: Option<&Vec<Vec<f64>>>,
 ) -> Result<(), ProcessError> {
     let wrap = |source| ProcessError::LoggedDerivatives { source };
-    for j in 0..2 {
+    for j in 0..log.joints() {
         let [theta, dtheta, ddtheta] =
             ["theta", "dtheta", "ddtheta"].map(|c| format!("{c}{}", j + 1));
         aras_log::units::check_derivative_column(

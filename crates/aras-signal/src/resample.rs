@@ -158,7 +158,7 @@ pub fn resample_log(log: &Log, opts: &ResampleOptions) -> Result<(Log, Resamplin
         });
     }
     let re = |x: &[f64]| resample(&log.t, x, t0, dt, n);
-    let pair = |p: &[Vec<f64>; 2]| [re(&p[0]), re(&p[1])];
+    let pair = |p: &Vec<Vec<f64>>| p.iter().map(|c| re(c)).collect::<Vec<_>>();
     let mut out = log.clone();
     out.t = (0..n).map(|k| t0 + k as f64 * dt).collect();
     out.theta = pair(&log.theta);
@@ -180,8 +180,8 @@ pub fn resample_log(log: &Log, opts: &ResampleOptions) -> Result<(Log, Resamplin
         step_s: dt,
         ratio: 1.0,
     });
-    s.theta_range = [range(&out.theta[0]), range(&out.theta[1])];
-    s.tau_range = [range(&out.tau[0]), range(&out.tau[1])];
+    s.theta_range = out.theta.iter().map(|c| range(c)).collect();
+    s.tau_range = out.tau.iter().map(|c| range(c)).collect();
     s.lines = Default::default();
     let report = Resampling {
         step_s: dt,

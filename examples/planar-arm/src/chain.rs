@@ -12,16 +12,22 @@
 //! inertias, which never forms `h` or `I_O`.
 //!
 //! The excitation is designed by `aras-excite` for the chain's joints (one
-//! Fourier series per joint, per-joint box, rate and acceleration limits),
-//! and the identification samples it exactly.
+//! Fourier series per joint, per-joint box, rate and acceleration limits).
+//! [`identify`] samples it exactly; [`identify_log`] takes the way of a
+//! measured log: an `aras-log` CSV with one angle and one torque column per
+//! joint, read by `aras-log`, processed by `aras-signal` in joint
+//! coordinates of run-time dimension and streamed through the base
+//! regressor.
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the equations
 
 use std::convert::Infallible;
 
-use aras_excite::{DesignSettings, Dual, Limits, Regressor};
+use aras_excite::{DesignSettings, Dual, FourierTrajectory, Limits, Regressor};
 use aras_ident::streaming::{RegressorStage, States};
 use aras_ident::{ConsistentLs, LinearModel, LinkLayout, ReducedLs};
+use aras_log::ReadOptions;
+use aras_signal::{Bandwidth, JointCoordinates, PeriodSource, ProcessOptions};
 use faer::Mat;
 use nalgebra::{DVector, Dyn};
 use num_dual::DualNum;
@@ -296,6 +302,8 @@ pub struct ChainOutcome {
     pub sdp_status: aras_ident::SolverStatus,
     /// Smallest pseudo-inertia eigenvalue per link of the SDP estimate.
     pub min_eigenvalues: Vec<f64>,
+    /// The designed excitation.
+    pub trajectory: FourierTrajectory<Dyn>,
 }
 
 /// The excitation's limits for `joints` joints: every joint within
@@ -417,5 +425,97 @@ pub fn identify(chain: &Chain, samples: usize) -> Result<ChainOutcome, Box<dyn s
         sdp: sol.base.clone(),
         sdp_status: sol.status,
         min_eigenvalues: sol.links.iter().map(|l| l.min_eigenvalue).collect(),
+        trajectory: traj.clone(),
+    })
+}
+
+/// The `aras-log` CSV of `periods` periods of `trajectory` run by `chain`
+/// and logged at `rate_hz`: `t, theta1 … thetaN, tau1 … tauN`, the torques
+/// from [`Chain::torques`] (noise-free). Samples lie half a step off the
+/// period boundary, where the design puts `q̇ = 0`, so none sits on a
+/// Coulomb reversal.
+pub fn log_csv(
+    chain: &Chain,
+    trajectory: &FourierTrajectory<Dyn>,
+    rate_hz: f64,
+    periods: usize,
+) -> String {
+    let n = chain.joints();
+    let mut csv = String::from("t");
+    for name in ["theta", "tau"] {
+        for j in 1..=n {
+            csv += &format!(",{name}{j}");
+        }
+    }
+    csv.push('\n');
+    let rows = (periods as f64 * trajectory.period() * rate_hz).round() as usize;
+    let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    for i in 0..rows {
+        let t = (i as f64 + 0.5) / rate_hz;
+        trajectory.eval_into(t, &mut q, &mut qd, &mut qdd);
+        let tau = chain.torques(&q, &qd, &qdd);
+        csv += &t.to_string();
+        for v in q.iter().chain(&tau) {
+            csv += &format!(",{v}");
+        }
+        csv.push('\n');
+    }
+    csv
+}
+
+/// What [`identify_log`] found.
+#[derive(Debug)]
+pub struct LogOutcome {
+    /// Joints the log reader found in the header.
+    pub joints: usize,
+    /// Processed samples (one averaged block of the period).
+    pub samples: usize,
+    /// How the processing limited the band, in its own words.
+    pub bandwidth: String,
+    /// True base parameters.
+    pub truth: Vec<f64>,
+    /// OLS from the streaming accumulation of the processed samples.
+    pub streaming: Vec<f64>,
+}
+
+/// Identifies `chain` from the log `csv` of a periodic excitation of
+/// period `period_s`: read by `aras-log` (as many joints as the header
+/// names), processed by `aras-signal` in the chain's joint coordinates
+/// (period averaging, the data-chosen bandwidth), and streamed through
+/// the base regressor to OLS.
+pub fn identify_log(
+    chain: &Chain,
+    csv: &str,
+    period_s: f64,
+) -> Result<LogOutcome, Box<dyn std::error::Error>> {
+    let model = chain.model();
+    let base = crate::base_parameters_of(&model, 400)?;
+    let log = aras_log::read_log_from(csv.as_bytes(), "chain.csv", &ReadOptions::default())?;
+    let processed = aras_signal::process_in::<Dyn>(
+        &log,
+        &ProcessOptions {
+            filter: Bandwidth::Auto,
+            period: PeriodSource::Seconds(period_s),
+            ..ProcessOptions::default()
+        },
+        &JointCoordinates,
+    )?;
+    let s = &processed.samples;
+    fn views(c: &[Vec<f64>]) -> Vec<&[f64]> {
+        c.iter().map(Vec::as_slice).collect()
+    }
+    let mut stage = RegressorStage::new(model, &base)?;
+    stage.push(&States {
+        x: &views(&s.x),
+        x_dot: &views(&s.x_dot),
+        x_ddot: &views(&s.x_ddot),
+        tau: &views(&s.tau),
+    })?;
+    Ok(LogOutcome {
+        joints: log.joints(),
+        samples: s.len(),
+        bandwidth: processed.summary.bandwidth.reason.clone(),
+        truth: base.to_base(&chain.standard())?,
+        streaming: stage.accumulator().ols()?.estimate,
     })
 }

@@ -445,7 +445,7 @@ pub fn run(settings: &Settings) -> Result<Outcome, Box<dyn std::error::Error>> {
     let mut t = vec![0.0; 2 * rows];
     let mut y = vec![0.0; 2 * COLUMNS];
     for i in 0..rows {
-        let at = |v: &[Vec<f64>; 2]| [v[0][i], v[1][i]];
+        let at = |v: &[Vec<f64>]| [v[0][i], v[1][i]];
         LinearModel::fill(&model, &at(&s.x), &at(&s.x_dot), &at(&s.x_ddot), &mut y)?;
         for j in 0..2 {
             for c in 0..COLUMNS {

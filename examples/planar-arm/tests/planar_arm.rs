@@ -238,6 +238,27 @@ fn three_link_chain_base_parameters_are_recovered_noise_free() {
         o.truth
     );
     assert_eq!(o.min_eigenvalues.len(), 3);
+    // The same excitation as a measured log would arrive: three angle and
+    // three torque columns, read, period-averaged and band-limited by the
+    // processing in joint coordinates of run-time dimension, streamed.
+    let period = o.trajectory.period();
+    let csv = planar_arm::chain::log_csv(&Chain::three_links(), &o.trajectory, 1000.0, 3);
+    let l = planar_arm::chain::identify_log(&Chain::three_links(), &csv, period).unwrap();
+    assert_eq!(l.joints, 3);
+    assert_eq!(l.samples, (period * 1000.0).round() as usize);
+    assert!(l.bandwidth.contains("Fourier series"), "{}", l.bandwidth);
+    eprintln!(
+        "three links from a log: worst relative error {:.1e}; {}",
+        worst(&l.streaming, &l.truth),
+        l.bandwidth
+    );
+    assert!(
+        worst(&l.streaming, &l.truth) < 1e-6,
+        "from the log {:?} vs {:?} ({})",
+        l.streaming,
+        l.truth,
+        l.bandwidth
+    );
     assert!(
         o.min_eigenvalues.iter().all(|&e| e > 0.0),
         "{:?}",

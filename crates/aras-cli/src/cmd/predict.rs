@@ -80,10 +80,10 @@ pub fn run(args: &PredictArgs) -> Result<()> {
     // The log's raw torques on the rows written (the processed samples'
     // torques are band-limited with the motion: not what the file is
     // compared with); the prediction is already band-limited.
-    let [(m1, p1), (m2, p2)] = processed.paired_with_log_rows([&tau[..n], &tau[n..]])?;
+    let pairs = processed.paired_with_log_rows(&[&tau[..n], &tau[n..]])?;
     let fit = [
-        aras_ident::validate::fitness(&m1, &p1)?,
-        aras_ident::validate::fitness(&m2, &p2)?,
+        aras_ident::validate::fitness(&pairs[0].0, &pairs[0].1)?,
+        aras_ident::validate::fitness(&pairs[1].0, &pairs[1].1)?,
     ];
     // The loss is a second opinion on the file written: a log that the
     // angles alone cannot process (e.g. a sidecar period that is no whole

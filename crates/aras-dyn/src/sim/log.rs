@@ -70,9 +70,9 @@ pub(crate) fn sidecar(
         torques: Some(aras_log::TorqueTiming::Held),
         ..Sidecar::default()
     };
-    sidecar.sensors.torque_constants = Some(s.torque_constants);
-    sidecar.sensors.gear_ratios = Some(s.gear_ratios);
-    sidecar.sensors.counts_per_rev = Some(s.counts_per_rev.map(f64::from));
+    sidecar.sensors.torque_constants = Some(s.torque_constants.to_vec());
+    sidecar.sensors.gear_ratios = Some(s.gear_ratios.to_vec());
+    sidecar.sensors.counts_per_rev = Some(s.counts_per_rev.map(f64::from).to_vec());
     sidecar.excitation.period_s = traj.period().filter(|p| p.is_finite() && *p > 0.0);
     Ok(sidecar)
 }
@@ -145,11 +145,15 @@ impl SimLog {
 /// always gives the same bytes). With `derivatives`, the exact
 /// `dtheta1,dtheta2,ddtheta1,ddtheta2` columns are appended.
 pub fn write_log(csv: &Path, log: &SimLog, derivatives: bool) -> Result<(), SimError> {
-    let pair = |v: &[[f64; 2]]| [0, 1].map(|j| v.iter().map(|r| r[j]).collect::<Vec<f64>>());
+    let pair = |v: &[[f64; 2]]| {
+        [0, 1]
+            .map(|j| v.iter().map(|r| r[j]).collect::<Vec<f64>>())
+            .to_vec()
+    };
     let (theta_dot, theta_ddot) = if derivatives {
         (pair(&log.theta_dot), pair(&log.theta_ddot))
     } else {
-        Default::default()
+        (vec![Vec::new(); 2], vec![Vec::new(); 2])
     };
     let columns = Columns {
         t: log.t.clone(),

@@ -45,7 +45,7 @@ pub struct Dataset {
 #[derive(Debug, Clone)]
 pub(crate) struct LogRows {
     /// The log's raw torques τ1, τ2, every row.
-    pub tau: [Vec<f64>; 2],
+    pub tau: Vec<Vec<f64>>,
     /// The sample of each row (`None` for rows lost at the derivative's edges).
     pub sample: Vec<Option<usize>>,
 }

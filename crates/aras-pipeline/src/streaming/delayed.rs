@@ -47,7 +47,7 @@ impl TorqueShift {
         }
         let at = out.len();
         super::log::append_rows(out, &self.buf, rows.clone());
-        for k in 0..2 {
+        for k in 0..out.joints() {
             for (o, i) in out.tau[k][at..].iter_mut().zip(rows.clone()) {
                 *o = aras_signal::delayed_at(&self.buf.tau[k], i, self.delay);
             }

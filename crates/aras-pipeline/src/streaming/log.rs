@@ -172,6 +172,23 @@ pub struct StreamingResult {
     pub log: LogReport,
 }
 
+/// Opens an ARAS-Diamond log: two joints (columns of further joints are
+/// ignored with a note, a log with fewer is refused).
+fn open_log(path: &Path, read: &ReadOptions) -> Result<LogReader<std::fs::File>, IdentError> {
+    if let Some(n) = read.joints.filter(|&n| n != 2) {
+        return Err(IdentError::InvalidSetting {
+            name: "read.joints",
+            value: n as f64,
+            reason: "ARAS-Diamond has two joints: leave ReadOptions::joints unset or give 2",
+        });
+    }
+    let read = ReadOptions {
+        joints: Some(2),
+        ..read.clone()
+    };
+    LogReader::open(path, &read).map_err(|e| sig(&format!("opening the log {}", path.display()), e))
+}
+
 fn sig(context: &str, e: impl std::error::Error + Send + Sync + 'static) -> IdentError {
     IdentError::external(context, e)
 }
@@ -248,8 +265,7 @@ pub fn identify_log_with_progress(
         });
     }
     let name = path.display().to_string();
-    let mut reader = LogReader::open(path, &options.read)
-        .map_err(|e| sig(&format!("opening the log {name}"), e))?;
+    let mut reader = open_log(path, &options.read)?;
     if !(options.min_speed.is_finite() && options.min_speed >= 0.0) {
         return Err(IdentError::InvalidSetting {
             name: "min_speed",
@@ -292,7 +308,7 @@ pub fn identify_log_with_progress(
                 v.resize(n, 0.0);
             }
             for i in 0..n {
-                let th = |a: &[Vec<f64>; 2]| Vector2::new(a[0][i], a[1][i]);
+                let th = |a: &[Vec<f64>]| Vector2::new(a[0][i], a[1][i]);
                 let joint = Motion::new(
                     th(&chunk.theta),
                     th(&chunk.theta_dot),
@@ -646,8 +662,7 @@ pub fn spool_log(
         || path.display().to_string(),
         |f| f.to_string_lossy().into(),
     );
-    let mut reader = LogReader::open(path, &options.read)
-        .map_err(|e| sig(&format!("opening the log {}", path.display()), e))?;
+    let mut reader = open_log(path, &options.read)?;
     let (period, logged) = period_and_derivatives(&reader, options);
     let mut read = rows_reader(&name, options.torque_delay, progress)?;
     let task = aras_kin::task_motion(&options.geometry);
@@ -818,7 +833,7 @@ fn read_blocks(
             dt = nominal_step(&buf, dt)?;
             if popts.filter == Bandwidth::Auto && !sizes.logged {
                 // One cut-off for every block: the first block's spectrum.
-                let c = aras_signal::spectrum_cutoff([&buf.theta[0], &buf.theta[1]], dt);
+                let c = aras_signal::spectrum_cutoff(&[&buf.theta[0], &buf.theta[1]], dt);
                 popts.filter = Bandwidth::Fixed(FilterSpec {
                     cutoff_hz: c.cutoff_hz,
                     ..FilterSpec::default()
@@ -994,7 +1009,8 @@ pub(super) fn append(buf: &mut Columns, c: &Columns) {
 /// Appends rows `r` of `c` to `buf` (columns the log lacks stay empty).
 pub(super) fn append_rows(buf: &mut Columns, c: &Columns, r: std::ops::Range<usize>) {
     buf.t.extend_from_slice(&c.t[r.clone()]);
-    for k in 0..2 {
+    buf.resize_joints(c.joints());
+    for k in 0..c.joints() {
         for (b, v) in [
             (&mut buf.theta[k], &c.theta[k]),
             (&mut buf.tau[k], &c.tau[k]),
@@ -1014,7 +1030,7 @@ pub(super) fn drain_front(buf: &mut Columns, n: usize) {
         v.drain(..n);
     };
     d(&mut buf.t);
-    for k in 0..2 {
+    for k in 0..buf.joints() {
         d(&mut buf.theta[k]);
         d(&mut buf.tau[k]);
         d(&mut buf.theta_dot[k]);
@@ -1031,7 +1047,7 @@ fn range(v: &[f64]) -> [f64; 2] {
 
 /// A `Log` over a block of rows, so `aras_signal::process` can run on it.
 fn block_log(name: &str, c: &Columns, dt: f64, sidecar: Sidecar) -> Log {
-    let pair = |a: &[Vec<f64>; 2]| (!a[0].is_empty()).then(|| a.clone());
+    let pair = |a: &Vec<Vec<f64>>| a.iter().any(|c| !c.is_empty()).then(|| a.clone());
     Log {
         name: name.to_owned(),
         t: c.t.clone(),
@@ -1049,12 +1065,12 @@ fn block_log(name: &str, c: &Columns, dt: f64, sidecar: Sidecar) -> Log {
             worst_step: None,
             angle_source: String::new(),
             torque_source: String::new(),
-            theta_range: [range(&c.theta[0]), range(&c.theta[1])],
-            tau_range: [range(&c.tau[0]), range(&c.tau[1])],
+            theta_range: c.theta.iter().map(|v| range(v)).collect(),
+            tau_range: c.tau.iter().map(|v| range(v)).collect(),
             sidecar: None,
             timing: Default::default(),
             lines: Default::default(),
-            channel_columns: [0; 4],
+            channel_columns: vec![0; 2 * c.joints()],
         },
         notes: Vec::new(),
         warnings: Vec::new(),
@@ -1214,16 +1230,16 @@ impl PeriodSums {
         let (th0, th1, tau0, tau1) = (next(), next(), next(), next());
         let (theta_dot, theta_ddot) = if self.logged {
             let (a, b, c, d) = (next(), next(), next(), next());
-            ([a, b], [c, d])
+            (vec![a, b], vec![c, d])
         } else {
-            Default::default()
+            (vec![Vec::new(); 2], vec![Vec::new(); 2])
         };
         let mut t = self.t0;
         t.truncate(mean.samples_per_block);
         let cols = Columns {
             t,
-            theta: [th0, th1],
-            tau: [tau0, tau1],
+            theta: vec![th0, th1],
+            tau: vec![tau0, tau1],
             theta_dot,
             theta_ddot,
         };
