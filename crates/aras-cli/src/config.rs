@@ -11,7 +11,6 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use aras_pipeline::friction_width::{FitRows, WidthSearch};
 use serde::{Deserialize, Serialize};
 
 /// The whole configuration. Units: SI, angles in degrees only where a key
@@ -336,116 +335,14 @@ impl Default for SignalConfig {
     }
 }
 
+/// `[identification]` is the library's identification settings
+/// (`aras_pipeline::identify`), defaults included; `[identification.sdp]`
+/// its SDP options.
+pub use aras_pipeline::identify::{
+    IdentifySettings as IdentificationConfig, SdpOptions as SdpConfig, Weighting,
+};
 /// Which signals the low-pass is applied to before the fit.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum FilteringMode {
-    /// The same zero-phase filter on the torques and on every regressor
-    /// column (`docs/processing.md`, "Parallel filtering").
-    Parallel,
-    /// Torques only (the paper as written; biased with Coulomb friction).
-    TorqueOnly,
-}
-
-impl FilteringMode {
-    /// The pipeline's filtering mode of this setting.
-    pub fn mode(self) -> aras_pipeline::robot::FilterMode {
-        use aras_pipeline::robot::FilterMode;
-        match self {
-            Self::Parallel => FilterMode::Parallel,
-            Self::TorqueOnly => FilterMode::TorqueOnly,
-        }
-    }
-}
-
-/// Row weighting of the least squares.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Weighting {
-    /// Ordinary least squares (62)–(66).
-    Ols,
-    /// Per-joint weights `1/σ_j`, σ_j from a first OLS pass's residuals.
-    Wls,
-}
-
-/// `[identification.sdp]`: the physically consistent solve (67)–(73).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct SdpConfig {
-    /// PSD margin ε relative to each link's scale `m L²`.
-    pub epsilon: f64,
-    /// Link masses may vary by this fraction around the nominal masses.
-    pub mass_tolerance: f64,
-    /// Box bounds (73) on the link parameters: `[lower, upper]` factors of
-    /// the nominal values (paper `[0.8, 1.25]`); absent: no box.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub box_bounds: Option<[f64; 2]>,
-    /// Regulariser λ towards the nominal parameters.
-    pub regularisation: f64,
-    /// Solver tolerance.
-    pub tolerance: f64,
-    /// Solver iteration limit.
-    pub max_iter: u32,
-}
-
-impl Default for SdpConfig {
-    fn default() -> Self {
-        let s = aras_ident::SdpSettings::default();
-        Self {
-            epsilon: s.psd_margin,
-            mass_tolerance: 0.2,
-            box_bounds: None,
-            regularisation: s.regularisation,
-            tolerance: s.tolerance,
-            max_iter: s.max_iter,
-        }
-    }
-}
-
-/// `[identification]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct IdentificationConfig {
-    /// Filtering mode.
-    pub filtering: FilteringMode,
-    /// Weighting.
-    pub weighting: Weighting,
-    /// Quasi-random workspace samples for the base-parameter analysis (58).
-    pub base_samples: usize,
-    /// Rows where the joint moves slower than this (rad/s) are left out of
-    /// the fit, widened by the filter's reach: near a reversal friction is
-    /// static (stiction, creep), which (49)'s `sign(θ̇)` does not describe.
-    /// 0 keeps every row.
-    pub min_speed: f64,
-    /// The exclusion around a slow row reaches as far as the zero-phase
-    /// filter's impulse response stays above this fraction of its peak.
-    pub reversal_reach: f64,
-    /// Which rows are fitted: `"away_from_reversals"` (default: the rows
-    /// away from velocity reversals by `min_speed`, the sign law (49)) or
-    /// `"all"` (every row, the friction's Coulomb transition widths
-    /// refined; a joint whose width is not identifiable falls back to the
-    /// former).
-    pub rows: FitRows,
-    /// The width search of `rows = "all"` (`min`, `max` in rad/s, `rounds`).
-    pub width: WidthSearch,
-    /// The SDP.
-    pub sdp: SdpConfig,
-}
-
-impl Default for IdentificationConfig {
-    fn default() -> Self {
-        Self {
-            filtering: FilteringMode::Parallel,
-            weighting: Weighting::Ols,
-            base_samples: 400,
-            min_speed: 0.2,
-            reversal_reach: 1e-3,
-            rows: FitRows::default(),
-            width: WidthSearch::default(),
-            sdp: SdpConfig::default(),
-        }
-    }
-}
+pub use aras_pipeline::robot::FilterMode as FilteringMode;
 
 /// `[validation]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

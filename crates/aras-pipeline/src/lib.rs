@@ -32,12 +32,19 @@
 //! * `faer`: the stacked regressors handed to `aras-ident`; `nalgebra`: the
 //!   robot crates' small vectors; `rayon`: parallel filtering and
 //!   candidate fits; `serde`: results serialise for reports.
+//!
+//! ## Features
+//! * `system-openblas` (default): link the distribution's OpenBLAS behind
+//!   the SDP's PSD cones (`docs/blas.md`). A program that links another
+//!   BLAS depends on this crate with `default-features = false` and
+//!   chooses its own (e.g. `openblas-src` with `static`).
 #![warn(missing_docs)]
 // Dense linear algebra on small fixed matrices reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
 pub mod diagnose;
 pub mod friction_width;
+pub mod identify;
 pub mod prepare;
 pub mod refine;
 pub mod robot;

@@ -176,8 +176,10 @@ pub fn base_parameters(
     BaseParameters::from_regressor(w, &model.names(), DEFAULT_RANK_TOLERANCE)
 }
 
-/// What the zero-phase filter is applied to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// What the zero-phase filter is applied to (`"parallel"`, `"torque_only"`
+/// in settings files).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum FilterMode {
     /// The torques and every regressor column (`docs/processing.md`): the fit
     /// compares like with like, so Coulomb jumps do not bias it.

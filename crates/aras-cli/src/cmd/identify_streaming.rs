@@ -14,17 +14,17 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use aras_dyn::{Model, Params};
+use aras_ident::BaseParameters;
 use aras_ident::streaming::Accumulation;
-use aras_ident::{BaseParameters, NoiseVariances};
 use aras_kin::Geometry;
 use aras_pipeline::friction_width::FitRows;
-use aras_pipeline::robot::params_from_solution;
+use aras_pipeline::identify::{StreamedIdentification, identify_streamed};
 use aras_pipeline::streaming::{StreamingOptions, StreamingResult, identify_log_with_progress};
 use indicatif::ProgressBar;
 
 use crate::cli::{AccumulationArg, IdentifyArgs, LogArgs};
-use crate::config::{Config, Weighting};
-use crate::identify::{consistent_fit, process_options, with_standard};
+use crate::config::Config;
+use crate::identify::process_options;
 use crate::output::OutDir;
 use crate::stages::Stages;
 use crate::summary::{
@@ -54,7 +54,7 @@ pub fn log_options(log: &LogArgs, cfg: &Config, geometry: Geometry) -> Result<St
     Ok(StreamingOptions {
         read: super::streaming_read_options(log, cfg)?,
         process: process_options(cfg, log.period, false),
-        filter_mode: ic.filtering.mode(),
+        filter_mode: ic.filtering,
         geometry,
         min_speed: ic.min_speed,
         reversal_reach: ic.reversal_reach,
@@ -143,24 +143,18 @@ pub fn fit_and_write(
     out: &OutDir,
     stages: &mut Stages,
 ) -> Result<Summary> {
-    let (ols, reduced) = match cfg.identification.weighting {
-        Weighting::Ols => (r.ols.clone(), r.reduced.clone()),
-        Weighting::Wls => {
-            let e = r.accumulator.wls(NoiseVariances::FromResiduals)?;
-            (e.estimate.with_filtered_noise(r.noise_gain)?, e.reduced)
-        }
-    };
-    let sdp = stages.run("SDP (67)–(73)", |_| {
-        consistent_fit(&reduced, base, model, nominal, cfg)
+    let id = stages.run("SDP (67)–(73)", |_| {
+        identify_streamed(r, base, model, nominal, &cfg.identification)
+            .context("OLS and the physically consistent fit (SDP) of the streamed log")
     })?;
-    let reference: Vec<f64> = nominal.standard_vector(model)?.as_slice().to_vec();
-    let ols_std = base.to_standard_near(&ols.estimate, &reference)?;
-    let ols_params = with_standard(nominal, model, &ols_std)?;
-    let mut sdp_params = nominal.clone();
-    sdp_params.extra = Default::default();
-    let sdp_params = params_from_solution(&sdp_params, model, &sdp)?;
-    let f_ols = r.fitness(&ols.estimate)?;
-    let f_sdp = r.fitness(&sdp.base)?;
+    let StreamedIdentification {
+        ols,
+        sdp,
+        ols_params,
+        sdp_params,
+        fitness_ols: f_ols,
+        fitness_sdp: f_sdp,
+    } = id;
     let fitness = vec![Fitness {
         dataset: "excitation".into(),
         frequency_hz: None,
