@@ -17,13 +17,15 @@
 //! measured log: an `aras-log` CSV with one angle and one torque column per
 //! joint, read by `aras-log`, processed by `aras-signal` in joint
 //! coordinates of run-time dimension and streamed through the base
-//! regressor.
+//! regressor; [`diagnose_logs`] names an effect the model lacks with
+//! `aras-ident`'s forward selection, one output group per joint.
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the equations
 
 use std::convert::Infallible;
 
 use aras_excite::{DesignSettings, Dual, FourierTrajectory, Limits, Regressor};
+use aras_ident::selection::{Accumulator, CandidateSpec, Layout, SelectionOptions};
 use aras_ident::streaming::{RegressorStage, States};
 use aras_ident::{ConsistentLs, LinearModel, LinkLayout, ReducedLs};
 use aras_log::ReadOptions;
@@ -53,6 +55,9 @@ pub struct Chain {
     pub coulomb: Vec<f64>,
     /// Viscous coefficient per joint (N·m·s/rad).
     pub viscous: Vec<f64>,
+    /// Joint springs `τ_j += k_j q_j` (N·m/rad): not in the model's
+    /// regressor, the effect the diagnosis test hides (zero by default).
+    pub spring: Vec<f64>,
 }
 
 impl Chain {
@@ -79,6 +84,7 @@ impl Chain {
             length: vec![0.3, 0.25, 0.15],
             coulomb: vec![0.3, 0.2, 0.1],
             viscous: vec![0.12, 0.08, 0.05],
+            spring: vec![0.0; 3],
         }
     }
 
@@ -133,7 +139,10 @@ impl Chain {
             let to_child = [k.pos[i + 1][0] - k.pos[i][0], k.pos[i + 1][1] - k.pos[i][1]];
             moment = l.central[2] * wd + cross(r, own) + moment + cross(to_child, f);
             f = [own[0] + f[0], own[1] + f[1]];
-            tau[i] = moment + self.coulomb[i] * qd[i].signum() + self.viscous[i] * qd[i];
+            tau[i] = moment
+                + self.coulomb[i] * qd[i].signum()
+                + self.viscous[i] * qd[i]
+                + self.spring.get(i).map_or(0.0, |k| k * q[i]);
         }
         tau
     }
@@ -429,17 +438,41 @@ pub fn identify(chain: &Chain, samples: usize) -> Result<ChainOutcome, Box<dyn s
     })
 }
 
+/// Sensor noise of a simulated log: Gaussian, independent per sample and
+/// channel, from a seeded generator (the same seed, the same log).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Noise {
+    /// Standard deviation of the angles (rad).
+    pub angle: f64,
+    /// Standard deviation of the torques (N·m).
+    pub torque: f64,
+    /// Seed of the generator.
+    pub seed: u64,
+}
+
 /// The `aras-log` CSV of `periods` periods of `trajectory` run by `chain`
 /// and logged at `rate_hz`: `t, theta1 … thetaN, tau1 … tauN`, the torques
-/// from [`Chain::torques`] (noise-free). Samples lie half a step off the
-/// period boundary, where the design puts `q̇ = 0`, so none sits on a
-/// Coulomb reversal.
+/// from [`Chain::torques`], with `noise` added if given. Samples lie half
+/// a step off the period boundary, where the design puts `q̇ = 0`, so none
+/// sits on a Coulomb reversal.
 pub fn log_csv(
     chain: &Chain,
     trajectory: &FourierTrajectory<Dyn>,
     rate_hz: f64,
     periods: usize,
+    noise: Option<Noise>,
 ) -> String {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(noise.map_or(0, |n| n.seed));
+    let mut draw = |sd: f64| -> f64 {
+        if sd > 0.0 {
+            let z: f64 = StandardNormal.sample(&mut rng);
+            sd * z
+        } else {
+            0.0
+        }
+    };
     let n = chain.joints();
     let mut csv = String::from("t");
     for name in ["theta", "tau"] {
@@ -455,8 +488,12 @@ pub fn log_csv(
         trajectory.eval_into(t, &mut q, &mut qd, &mut qdd);
         let tau = chain.torques(&q, &qd, &qdd);
         csv += &t.to_string();
-        for v in q.iter().chain(&tau) {
-            csv += &format!(",{v}");
+        let (sa, st) = noise.map_or((0.0, 0.0), |n| (n.angle, n.torque));
+        for v in &q {
+            csv += &format!(",{}", v + draw(sa));
+        }
+        for v in &tau {
+            csv += &format!(",{}", v + draw(st));
         }
         csv.push('\n');
     }
@@ -490,16 +527,7 @@ pub fn identify_log(
 ) -> Result<LogOutcome, Box<dyn std::error::Error>> {
     let model = chain.model();
     let base = crate::base_parameters_of(&model, 400)?;
-    let log = aras_log::read_log_from(csv.as_bytes(), "chain.csv", &ReadOptions::default())?;
-    let processed = aras_signal::process_in::<Dyn>(
-        &log,
-        &ProcessOptions {
-            filter: Bandwidth::Auto,
-            period: PeriodSource::Seconds(period_s),
-            ..ProcessOptions::default()
-        },
-        &JointCoordinates,
-    )?;
+    let (joints, processed) = read_and_process(csv, period_s)?;
     let s = &processed.samples;
     fn views(c: &[Vec<f64>]) -> Vec<&[f64]> {
         c.iter().map(Vec::as_slice).collect()
@@ -512,10 +540,133 @@ pub fn identify_log(
         tau: &views(&s.tau),
     })?;
     Ok(LogOutcome {
-        joints: log.joints(),
+        joints,
         samples: s.len(),
         bandwidth: processed.summary.bandwidth.reason.clone(),
         truth: base.to_base(&chain.standard())?,
         streaming: stage.accumulator().ols()?.estimate,
+    })
+}
+
+/// Reads a chain log (as many joints as its header names) and processes it
+/// in joint coordinates of run-time dimension: period averaging, the
+/// data-chosen bandwidth. Returns the joint count and the processing.
+fn read_and_process(
+    csv: &str,
+    period_s: f64,
+) -> Result<(usize, aras_signal::Processed), Box<dyn std::error::Error>> {
+    let log = aras_log::read_log_from(csv.as_bytes(), "chain.csv", &ReadOptions::default())?;
+    let processed = aras_signal::process_in::<Dyn>(
+        &log,
+        &ProcessOptions {
+            filter: Bandwidth::Auto,
+            period: PeriodSource::Seconds(period_s),
+            ..ProcessOptions::default()
+        },
+        &JointCoordinates,
+    )?;
+    Ok((log.joints(), processed))
+}
+
+/// The effects [`diagnose_logs`] tries, per joint `j`: a torque offset
+/// (`offset_j`) and a spring `k q_j` (`spring_j`), each on its own joint's
+/// torque only.
+pub fn candidate_names(joints: usize) -> Vec<String> {
+    (1..=joints)
+        .flat_map(|j| [format!("offset_{j}"), format!("spring_{j}")])
+        .collect()
+}
+
+/// What [`diagnose_logs`] named.
+#[derive(Debug)]
+pub struct ChainDiagnosis {
+    /// The candidates added, in order ([`candidate_names`]).
+    pub added: Vec<String>,
+    /// Their fitted values (N·m or N·m/rad).
+    pub values: Vec<f64>,
+    /// Mean validation fitness (78) per joint of the chain's model (%).
+    pub fitness_before: Vec<f64>,
+    /// The same with the added effects (%).
+    pub fitness_after: Vec<f64>,
+}
+
+/// Finds which effect the chain's model misses, with `aras-ident`'s
+/// forward selection (the engine of the pipeline's diagnosis): the base
+/// regressor of the processed `train` log and the [`candidate_names`] per
+/// joint, one output group per joint, judged on the processed `validation`
+/// log of another motion (both periodic with `period_s`).
+pub fn diagnose_logs(
+    chain: &Chain,
+    train: &str,
+    validation: &str,
+    period_s: f64,
+) -> Result<ChainDiagnosis, Box<dyn std::error::Error>> {
+    let model = chain.model();
+    let (n, cols) = (chain.joints(), model.columns());
+    let base = crate::base_parameters_of(&model, 400)?;
+    let names = candidate_names(n);
+    let layout = Layout::new(
+        base.n_base(),
+        names
+            .iter()
+            .map(|c| CandidateSpec::columns(c.clone(), 1))
+            .collect(),
+        n,
+    )?;
+    let mut sets = Vec::new();
+    for csv in [train, validation] {
+        let (_, processed) = read_and_process(csv, period_s)?;
+        let s = &processed.samples;
+        let m = s.len();
+        let mut w = Mat::<f64>::zeros(n * m, cols);
+        let mut y = vec![0.0; n * cols];
+        for i in 0..m {
+            let at = |v: &[Vec<f64>]| -> Vec<f64> { v.iter().map(|c| c[i]).collect() };
+            let Ok(()) = model.fill(&at(&s.x), &at(&s.x_dot), &at(&s.x_ddot), &mut y);
+            for j in 0..n {
+                for c in 0..cols {
+                    w[(j * m + i, c)] = y[n * c + j];
+                }
+            }
+        }
+        let wb = base.base_regressor(w.as_ref())?;
+        let mut acc = Accumulator::new(&layout);
+        let mut row = Vec::with_capacity(layout.width());
+        for j in 0..n {
+            let mut rows = Vec::with_capacity(m * layout.width());
+            for i in 0..m {
+                row.clear();
+                row.extend((0..base.n_base()).map(|c| wb[(j * m + i, c)]));
+                for k in 0..n {
+                    let own = if k == j { 1.0 } else { 0.0 };
+                    row.extend([own, own * s.x[j][i]]);
+                }
+                row.push(s.tau[j][i]);
+                rows.extend_from_slice(&row);
+            }
+            acc.push_rows(j, &rows)?;
+        }
+        sets.push(acc);
+    }
+    let opts = SelectionOptions::default();
+    let before = aras_ident::selection::fit_model(&sets[0], &sets[1..], &[], &opts)?;
+    let sel = aras_ident::selection::select(&sets[0], &sets[1..], &opts)?;
+    let fit = sel.final_fit();
+    let added = sel.added();
+    let values = added
+        .iter()
+        .map(|&k| {
+            let col = layout.candidate_columns(k).start;
+            fit.columns
+                .iter()
+                .position(|&c| c == col)
+                .map_or(f64::NAN, |p| fit.estimate[p])
+        })
+        .collect();
+    Ok(ChainDiagnosis {
+        added: added.iter().map(|&k| names[k].clone()).collect(),
+        values,
+        fitness_before: before.mean_fitness(),
+        fitness_after: fit.mean_fitness(),
     })
 }
