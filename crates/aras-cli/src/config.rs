@@ -33,6 +33,37 @@ pub struct Config {
     pub identification: IdentificationConfig,
     /// Validation ((78)–(80), `docs/validation.md`).
     pub validation: ValidationConfig,
+    /// The discrepancy diagnosis's selection (`docs/diagnose.md`).
+    pub diagnose: DiagnoseConfig,
+}
+
+/// `[diagnose]`: the forward selection of missing effects
+/// (`aras_pipeline::diagnose::DiagnoseOptions`, whose defaults these are).
+/// The rows it fits are identification's (`[identification]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DiagnoseConfig {
+    /// Family-wise significance level of one round.
+    pub alpha: f64,
+    /// Smallest validation fitness gain (points of (78), mean over the
+    /// joints) a candidate must bring on every validation log.
+    pub min_gain: f64,
+    /// At most this many effects are added.
+    pub max_steps: usize,
+    /// The candidates and their grids.
+    pub grid: aras_pipeline::diagnose::CandidateGrid,
+}
+
+impl Default for DiagnoseConfig {
+    fn default() -> Self {
+        let d = aras_pipeline::diagnose::DiagnoseOptions::default();
+        Self {
+            alpha: d.alpha,
+            min_gain: d.min_gain,
+            max_steps: d.max_steps,
+            grid: d.grid,
+        }
+    }
 }
 
 /// `[robot]`: which robot, and overrides of its geometry and gravity.
@@ -731,6 +762,23 @@ impl Config {
         pos("identification.sdp.tolerance", d.tolerance)?;
         if d.max_iter == 0 {
             return bad("identification.sdp.max_iter", "at least 1".into());
+        }
+        let d = &self.diagnose;
+        if !(d.alpha.is_finite() && d.alpha > 0.0 && d.alpha < 1.0) {
+            return bad(
+                "diagnose.alpha",
+                format!(
+                    "must be a significance level in (0, 1) such as 0.01, found {}",
+                    d.alpha
+                ),
+            );
+        }
+        nonneg("diagnose.min_gain", d.min_gain)?;
+        if d.max_steps == 0 {
+            return bad(
+                "diagnose.max_steps",
+                "must be at least 1 (the number of effects the diagnosis may add)".into(),
+            );
         }
         let v = &self.validation;
         for &f in &v.frequencies_hz {

@@ -204,6 +204,12 @@ fn config_files() {
                 "negative_cutoff.toml:2:1: key `signal.cutoff_hz`: must be a finite number ≥ 0, found -5",
             ],
         ),
+        (
+            "diagnose_alpha.toml",
+            &[
+                "key `diagnose.alpha`: must be a significance level in (0, 1) such as 0.01, found 1.5",
+            ],
+        ),
         ("syntax.toml", &["syntax.toml:1:12: unclosed table"]),
         (
             "trailing_comma.json",

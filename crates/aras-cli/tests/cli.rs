@@ -282,6 +282,21 @@ fn print_config_prints_parseable_defaults() {
     let c =
         aras_cli::config::Config::parse(&text, aras_cli::config::Format::Toml, "printed").unwrap();
     assert_eq!(c, aras_cli::config::Config::default());
+    // Every setting is in the file, the diagnosis's too, with the library's
+    // defaults.
+    assert!(
+        text.contains("[diagnose]") && text.contains("[diagnose.grid]"),
+        "{text}"
+    );
+    let lib = aras_pipeline::diagnose::DiagnoseOptions::default();
+    assert_eq!(
+        (c.diagnose.alpha, c.diagnose.min_gain, &c.diagnose.grid),
+        (lib.alpha, lib.min_gain, &lib.grid)
+    );
+    assert_eq!(
+        c.identification,
+        aras_pipeline::identify::IdentifySettings::default()
+    );
 }
 
 /// `--torques` and `log.torques` reach the log reader: the simulator's log

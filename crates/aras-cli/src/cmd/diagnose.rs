@@ -190,7 +190,12 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     // parameter sampling (`[identification]`), and cross-validation's
     // exclusion for the validation logs (`validation.reversal_reach`).
     let ic = &cfg.identification;
+    let dc = &cfg.diagnose;
     let opts = DiagnoseOptions {
+        alpha: dc.alpha,
+        min_gain: dc.min_gain,
+        max_steps: dc.max_steps,
+        grid: dc.grid.clone(),
         reference: Some(nominal.clone()),
         base_samples: ic.base_samples,
         workspace: crate::identify::workspace(&cfg)?,
@@ -270,7 +275,7 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
             out.write(&format!("pred_{tag}_{v}.csv"), csv)?;
         }
     }
-    let report = build(&d, &train_name, &widths)?;
+    let report = build(&d, &train_name, &widths, &cfg.diagnose)?;
     for (file, svg) in report.figures() {
         out.write(file, svg)?;
     }
@@ -325,20 +330,27 @@ fn pct(x: f64) -> String {
 
 /// The report: conclusion, effects added with evidence, fitness table and
 /// plot, residual findings and plots before/after, candidate scores.
-fn build(d: &Diagnosis, train: &str, widths: &WidthRefinement) -> Result<Report> {
+fn build(
+    d: &Diagnosis,
+    train: &str,
+    widths: &WidthRefinement,
+    settings: &crate::config::DiagnoseConfig,
+) -> Result<Report> {
     let mut r = Report::new("Diagnosis: where the model and the measurement disagree");
     let names: Vec<&str> = d.before.iter().map(|a| a.dataset.as_str()).collect();
     r.paragraph(format!(
         "Model identified on `{train}` and scored on {}. Candidates are fitted with the \
          current model on TRAIN, tested with an F-test on the effective number of independent \
-         samples (Bonferroni over the round's candidates, α = 1 %), and must raise the \
-         validation fitness (78) by ≥ 0.1 points on every validation set; the significant one \
-         with the lowest ΔBIC is added (docs/diagnose.md).",
+         samples (Bonferroni over the round's candidates, α = {} %), and must raise the \
+         validation fitness (78) by ≥ {} points on every validation set; the significant one \
+         with the lowest ΔBIC is added (docs/diagnose.md; `[diagnose]` settings).",
         names
             .iter()
             .map(|n| format!("`{n}`"))
             .collect::<Vec<_>>()
-            .join(", ")
+            .join(", "),
+        100.0 * settings.alpha,
+        settings.min_gain
     ));
     r.paragraph(format!(
         "Starting model: identify's, on the rows it fits. {}",

@@ -223,7 +223,8 @@ pub fn explanation(id: &str) -> &'static str {
 }
 
 /// Which candidates are scanned, and over which grids.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct CandidateGrid {
     /// Candidate identifiers to try (a subset of [`CANDIDATE_IDS`]).
     pub ids: Vec<String>,

@@ -40,7 +40,8 @@ pub struct DiagnoseOptions {
     pub min_gain: f64,
     /// At most this many effects are added (default 7).
     pub max_steps: usize,
-    /// Quasi-random states for the structural base parameters (default 600).
+    /// Quasi-random states for the structural base parameters (default
+    /// [`crate::identify::DEFAULT_BASE_SAMPLES`], as identification).
     pub base_samples: usize,
     /// The box those states fill (default the paper's workspace (77));
     /// identification samples its configured excitation box.
@@ -82,7 +83,7 @@ impl Default for DiagnoseOptions {
             alpha: 0.01,
             min_gain: 0.1,
             max_steps: 7,
-            base_samples: 600,
+            base_samples: crate::identify::DEFAULT_BASE_SAMPLES,
             workspace: Workspace::paper(),
             min_speed: 0.2,
             reach_tol: 1e-3,
