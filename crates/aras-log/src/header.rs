@@ -232,24 +232,30 @@ fn columns_of(role: Role, joints: usize) -> String {
     }
 }
 
+/// Where a sensor constant is needed, for [`per_joint`]'s messages.
+struct Place<'p> {
+    joints: usize,
+    file: &'p str,
+    sidecar: &'p str,
+}
+
 /// A per-joint sensor constant of the sidecar, checked to cover every joint.
 fn per_joint<'a>(
     values: Option<&'a [f64]>,
     key: &str,
     role: Role,
-    joints: usize,
-    file: &str,
-    sidecar: &str,
+    at: &Place<'_>,
 ) -> Result<&'a [f64], LogError> {
+    let joints = at.joints;
     let v = values.ok_or_else(|| LogError::MissingSensor {
-        file: file.into(),
+        file: at.file.into(),
         columns: columns_of(role, joints),
         key: format!("sensors.{key}"),
-        sidecar: sidecar.into(),
+        sidecar: at.sidecar.into(),
     })?;
     if v.len() != joints {
         return Err(LogError::SidecarValue {
-            file: sidecar.into(),
+            file: at.sidecar.into(),
             key: format!("sensors.{key}"),
             value: format!("{v:?}"),
             reason: format!(
@@ -380,6 +386,12 @@ impl Layout {
                 .map_or_else(String::new, |f| columns.label(f))
         };
 
+        let place = Place {
+            joints: n,
+            file,
+            sidecar: sidecar_name,
+        };
+
         // Angles: theta columns, else encoder counts.
         let has_enc = all(Role::Enc)?;
         let thetas = columns_of(Role::Theta, n);
@@ -403,17 +415,13 @@ impl Layout {
                 sensors.counts_per_rev.as_deref(),
                 "counts_per_rev",
                 Role::Enc,
-                n,
-                file,
-                sidecar_name,
+                &place,
             )?;
             let gear = per_joint(
                 sensors.gear_ratios.as_deref(),
                 "gear_ratios",
                 Role::Enc,
-                n,
-                file,
-                sidecar_name,
+                &place,
             )?;
             use_role(Role::Enc);
             notes.push(format!(
@@ -455,17 +463,13 @@ impl Layout {
                 sensors.torque_constants.as_deref(),
                 "torque_constants",
                 Role::Current,
-                n,
-                file,
-                sidecar_name,
+                &place,
             )?;
             let gear = per_joint(
                 sensors.gear_ratios.as_deref(),
                 "gear_ratios",
                 Role::Current,
-                n,
-                file,
-                sidecar_name,
+                &place,
             )?;
             for (i, k) in kt.iter().enumerate() {
                 if *k == 0.0 {

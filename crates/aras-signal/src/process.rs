@@ -456,29 +456,35 @@ impl Processed {
     }
 
     fn check_joints(&self, have: usize) -> Result<(), ProcessError> {
-        if have == self.log_tau.len() {
-            Ok(())
-        } else {
-            Err(ProcessError::TooShort {
-                what: "pairing a prediction with the log's joints".into(),
-                have,
-                need: self.log_tau.len(),
-                hint: "give one predicted torque series per joint".into(),
-            })
-        }
+        check_count(
+            have,
+            self.log_tau.len(),
+            "pairing a prediction with the log's joints",
+            "give one predicted torque series per joint",
+        )
     }
 
     fn check_per_sample(&self, have: usize) -> Result<(), ProcessError> {
-        if have == self.samples.len() {
-            Ok(())
-        } else {
-            Err(ProcessError::TooShort {
-                what: "pairing a prediction with the log's rows".into(),
-                have,
-                need: self.samples.len(),
-                hint: "give one predicted torque per processed sample".into(),
-            })
-        }
+        check_count(
+            have,
+            self.samples.len(),
+            "pairing a prediction with the log's rows",
+            "give one predicted torque per processed sample",
+        )
+    }
+}
+
+/// `Ok` when `have == need`, else [`ProcessError::TooShort`].
+fn check_count(have: usize, need: usize, what: &str, hint: &str) -> Result<(), ProcessError> {
+    if have == need {
+        Ok(())
+    } else {
+        Err(ProcessError::TooShort {
+            what: what.into(),
+            have,
+            need,
+            hint: hint.into(),
+        })
     }
 }
 
