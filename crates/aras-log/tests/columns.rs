@@ -94,3 +94,78 @@ fn bad_mappings_say_what_is_wrong() {
     }
     assert!(ColumnNames::parse("").unwrap().is_empty());
 }
+
+/// The joint count comes from the header: every column kind for every joint
+/// or for none, the first missing one named; a reader told the count takes
+/// that many, refuses fewer, and a lab's names map any joint's role.
+#[test]
+fn joints_come_from_the_header_and_every_joint_needs_every_column() {
+    let rows = |header: &str, fields: usize| {
+        let mut s = format!("{header}\n");
+        for i in 0..40 {
+            let t = i as f64 * 1e-3;
+            s += &t.to_string();
+            for k in 1..fields {
+                s += &format!(",{}", 0.1 * k as f64 + t);
+            }
+            s.push('\n');
+        }
+        s
+    };
+    let read = |text: &str, opts: &ReadOptions| read_log_from(text.as_bytes(), "j.csv", opts);
+    let four = "t,theta1,theta2,theta3,theta4,tau1,tau2,tau3,tau4";
+    let log = read(&rows(four, 9), &ReadOptions::default()).unwrap();
+    assert_eq!((log.joints(), log.tau.len()), (4, 4));
+    assert_eq!(log.summary.channel_columns, (2..=9).collect::<Vec<_>>());
+    // A gap in the joints, a torque missing, a derivative for one joint only.
+    for (header, fields, message) in [
+        (
+            "t,theta1,theta3,tau1,tau2,tau3",
+            6,
+            "column `theta2` is missing",
+        ),
+        (
+            "t,theta1,theta2,theta3,tau1,tau2",
+            6,
+            "column `tau3` is missing",
+        ),
+        (
+            "t,theta1,theta2,tau1,tau2,dtheta2",
+            6,
+            "column `dtheta2` is present but `dtheta1` is not",
+        ),
+    ] {
+        let e = read(&rows(header, fields), &ReadOptions::default()).unwrap_err();
+        assert!(e.to_string().contains(message), "{header}: {e}");
+    }
+    // Told two joints: the others' columns are ignored; told five: refused.
+    let two = ReadOptions {
+        joints: Some(2),
+        ..ReadOptions::default()
+    };
+    let log = read(&rows(four, 9), &two).unwrap();
+    assert_eq!(log.joints(), 2);
+    assert!(
+        log.notes
+            .iter()
+            .any(|n| n.contains("theta3") && n.contains("tau4")),
+        "{:?}",
+        log.notes
+    );
+    let five = ReadOptions {
+        joints: Some(5),
+        ..ReadOptions::default()
+    };
+    let e = read(&rows(four, 9), &five).unwrap_err();
+    assert!(e.to_string().contains("theta5"), "{e}");
+    // A lab's name for the third joint's torque.
+    let mapped = ReadOptions {
+        columns: ColumnNames::parse("tau3=elbow_torque").unwrap(),
+        ..ReadOptions::default()
+    };
+    let header = "t,theta1,theta2,theta3,tau1,tau2,elbow_torque";
+    let log = read(&rows(header, 7), &mapped).unwrap();
+    assert_eq!(log.tau[2][0], 0.1 * 6.0); // the sixth field of the first row
+    let e = read(&rows("t,theta1,theta2,theta3,tau1,tau2", 6), &mapped).unwrap_err();
+    assert!(e.to_string().contains("elbow_torque (tau3)"), "{e}");
+}

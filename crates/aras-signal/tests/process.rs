@@ -429,3 +429,77 @@ fn held_torques_move_the_motion_to_the_holds_midpoint() {
         assert_eq!(sampled.summary.motion_shift_steps, 0.0);
     }
 }
+
+/// A log of three joints: processed in three coordinates with the same
+/// period and bandwidth for all (each joint's samples as if it were alone),
+/// refused by the two-coordinate `process` with the joint counts named.
+#[test]
+fn any_number_of_joints_is_processed_and_a_wrong_dimension_refused() {
+    use aras_signal::{Bandwidth, JointCoordinates, PeriodSource, ProcessOptions, process_in};
+    let fs = 1000.0;
+    let mut csv = String::from("t,theta1,theta2,theta3,tau1,tau2,tau3\n");
+    for i in 0..6000 {
+        let t = i as f64 / fs;
+        let w = TAU * 0.5;
+        let q = [
+            0.3 * (w * t).sin(),
+            -0.2 * (2.0 * w * t).cos(),
+            0.1 * (3.0 * w * t).sin(),
+        ];
+        csv += &format!(
+            "{t},{},{},{},{},{},{}\n",
+            q[0],
+            q[1],
+            q[2],
+            2.0 * q[0],
+            -q[1],
+            0.5 * q[2]
+        );
+    }
+    let log = read_log_from(csv.as_bytes(), "three.csv", &ReadOptions::default()).unwrap();
+    let opts = ProcessOptions {
+        filter: Bandwidth::Auto,
+        period: PeriodSource::Seconds(2.0),
+        ..ProcessOptions::default()
+    };
+    let out = process_in::<nalgebra::Dyn>(&log, &opts, &JointCoordinates).unwrap();
+    assert_eq!((out.samples.joints(), out.samples.len()), (3, 2000));
+    let h = out.summary.bandwidth.harmonics.as_ref().unwrap();
+    assert_eq!(h.len(), 3);
+    // Exact series: θ̈ of the third joint is −(3ω)² θ to rounding.
+    let w3 = 3.0 * TAU * 0.5;
+    for i in (0..2000).step_by(97) {
+        let (x, a) = (out.samples.x[2][i], out.samples.x_ddot[2][i]);
+        assert!(
+            (a + w3 * w3 * x).abs() < 1e-6,
+            "{i}: {a} vs {}",
+            -w3 * w3 * x
+        );
+    }
+    // One joint's processing does not depend on the others': joint 3 alone.
+    let mut one = String::from("t,theta1,tau1\n");
+    for line in csv.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        one += &format!("{},{},{}\n", f[0], f[3], f[6]);
+    }
+    let single = read_log_from(one.as_bytes(), "one.csv", &ReadOptions::default()).unwrap();
+    let alone = process_in::<nalgebra::Dyn>(&single, &opts, &JointCoordinates).unwrap();
+    assert_eq!(alone.samples.x_ddot[0], out.samples.x_ddot[2]);
+    let e = process(&log, &opts, &JointCoordinates).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            ProcessError::Joints {
+                joints: 3,
+                expected: 2,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .contains("has 3 joint(s) but the model's coordinates take 2"),
+        "{e}"
+    );
+}
