@@ -296,20 +296,47 @@ pub struct LogReader<R> {
     row: Row,
 }
 
-/// Scratch of one row, allocated once per reader.
+/// Scratch of one row, allocated once per reader, with where each joint's
+/// values are in it (resolved once from the layout, not per row).
 #[derive(Debug, Clone, Default)]
 struct Row {
     vals: Vec<f64>,
     theta: Vec<f64>,
     tau: Vec<f64>,
+    /// Per joint: the slot of its angle field and the factor to radians
+    /// (1 for `thetaJ`: `x · 1` is `x` exactly).
+    angle: Vec<(usize, f64)>,
+    /// Per joint: the slot of its torque field and the factor to N·m.
+    torque: Vec<(usize, f64)>,
+    /// Per joint: the slots of `dthetaJ` and `ddthetaJ`.
+    rates: Vec<(usize, usize)>,
 }
 
 impl Row {
-    fn new(joints: usize) -> Self {
+    fn new(layout: &Layout) -> Self {
+        let n = layout.joints;
+        let slot = |role: Role, j: usize| Field::Joint(role, j).slot(n);
+        let angle = (0..n)
+            .map(|j| match &layout.angles {
+                AngleSource::Theta => (slot(Role::Theta, j), 1.0),
+                AngleSource::Encoder { scale } => (slot(Role::Enc, j), scale[j]),
+            })
+            .collect();
+        let torque = (0..n)
+            .map(|j| match &layout.torques {
+                TorqueSource::Tau => (slot(Role::Tau, j), 1.0),
+                TorqueSource::Current { scale } => (slot(Role::Current, j), scale[j]),
+            })
+            .collect();
         Self {
-            vals: vec![0.0; slots(joints)],
-            theta: vec![0.0; joints],
-            tau: vec![0.0; joints],
+            vals: vec![0.0; slots(n)],
+            theta: vec![0.0; n],
+            tau: vec![0.0; n],
+            angle,
+            torque,
+            rates: (0..n)
+                .map(|j| (slot(Role::Dtheta, j), slot(Role::Ddtheta, j)))
+                .collect(),
         }
     }
 }
@@ -503,7 +530,7 @@ impl<R: Read> LogReader<R> {
         }
         notes.extend(timing_note);
         let checks = Checks::new(opts.nominal_step, opts.saturation_samples, layout.joints);
-        let row = Row::new(layout.joints);
+        let row = Row::new(&layout);
         let mut layout = layout;
         layout.notes = notes;
         Ok(Self {
@@ -614,16 +641,11 @@ impl<R: Read> LogReader<R> {
                 }
                 (raw_t - offset) * self.unit_s
             };
-            let at = |role: Role, j: usize| vals[Field::Joint(role, j).slot(n)];
-            for j in 0..n {
-                row.theta[j] = match &self.layout.angles {
-                    AngleSource::Theta => at(Role::Theta, j),
-                    AngleSource::Encoder { scale } => at(Role::Enc, j) * scale[j],
-                };
-                row.tau[j] = match &self.layout.torques {
-                    TorqueSource::Tau => at(Role::Tau, j),
-                    TorqueSource::Current { scale } => at(Role::Current, j) * scale[j],
-                };
+            for (theta, &(s, k)) in row.theta.iter_mut().zip(&row.angle) {
+                *theta = vals[s] * k;
+            }
+            for (tau, &(s, k)) in row.tau.iter_mut().zip(&row.torque) {
+                *tau = vals[s] * k;
             }
             self.checks.row(
                 &self.name,
@@ -638,11 +660,12 @@ impl<R: Read> LogReader<R> {
             for j in 0..n {
                 out.theta[j].push(row.theta[j]);
                 out.tau[j].push(row.tau[j]);
+                let (v, a) = row.rates[j];
                 if self.layout.has_velocity {
-                    out.theta_dot[j].push(at(Role::Dtheta, j));
+                    out.theta_dot[j].push(vals[v]);
                 }
                 if self.layout.has_acceleration {
-                    out.theta_ddot[j].push(at(Role::Ddtheta, j));
+                    out.theta_ddot[j].push(vals[a]);
                 }
             }
             count += 1;
