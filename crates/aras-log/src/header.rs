@@ -190,6 +190,27 @@ pub(crate) enum TorqueSource {
     Current { scale: Vec<f64> },
 }
 
+impl AngleSource {
+    /// The field joint `j`'s angle is read from, and its factor to radians
+    /// (1 for `thetaJ`: `x · 1` is `x` exactly).
+    pub fn field(&self, j: usize) -> (Field, f64) {
+        match self {
+            Self::Theta => (Field::Joint(Role::Theta, j), 1.0),
+            Self::Encoder { scale } => (Field::Joint(Role::Enc, j), scale[j]),
+        }
+    }
+}
+
+impl TorqueSource {
+    /// The field joint `j`'s torque is read from, and its factor to N·m.
+    pub fn field(&self, j: usize) -> (Field, f64) {
+        match self {
+            Self::Tau => (Field::Joint(Role::Tau, j), 1.0),
+            Self::Current { scale } => (Field::Joint(Role::Current, j), scale[j]),
+        }
+    }
+}
+
 /// The resolved meaning of every column.
 #[derive(Debug, Clone)]
 pub(crate) struct Layout {
@@ -547,19 +568,9 @@ impl Layout {
     /// 1-based file columns of the angle channels, then the torque
     /// channels, as read (0 if unknown).
     pub fn channel_columns(&self) -> Vec<usize> {
-        let angle = match self.angles {
-            AngleSource::Theta => Role::Theta,
-            AngleSource::Encoder { .. } => Role::Enc,
-        };
-        let torque = match self.torques {
-            TorqueSource::Tau => Role::Tau,
-            TorqueSource::Current { .. } => Role::Current,
-        };
-        [angle, torque]
-            .into_iter()
-            .flat_map(|r| (0..self.joints).map(move |j| Field::Joint(r, j)))
-            .map(|f| self.column(f))
-            .collect()
+        let angles = (0..self.joints).map(|j| self.angles.field(j).0);
+        let torques = (0..self.joints).map(|j| self.torques.field(j).0);
+        angles.chain(torques).map(|f| self.column(f)).collect()
     }
 }
 

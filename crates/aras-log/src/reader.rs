@@ -304,7 +304,7 @@ struct Row {
     theta: Vec<f64>,
     tau: Vec<f64>,
     /// Per joint: the slot of its angle field and the factor to radians
-    /// (1 for `thetaJ`: `x · 1` is `x` exactly).
+    /// ([`AngleSource::field`]).
     angle: Vec<(usize, f64)>,
     /// Per joint: the slot of its torque field and the factor to N·m.
     torque: Vec<(usize, f64)>,
@@ -316,18 +316,9 @@ impl Row {
     fn new(layout: &Layout) -> Self {
         let n = layout.joints;
         let slot = |role: Role, j: usize| Field::Joint(role, j).slot(n);
-        let angle = (0..n)
-            .map(|j| match &layout.angles {
-                AngleSource::Theta => (slot(Role::Theta, j), 1.0),
-                AngleSource::Encoder { scale } => (slot(Role::Enc, j), scale[j]),
-            })
-            .collect();
-        let torque = (0..n)
-            .map(|j| match &layout.torques {
-                TorqueSource::Tau => (slot(Role::Tau, j), 1.0),
-                TorqueSource::Current { scale } => (slot(Role::Current, j), scale[j]),
-            })
-            .collect();
+        let at = |(f, k): (Field, f64)| (f.slot(n), k);
+        let angle = (0..n).map(|j| at(layout.angles.field(j))).collect();
+        let torque = (0..n).map(|j| at(layout.torques.field(j))).collect();
         Self {
             vals: vec![0.0; slots(n)],
             theta: vec![0.0; n],

@@ -663,8 +663,15 @@ where
         .summary
         .worst_step
         .is_some_and(|w| (w.ratio - 1.0).abs() > UNIFORM_TOLERANCE);
-    let mut raw: Vec<Vec<f64>> = Vec::new();
-    let mut push = |c: &[f64]| raw.push(c.to_vec());
+    // The channels processed: the angles, the torques, then any logged
+    // derivatives (`channel_name`'s order).
+    let chans = log
+        .theta
+        .iter()
+        .chain(&log.tau)
+        .chain(logged_vel.into_iter().flatten())
+        .chain(logged_acc.into_iter().flatten());
+    let raw: Vec<Vec<f64>>;
     let resampling;
     let t_uniform: Vec<f64>;
     if irregular {
@@ -672,15 +679,7 @@ where
         let span = log.t[log.len() - 1] - t0;
         let n = (span / dt + 1e-9).floor() as usize + 1;
         t_uniform = (0..n).map(|k| t0 + k as f64 * dt).collect();
-        let chans = log
-            .theta
-            .iter()
-            .chain(&log.tau)
-            .chain(logged_vel.into_iter().flatten())
-            .chain(logged_acc.into_iter().flatten());
-        for c in chans {
-            push(&resample(&log.t, c, t0, dt, n));
-        }
+        raw = chans.map(|c| resample(&log.t, c, t0, dt, n)).collect();
         let w = log.summary.worst_step.expect("irregular");
         resampling = Some(format!(
             "time steps vary (worst {:.4} s = {:.3}× the nominal {:.4} s at t = {:.3} s): all \
@@ -690,15 +689,7 @@ where
         ));
     } else {
         t_uniform = log.t.clone();
-        let chans = log
-            .theta
-            .iter()
-            .chain(&log.tau)
-            .chain(logged_vel.into_iter().flatten())
-            .chain(logged_acc.into_iter().flatten());
-        for c in chans {
-            push(c);
-        }
+        raw = chans.cloned().collect();
         resampling = None;
     }
     let nu = t_uniform.len();
@@ -878,14 +869,8 @@ where
                     source,
                 }
             })?;
-            filter_all(
-                &sos,
-                spec,
-                fs,
-                &mut data[..2 * nj],
-                fourier.as_mut(),
-                &log.name,
-            )?;
+            let filtered = &mut data[..2 * nj];
+            filter_all(&sos, spec, fs, filtered, fourier.as_mut(), &log.name, nj)?;
             Some(FilterSummary {
                 order: spec.order,
                 cutoff_hz: spec.cutoff_hz,
@@ -1038,7 +1023,7 @@ where
                 }
             })?;
             let mut r = r;
-            filter_all(&sos, spec, fs, &mut r, None, &log.name)?;
+            filter_all(&sos, spec, fs, &mut r, None, &log.name, nj)?;
             for j in 0..nj {
                 let (dv, da) = uniform_derivatives(&r[j], dt);
                 for i in 0..x[j].len() {
@@ -1437,6 +1422,8 @@ fn padlen(sos: &Sos, spec: FilterSpec, fs: f64, n: usize) -> usize {
         .min(n.saturating_sub(1))
 }
 
+/// Filters every channel of `data` (in `channel_name`'s order for a log of
+/// `joints` joints, which names a failing channel) in place.
 fn filter_all(
     sos: &Sos,
     spec: FilterSpec,
@@ -1444,8 +1431,8 @@ fn filter_all(
     data: &mut [Vec<f64>],
     fourier: Option<&mut Fourier>,
     name: &str,
+    joints: usize,
 ) -> Result<(), ProcessError> {
-    let joints = (data.len() / 2).max(1);
     match fourier {
         Some(f) => {
             for ch in data.iter_mut() {

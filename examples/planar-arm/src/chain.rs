@@ -30,11 +30,10 @@ use aras_ident::streaming::{RegressorStage, States};
 use aras_ident::{ConsistentLs, LinearModel, LinkLayout, ReducedLs};
 use aras_log::ReadOptions;
 use aras_signal::{Bandwidth, JointCoordinates, PeriodSource, ProcessOptions};
-use faer::Mat;
 use nalgebra::{DVector, Dyn};
 use num_dual::DualNum;
 
-use crate::{G, Link};
+use crate::{G, Link, views};
 
 /// Standard parameters per link: `Ixx, Ixy, Ixz, Iyy, Iyz, Izz` about the
 /// joint, `hx, hy, hz`, `m`.
@@ -334,7 +333,7 @@ pub fn limits(joints: usize) -> Limits<Dyn> {
 /// memory and streamed, and the SDP with one pseudo-inertia per link.
 pub fn identify(chain: &Chain, samples: usize) -> Result<ChainOutcome, Box<dyn std::error::Error>> {
     let model = chain.model();
-    let (n, cols) = (chain.joints(), model.columns());
+    let n = chain.joints();
     let names = model.names();
     let beta = chain.standard();
     let base = crate::base_parameters_of(&model, 400)?;
@@ -369,23 +368,11 @@ pub fn identify(chain: &Chain, samples: usize) -> Result<ChainOutcome, Box<dyn s
             }
         }
     }
-    let slices = |k: usize| -> Vec<&[f64]> { soa[k].iter().map(Vec::as_slice).collect() };
-    let (x, xd, xdd, tau) = (slices(0), slices(1), slices(2), slices(3));
+    let [x, xd, xdd, tau] = [0, 1, 2, 3].map(|k| views(&soa[k]));
 
     // 3. In memory: the stacked regressor, joint 1's rows, then joint 2's, ….
-    let mut w = Mat::<f64>::zeros(n * samples, cols);
-    let mut t = vec![0.0; n * samples];
-    let mut y = vec![0.0; n * cols];
-    let at = |v: &[&[f64]], s: usize| -> Vec<f64> { v.iter().map(|c| c[s]).collect() };
-    for s in 0..samples {
-        let Ok(()) = model.fill(&at(&x, s), &at(&xd, s), &at(&xdd, s), &mut y);
-        for j in 0..n {
-            for c in 0..cols {
-                w[(j * samples + s, c)] = y[n * c + j];
-            }
-            t[j * samples + s] = tau[j][s];
-        }
-    }
+    let w = crate::stacked_regressor(&model, &x, &xd, &xdd);
+    let t = soa[3].concat();
     let truth = base.to_base(&beta)?;
     let wb = base.base_regressor(w.as_ref())?;
     let reduced = ReducedLs::new(wb.as_ref(), &t, &base.base_names())?;
@@ -529,9 +516,6 @@ pub fn identify_log(
     let base = crate::base_parameters_of(&model, 400)?;
     let (joints, processed) = read_and_process(csv, period_s)?;
     let s = &processed.samples;
-    fn views(c: &[Vec<f64>]) -> Vec<&[f64]> {
-        c.iter().map(Vec::as_slice).collect()
-    }
     let mut stage = RegressorStage::new(model, &base)?;
     stage.push(&States {
         x: &views(&s.x),
@@ -602,7 +586,7 @@ pub fn diagnose_logs(
     period_s: f64,
 ) -> Result<ChainDiagnosis, Box<dyn std::error::Error>> {
     let model = chain.model();
-    let (n, cols) = (chain.joints(), model.columns());
+    let n = chain.joints();
     let base = crate::base_parameters_of(&model, 400)?;
     let names = candidate_names(n);
     let layout = Layout::new(
@@ -618,17 +602,7 @@ pub fn diagnose_logs(
         let (_, processed) = read_and_process(csv, period_s)?;
         let s = &processed.samples;
         let m = s.len();
-        let mut w = Mat::<f64>::zeros(n * m, cols);
-        let mut y = vec![0.0; n * cols];
-        for i in 0..m {
-            let at = |v: &[Vec<f64>]| -> Vec<f64> { v.iter().map(|c| c[i]).collect() };
-            let Ok(()) = model.fill(&at(&s.x), &at(&s.x_dot), &at(&s.x_ddot), &mut y);
-            for j in 0..n {
-                for c in 0..cols {
-                    w[(j * m + i, c)] = y[n * c + j];
-                }
-            }
-        }
+        let w = crate::stacked_regressor(&model, &views(&s.x), &views(&s.x_dot), &views(&s.x_ddot));
         let wb = base.base_regressor(w.as_ref())?;
         let mut acc = Accumulator::new(&layout);
         let mut row = Vec::with_capacity(layout.width());

@@ -352,32 +352,61 @@ pub fn base_parameters() -> Result<BaseParameters, aras_ident::IdentError> {
     base_parameters_of(&PlanarArm, 300)
 }
 
-/// Base parameters of any of this example's models from `samples`
-/// pseudo-random states: `q` within ±1.5 rad, `q̇` ±3 rad/s, `q̈` ±10 rad/s².
-pub fn base_parameters_of<M: LinearModel<Error = Infallible>>(
+/// The stacked regressor of `model` on per-coordinate columns `x, ẋ, ẍ`
+/// (one slice per coordinate, all of one length): output 1's rows, then
+/// output 2's, … (`aras-ident`'s output-major layout).
+pub fn stacked_regressor<M: LinearModel<Error = Infallible>>(
     model: &M,
-    samples: usize,
-) -> Result<BaseParameters, aras_ident::IdentError> {
-    let (m, cols, dims) = (model.outputs(), model.columns(), model.coordinates());
+    x: &[&[f64]],
+    x_dot: &[&[f64]],
+    x_ddot: &[&[f64]],
+) -> Mat<f64> {
+    let (m, cols) = (model.outputs(), model.columns());
+    let samples = x.first().map_or(0, |c| c.len());
     let mut w = Mat::<f64>::zeros(m * samples, cols);
     let mut y = vec![0.0; m * cols];
-    let mut u = 0.5f64;
-    let mut next = || {
-        // A fixed additive-recurrence sequence: deterministic, no seed.
-        u = (u + 0.618_033_988_749_895) % 1.0;
-        2.0 * u - 1.0
-    };
+    let at = |v: &[&[f64]], i: usize| -> Vec<f64> { v.iter().map(|c| c[i]).collect() };
     for i in 0..samples {
-        let q: Vec<f64> = (0..dims).map(|_| 1.5 * next()).collect();
-        let qd: Vec<f64> = (0..dims).map(|_| 3.0 * next()).collect();
-        let qdd: Vec<f64> = (0..dims).map(|_| 10.0 * next()).collect();
-        let Ok(()) = model.fill(&q, &qd, &qdd, &mut y);
+        let Ok(()) = model.fill(&at(x, i), &at(x_dot, i), &at(x_ddot, i), &mut y);
         for j in 0..m {
             for c in 0..cols {
                 w[(j * samples + i, c)] = y[m * c + j];
             }
         }
     }
+    w
+}
+
+/// Slices of per-coordinate columns, as [`stacked_regressor`] and
+/// `aras-ident`'s streaming stage take them.
+pub fn views(columns: &[Vec<f64>]) -> Vec<&[f64]> {
+    columns.iter().map(Vec::as_slice).collect()
+}
+
+/// Base parameters of any of this example's models from `samples`
+/// pseudo-random states: `q` within ±1.5 rad, `q̇` ±3 rad/s, `q̈` ±10 rad/s².
+pub fn base_parameters_of<M: LinearModel<Error = Infallible>>(
+    model: &M,
+    samples: usize,
+) -> Result<BaseParameters, aras_ident::IdentError> {
+    let dims = model.coordinates();
+    let mut u = 0.5f64;
+    let mut next = || {
+        // A fixed additive-recurrence sequence: deterministic, no seed.
+        u = (u + 0.618_033_988_749_895) % 1.0;
+        2.0 * u - 1.0
+    };
+    // Per sample: q, then q̇, then q̈, each over the coordinates.
+    let mut states = vec![vec![Vec::with_capacity(samples); dims]; 3];
+    for _ in 0..samples {
+        for (state, scale) in states.iter_mut().zip([1.5, 3.0, 10.0]) {
+            for column in state.iter_mut() {
+                column.push(scale * next());
+            }
+        }
+    }
+    let [x, xd, xdd] = [0, 1, 2].map(|k| views(&states[k]));
+    let w = stacked_regressor(model, &x, &xd, &xdd);
     BaseParameters::from_regressor(w.as_ref(), &model.names(), 1e-8)
 }
 
@@ -441,19 +470,8 @@ pub fn run(settings: &Settings) -> Result<Outcome, Box<dyn std::error::Error>> {
 
     // 4. Stacked regressor from the processed samples: joint 1's rows, then
     // joint 2's; the torques are the log's.
-    let mut w = Mat::<f64>::zeros(2 * rows, COLUMNS);
-    let mut t = vec![0.0; 2 * rows];
-    let mut y = vec![0.0; 2 * COLUMNS];
-    for i in 0..rows {
-        let at = |v: &[Vec<f64>]| [v[0][i], v[1][i]];
-        LinearModel::fill(&model, &at(&s.x), &at(&s.x_dot), &at(&s.x_ddot), &mut y)?;
-        for j in 0..2 {
-            for c in 0..COLUMNS {
-                w[(j * rows + i, c)] = y[2 * c + j];
-            }
-            t[j * rows + i] = s.tau[j][i];
-        }
-    }
+    let w = stacked_regressor(&model, &views(&s.x), &views(&s.x_dot), &views(&s.x_ddot));
+    let t = s.tau.concat();
     let truth = base.to_base(&beta)?;
     let wb = base.base_regressor(w.as_ref())?;
     let reduced = ReducedLs::new(wb.as_ref(), &t, &base.base_names())?;
