@@ -278,10 +278,11 @@ pub fn find_glitches(log: &Log, opts: &GlitchOptions) -> Vec<Glitch> {
             &log.tau[c - joints]
         };
         let channel = if angle {
-            format!("theta{}", c + 1)
+            Field::Joint(Role::Theta, c)
         } else {
-            format!("tau{}", c - joints + 1)
-        };
+            Field::Joint(Role::Tau, c - joints)
+        }
+        .name();
         let (res, reach) = if angle {
             let a = angle_residuals(&log.t, x);
             (a.into_iter().map(|(e, r)| (e, r, r)).collect::<Vec<_>>(), 2)
@@ -410,7 +411,7 @@ pub fn apply_glitches(mut log: Log, opts: &GlitchOptions) -> Result<(Log, Vec<Gl
         GlitchAction::Warn => "kept as logged (--glitches warn)",
         GlitchAction::Repair => {
             for g in &glitches {
-                let ch = match crate::header::Field::parse(&g.channel) {
+                let ch = match Field::parse(&g.channel) {
                     Some(Field::Joint(Role::Theta, j)) => &mut log.theta[j],
                     Some(Field::Joint(Role::Tau, j)) => &mut log.tau[j],
                     _ => continue,

@@ -56,7 +56,6 @@ pub(crate) fn channels_mut(s: &mut Samples) -> [&mut Vec<f64>; CHANNELS] {
         x_ddot,
         tau,
     } = s;
-    let two = |g: &mut Vec<Vec<f64>>| g.resize_with(2, Vec::new);
     for g in [
         &mut *theta,
         &mut *theta_dot,
@@ -66,7 +65,7 @@ pub(crate) fn channels_mut(s: &mut Samples) -> [&mut Vec<f64>; CHANNELS] {
         &mut *x_ddot,
         &mut *tau,
     ] {
-        two(g);
+        g.resize_with(2, Vec::new);
     }
     let all: Vec<&mut Vec<f64>> = std::iter::once(t)
         .chain(theta.iter_mut())
