@@ -19,16 +19,17 @@ use nalgebra::{DefaultAllocator, Dim, OVector, U1};
 use serde::Serialize;
 
 use crate::bandwidth::{
-    CUTOFF_MARGIN, HarmonicSelection, PeriodDetection, PeriodOrigin, SpectrumCutoff, detect_period,
-    harmonic_fit, hermite_at, resample, spectrum_cutoff, uniform_derivatives,
+    CUTOFF_MARGIN, HarmonicSelection, PeriodDetection, PeriodOrigin, SpectrumCutoff,
+    uniform_derivatives,
 };
 use crate::coordinates::{Coordinates, Motion};
-use crate::derivative::{DerivativeMethod, derivatives, resolve, spectral_with};
+use crate::derivative::DerivativeMethod;
 use crate::error::ProcessError;
 use crate::fourier::Fourier;
-use crate::periods::average_periods;
 use crate::{BandLimit, Butterworth, HarmonicBand, Sos};
 use aras_log::{Log, Warning};
+
+mod stages;
 
 /// Low-pass filter settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -612,143 +613,17 @@ where
 
     // Logged derivatives, every row: the log as it is.
     if let (Some(v), Some(a), true) = (logged_vel, logged_acc, every_row) {
-        let mut s = samples_from(
-            log.t.clone(),
-            log.theta.clone(),
-            v.clone(),
-            a.clone(),
-            log.tau.clone(),
-        );
-        model_coordinates(&mut s, coordinates)?;
-        return Ok(Processed {
-            summary: ProcessSummary {
-                input_samples: log.len(),
-                output_samples: s.len(),
-                sample_rate_hz: fs,
-                filter: None,
-                periods: None,
-                bandwidth: BandwidthChoice {
-                    method: BandwidthMethod::LoggedDerivatives,
-                    period_s: None,
-                    period_origin: None,
-                    detection: None,
-                    harmonics: None,
-                    filter: None,
-                    spectrum: None,
-                    aperiodic: None,
-                    resampling: None,
-                    reason: "the log's dtheta/ddtheta columns are used exactly as given, with the \
-                             logged angles and torques: nothing is filtered or averaged"
-                        .into(),
-                },
-                samples_dropped: 0,
-                derivative: DerivativeMethod::Auto,
-                derivative_source: "logged dtheta/ddtheta columns".into(),
-                angle_source: log.summary.angle_source.clone(),
-                torque_source: log.summary.torque_source.clone(),
-                torque_timing: log.torque_timing(),
-                motion_shift_steps: 0.0,
-            },
-            samples: s,
-            notes,
-            warnings,
-            log_tau: log.tau.clone(),
-            map: RowMap::Direct { edge: 0 },
-            band: BandLimit::None,
-        });
+        return as_logged(log, v, a, coordinates, notes, warnings);
     }
 
     // 0. A uniform grid.
-    let irregular = log
-        .summary
-        .worst_step
-        .is_some_and(|w| (w.ratio - 1.0).abs() > UNIFORM_TOLERANCE);
-    // The channels processed: the angles, the torques, then any logged
-    // derivatives (`channel_name`'s order).
-    let chans = log
-        .theta
-        .iter()
-        .chain(&log.tau)
-        .chain(logged_vel.into_iter().flatten())
-        .chain(logged_acc.into_iter().flatten());
-    let raw: Vec<Vec<f64>>;
-    let resampling;
-    let t_uniform: Vec<f64>;
-    if irregular {
-        let t0 = log.t[0];
-        let span = log.t[log.len() - 1] - t0;
-        let n = (span / dt + 1e-9).floor() as usize + 1;
-        t_uniform = (0..n).map(|k| t0 + k as f64 * dt).collect();
-        raw = chans.map(|c| resample(&log.t, c, t0, dt, n)).collect();
-        let w = log.summary.worst_step.expect("irregular");
-        resampling = Some(format!(
-            "time steps vary (worst {:.4} s = {:.3}× the nominal {:.4} s at t = {:.3} s): all \
-             columns resampled onto the nominal grid by cubic Hermite interpolation (three-point \
-             slopes of the non-uniform grid); the outputs are evaluated back at the logged times",
-            w.step_s, w.ratio, dt, w.t
-        ));
-    } else {
-        t_uniform = log.t.clone();
-        raw = chans.cloned().collect();
-        resampling = None;
-    }
-    let nu = t_uniform.len();
+    let grid = stages::uniform_grid(log, logged_vel, logged_acc);
+    let (irregular, nu) = (grid.irregular, grid.t.len());
 
     // 1. Period: given, from the sidecar, or detected.
-    let mut detection = None;
-    let (period, origin) = match opts.period {
-        PeriodSource::Seconds(p) => (Some(p), Some(PeriodOrigin::Given)),
-        PeriodSource::Off => (None, None),
-        PeriodSource::FromSidecar => match log.sidecar.excitation.period_s {
-            Some(p) => (Some(p), Some(PeriodOrigin::Sidecar)),
-            None if logged_vel.is_none() && opts.filter == Bandwidth::Auto => {
-                let angles: Vec<&[f64]> = raw[..nj].iter().map(Vec::as_slice).collect();
-                let d = detect_period(&angles, dt);
-                let p = d.period_s;
-                detection = Some(d);
-                (p, p.map(|_| PeriodOrigin::Detected))
-            }
-            None => (None, None),
-        },
-    };
-    let detected = origin == Some(PeriodOrigin::Detected);
-    let views: Vec<&[f64]> = raw.iter().map(|c| c.as_slice()).collect();
-    let mut averaged = None;
-    if let Some(p) = period {
-        match average_periods(&views, dt, p, opts.settling_s) {
-            Ok(avg) => {
-                let worst = (0..nj).find(|&c| avg.spread_relative[c] > opts.max_period_spread);
-                match worst {
-                    Some(c) if !detected => {
-                        let k = avg.worst_block[c];
-                        let i0 = avg.start + k * avg.samples_per_block;
-                        return Err(ProcessError::PeriodsDisagree {
-                            channel: channel_name(c, nj),
-                            index: k,
-                            t_start: t_uniform[i0],
-                            t_end: t_uniform[i0 + avg.samples_per_block - 1],
-                            relative: avg.spread_relative[c],
-                            limit: opts.max_period_spread,
-                            period_s: p,
-                        });
-                    }
-                    Some(c) => notes.push(format!(
-                        "detected period {p:.6} s not used: {} spreads {:.1} % between periods \
-                         (limit {:.1} %)",
-                        channel_name(c, nj),
-                        100.0 * avg.spread_relative[c],
-                        100.0 * opts.max_period_spread
-                    )),
-                    None => averaged = Some(avg),
-                }
-            }
-            Err(e) if detected => {
-                notes.push(format!("detected period {p:.6} s not used: {e}"));
-            }
-            Err(e) => return Err(e),
-        }
-    }
-    let period_used = averaged.as_ref().and(period);
+    let choice = stages::choose_period(log, opts, &grid.raw[..nj], logged_vel.is_some());
+    let mut averaged = stages::average(&grid, &choice, opts, nj, dt, &mut notes)?;
+    let period_used = averaged.as_ref().and(choice.period);
     // Prediction on every row: periods that are outliers (a start-up
     // transient) are left out of the average, and what is not periodic is
     // kept as an aperiodic remainder (below).
@@ -757,183 +632,59 @@ where
         && !irregular
         && logged_vel.is_none()
         && opts.filter == Bandwidth::Auto)
-        .then(|| raw[..nj].to_vec());
+        .then(|| grid.raw[..nj].to_vec());
     let mut rejected = 0;
     if let (Some(avg), Some(_)) = (&mut averaged, &aperiodic_input) {
-        rejected = reject_outlier_blocks(avg, &raw, nj);
+        rejected = reject_outlier_blocks(avg, &grid.raw, nj);
     }
-    let (mut data, t, period_summary, mut dropped, map) = match averaged {
-        Some(avg) => {
-            for c in nj..2 * nj {
-                if avg.spread_relative[c] > opts.max_period_spread {
-                    warnings.push(Warning::PeriodSpread {
-                        channel: channel_name(c, nj),
-                        relative: avg.spread_relative[c],
-                    });
-                }
-            }
-            // A large unused remainder means the block is many periods long
-            // (the period is not a whole number of samples at this step):
-            // say so rather than average silently less of the record.
-            let unused = (nu - avg.samples_per_block * avg.blocks) as f64 / nu as f64;
-            if unused > MAX_UNUSED_SILENT {
-                warnings.push(Warning::AveragingUnused {
-                    periods_per_block: avg.periods_per_block,
-                    blocks: avg.blocks,
-                    unused,
-                });
-            }
-            let t = t_uniform[avg.start..avg.start + avg.samples_per_block].to_vec();
-            let summary = PeriodSummary {
-                period_s: period.expect("averaged"),
-                periods_per_block: avg.periods_per_block,
-                samples_per_block: avg.samples_per_block,
-                blocks_averaged: avg.blocks,
-                periods_averaged: avg.periods(),
-                settling_samples: avg.start,
-                tail_samples: avg.tail,
-                spread_relative: avg.spread_relative[..2 * nj].to_vec(),
-                spread_rms: avg.spread_rms[..2 * nj].to_vec(),
-            };
-            let dropped = nu - avg.samples_per_block * avg.blocks;
-            let map = RowMap::Periodic {
-                start: avg.start,
-                per: avg.samples_per_block,
-            };
-            (avg.channels, t, Some(summary), dropped, map)
-        }
-        None => (raw, t_uniform.clone(), None, 0, RowMap::Direct { edge: 0 }),
-    };
-    let periodic = period_summary.is_some();
-    let n = t.len();
+    let resampling = grid.resampling.clone();
+    let mut record = stages::record(averaged, grid, choice.period, opts, nj, &mut warnings);
+    let periodic = record.periods.is_some();
+    let n = record.t.len();
     let mut fourier = periodic.then(|| Fourier::new(n));
 
     // 2–3. Bandwidth and derivatives.
     let logged = logged_vel.is_some();
-    let mut harmonics = None;
-    let mut spectrum = None;
-    let mut spec_used = None;
-    let mut derivs: Option<(Pair, Pair, usize)> = None;
-    if logged {
-        // Nothing is filtered; θ̈ from the logged θ̇ when it is not logged.
-        let vel: Pair = data[2 * nj..3 * nj].to_vec();
-        let acc: Pair = if logged_acc.is_some() {
-            data[3 * nj..4 * nj].to_vec()
-        } else {
-            vel.iter().map(|v| uniform_derivatives(v, dt).0).collect()
-        };
-        derivs = Some((vel, acc, 0));
-    } else {
-        match (opts.filter, &mut fourier) {
-            (Bandwidth::Auto, Some(f)) => {
-                let kp = period_summary.as_ref().map_or(1, |p| p.periods_per_block);
-                let mut sel = Vec::new();
-                let mut vel = vec![vec![0.0; n]; nj];
-                let mut acc = vec![vec![0.0; n]; nj];
-                for j in 0..nj {
-                    sel.push(harmonic_fit(
-                        f,
-                        &mut data[j],
-                        &mut vel[j],
-                        &mut acc[j],
-                        kp,
-                        dt,
-                    ));
-                }
-                harmonics = Some(sel);
-                if opts.derivative == DerivativeMethod::Auto
-                    || opts.derivative == DerivativeMethod::Spectral
-                {
-                    derivs = Some((vel, acc, 0));
-                }
-            }
-            (Bandwidth::Auto, None) => {
-                let angles: Vec<&[f64]> = data[..nj].iter().map(Vec::as_slice).collect();
-                let c = spectrum_cutoff(&angles, dt);
-                spectrum = Some(c.clone());
-                spec_used = Some(FilterSpec {
-                    order: FilterSpec::default().order,
-                    cutoff_hz: c.cutoff_hz,
-                });
-            }
-            (Bandwidth::Fixed(spec), _) => spec_used = Some(spec),
-            (Bandwidth::Off, _) => {}
-        }
-    }
-    let filter_summary = match spec_used {
+    let band_choice = stages::choose_band(
+        &mut record,
+        fourier.as_mut(),
+        opts,
+        logged.then_some(logged_acc.is_some()),
+        nj,
+        dt,
+    );
+    let filter_summary = match band_choice.filter {
+        Some(spec) => Some(stages::low_pass(
+            spec,
+            &mut record.data,
+            fourier.as_mut(),
+            log,
+            nj,
+        )?),
         None => None,
-        Some(spec) => {
-            let sos = Butterworth::lowpass(spec.order, spec.cutoff_hz, fs).map_err(|source| {
-                ProcessError::Filter {
-                    context: format!("designing the low-pass for {}", log.name),
-                    source,
-                }
-            })?;
-            let filtered = &mut data[..2 * nj];
-            filter_all(&sos, spec, fs, filtered, fourier.as_mut(), &log.name, nj)?;
-            Some(FilterSummary {
-                order: spec.order,
-                cutoff_hz: spec.cutoff_hz,
-                kind: if periodic {
-                    "zero-phase, periodic (|H|² applied to the averaged period's spectrum)".into()
-                } else {
-                    format!(
-                        "zero-phase forward-backward (scipy sosfiltfilt, odd padding of {} samples)",
-                        padlen(&sos, spec, fs, n)
-                    )
-                },
-            })
-        }
     };
-    let method = match (&derivs, opts.derivative) {
-        (Some(_), _) => opts.derivative,
-        (None, DerivativeMethod::Auto) if !periodic => DerivativeMethod::Auto,
-        (None, m) => resolve(m, periodic),
-    };
-    let (theta_dot, theta_ddot, edge) = match derivs {
-        Some(d) => d,
-        None if method == DerivativeMethod::Auto => {
-            // Non-periodic, automatic: central differences, one-sided at
-            // the ends, so no row is lost.
-            let (v, a) = data[..nj]
-                .iter()
-                .map(|x| uniform_derivatives(x, dt))
-                .unzip();
-            (v, a, 0)
-        }
-        None => {
-            let mut out = Vec::new();
-            for ch in &data[..nj] {
-                match (&mut fourier, method) {
-                    (Some(f), DerivativeMethod::Spectral) => {
-                        let (mut a, mut b) = (ch.clone(), ch.clone());
-                        spectral_with(f, &mut a, &mut b, dt);
-                        out.push((a, b, 0));
-                    }
-                    _ => {
-                        let d = derivatives(ch, dt, method, periodic)?;
-                        out.push((d.first, d.second, d.edge));
-                    }
-                }
-            }
-            let e = out.first().map_or(0, |o| o.2);
-            let (first, second) = out.into_iter().map(|(a, b, _)| (a, b)).unzip();
-            (first, second, e)
-        }
-    };
+    let (method, theta_dot, theta_ddot, edge) = stages::differentiate(
+        band_choice.derivatives,
+        &record.data[..nj],
+        fourier.as_mut(),
+        opts.derivative,
+        dt,
+    )?;
     let source = if logged {
         "logged dtheta/ddtheta columns"
     } else {
         "differentiated θ"
     };
-    let bandwidth = describe(
+    let harmonics = band_choice.harmonics;
+    let spec_used = band_choice.filter;
+    let mut bandwidth = describe(
         logged,
         harmonics.clone(),
         spec_used,
-        spectrum,
+        band_choice.spectrum,
         period_used,
-        origin.filter(|_| period_used.is_some()),
-        detection,
+        choice.origin.filter(|_| period_used.is_some()),
+        choice.detection,
         resampling,
         opts.filter,
     );
@@ -941,149 +692,76 @@ where
     // Output rows.
     let mut aperiodic = None;
     let keep = edge..n - edge;
-    let theta: Pair = data[..nj]
+    let theta: Pair = record.data[..nj]
         .iter()
         .map(|c| c[keep.clone()].to_vec())
         .collect();
-    let mut s;
+    let t = &record.t;
+    let mut dropped = record.dropped;
+    let s;
     let map = if every_row && (irregular || periodic) {
         // Evaluate at the logged times: exact indices on a uniform grid,
         // cubic Hermite (with the derivatives as slopes) between grid points.
-        let rows = log.len();
-        let mut out: [Pair; 3] = std::array::from_fn(|_| vec![Vec::new(); nj]);
-        for j in 0..nj {
-            let (x, v, a) = (&theta[j], &theta_dot[j], &theta_ddot[j]);
-            let jerk = periodic_slopes(a, dt, periodic);
-            out[0][j] = Vec::with_capacity(rows);
-            out[1][j] = Vec::with_capacity(rows);
-            out[2][j] = Vec::with_capacity(rows);
-            let m = x.len();
-            let t0 = t[edge];
-            for &ti in &log.t {
-                let pos = (ti - t0) / dt + if irregular { shift } else { 0.0 };
-                let (k, u) = if irregular {
-                    let k = pos.floor();
-                    (k as i64, pos - k)
-                } else {
-                    (pos.round() as i64, 0.0)
-                };
-                let idx = |k: i64| -> usize {
-                    if periodic {
-                        k.rem_euclid(m as i64) as usize
-                    } else {
-                        k.clamp(0, m as i64 - 1) as usize
-                    }
-                };
-                let (i0, i1) = (idx(k), idx(k + 1));
-                let h = |y: &[f64], dy: &[f64], sc: f64| -> f64 {
-                    if u == 0.0 {
-                        return y[i0];
-                    }
-                    let (u2, u3) = (u * u, u * u * u);
-                    y[i0] * (2.0 * u3 - 3.0 * u2 + 1.0)
-                        + dy[i0] * sc * (u3 - 2.0 * u2 + u)
-                        + y[i1] * (-2.0 * u3 + 3.0 * u2)
-                        + dy[i1] * sc * (u3 - u2)
-                };
-                out[0][j].push(h(x, v, dt));
-                out[1][j].push(h(v, a, dt));
-                out[2][j].push(h(a, &jerk, dt));
-            }
-        }
-        let [mut x, mut v, mut a] = out;
+        let mut motion = stages::at_log_times(
+            &log.t,
+            t[edge],
+            [&theta, &theta_dot, &theta_ddot],
+            dt,
+            shift,
+            irregular,
+            periodic,
+        );
         if let Some(th) = &aperiodic_input {
-            // The aperiodic remainder θ − series, low-passed where its own
-            // spectrum meets the noise, differentiated and added back.
-            let r: Vec<Vec<f64>> = (0..nj)
-                .map(|j| th[j].iter().zip(&x[j]).map(|(a, b)| a - b).collect())
-                .collect();
-            let views: Vec<&[f64]> = r.iter().map(Vec::as_slice).collect();
-            let mut c = spectrum_cutoff(&views, dt);
-            // Above the band of the series (the smallest highest harmonic
-            // of the joints that move, `band_of`) the angles hold noise for
-            // the torque.
-            if let Some(h) = &harmonics {
-                let top = h
-                    .iter()
-                    .map(|s| s.highest_hz)
-                    .filter(|f| *f > 0.0)
-                    .fold(f64::INFINITY, f64::min);
-                if top.is_finite() {
-                    c.cutoff_hz = c.cutoff_hz.min(top);
-                }
-            }
-            let spec = FilterSpec {
-                cutoff_hz: c.cutoff_hz,
-                ..FilterSpec::default()
-            };
-            let sos = Butterworth::lowpass(spec.order, spec.cutoff_hz, fs).map_err(|source| {
-                ProcessError::Filter {
-                    context: format!("designing the remainder's low-pass for {}", log.name),
-                    source,
-                }
-            })?;
-            let mut r = r;
-            filter_all(&sos, spec, fs, &mut r, None, &log.name, nj)?;
-            for j in 0..nj {
-                let (dv, da) = uniform_derivatives(&r[j], dt);
-                for i in 0..x[j].len() {
-                    x[j][i] += r[j][i];
-                    v[j][i] += dv[i];
-                    a[j][i] += da[i];
-                }
-            }
-            aperiodic = Some(c);
+            aperiodic = Some(stages::add_aperiodic_remainder(
+                th,
+                &mut motion,
+                harmonics.as_deref(),
+                log,
+            )?);
         }
+        let [mut x, mut v, mut a] = motion;
         if !irregular && shift != 0.0 {
             shift_motion(&mut x, &mut v, &mut a, shift, dt, false);
         }
         s = samples_from(log.t.clone(), x, v, a, log.tau.clone());
         dropped = 0;
         RowMap::Direct { edge: 0 }
+    } else if irregular && !periodic {
+        // Every row of the log again, with its raw torque.
+        let [x, v, a] = stages::resampled_at_log_times(
+            &t[keep.clone()],
+            [&theta, &theta_dot, &theta_ddot],
+            &log.t,
+            shift,
+            dt,
+        );
+        s = samples_from(log.t.clone(), x, v, a, log.tau.clone());
+        RowMap::Direct { edge: 0 }
     } else {
-        let tau = if irregular && !periodic {
-            // Every row of the log again, with its raw torque.
-            log.tau.clone()
-        } else {
-            data[nj..2 * nj]
-                .iter()
-                .map(|c| c[keep.clone()].to_vec())
-                .collect()
-        };
-        if irregular && !periodic {
-            let mut out: [Pair; 3] = std::array::from_fn(|_| vec![Vec::new(); nj]);
-            let at: Vec<f64> = log.t.iter().map(|ti| ti + shift * dt).collect();
-            for j in 0..nj {
-                let jerk = periodic_slopes(&theta_ddot[j], dt, false);
-                out[0][j] = hermite_at(&t[keep.clone()], &theta[j], &theta_dot[j], &at);
-                out[1][j] = hermite_at(&t[keep.clone()], &theta_dot[j], &theta_ddot[j], &at);
-                out[2][j] = hermite_at(&t[keep.clone()], &theta_ddot[j], &jerk, &at);
-            }
-            let [x, v, a] = out;
-            s = samples_from(log.t.clone(), x, v, a, tau);
-            RowMap::Direct { edge: 0 }
-        } else {
-            dropped += 2 * edge;
-            let (mut theta, mut theta_dot, mut theta_ddot) = (theta, theta_dot, theta_ddot);
-            if shift != 0.0 {
-                shift_motion(
-                    &mut theta,
-                    &mut theta_dot,
-                    &mut theta_ddot,
-                    shift,
-                    dt,
-                    periodic,
-                );
-            }
-            s = samples_from(t[keep.clone()].to_vec(), theta, theta_dot, theta_ddot, tau);
-            match map {
-                RowMap::Direct { .. } => RowMap::Direct { edge },
-                p => p,
-            }
+        let tau = record.data[nj..2 * nj]
+            .iter()
+            .map(|c| c[keep.clone()].to_vec())
+            .collect();
+        dropped += 2 * edge;
+        let (mut theta, mut theta_dot, mut theta_ddot) = (theta, theta_dot, theta_ddot);
+        if shift != 0.0 {
+            shift_motion(
+                &mut theta,
+                &mut theta_dot,
+                &mut theta_ddot,
+                shift,
+                dt,
+                periodic,
+            );
+        }
+        s = samples_from(t[keep.clone()].to_vec(), theta, theta_dot, theta_ddot, tau);
+        match record.map {
+            RowMap::Direct { .. } => RowMap::Direct { edge },
+            p => p,
         }
     };
+    let mut s = s;
 
-    let mut bandwidth = bandwidth;
     if rejected > 0 {
         bandwidth.reason += &format!(
             "; {rejected} period block(s) left out of the average as outliers (θ deviating more \
@@ -1106,7 +784,7 @@ where
         harmonics: harmonics.as_deref(),
         spec_used,
         remainder_hz,
-        periods: period_summary.as_ref(),
+        periods: record.periods.as_ref(),
         every_row,
         irregular,
         rows: nu,
@@ -1131,7 +809,7 @@ where
             output_samples: s.len(),
             sample_rate_hz: fs,
             filter: filter_summary,
-            periods: period_summary,
+            periods: record.periods,
             bandwidth,
             samples_dropped: dropped,
             derivative: method,
@@ -1147,6 +825,65 @@ where
         log_tau: log.tau.clone(),
         map,
         band,
+    })
+}
+
+/// A log with logged rates and accelerations, on every row: its samples as
+/// they are, nothing filtered or averaged.
+fn as_logged<D: Dim>(
+    log: &Log,
+    vel: &Pair,
+    acc: &Pair,
+    coordinates: &impl Coordinates<D>,
+    notes: Vec<String>,
+    warnings: Vec<Warning>,
+) -> Result<Processed, ProcessError>
+where
+    DefaultAllocator: Allocator<D>,
+{
+    let mut s = samples_from(
+        log.t.clone(),
+        log.theta.clone(),
+        vel.clone(),
+        acc.clone(),
+        log.tau.clone(),
+    );
+    model_coordinates(&mut s, coordinates)?;
+    Ok(Processed {
+        summary: ProcessSummary {
+            input_samples: log.len(),
+            output_samples: s.len(),
+            sample_rate_hz: 1.0 / log.summary.nominal_step_s,
+            filter: None,
+            periods: None,
+            bandwidth: BandwidthChoice {
+                method: BandwidthMethod::LoggedDerivatives,
+                period_s: None,
+                period_origin: None,
+                detection: None,
+                harmonics: None,
+                filter: None,
+                spectrum: None,
+                aperiodic: None,
+                resampling: None,
+                reason: "the log's dtheta/ddtheta columns are used exactly as given, with the \
+                         logged angles and torques: nothing is filtered or averaged"
+                    .into(),
+            },
+            samples_dropped: 0,
+            derivative: DerivativeMethod::Auto,
+            derivative_source: "logged dtheta/ddtheta columns".into(),
+            angle_source: log.summary.angle_source.clone(),
+            torque_source: log.summary.torque_source.clone(),
+            torque_timing: log.torque_timing(),
+            motion_shift_steps: 0.0,
+        },
+        samples: s,
+        notes,
+        warnings,
+        log_tau: log.tau.clone(),
+        map: RowMap::Direct { edge: 0 },
+        band: BandLimit::None,
     })
 }
 
