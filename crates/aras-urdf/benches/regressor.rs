@@ -5,7 +5,10 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/urdf/panda_arm.urdf");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../fixtures/urdf/panda_arm.urdf"
+    );
     let model = UrdfModel::from_file(path, ModelSettings::default()).expect("the Panda fixture");
     let n = model.dof();
     let q: Vec<f64> = (0..n).map(|i| 0.3 * i as f64 - 0.8).collect();

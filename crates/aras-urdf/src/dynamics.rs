@@ -83,8 +83,8 @@ impl<T: Scalar> Workspace<T> {
 }
 
 thread_local! {
-    static SCRATCH: RefCell<Workspace<f64>> = RefCell::new(Workspace { states: Vec::new() });
-    static SCRATCH_DUAL: RefCell<Workspace<Dual>> = RefCell::new(Workspace { states: Vec::new() });
+    static SCRATCH: RefCell<Workspace<f64>> = const { RefCell::new(Workspace { states: Vec::new() }) };
+    static SCRATCH_DUAL: RefCell<Workspace<Dual>> = const { RefCell::new(Workspace { states: Vec::new() }) };
 }
 
 /// `I x` for the inertia entries `i` in Pinocchio's order.
@@ -152,13 +152,16 @@ impl UrdfModel {
 
     /// Joint frames in their parents, velocities and accelerations of every
     /// body (with gravity as the base's upward acceleration if `gravity`).
-    fn kinematics<T: Scalar>(&self, ws: &mut Workspace<T>, q: &[T], qd: &[T], qdd: &[T], gravity: bool) {
+    fn kinematics<T: Scalar>(
+        &self,
+        ws: &mut Workspace<T>,
+        q: &[T],
+        qd: &[T],
+        qdd: &[T],
+        gravity: bool,
+    ) {
         ws.ensure(self.dof());
-        let g = if gravity {
-            self.gravity_root
-        } else {
-            [0.0; 3]
-        };
+        let g = if gravity { self.gravity_root } else { [0.0; 3] };
         let base_dv: V3<T> = lift([-g[0], -g[1], -g[2]]);
         for (i, b) in self.bodies.iter().enumerate() {
             let (r, p) = if b.rotates {
@@ -223,7 +226,12 @@ impl UrdfModel {
         qdd: &[T],
         y: &mut [T],
     ) -> Result<(), UrdfError> {
-        self.check_state(q, qd, qdd, ("regressor", self.dof() * self.parameter_count(), y.len()))?;
+        self.check_state(
+            q,
+            qd,
+            qdd,
+            ("regressor", self.dof() * self.parameter_count(), y.len()),
+        )?;
         self.regressor_unchecked(ws, q, qd, qdd, y);
         Ok(())
     }
@@ -257,10 +265,7 @@ impl UrdfModel {
             for k in 0..6 {
                 let mut unit = [0.0; 6];
                 unit[k] = 1.0;
-                let ang = add(
-                    inertia_apply(&unit, dw),
-                    cross(w, inertia_apply(&unit, w)),
-                );
+                let ang = add(inertia_apply(&unit, dw), cross(w, inertia_apply(&unit, w)));
                 cols[4 + k] = [ang, zero3()];
             }
             // Carried to every joint from i up to the root.
@@ -286,7 +291,12 @@ impl UrdfModel {
 
     /// Writes the enabled per-joint columns' entries through `set(column,
     /// joint, value)`.
-    fn joint_columns_into<T: Scalar>(&self, qd: &[T], qdd: &[T], mut set: impl FnMut(usize, usize, T)) {
+    fn joint_columns_into<T: Scalar>(
+        &self,
+        qd: &[T],
+        qdd: &[T],
+        mut set: impl FnMut(usize, usize, T),
+    ) {
         let c = self.columns;
         for j in 0..self.dof() {
             let mut col = self.joint_base(j);

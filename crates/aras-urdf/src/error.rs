@@ -19,7 +19,9 @@ pub enum UrdfError {
     },
 
     /// The text is not well-formed XML.
-    #[error("{file}: not well-formed XML: {source}; fix the XML (a URDF made by xacro must be expanded first: `xacro robot.urdf.xacro > robot.urdf`)")]
+    #[error(
+        "{file}: not well-formed XML: {source}; fix the XML (a URDF made by xacro must be expanded first: `xacro robot.urdf.xacro > robot.urdf`)"
+    )]
     Xml {
         /// The file (or label) of the text.
         file: String,

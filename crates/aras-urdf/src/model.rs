@@ -289,7 +289,11 @@ impl UrdfModel {
 
     /// Builds the model of the URDF text `text`; `file` names it in
     /// messages.
-    pub fn from_urdf_str(text: &str, file: &str, settings: ModelSettings) -> Result<Self, UrdfError> {
+    pub fn from_urdf_str(
+        text: &str,
+        file: &str,
+        settings: ModelSettings,
+    ) -> Result<Self, UrdfError> {
         let raw = parse::parse(text, file)?;
         Self::build(raw, file, settings)
     }
@@ -379,7 +383,11 @@ impl UrdfModel {
             many => {
                 let names: Vec<&str> = many.iter().map(|&l| raw.links[l].name.as_str()).collect();
                 return Err(structure(
-                    format!("has {} root links ({}), not one tree", many.len(), names.join(", ")),
+                    format!(
+                        "has {} root links ({}), not one tree",
+                        many.len(),
+                        names.join(", ")
+                    ),
                     "connect every part to the base by joints (a fixed joint for a rigid mount) or remove the unconnected links",
                 ));
             }
@@ -435,7 +443,10 @@ impl UrdfModel {
                 .map(|l| raw.links[l].name.as_str())
                 .collect();
             return Err(structure(
-                format!("links {} form a closed loop apart from the tree", stray.join(", ")),
+                format!(
+                    "links {} form a closed loop apart from the tree",
+                    stray.join(", ")
+                ),
                 "the model takes trees only: remove the joint that closes the loop",
             ));
         }
@@ -538,7 +549,11 @@ impl UrdfModel {
         let mut names: Vec<String> = self
             .joints
             .iter()
-            .flat_map(|j| LINK_PARAMETERS.iter().map(move |p| format!("{}.{p}", j.link)))
+            .flat_map(|j| {
+                LINK_PARAMETERS
+                    .iter()
+                    .map(move |p| format!("{}.{p}", j.link))
+            })
             .collect();
         let c = self.columns;
         for j in &self.joints {

@@ -291,14 +291,9 @@ fn check_inertia(
     // covered by the diagonal, the 2 × 2 minors and the determinant
     // (with a tolerance relative to the largest moment).
     let tol = 1e-9 * scale * scale;
-    let minors = [
-        xx * yy - xy * xy,
-        xx * zz - xz * xz,
-        yy * zz - yz * yz,
-    ];
+    let minors = [xx * yy - xy * xy, xx * zz - xz * xz, yy * zz - yz * yz];
     let det = xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz);
-    if xx < 0.0 || yy < 0.0 || zz < 0.0 || minors.iter().any(|&m| m < -tol) || det < -tol * scale
-    {
+    if xx < 0.0 || yy < 0.0 || zz < 0.0 || minors.iter().any(|&m| m < -tol) || det < -tol * scale {
         return Err(site.err(
             t,
             Some(link),
@@ -366,7 +361,7 @@ fn parse_joint(site: &Site, node: Node) -> Result<RawJoint, UrdfError> {
         Some(a) => {
             let v = site.triple(a, node, "xyz")?.unwrap_or([1.0, 0.0, 0.0]);
             let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            if kind != RawKind::Fixed && !(norm > 1e-9) {
+            if kind != RawKind::Fixed && (norm.is_nan() || norm <= 1e-9) {
                 return Err(site.err(
                     a,
                     Some(node),

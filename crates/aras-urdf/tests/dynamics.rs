@@ -1,4 +1,5 @@
 //! Property tests of the dynamics: the regressor against RNEA, RNEA
+#![allow(clippy::needless_range_loop)] // index loops mirror the equations
 //! against the Lagrangian built from the forward kinematics alone, fixed
 //! joints merged against the same joints free but at rest, the energy
 //! balance, and the dual-number rows against finite differences.

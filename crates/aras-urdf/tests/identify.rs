@@ -7,7 +7,10 @@ mod common;
 use aras_ident::{BaseParameters, LinearModel, ReducedLs};
 use aras_urdf::{CoulombWidth, JointColumns, ModelSettings, UrdfModel};
 
-const PANDA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fixtures/urdf/panda_arm.urdf");
+const PANDA: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../fixtures/urdf/panda_arm.urdf"
+);
 
 /// A fixed additive-recurrence sequence in [−1, 1).
 fn sequence() -> impl FnMut() -> f64 {
@@ -40,7 +43,12 @@ fn panda_base_parameters_are_recovered_by_ols() {
     let mut truth = model.urdf_parameters();
     for j in 0..n {
         let b = 70 + 4 * j;
-        truth[b..b + 4].copy_from_slice(&[0.3 + 0.05 * j as f64, 0.8 - 0.1 * j as f64, 0.02 * j as f64 - 0.05, 0.1 + 0.02 * j as f64]);
+        truth[b..b + 4].copy_from_slice(&[
+            0.3 + 0.05 * j as f64,
+            0.8 - 0.1 * j as f64,
+            0.02 * j as f64 - 0.05,
+            0.1 + 0.02 * j as f64,
+        ]);
     }
     let samples = 600;
     let mut next = sequence();

@@ -37,7 +37,8 @@ fn assert_says(msg: &str, parts: &[&str]) {
 
 #[test]
 fn the_arm_itself_is_accepted() {
-    let m = UrdfModel::from_urdf_str(&arm(ELBOW, ""), "arm.urdf", ModelSettings::default()).unwrap();
+    let m =
+        UrdfModel::from_urdf_str(&arm(ELBOW, ""), "arm.urdf", ModelSettings::default()).unwrap();
     assert_eq!(m.joint_names(), ["shoulder", "elbow"]);
     assert_eq!(m.parameter_count(), 2 * (10 + 3));
 }
@@ -48,7 +49,12 @@ fn floating_and_planar_joints_are_refused() {
         let msg = refused(&arm(&ELBOW.replace("revolute", ty), ""));
         assert_says(
             &msg,
-            &["arm.urdf:6:", "<joint name=\"elbow\">", ty, "make the joint fixed"],
+            &[
+                "arm.urdf:6:",
+                "<joint name=\"elbow\">",
+                ty,
+                "make the joint fixed",
+            ],
         );
     }
     let msg = refused(&arm(&ELBOW.replace("revolute", "screw"), ""));
@@ -67,17 +73,26 @@ fn mimic_joints_are_refused() {
         .to_string();
     assert_says(
         &msg,
-        &["panda.urdf:348:", "panda_finger_joint2", "panda_finger_joint1"],
+        &[
+            "panda.urdf:348:",
+            "panda_finger_joint2",
+            "panda_finger_joint1",
+        ],
     );
 }
 
 #[test]
 fn loops_and_several_roots_are_refused() {
-    let second_parent = r#"  <joint name="brace" type="fixed"><parent link="base"/><child link="fore"/></joint>"#;
+    let second_parent =
+        r#"  <joint name="brace" type="fixed"><parent link="base"/><child link="fore"/></joint>"#;
     let msg = refused(&arm(ELBOW, second_parent));
     assert_says(
         &msg,
-        &["<joint name=\"brace\">", "already the child of joint \"elbow\"", "closes a kinematic loop"],
+        &[
+            "<joint name=\"brace\">",
+            "already the child of joint \"elbow\"",
+            "closes a kinematic loop",
+        ],
     );
     let stray = r#"  <link name="stray"/>"#;
     let msg = refused(&arm(ELBOW, stray));
@@ -89,9 +104,20 @@ fn loops_and_several_roots_are_refused() {
 #[test]
 fn impossible_inertials_are_refused() {
     let bad_mass = arm(ELBOW, "").replacen("<mass value=\"1\"/>", "<mass value=\"-1\"/>", 1);
-    assert_says(&refused(&bad_mass), &["arm.urdf:3:", "<link name=\"upper\"> <mass>", "negative", "≥ 0"]);
+    assert_says(
+        &refused(&bad_mass),
+        &[
+            "arm.urdf:3:",
+            "<link name=\"upper\"> <mass>",
+            "negative",
+            "≥ 0",
+        ],
+    );
     let not_psd = arm(ELBOW, "").replacen("ixx=\"0.01\"", "ixx=\"-0.01\"", 1);
-    assert_says(&refused(&not_psd), &["not positive semidefinite", "tensor entries"]);
+    assert_says(
+        &refused(&not_psd),
+        &["not positive semidefinite", "tensor entries"],
+    );
     let violates = arm(ELBOW, "").replacen("ixy=\"0\"", "ixy=\"0.02\"", 1);
     assert_says(&refused(&violates), &["not positive semidefinite"]);
     let no_inertia = arm(ELBOW, "").replacen(
@@ -128,21 +154,54 @@ fn broken_structure_and_settings_are_refused() {
         ..ModelSettings::default()
     };
     assert!(UrdfModel::from_urdf_str(&arm(ELBOW, ""), "arm.urdf", settings).is_err());
-    let err = UrdfModel::from_file("/nonexistent/robot.urdf", ModelSettings::default()).unwrap_err();
-    assert_says(&err.to_string(), &["/nonexistent/robot.urdf", "check the path"]);
+    let err =
+        UrdfModel::from_file("/nonexistent/robot.urdf", ModelSettings::default()).unwrap_err();
+    assert_says(
+        &err.to_string(),
+        &["/nonexistent/robot.urdf", "check the path"],
+    );
 }
 
 #[test]
 fn bad_states_are_errors_not_nan() {
-    let m = UrdfModel::from_urdf_str(&arm(ELBOW, ""), "arm.urdf", ModelSettings::default()).unwrap();
+    let m =
+        UrdfModel::from_urdf_str(&arm(ELBOW, ""), "arm.urdf", ModelSettings::default()).unwrap();
     let p = m.urdf_parameters();
-    let err = m.inverse_dynamics(&p, &[0.0], &[0.0; 2], &[0.0; 2]).unwrap_err();
-    assert!(matches!(err, UrdfError::Dimension { what: "q", .. }), "{err}");
-    let err = m.regressor(&[0.0, f64::NAN], &[0.0; 2], &[0.0; 2]).unwrap_err();
+    let err = m
+        .inverse_dynamics(&p, &[0.0], &[0.0; 2], &[0.0; 2])
+        .unwrap_err();
+    assert!(
+        matches!(err, UrdfError::Dimension { what: "q", .. }),
+        "{err}"
+    );
+    let err = m
+        .regressor(&[0.0, f64::NAN], &[0.0; 2], &[0.0; 2])
+        .unwrap_err();
     assert_says(&err.to_string(), &["q[1] is NaN", "finite"]);
-    let err = m.inverse_dynamics(&p[1..], &[0.0; 2], &[0.0; 2], &[0.0; 2]).unwrap_err();
-    assert!(matches!(err, UrdfError::Dimension { what: "parameters", .. }), "{err}");
+    let err = m
+        .inverse_dynamics(&p[1..], &[0.0; 2], &[0.0; 2], &[0.0; 2])
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            UrdfError::Dimension {
+                what: "parameters",
+                ..
+            }
+        ),
+        "{err}"
+    );
     let mut short = vec![0.0; 3];
-    let err = aras_ident::LinearModel::fill(&m, &[0.0; 2], &[0.0; 2], &[0.0; 2], &mut short).unwrap_err();
-    assert!(matches!(err, UrdfError::Dimension { what: "regressor", .. }), "{err}");
+    let err =
+        aras_ident::LinearModel::fill(&m, &[0.0; 2], &[0.0; 2], &[0.0; 2], &mut short).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            UrdfError::Dimension {
+                what: "regressor",
+                ..
+            }
+        ),
+        "{err}"
+    );
 }

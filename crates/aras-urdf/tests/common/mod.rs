@@ -90,14 +90,18 @@ fn axis() -> impl Strategy<Value = [f64; 3]> {
 }
 
 pub fn link() -> impl Strategy<Value = LinkSpec> {
-    (0.2..5.0f64, v3(0.2), v3(3.2), [0.001..0.05f64, 0.001..0.05, 0.001..0.05]).prop_map(
-        |(mass, com, rpy, spread)| LinkSpec {
+    (
+        0.2..5.0f64,
+        v3(0.2),
+        v3(3.2),
+        [0.001..0.05f64, 0.001..0.05, 0.001..0.05],
+    )
+        .prop_map(|(mass, com, rpy, spread)| LinkSpec {
             mass,
             com,
             rpy,
             spread,
-        },
-    )
+        })
 }
 
 /// A robot of `2..=max` links; `fixed` allows fixed joints, `tree`
@@ -106,7 +110,13 @@ pub fn robot(max: usize, fixed: bool, tree: bool) -> impl Strategy<Value = Robot
     (2..=max)
         .prop_flat_map(move |n| {
             let joints = proptest::collection::vec(
-                (0..if fixed { 4usize } else { 3 }, 0.0..1.0f64, v3(0.4), v3(3.2), axis()),
+                (
+                    0..if fixed { 4usize } else { 3 },
+                    0.0..1.0f64,
+                    v3(0.4),
+                    v3(3.2),
+                    axis(),
+                ),
                 n - 1,
             );
             (proptest::collection::vec(link(), n), joints)
