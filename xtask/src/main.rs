@@ -13,6 +13,10 @@
 //!   with `mujoco` and `numpy` from PyPI in `target/check-mjcf/venv` (`--reuse-venv`:
 //!   keep an existing one) and runs `scripts/check_mjcf.py` (ARGS go to the script,
 //!   e.g. `--params P.json`).
+//! * `cargo xtask check-urdf [--reuse-venv]`: cross-checks `aras-urdf` against Pinocchio
+//!   (`docs/urdf.md`): builds its `urdf_torques` example, creates a throwaway environment
+//!   with `pin`, `example-robot-data` and `numpy` in `target/check-urdf/venv` and runs
+//!   `scripts/check_urdf.py`.
 //! * `cargo xtask <command> [ARGS…]`: every other command (`pipeline`, `excite`,
 //!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `friction`, `--help`) is
 //!   passed to the `aras` binary of the `aras-cli` package (`export-mjcf` too).
@@ -229,7 +233,7 @@ fn main() -> ExitCode {
     }
     let Some(first) = args.first().map(String::as_str) else {
         eprintln!(
-            "usage: cargo xtask [--no-install] <pipeline|excite|simulate|identify|validate|predict|diagnose|friction|export-mjcf|check-mjcf|test|deps> [ARGS…]\n\
+            "usage: cargo xtask [--no-install] <pipeline|excite|simulate|identify|validate|predict|diagnose|friction|export-mjcf|check-mjcf|check-urdf|test|deps> [ARGS…]\n\
              `cargo xtask --help` lists the commands of the toolkit; --no-install (or\n\
              ARAS_NO_INSTALL=1) never installs missing system libraries, it prints the command."
         );
@@ -242,6 +246,7 @@ fn main() -> ExitCode {
     match first {
         "deps" => ExitCode::SUCCESS,
         "check-mjcf" => check_mjcf(&args[1..]),
+        "check-urdf" => check_urdf(&args[1..]),
         "test" => {
             let mut cmd = cargo();
             cmd.args(["test", "--workspace", "--release"])
@@ -418,6 +423,99 @@ fn check_mjcf(args: &[String]) -> ExitCode {
         .arg(&work)
         .arg("--identified")
         .args(script_args);
+    run(check)
+}
+
+/// Python packages of the URDF check, pinned so that every machine checks
+/// against the same Pinocchio (update together).
+const CHECK_URDF_PACKAGES: [&str; 3] = ["pin==4.1.0", "example-robot-data==6.0.0", "numpy==2.4.6"];
+
+/// `cargo xtask check-urdf`: build the example, make the throwaway venv, run the script.
+fn check_urdf(args: &[String]) -> ExitCode {
+    let here = std::env::current_dir().unwrap_or_else(|_| ".".into());
+    let manifest = std::env::var_os("CARGO_MANIFEST_DIR").map(PathBuf::from);
+    let Some(root) = workspace_root(manifest.as_deref(), &here) else {
+        eprintln!(
+            "xtask: no Cargo workspace above {}; run `cargo xtask check-urdf` inside the checkout",
+            here.display()
+        );
+        return ExitCode::FAILURE;
+    };
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("target"));
+    let base = target.join("check-urdf");
+    let venv = base.join("venv");
+    let reuse = args.iter().any(|a| a == "--reuse-venv");
+    let mut build = cargo();
+    build.args([
+        "build",
+        "--quiet",
+        "--release",
+        "--package",
+        "aras-urdf",
+        "--example",
+        "urdf_torques",
+    ]);
+    if run(build) != ExitCode::SUCCESS {
+        return ExitCode::FAILURE;
+    }
+    let python = venv.join("bin").join("python");
+    if !(reuse && python.exists()) {
+        if let Err(msg) = remove_own_dir(&venv) {
+            eprintln!("xtask: {msg}");
+            return ExitCode::FAILURE;
+        }
+        eprintln!(
+            "xtask: creating {} with {}…",
+            venv.display(),
+            CHECK_URDF_PACKAGES.join(", ")
+        );
+        let mut mk = Command::new("python3");
+        mk.args(["-m", "venv"]).arg(&venv);
+        if run(mk) != ExitCode::SUCCESS {
+            eprintln!("xtask: `python3 -m venv` failed; install python3 and python3-venv");
+            return ExitCode::FAILURE;
+        }
+        if let Err(e) = std::fs::write(venv.join(VENV_MARKER), b"") {
+            eprintln!("xtask: cannot write into {}: {e}", venv.display());
+            return ExitCode::FAILURE;
+        }
+        let mut pip = Command::new(&python);
+        pip.args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+        ])
+        .args(CHECK_URDF_PACKAGES);
+        if run(pip) != ExitCode::SUCCESS {
+            eprintln!(
+                "xtask: installing {} from PyPI failed",
+                CHECK_URDF_PACKAGES.join(" ")
+            );
+            return ExitCode::FAILURE;
+        }
+    }
+    let work = base.join("work");
+    if let Err(msg) = remove_own_dir(&work) {
+        eprintln!("xtask: {msg}");
+        return ExitCode::FAILURE;
+    }
+    if let Err(e) =
+        std::fs::create_dir_all(&work).and_then(|()| std::fs::write(work.join(VENV_MARKER), b""))
+    {
+        eprintln!("xtask: cannot create {}: {e}", work.display());
+        return ExitCode::FAILURE;
+    }
+    let mut check = Command::new(&python);
+    check
+        .arg(root.join("scripts").join("check_urdf.py"))
+        .arg("--ours")
+        .arg(target.join("release").join("examples").join("urdf_torques"))
+        .arg("--work")
+        .arg(&work);
     run(check)
 }
 

@@ -1,0 +1,52 @@
+//! Serial and tree robots from their URDF, for identification by the
+//! toolkit's robot-agnostic crates (`docs/urdf.md`).
+//!
+//! [`UrdfModel`] reads a URDF (revolute, continuous and prismatic joints;
+//! fixed joints merged into their parent body by the parallel-axis theorem
+//! with rotations), takes the base orientation and a gravity vector from
+//! [`ModelSettings`], and gives
+//!
+//! * forward kinematics ([`UrdfModel::body_poses`]),
+//! * inverse dynamics by the recursive Newton–Euler algorithm
+//!   ([`UrdfModel::inverse_dynamics`]),
+//! * the joint-torque regressor `τ = Y(q, q̇, q̈) π` linear in the standard
+//!   parameters: per body `m, m·c, I` about the body (joint) frame's origin
+//!   in Pinocchio's order ([`LINK_PARAMETERS`]), then per joint the enabled
+//!   viscous, Coulomb (`tanh(q̇/w)`), offset and armature columns
+//!   ([`JointColumns`]).
+//!
+//! The regressor is written once over the number type, so the model is
+//! both `aras-ident`'s [`aras_ident::LinearModel`] (base parameters, OLS,
+//! the SDP with one pseudo-inertia per body via
+//! [`UrdfModel::link_columns`], streaming) and `aras-excite`'s
+//! [`aras_excite::Regressor`] (excitation design with exact derivatives).
+//! Evaluations reuse a per-thread [`Workspace`] and do not allocate.
+//!
+//! **Parser.** URDF is read with `roxmltree`, a small, maintained,
+//! read-only XML tree with no dependencies of its own beyond `memchr`
+//! that keeps every element's position, so a message names the file and
+//! line. The URDF-specific crate `urdf-rs` was not taken: it builds on an
+//! unmaintained XML reader and fills a missing `<inertial>` or `<mass>`
+//! with defaults, so an absent mass cannot be told from a zero one, and
+//! its errors carry no position. Only the elements the dynamics needs are
+//! read; what the model cannot express (floating and planar joints,
+//! `<mimic>`, closed loops, several roots, impossible inertials) is
+//! refused with a [`UrdfError`] saying where and what to do.
+//!
+//! The crate depends on neither `aras-kin` nor `aras-dyn`.
+
+#![allow(clippy::needless_range_loop)] // index loops mirror the equations
+
+mod dynamics;
+mod error;
+mod model;
+mod parse;
+mod spatial;
+
+pub use dynamics::{Pose, Workspace};
+pub use error::UrdfError;
+pub use model::{
+    CoulombWidth, Joint, JointColumns, JointKind, JointLimits, LINK_COLUMNS, LINK_PARAMETERS,
+    LinkColumns, ModelSettings, UrdfModel,
+};
+pub use spatial::Scalar;

@@ -1,0 +1,670 @@
+//! The model built from a URDF: movable joints in tree order, each with the
+//! rigid body it moves (its child link and every link fixed to it), and the
+//! settings that choose gravity, the base placement and the friction and
+//! armature columns.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::UrdfError;
+use crate::parse::{self, RawKind, RawRobot};
+use crate::spatial::{IDENTITY, M3, V3, mat_mul, mul, rpy_matrix, skew, transpose};
+
+/// Standard parameters per body, in Pinocchio's order of dynamic
+/// parameters: `m, m·cx, m·cy, m·cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz`, the
+/// inertia about the body frame's origin (the joint frame), in that frame.
+pub const LINK_COLUMNS: usize = 10;
+
+/// The names of a body's [`LINK_COLUMNS`] parameters, after `link.`.
+pub const LINK_PARAMETERS: [&str; LINK_COLUMNS] = [
+    "m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz",
+];
+
+/// How a joint moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JointKind {
+    /// A rotation about the axis with position limits (rad).
+    Revolute,
+    /// A rotation about the axis without limits (rad).
+    Continuous,
+    /// A translation along the axis (m).
+    Prismatic,
+}
+
+impl JointKind {
+    /// Whether the joint rotates (revolute or continuous).
+    pub fn rotates(self) -> bool {
+        !matches!(self, JointKind::Prismatic)
+    }
+}
+
+/// A joint's `<limit>` as the URDF gives it (absent entries are `None`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct JointLimits {
+    /// Lowest position (rad or m).
+    pub lower: Option<f64>,
+    /// Highest position (rad or m).
+    pub upper: Option<f64>,
+    /// Largest effort (N·m or N).
+    pub effort: Option<f64>,
+    /// Largest rate (rad/s or m/s).
+    pub velocity: Option<f64>,
+}
+
+/// One movable joint and the body it moves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Joint {
+    /// The URDF joint's name.
+    pub name: String,
+    /// The URDF name of its child link (the body's frame; links fixed to it
+    /// are merged into its inertia).
+    pub link: String,
+    /// The URDF links merged into this body by fixed joints.
+    pub merged: Vec<String>,
+    /// How it moves.
+    pub kind: JointKind,
+    /// Index of the parent body's joint, `None` for a joint on the base.
+    pub parent: Option<usize>,
+    /// Unit axis in the joint (body) frame.
+    pub axis: [f64; 3],
+    /// The joint frame at zero position in the parent body's frame:
+    /// rotation (row-major) …
+    pub origin_rotation: [[f64; 3]; 3],
+    /// … and position (m).
+    pub origin_translation: [f64; 3],
+    /// Its limits, if the URDF gives any.
+    pub limits: Option<JointLimits>,
+    /// The body's standard parameters from the URDF's inertials, in the
+    /// order of [`LINK_PARAMETERS`].
+    pub inertial: [f64; LINK_COLUMNS],
+}
+
+/// Which per-joint columns follow the link columns, in this order per
+/// joint: viscous `Fv q̇`, Coulomb `Fc tanh(q̇/w)`, offset `τ₀`, armature
+/// `Ia q̈`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct JointColumns {
+    /// Viscous friction `Fv q̇` (N·m·s/rad).
+    pub viscous: bool,
+    /// Coulomb friction `Fc tanh(q̇ / w)` (N·m), `sign(q̇)` for `w = 0`.
+    pub coulomb: bool,
+    /// A constant torque offset `τ₀` (N·m), e.g. a sensor bias.
+    pub offset: bool,
+    /// Rotor inertia reflected to the joint (armature) `Ia q̈` (kg·m²).
+    pub armature: bool,
+}
+
+impl Default for JointColumns {
+    /// Viscous, Coulomb and armature: the effects every geared arm shows;
+    /// the offset only where a torque sensor needs it.
+    fn default() -> Self {
+        Self {
+            viscous: true,
+            coulomb: true,
+            offset: false,
+            armature: true,
+        }
+    }
+}
+
+impl JointColumns {
+    /// No friction or armature columns: the rigid bodies only.
+    pub fn none() -> Self {
+        Self {
+            viscous: false,
+            coulomb: false,
+            offset: false,
+            armature: false,
+        }
+    }
+
+    /// Number of columns per joint.
+    pub fn count(&self) -> usize {
+        [self.viscous, self.coulomb, self.offset, self.armature]
+            .iter()
+            .filter(|&&b| b)
+            .count()
+    }
+}
+
+/// The width `w` of the smooth Coulomb column `tanh(q̇ / w)` (rad/s or
+/// m/s): one for every joint, or one per joint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum CoulombWidth {
+    /// The same width at every joint.
+    Uniform(f64),
+    /// One width per movable joint, in the model's joint order.
+    PerJoint(Vec<f64>),
+}
+
+impl Default for CoulombWidth {
+    /// `w = 0`: the sign of the rate, the textbook Coulomb model.
+    fn default() -> Self {
+        CoulombWidth::Uniform(0.0)
+    }
+}
+
+/// Settings of a model, with their defaults in one place
+/// ([`Default`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ModelSettings {
+    /// Gravity in the world frame (m/s²); tilt it for a robot mounted on a
+    /// slope or to check a model. Default `[0, 0, −9.81]`.
+    pub gravity: [f64; 3],
+    /// Orientation of the URDF's root link in the world (URDF `rpy`, rad).
+    /// Default zero (root frame = world frame).
+    pub base_rpy: [f64; 3],
+    /// Position of the root link in the world (m); changes only the
+    /// forward kinematics. Default zero.
+    pub base_xyz: [f64; 3],
+    /// Which per-joint columns the regressor has.
+    pub columns: JointColumns,
+    /// The Coulomb columns' width.
+    pub coulomb_width: CoulombWidth,
+}
+
+impl Default for ModelSettings {
+    fn default() -> Self {
+        Self {
+            gravity: [0.0, 0.0, -9.81],
+            base_rpy: [0.0; 3],
+            base_xyz: [0.0; 3],
+            columns: JointColumns::default(),
+            coulomb_width: CoulombWidth::default(),
+        }
+    }
+}
+
+/// A constant part of a body's motion, precomputed for the hot path: the
+/// rotation `R(q) = c A + s B + (1 − c) C` of a revolute joint
+/// (Rodrigues, with `A` the origin's rotation, `B = A [a]×`,
+/// `C = (A a) aᵀ`), the translation `p(q) = p₀ + (A a) q` of a prismatic
+/// one.
+#[derive(Debug, Clone)]
+pub(crate) struct Body {
+    pub parent: Option<usize>,
+    pub rotates: bool,
+    pub axis: V3<f64>,
+    pub a: M3<f64>,
+    pub b: M3<f64>,
+    pub c: M3<f64>,
+    pub p0: V3<f64>,
+    pub aa: V3<f64>,
+}
+
+/// A serial or tree robot from its URDF, with a fixed base: forward
+/// kinematics, inverse dynamics (RNEA) and the joint-torque regressor
+/// `τ = Y(q, q̇, q̈) π`, linear in the standard parameters `π` (the
+/// [`LINK_COLUMNS`] of every body, then the enabled [`JointColumns`] of
+/// every joint).
+///
+/// It is `aras-ident`'s [`aras_ident::LinearModel`] and `aras-excite`'s
+/// [`aras_excite::Regressor`], so base parameters, least squares, the SDP,
+/// streaming and the excitation design apply to it unchanged.
+#[derive(Debug, Clone)]
+pub struct UrdfModel {
+    pub(crate) name: String,
+    pub(crate) joints: Vec<Joint>,
+    pub(crate) bodies: Vec<Body>,
+    /// Gravity in the root frame.
+    pub(crate) gravity_root: V3<f64>,
+    pub(crate) base_rotation: M3<f64>,
+    pub(crate) base_translation: V3<f64>,
+    pub(crate) columns: JointColumns,
+    /// The Coulomb width per joint.
+    pub(crate) widths: Vec<f64>,
+    pub(crate) settings: ModelSettings,
+}
+
+/// A rigid transform `x_parent = R x_child + p` (f64).
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    r: M3<f64>,
+    p: V3<f64>,
+}
+
+impl Frame {
+    const ID: Frame = Frame {
+        r: IDENTITY,
+        p: [0.0; 3],
+    };
+
+    fn from_origin(xyz: V3<f64>, rpy: V3<f64>) -> Self {
+        Frame {
+            r: rpy_matrix(rpy),
+            p: xyz,
+        }
+    }
+
+    /// `self ∘ other`.
+    fn then(&self, other: &Frame) -> Frame {
+        let rp = mul(&self.r, other.p);
+        Frame {
+            r: mat_mul(&self.r, &other.r),
+            p: [rp[0] + self.p[0], rp[1] + self.p[1], rp[2] + self.p[2]],
+        }
+    }
+}
+
+/// The standard parameters of an inertial (`mass`, centre of mass `c` and
+/// central inertia `ic` given in the frame `f` of a body): `m, m c, I_O`
+/// about the body frame's origin, by rotation and the parallel-axis
+/// theorem `I_O = R I_c Rᵀ + m ([c]×)ᵀ [c]×`.
+fn standard_in(f: &Frame, mass: f64, ic: &M3<f64>) -> [f64; LINK_COLUMNS] {
+    let rot = mat_mul(&mat_mul(&f.r, ic), &transpose(&f.r));
+    let c = f.p;
+    let s = skew(c);
+    let sts = mat_mul(&transpose(&s), &s);
+    let i = |r: usize, k: usize| rot[r][k] + mass * sts[r][k];
+    [
+        mass,
+        mass * c[0],
+        mass * c[1],
+        mass * c[2],
+        i(0, 0),
+        i(0, 1),
+        i(1, 1),
+        i(0, 2),
+        i(1, 2),
+        i(2, 2),
+    ]
+}
+
+impl UrdfModel {
+    /// Reads and builds the model of the URDF file at `path`.
+    pub fn from_file(path: impl AsRef<Path>, settings: ModelSettings) -> Result<Self, UrdfError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| UrdfError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_urdf_str(&text, &path.display().to_string(), settings)
+    }
+
+    /// Builds the model of the URDF text `text`; `file` names it in
+    /// messages.
+    pub fn from_urdf_str(
+        text: &str,
+        file: &str,
+        settings: ModelSettings,
+    ) -> Result<Self, UrdfError> {
+        let raw = parse::parse(text, file)?;
+        Self::build(raw, file, settings)
+    }
+
+    fn build(raw: RawRobot, file: &str, settings: ModelSettings) -> Result<Self, UrdfError> {
+        check_settings(&settings)?;
+        let structure = |problem: String, fix: &str| UrdfError::Structure {
+            file: file.to_owned(),
+            problem,
+            fix: fix.to_owned(),
+        };
+        let element = |line: u32, element: String, problem: String, fix: &str| UrdfError::Element {
+            file: file.to_owned(),
+            line,
+            element,
+            problem,
+            fix: fix.to_owned(),
+        };
+        let mut link_index = HashMap::new();
+        for (k, l) in raw.links.iter().enumerate() {
+            if link_index.insert(l.name.as_str(), k).is_some() {
+                return Err(element(
+                    l.line,
+                    format!("<link name=\"{}\">", l.name),
+                    "repeats a link name".to_owned(),
+                    "give every link a unique name",
+                ));
+            }
+        }
+        let mut joint_names = HashMap::new();
+        // The joint whose child each link is.
+        let mut parent_joint: Vec<Option<usize>> = vec![None; raw.links.len()];
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); raw.links.len()];
+        for (k, j) in raw.joints.iter().enumerate() {
+            let here = format!("<joint name=\"{}\">", j.name);
+            if joint_names.insert(j.name.as_str(), k).is_some() {
+                return Err(element(
+                    j.line,
+                    here,
+                    "repeats a joint name".to_owned(),
+                    "give every joint a unique name",
+                ));
+            }
+            let find = |l: &str, role: &str| {
+                link_index.get(l).copied().ok_or_else(|| {
+                    element(
+                        j.line,
+                        here.clone(),
+                        format!("its {role} link \"{l}\" is not defined"),
+                        "define the link with <link name=\"…\"> or correct the name",
+                    )
+                })
+            };
+            let p = find(&j.parent, "parent")?;
+            let c = find(&j.child, "child")?;
+            if let Some(other) = parent_joint[c] {
+                return Err(element(
+                    j.line,
+                    here,
+                    format!(
+                        "link \"{}\" is already the child of joint \"{}\": this closes a kinematic loop",
+                        j.child, raw.joints[other].name
+                    ),
+                    "the model takes trees only: every link has at most one parent joint",
+                ));
+            }
+            parent_joint[c] = Some(k);
+            children[p].push(k);
+        }
+        let roots: Vec<usize> = (0..raw.links.len())
+            .filter(|&l| parent_joint[l].is_none())
+            .collect();
+        let root = match roots.as_slice() {
+            [r] => *r,
+            [] if raw.links.is_empty() => {
+                return Err(structure(
+                    "has no <link>".to_owned(),
+                    "give a URDF with links and joints",
+                ));
+            }
+            [] => {
+                return Err(structure(
+                    "every link is some joint's child, so the joints form a closed loop".to_owned(),
+                    "the model takes trees only: remove the joint that closes the loop",
+                ));
+            }
+            many => {
+                let names: Vec<&str> = many.iter().map(|&l| raw.links[l].name.as_str()).collect();
+                return Err(structure(
+                    format!(
+                        "has {} root links ({}), not one tree",
+                        many.len(),
+                        names.join(", ")
+                    ),
+                    "connect every part to the base by joints (a fixed joint for a rigid mount) or remove the unconnected links",
+                ));
+            }
+        };
+
+        // Depth-first from the root: every link's body (the movable joint
+        // it moves with, None for the base) and its frame in that body.
+        let mut joints: Vec<Joint> = Vec::new();
+        let mut link_body: Vec<Option<(Option<usize>, Frame)>> = vec![None; raw.links.len()];
+        link_body[root] = Some((None, Frame::ID));
+        let mut stack: Vec<usize> = children[root].iter().rev().copied().collect();
+        let mut visited = 1;
+        while let Some(k) = stack.pop() {
+            let j = &raw.joints[k];
+            let (p, c) = (link_index[j.parent.as_str()], link_index[j.child.as_str()]);
+            let (body, in_body) = link_body[p].expect("parents are visited first");
+            let origin = in_body.then(&Frame::from_origin(j.xyz, j.rpy));
+            let kind = match j.kind {
+                RawKind::Fixed => None,
+                RawKind::Revolute => Some(JointKind::Revolute),
+                RawKind::Continuous => Some(JointKind::Continuous),
+                RawKind::Prismatic => Some(JointKind::Prismatic),
+            };
+            link_body[c] = Some(match kind {
+                None => (body, origin),
+                Some(kind) => {
+                    joints.push(Joint {
+                        name: j.name.clone(),
+                        link: j.child.clone(),
+                        merged: Vec::new(),
+                        kind,
+                        parent: body,
+                        axis: j.axis,
+                        origin_rotation: origin.r,
+                        origin_translation: origin.p,
+                        limits: j.limit.as_ref().map(|l| JointLimits {
+                            lower: l.lower,
+                            upper: l.upper,
+                            effort: l.effort,
+                            velocity: l.velocity,
+                        }),
+                        inertial: [0.0; LINK_COLUMNS],
+                    });
+                    (Some(joints.len() - 1), Frame::ID)
+                }
+            });
+            visited += 1;
+            stack.extend(children[c].iter().rev().copied());
+        }
+        if visited != raw.links.len() {
+            let stray: Vec<&str> = (0..raw.links.len())
+                .filter(|&l| link_body[l].is_none())
+                .map(|l| raw.links[l].name.as_str())
+                .collect();
+            return Err(structure(
+                format!(
+                    "links {} form a closed loop apart from the tree",
+                    stray.join(", ")
+                ),
+                "the model takes trees only: remove the joint that closes the loop",
+            ));
+        }
+        if joints.is_empty() {
+            return Err(structure(
+                "has no revolute, continuous or prismatic joint".to_owned(),
+                "give a robot with at least one movable joint",
+            ));
+        }
+        // Inertials into their bodies (links fixed to the base are part of
+        // the world and carry no parameter).
+        for (l, link) in raw.links.iter().enumerate() {
+            let (Some((Some(b), in_body)), Some(inertial)) = (link_body[l], &link.inertial) else {
+                continue;
+            };
+            let f = in_body.then(&Frame::from_origin(inertial.xyz, inertial.rpy));
+            let [xx, xy, xz, yy, yz, zz] = inertial.inertia;
+            let ic = [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]];
+            let s = standard_in(&f, inertial.mass, &ic);
+            let joint = &mut joints[b];
+            for (t, v) in joint.inertial.iter_mut().zip(s) {
+                *t += v;
+            }
+            if link.name != joint.link {
+                joint.merged.push(link.name.clone());
+            }
+        }
+        let bodies = joints.iter().map(body_of).collect();
+        let n = joints.len();
+        let widths = match &settings.coulomb_width {
+            CoulombWidth::Uniform(w) => vec![*w; n],
+            CoulombWidth::PerJoint(w) if w.len() == n => w.clone(),
+            CoulombWidth::PerJoint(w) => {
+                return Err(UrdfError::Setting {
+                    name: "coulomb_width".to_owned(),
+                    problem: format!(
+                        "{} widths for {n} movable joints; give one per joint or a single number",
+                        w.len()
+                    ),
+                });
+            }
+        };
+        let base_rotation = rpy_matrix(settings.base_rpy);
+        let g = settings.gravity;
+        let gravity_root = crate::spatial::mul_t(&base_rotation, g);
+        Ok(Self {
+            name: raw.name,
+            joints,
+            bodies,
+            gravity_root,
+            base_rotation,
+            base_translation: settings.base_xyz,
+            columns: settings.columns,
+            widths,
+            settings,
+        })
+    }
+
+    /// The URDF robot's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The movable joints in the model's order: depth first from the root,
+    /// children in the order of the file (a parent always before its
+    /// children).
+    pub fn joints(&self) -> &[Joint] {
+        &self.joints
+    }
+
+    /// Number of movable joints (coordinates and torques).
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// The movable joints' names, in order.
+    pub fn joint_names(&self) -> Vec<String> {
+        self.joints.iter().map(|j| j.name.clone()).collect()
+    }
+
+    /// The settings the model was built with.
+    pub fn settings(&self) -> &ModelSettings {
+        &self.settings
+    }
+
+    /// Which per-joint columns the regressor has.
+    pub fn joint_columns(&self) -> JointColumns {
+        self.columns
+    }
+
+    /// Number of standard parameters (regressor columns).
+    pub fn parameter_count(&self) -> usize {
+        self.dof() * (LINK_COLUMNS + self.columns.count())
+    }
+
+    /// The standard parameters' names, in column order: `link.m`,
+    /// `link.mcx`, … ([`LINK_PARAMETERS`]) per body, then `joint.Fv`,
+    /// `joint.Fc`, `joint.offset`, `joint.Ia` (the enabled ones) per joint.
+    pub fn parameter_names(&self) -> Vec<String> {
+        let mut names: Vec<String> = self
+            .joints
+            .iter()
+            .flat_map(|j| {
+                LINK_PARAMETERS
+                    .iter()
+                    .map(move |p| format!("{}.{p}", j.link))
+            })
+            .collect();
+        let c = self.columns;
+        for j in &self.joints {
+            for (on, tag) in [
+                (c.viscous, "Fv"),
+                (c.coulomb, "Fc"),
+                (c.offset, "offset"),
+                (c.armature, "Ia"),
+            ] {
+                if on {
+                    names.push(format!("{}.{tag}", j.name));
+                }
+            }
+        }
+        names
+    }
+
+    /// The standard parameters of the URDF: every body's inertial (with
+    /// the links fixed to it), zero friction, offset and armature.
+    pub fn urdf_parameters(&self) -> Vec<f64> {
+        let mut p: Vec<f64> = self.joints.iter().flat_map(|j| j.inertial).collect();
+        p.resize(self.parameter_count(), 0.0);
+        p
+    }
+
+    /// Where each body's parameters sit in the standard vector, in the
+    /// order `aras-ident`'s `LinkLayout` takes them, for the physically
+    /// consistent identification (one pseudo-inertia per body).
+    pub fn link_columns(&self) -> Vec<LinkColumns> {
+        self.joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| {
+                let c = i * LINK_COLUMNS;
+                LinkColumns {
+                    link: j.link.clone(),
+                    mass: c,
+                    first_moment: [c + 1, c + 2, c + 3],
+                    inertia: [c + 4, c + 5, c + 7, c + 6, c + 8, c + 9],
+                }
+            })
+            .collect()
+    }
+
+    /// Index of the first per-joint column of joint `j`, and the enabled
+    /// kinds' offsets within it.
+    pub(crate) fn joint_base(&self, j: usize) -> usize {
+        self.dof() * LINK_COLUMNS + j * self.columns.count()
+    }
+}
+
+/// The columns of one body in the standard vector.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LinkColumns {
+    /// The body's URDF link.
+    pub link: String,
+    /// Index of `m`.
+    pub mass: usize,
+    /// Indices of `m·cx, m·cy, m·cz`.
+    pub first_moment: [usize; 3],
+    /// Indices of `Ixx, Ixy, Ixz, Iyy, Iyz, Izz` (note: not Pinocchio's
+    /// order; the order `aras_ident::LinkLayout` takes).
+    pub inertia: [usize; 6],
+}
+
+fn body_of(j: &Joint) -> Body {
+    let a = j.origin_rotation;
+    let axis = j.axis;
+    let b = mat_mul(&a, &skew(axis));
+    let aa = mul(&a, axis);
+    let mut c = [[0.0; 3]; 3];
+    for r in 0..3 {
+        for k in 0..3 {
+            c[r][k] = aa[r] * axis[k];
+        }
+    }
+    Body {
+        parent: j.parent,
+        rotates: j.kind.rotates(),
+        axis,
+        a,
+        b,
+        c,
+        p0: j.origin_translation,
+        aa,
+    }
+}
+
+fn check_settings(s: &ModelSettings) -> Result<(), UrdfError> {
+    let finite = |name: &str, v: &[f64]| {
+        if v.iter().all(|x| x.is_finite()) {
+            Ok(())
+        } else {
+            Err(UrdfError::Setting {
+                name: name.to_owned(),
+                problem: format!("{v:?} has a non-finite entry; give finite numbers"),
+            })
+        }
+    };
+    finite("gravity", &s.gravity)?;
+    finite("base_rpy", &s.base_rpy)?;
+    finite("base_xyz", &s.base_xyz)?;
+    let widths = match &s.coulomb_width {
+        CoulombWidth::Uniform(w) => std::slice::from_ref(w),
+        CoulombWidth::PerJoint(w) => w.as_slice(),
+    };
+    if let Some(w) = widths.iter().find(|w| !(w.is_finite() && **w >= 0.0)) {
+        return Err(UrdfError::Setting {
+            name: "coulomb_width".to_owned(),
+            problem: format!("width {w} must be finite and ≥ 0 (rad/s; 0 is sign(q̇))"),
+        });
+    }
+    Ok(())
+}
