@@ -83,6 +83,8 @@ mod documentation {
     struct Simulator;
     #[doc = include_str!("../../../docs/tour.md")]
     struct Tour;
+    #[doc = include_str!("../../../docs/urdf.md")]
+    struct Urdf;
     #[doc = include_str!("../../../docs/validation.md")]
     struct Validation;
 }
