@@ -56,7 +56,7 @@ impl Default for FilterSpec {
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
 pub enum PeriodSource {
     /// `excitation.period_s` of the sidecar if present, else the period
-    /// [`detect_period`] finds in the angles (no averaging if it declines).
+    /// [`detect_period`](crate::detect_period) finds in the angles (no averaging if it declines).
     #[default]
     FromSidecar,
     /// This period (s).
