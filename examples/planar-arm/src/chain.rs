@@ -555,7 +555,10 @@ fn read_and_process(
 /// (`offset_j`) and a spring `k q_j` (`spring_j`), each on its own joint's
 /// torque only.
 pub fn candidate_names(joints: usize) -> Vec<String> {
-    chain_candidates(joints).iter().map(|c| c.label()).collect()
+    chain_candidates(joints)
+        .iter()
+        .map(aras_diagnose::Candidate::label)
+        .collect()
 }
 
 /// A candidate effect of the chain: one column on one joint's torque.
