@@ -13,22 +13,24 @@
 //!    stack, the processing's low-pass on torques and columns alike; the
 //!    in-memory identification, the streaming blocks and the diagnosis's
 //!    data sets all start there.
-//! 3. [`refine`]: the one refinement of a continuous non-linear setting
-//!    (zoomed passes over a scalar RSS profile, parabola vertex, σ from the
-//!    curvature), used by the diagnosis's candidates and by
-//!    [`friction_width`], the identification's Coulomb transition widths.
+//! 3. [`refine`] (`aras-diagnose`'s): the one refinement of a continuous
+//!    non-linear setting (zoomed passes over a scalar RSS profile, parabola
+//!    vertex, σ from the curvature), used by the diagnosis's candidates and
+//!    by [`friction_width`], the identification's Coulomb transition widths.
 //! 4. [`streaming`]: identification from a CSV log of any length in bounded
 //!    memory (chunked reading, filtering with overlap, reversal exclusion,
 //!    `aras_ident`'s accumulators).
-//! 5. [`diagnose`]: where model and measurement disagree, which missing
-//!    effect explains it, and how much the gap shrinks once it is added;
-//!    [`spool`] holds a long log's processed samples in a scratch file that
+//! 5. [`diagnose`]: the ARAS-Diamond as a robot of `aras-diagnose`'s
+//!    engine (its regressor, its candidate effects, the SDP refit): where
+//!    model and measurement disagree, which missing effect explains it, and
+//!    how much the gap shrinks once it is added; [`spool`] holds a long log's processed samples in a scratch file that
 //!    its passes read window by window ([`streaming::spool_log`]).
 //!
 //! ## Dependencies, and why
-//! * `aras-kin`, `aras-dyn`, `aras-signal`, `aras-ident`: the robot's
-//!   kinematics and model, the log reader and signal processing, and the
-//!   estimation this crate wires together.
+//! * `aras-kin`, `aras-dyn`, `aras-signal`, `aras-ident`, `aras-diagnose`:
+//!   the robot's kinematics and model, the log reader and signal
+//!   processing, the estimation and the diagnosis engine this crate wires
+//!   together.
 //! * `faer`: the stacked regressors handed to `aras-ident`; `nalgebra`: the
 //!   robot crates' small vectors; `rayon`: parallel filtering and
 //!   candidate fits; `serde`: results serialise for reports.
@@ -46,9 +48,9 @@ pub mod diagnose;
 pub mod friction_width;
 pub mod identify;
 pub mod prepare;
-pub mod refine;
 pub mod robot;
 pub mod spool;
 pub mod streaming;
 
+pub use aras_diagnose::refine;
 pub use aras_dyn::{RegressorError, TaskRegressor};

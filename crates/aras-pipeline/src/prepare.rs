@@ -9,7 +9,7 @@ use aras_dyn::Model;
 use aras_ident::{BaseParameters, IdentError};
 use aras_kin::{Geometry, KinematicSample};
 use aras_log::Log;
-use aras_signal::{BandLimit, Butterworth, ProcessOptions, ProcessSummary, Processed, Sos};
+use aras_signal::{BandLimit, ProcessOptions, Processed, Sos};
 use faer::{Mat, MatRef};
 
 use crate::robot::{
@@ -84,18 +84,7 @@ pub struct Prepared {
     pub unfiltered: Option<Stacked>,
 }
 
-/// The processing's zero-phase low-pass, designed again from its summary
-/// (same order, cut-off and rate); `None` if it applied none.
-pub fn processing_filter(summary: &ProcessSummary) -> Result<Option<Sos>, IdentError> {
-    summary
-        .filter
-        .as_ref()
-        .map(|f| {
-            Butterworth::lowpass(f.order, f.cutoff_hz, summary.sample_rate_hz)
-                .map_err(|e| IdentError::external("re-designing the processing low-pass", e))
-        })
-        .transpose()
-}
+pub use aras_diagnose::{processing_filter, record_noise_gain};
 
 /// Processes `log` (`aras_signal::process` with the model's task
 /// coordinates), stacks `model`'s `columns` on the samples and applies the
@@ -389,19 +378,6 @@ impl Prepared {
             min_speed,
             reach_tol,
         )
-    }
-}
-
-/// Noise power gain of the zero-phase `filter` applied to a record of `n`
-/// samples ([`noise_gain`]; 1 when nothing was filtered).
-pub fn record_noise_gain(
-    filter: Option<&Sos>,
-    n: usize,
-    periodic: bool,
-) -> Result<f64, IdentError> {
-    match filter {
-        Some(sos) => noise_gain(sos, n, periodic),
-        None => Ok(1.0),
     }
 }
 

@@ -18,14 +18,13 @@
 //! joint, read by `aras-log`, processed by `aras-signal` in joint
 //! coordinates of run-time dimension and streamed through the base
 //! regressor; [`diagnose_logs`] names an effect the model lacks with
-//! `aras-ident`'s forward selection, one output group per joint.
+//! `aras-diagnose`'s engine (the pipeline's), one output group per joint.
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the equations
 
 use std::convert::Infallible;
 
 use aras_excite::{DesignSettings, Dual, FourierTrajectory, Limits, Regressor};
-use aras_ident::selection::{Accumulator, CandidateSpec, Layout, SelectionOptions};
 use aras_ident::streaming::{RegressorStage, States};
 use aras_ident::{ConsistentLs, LinearModel, LinkLayout, ReducedLs};
 use aras_log::ReadOptions;
@@ -556,9 +555,144 @@ fn read_and_process(
 /// (`offset_j`) and a spring `k q_j` (`spring_j`), each on its own joint's
 /// torque only.
 pub fn candidate_names(joints: usize) -> Vec<String> {
-    (1..=joints)
-        .flat_map(|j| [format!("offset_{j}"), format!("spring_{j}")])
+    chain_candidates(joints)
+        .iter()
+        .map(aras_diagnose::Candidate::label)
         .collect()
+}
+
+/// A candidate effect of the chain: one column on one joint's torque.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(tag = "kind", content = "joint", rename_all = "snake_case")]
+pub enum ChainCandidate {
+    /// A constant torque on joint `j` (0-based): a torque sensor's or
+    /// amplifier's offset.
+    Offset(usize),
+    /// A torque `k q_j` on joint `j` (0-based): a spring, a cable or a
+    /// gravity compensator.
+    Spring(usize),
+}
+
+/// The candidates per joint, in [`candidate_names`]' order.
+fn chain_candidates(joints: usize) -> Vec<ChainCandidate> {
+    (0..joints)
+        .flat_map(|j| [ChainCandidate::Offset(j), ChainCandidate::Spring(j)])
+        .collect()
+}
+
+impl aras_diagnose::Candidate for ChainCandidate {
+    fn id(&self) -> String {
+        // Each candidate is its own family (an offset on every joint may be
+        // added): the label names it.
+        aras_diagnose::Candidate::label(self)
+    }
+    fn label(&self) -> String {
+        match self {
+            ChainCandidate::Offset(j) => format!("offset_{}", j + 1),
+            ChainCandidate::Spring(j) => format!("spring_{}", j + 1),
+        }
+    }
+    fn explanation(&self) -> String {
+        match self {
+            ChainCandidate::Offset(_) => {
+                "a constant torque on one joint (a torque sensor's or amplifier's offset); \
+                 the residual has a constant mean"
+            }
+            ChainCandidate::Spring(_) => {
+                "a torque proportional to one joint's angle (a spring, a cable, a gravity \
+                 compensator); the residual grows linearly with the angle"
+            }
+        }
+        .to_owned()
+    }
+    fn parameter_names(&self) -> Vec<String> {
+        vec![self.label()]
+    }
+    fn with_setting(&self, _: f64) -> Self {
+        *self
+    }
+}
+
+/// The chain's model as the diagnosis engine sees it.
+struct ChainRobot {
+    model: ChainModel,
+    base: aras_ident::BaseParameters,
+    joints: usize,
+}
+
+/// A window of processed samples: the chain's standard regressor on them
+/// (joint-major) and its joint angles.
+struct ChainWindow {
+    w: faer::Mat<f64>,
+    q: Vec<Vec<f64>>,
+}
+
+impl aras_diagnose::DiagnosisModel for ChainRobot {
+    type Candidate = ChainCandidate;
+    type Window = ChainWindow;
+    type Terms = Vec<String>;
+    type Refit = aras_diagnose::NoRefit;
+
+    fn joints(&self) -> usize {
+        self.joints
+    }
+    fn n_base(&self) -> usize {
+        self.base.n_base()
+    }
+    fn base_name(&self, column: usize) -> String {
+        self.base.expression(column)
+    }
+    fn window(
+        &self,
+        s: &aras_signal::Samples,
+        _first: usize,
+    ) -> Result<ChainWindow, aras_ident::IdentError> {
+        Ok(ChainWindow {
+            w: crate::stacked_regressor(
+                &self.model,
+                &views(&s.x),
+                &views(&s.x_dot),
+                &views(&s.x_ddot),
+            ),
+            q: s.x.clone(),
+        })
+    }
+    fn base_columns(&self, w: &ChainWindow) -> Result<faer::Mat<f64>, aras_ident::IdentError> {
+        self.base.base_regressor(w.w.as_ref())
+    }
+    fn candidate_columns(
+        &self,
+        c: &ChainCandidate,
+        w: &ChainWindow,
+    ) -> Result<faer::Mat<f64>, aras_ident::IdentError> {
+        let m = w.q.first().map_or(0, Vec::len);
+        let (j, spring) = match *c {
+            ChainCandidate::Offset(j) => (j, false),
+            ChainCandidate::Spring(j) => (j, true),
+        };
+        Ok(faer::Mat::from_fn(self.joints * m, 1, |r, _| {
+            match (r / m.max(1) == j, spring) {
+                (false, _) => 0.0,
+                (true, false) => 1.0,
+                (true, true) => w.q[j][r % m],
+            }
+        }))
+    }
+    fn term_names(&self) -> Vec<String> {
+        vec!["links".into(), "coulomb_viscous".into()]
+    }
+    fn terms(&self, added: &[ChainCandidate]) -> Result<Vec<String>, aras_ident::IdentError> {
+        use aras_diagnose::Candidate as _;
+        let mut t = self.term_names();
+        t.extend(added.iter().map(|c| c.label()));
+        Ok(t)
+    }
+    fn consistent_refit(
+        &self,
+        _: &[ChainCandidate],
+    ) -> Result<Option<aras_diagnose::NoRefit>, aras_ident::IdentError> {
+        Ok(None)
+    }
 }
 
 /// What [`diagnose_logs`] named.
@@ -572,13 +706,19 @@ pub struct ChainDiagnosis {
     pub fitness_before: Vec<f64>,
     /// The same with the added effects (%).
     pub fitness_after: Vec<f64>,
+    /// True if the final validation residual is white with no systematic
+    /// bin ([`aras_diagnose::Diagnosis::noise_like`]).
+    pub noise_like: bool,
+    /// The engine's conclusion in words.
+    pub conclusion: String,
 }
 
-/// Finds which effect the chain's model misses, with `aras-ident`'s
-/// forward selection (the engine of the pipeline's diagnosis): the base
-/// regressor of the processed `train` log and the [`candidate_names`] per
-/// joint, one output group per joint, judged on the processed `validation`
-/// log of another motion (both periodic with `period_s`).
+/// Finds which effect the chain's model misses with the diagnosis engine
+/// of `aras-diagnose` (the pipeline's): the base regressor of the
+/// processed `train` log and the [`candidate_names`] per joint, one output
+/// group per joint, judged on the processed `validation` log of another
+/// motion (both periodic with `period_s`). Every row is used: the chain's
+/// Coulomb law is exact at its velocity reversals.
 pub fn diagnose_logs(
     chain: &Chain,
     train: &str,
@@ -586,61 +726,54 @@ pub fn diagnose_logs(
     period_s: f64,
 ) -> Result<ChainDiagnosis, Box<dyn std::error::Error>> {
     let model = chain.model();
-    let n = chain.joints();
+    let joints = chain.joints();
     let base = crate::base_parameters_of(&model, 400)?;
-    let names = candidate_names(n);
-    let layout = Layout::new(
-        base.n_base(),
-        names
-            .iter()
-            .map(|c| CandidateSpec::columns(c.clone(), 1))
-            .collect(),
-        n,
-    )?;
+    let robot = ChainRobot {
+        model,
+        base,
+        joints,
+    };
     let mut sets = Vec::new();
-    for csv in [train, validation] {
+    for (name, csv) in [("train", train), ("validation", validation)] {
         let (_, processed) = read_and_process(csv, period_s)?;
-        let s = &processed.samples;
-        let m = s.len();
-        let w = crate::stacked_regressor(&model, &views(&s.x), &views(&s.x_dot), &views(&s.x_ddot));
-        let wb = base.base_regressor(w.as_ref())?;
-        let mut acc = Accumulator::new(&layout);
-        let mut row = Vec::with_capacity(layout.width());
-        for j in 0..n {
-            let mut rows = Vec::with_capacity(m * layout.width());
-            for i in 0..m {
-                row.clear();
-                row.extend((0..base.n_base()).map(|c| wb[(j * m + i, c)]));
-                for k in 0..n {
-                    let own = if k == j { 1.0 } else { 0.0 };
-                    row.extend([own, own * s.x[j][i]]);
-                }
-                row.push(s.tau[j][i]);
-                rows.extend_from_slice(&row);
-            }
-            acc.push_rows(j, &rows)?;
-        }
-        sets.push(acc);
+        sets.push(aras_diagnose::Dataset::from_processed_owned(
+            name, processed,
+        )?);
     }
-    let opts = SelectionOptions::default();
-    let before = aras_ident::selection::fit_model(&sets[0], &sets[1..], &[], &opts)?;
-    let sel = aras_ident::selection::select(&sets[0], &sets[1..], &opts)?;
-    let fit = sel.final_fit();
-    let added = sel.added();
+    let opts = aras_diagnose::EngineOptions {
+        min_speed: 0.0,
+        ..aras_diagnose::EngineOptions::default()
+    };
+    let d = aras_diagnose::diagnose(
+        &robot,
+        chain_candidates(joints),
+        &sets[0],
+        &sets[1..],
+        &opts,
+    )?;
+    let mean = |row: Option<&aras_diagnose::FitnessRow>| -> Vec<f64> {
+        let Some(row) = row else { return Vec::new() };
+        let sets = row.fitness_filtered.len().max(1) as f64;
+        (0..joints)
+            .map(|j| row.fitness_filtered.iter().map(|f| f[j]).sum::<f64>() / sets)
+            .collect()
+    };
+    let added: Vec<String> = d.steps.iter().map(|s| s.label.clone()).collect();
     let values = added
         .iter()
-        .map(|&k| {
-            let col = layout.candidate_columns(k).start;
-            fit.columns
+        .map(|name| {
+            d.estimate
                 .iter()
-                .position(|&c| c == col)
-                .map_or(f64::NAN, |p| fit.estimate[p])
+                .find(|v| &v.name == name)
+                .map_or(f64::NAN, |v| v.value)
         })
         .collect();
     Ok(ChainDiagnosis {
-        added: added.iter().map(|&k| names[k].clone()).collect(),
+        added,
         values,
-        fitness_before: before.mean_fitness(),
-        fitness_after: fit.mean_fitness(),
+        fitness_before: mean(d.fitness.first()),
+        fitness_after: mean(d.fitness.last()),
+        noise_like: d.noise_like,
+        conclusion: d.conclusion,
     })
 }

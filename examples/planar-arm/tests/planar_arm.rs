@@ -151,7 +151,7 @@ fn neither_aras_kin_nor_aras_dyn_is_a_dependency() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    for name in ["aras-excite", "aras-signal", "aras-ident"] {
+    for name in ["aras-excite", "aras-signal", "aras-ident", "aras-diagnose"] {
         assert!(tree.contains(name), "{name} missing:\n{tree}");
     }
     for name in ["aras-kin", "aras-dyn", "aras-pipeline"] {

@@ -294,7 +294,9 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
             .iter()
             .zip(&r.fitness_filtered)
             .map(|(x, y)| {
-                let raw = x.map_or("–".to_string(), |x| format!("{:.2}/{:.2} %", x[0], x[1]));
+                let raw = x
+                    .as_ref()
+                    .map_or("–".to_string(), |x| format!("{:.2}/{:.2} %", x[0], x[1]));
                 format!("{raw} ({:.2}/{:.2} %)", y[0], y[1])
             })
             .collect();
@@ -452,8 +454,8 @@ fn build(
         .map(|row| {
             let mut v = vec![row.step.to_string(), row.model.clone()];
             for (f, g) in row.fitness.iter().zip(&row.fitness_filtered) {
-                v.push(f.map_or("–".into(), |f| pct(f[0])));
-                v.push(f.map_or("–".into(), |f| pct(f[1])));
+                v.push(f.as_ref().map_or("–".into(), |f| pct(f[0])));
+                v.push(f.as_ref().map_or("–".into(), |f| pct(f[1])));
                 v.push(pct(g[0]));
                 v.push(pct(g[1]));
             }
@@ -776,8 +778,7 @@ pub fn fitness_steps(d: &Diagnosis, names: &[&str]) -> Result<String> {
                     .map(|f| {
                         f.fitness
                             .get(s)
-                            .copied()
-                            .flatten()
+                            .and_then(Option::as_ref)
                             .map_or(f64::NAN, |v| v[j])
                     })
                     .collect(),

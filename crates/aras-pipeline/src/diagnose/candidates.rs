@@ -3,7 +3,9 @@
 //! its non-linear setting is scanned. Every candidate except `time_delay`
 //! is an [`aras_dyn::Effect`], so the extended model is an ordinary
 //! [`aras_dyn::Model`] that identification and prediction use unchanged.
+//! A [`Candidate`] is an [`aras_diagnose::Candidate`] of the engine.
 
+use aras_diagnose::SearchScale;
 use aras_dyn::{Effect, EffectId};
 use serde::Serialize;
 
@@ -167,47 +169,39 @@ impl Candidate {
     }
 }
 
-/// How a candidate's setting is searched between grid points
-/// ([`Candidate::search_scale`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub enum SearchScale {
-    /// On its logarithm, over `factor` either side of the grid value (a
-    /// positive scale such as a velocity or a count per revolution).
-    Log {
-        /// The factor either side.
-        factor: f64,
-    },
-    /// On the value itself, over `half_width` either side (a signed shift).
-    Linear {
-        /// The half-width.
-        half_width: f64,
-    },
-}
-
-impl SearchScale {
-    /// The setting value of a search variable.
-    pub fn setting_value(self, u: f64) -> f64 {
+impl aras_diagnose::Candidate for Candidate {
+    fn id(&self) -> String {
+        Candidate::id(self).to_owned()
+    }
+    fn label(&self) -> String {
+        Candidate::label(self)
+    }
+    fn explanation(&self) -> String {
+        Candidate::explanation(self).to_owned()
+    }
+    fn parameter_names(&self) -> Vec<String> {
         match self {
-            SearchScale::Log { .. } => u.exp(),
-            SearchScale::Linear { .. } => u,
+            Candidate::Effect { effect } => effect.names(),
+            Candidate::TimeDelay { .. } => Vec::new(),
         }
     }
-
-    /// The search interval around the grid value `v`, in the search
-    /// variable.
-    pub fn interval(self, v: f64) -> (f64, f64) {
+    fn torque_shift(&self) -> Option<f64> {
         match self {
-            SearchScale::Log { factor } => (v.ln() - factor.ln(), v.ln() + factor.ln()),
-            SearchScale::Linear { half_width } => (v - half_width, v + half_width),
+            Candidate::TimeDelay { samples } => Some(*samples),
+            Candidate::Effect { .. } => None,
         }
     }
-
-    /// The σ of the setting from the σ of the search variable at `u`.
-    pub fn sigma(self, u: f64, sigma_u: f64) -> f64 {
-        match self {
-            SearchScale::Log { .. } => u.exp() * sigma_u,
-            SearchScale::Linear { .. } => sigma_u,
-        }
+    fn setting(&self) -> Option<(&str, f64)> {
+        Candidate::setting(self)
+    }
+    fn search_scale(&self) -> Option<SearchScale> {
+        Candidate::search_scale(self)
+    }
+    fn search_centres(&self) -> Vec<f64> {
+        Candidate::search_centres(self)
+    }
+    fn with_setting(&self, value: f64) -> Self {
+        Candidate::with_setting(self, value)
     }
 }
 

@@ -1,91 +1,49 @@
-//! Diagnosis: where model and measurement disagree, which missing effect
-//! explains it, and how much the gap shrinks once it is added.
+//! Diagnosis of the ARAS-Diamond: where model and measurement disagree,
+//! which missing effect explains it, and how much the gap shrinks once it
+//! is added, by the robot-agnostic engine of `aras-diagnose` (its module
+//! documentation describes the residual analysis, the selection with the
+//! effective number of samples, the refinement, memory and time).
 //!
-//! 1. **Residual analysis** ([`residual`]): the current model identified on
-//!    TRAIN predicts the validation data; each joint's residual is binned
-//!    against velocity (rest band `|θ̇| < 0.05 rad/s`, split by sign),
-//!    position, acceleration and time, its whiteness is tested (Ljung–Box)
-//!    and bins beyond noise become [`Finding`]s in words with numbers.
-//! 2. **Candidates** ([`CANDIDATE_IDS`], [`Candidate`]): `torque_offset`, `coulomb_asymmetry`,
-//!    `stribeck_friction` (v_s scanned), `passive_joint_viscous`, `cogging`
-//!    (cycles per revolution scanned, order configurable),
-//!    `quadratic_damping`, `time_delay` (torque shifted against the angles).
-//! 3. **Selection** ([`diagnose`]) by the robot-agnostic engine
-//!    [`aras_ident::selection`]: one chunked pass per data set accumulates, per
-//!    joint, the Gram matrix of `[starting model's base regressor | every
-//!    candidate setting's filtered columns | τ | τ shifted by every delay]`;
-//!    every candidate fit, its F-test and its validation fitness follow from
-//!    these blocks. A candidate must be significant on TRAIN (F-test with
-//!    the effective number of samples, below) and gain ≥ `min_gain` points
-//!    on every validation set; the significant candidate with the lowest
-//!    ΔBIC is added (aliases listed) and the search repeats; rows near
-//!    velocity reversals are excluded as in identification
-//!    (`robot::reversal_mask`); each identifier is added at most once, so
-//!    the loop ends. Finally the model is re-identified physically
-//!    consistently (SDP on the links, friction-like levels `≥ 0`) from a
-//!    chunked incremental QR of the final model.
-//!
-//! ## Effective number of samples
-//! Filtered and period-averaged samples are strongly correlated: a 10 Hz
-//! zero-phase low-pass at 1 kHz leaves about one independent value per
-//! 50 samples. Treating 10 000 samples as independent would make every
-//! candidate "significant". The F-test therefore uses `N_eff = 2 B T` per
-//! joint, `B` the filter's equivalent noise bandwidth
-//! ([`Dataset::filter_dof`]). Slow systematic misfit is not counted as
-//! correlated here (that needs the residual's autocorrelation, i.e. a pass
-//! per candidate); the requirement of a gain on every independent
-//! validation set is the guard against fitting it. The significance level
-//! is divided by the number of candidate settings tried in a round
-//! (Bonferroni for the grid scans).
-//!
-//! ## σ of the fitted parameters
-//! The σ reported with every fitted parameter ([`NamedValue::std_dev`]) is
-//! that of the HAC sandwich covariance ([`aras_ident::covariance`],
-//! `OlsEstimate::with_hac`), as in identification: it counts the filtered,
-//! correlated residual (and any slow misfit) with a bandwidth taken from
-//! the residual's own autocorrelation time. The F-test uses the
-//! uncorrected residual sums of squares with `N_eff` degrees of freedom
-//! (the filter's `2 B T / N = Σ h²`, Parseval, or `N / τ_int`); residual
-//! bins use `σ_rms / √(g n)`.
-//!
-//! ## Memory and time
-//! Every pass reads its data sets window by window ([`Dataset::read`]):
-//! each chunk of 3072 samples with the zero-phase filter's reach to 1e-9
-//! of its peak on both sides, where the window's candidate columns and
-//! torques are filtered and its reversal exclusion is computed, so a
-//! chunk's rows equal the whole record's to that accuracy. A data set's
-//! samples are in memory or, for a long training log, in a scratch file
-//! written while the log is processed in overlapping blocks
-//! ([`crate::streaming::spool_log`]): then nothing proportional to the
-//! training log is held. The sums are `joints × width²` numbers per data
-//! set (width ≈ 170 with the default grid; each joint's rows carry only the
-//! columns that are not zero on them). The residual analysis summarises
-//! each validation set row by row in record order into fixed-size
-//! histograms, lag sums, Welch spectra, a decimated trace and an evenly
-//! strided sample of at most [`SAMPLE_ROWS`] rows for the figures (at most
-//! ≈ 8 MB per joint, whatever the set's length).
-//! Passes over the training log: one for the selection, two per refined
-//! setting, one for the physically consistent fit. Deterministic: fixed
-//! accumulation lanes, no randomness (the base parameters use a Halton
-//! set).
+//! What is the ARAS-Diamond's here:
+//! * **Candidates** ([`CANDIDATE_IDS`], [`Candidate`]): `torque_offset`, `coulomb_asymmetry`,
+//!   `stribeck_friction` (v_s scanned), `passive_joint_viscous`, `cogging`
+//!   (cycles per revolution scanned, order configurable),
+//!   `quadratic_damping`, `time_delay` (torque shifted against the angles),
+//!   over the grids of [`CandidateGrid`].
+//! * **The robot** ([`diagnose`]): the starting model's base regressor
+//!   through the kinematics of every sample (its structural base from a
+//!   Halton set of the workspace, as in identification), each candidate's
+//!   columns from its single-effect [`aras_dyn::Model`], and the final
+//!   model's physically consistent re-identification (SDP on the links,
+//!   friction-like levels `≥ 0`) when a reference is given.
+//! * **Long logs**: a data set's samples may be in a scratch file
+//!   ([`crate::spool::SpooledSamples`], an [`aras_diagnose::SampleSource`]),
+//!   written while a long training log is processed in overlapping blocks
+//!   ([`crate::streaming::spool_log`]).
 
 mod candidates;
-mod chunks;
-mod data;
-mod histogram;
-pub mod residual;
 mod select;
 
-pub use aras_ident::stats::{chi2_sf, f_sf, integrated_time, ljung_box};
-pub use candidates::{
-    CANDIDATE_IDS, Candidate, CandidateGrid, SearchScale, TIME_DELAY, explanation,
+pub use aras_diagnose::residual;
+pub use aras_diagnose::{
+    ConsistentFit, Dataset, EngineOptions, Finding, FitnessRow, LeftOut, LogPrediction, NamedValue,
+    Refinement, RefinementStatus, ResidualAnalysis, ResidualSpectrum, RowSample, SAMPLE_ROWS,
+    SampledRow, SearchScale, SpectrumBand, TRACE_POINTS, Trace, Whiteness,
 };
-pub use data::Dataset;
-pub use residual::{
-    Finding, LeftOut, ResidualAnalysis, ResidualSpectrum, RowSample, SAMPLE_ROWS, SampledRow,
-    SpectrumBand, TRACE_POINTS, Trace, Whiteness,
-};
-pub use select::{
-    CandidateScore, ConsistentFit, DiagnoseOptions, Diagnosis, FitnessRow, LogPrediction,
-    NamedValue, Refinement, RefinementStatus, Step, diagnose,
-};
+pub use aras_diagnose::{chi2_sf, f_sf, integrated_time, ljung_box};
+pub use candidates::{CANDIDATE_IDS, Candidate, CandidateGrid, TIME_DELAY, explanation};
+pub use select::{CandidateScore, DiagnoseOptions, Diagnosis, Step, diagnose};
+
+impl aras_diagnose::SampleSource for crate::spool::SpooledSamples {
+    fn len(&self) -> usize {
+        crate::spool::SpooledSamples::len(self)
+    }
+
+    fn read(
+        &self,
+        rows: std::ops::Range<usize>,
+        out: &mut aras_signal::Samples,
+    ) -> Result<(), aras_ident::IdentError> {
+        crate::spool::SpooledSamples::read(self, rows, out)
+    }
+}

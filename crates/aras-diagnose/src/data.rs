@@ -1,22 +1,31 @@
-//! Data sets and the stacked, parallel-filtered regressor blocks the
-//! diagnosis fits: the current model's columns, each candidate's columns,
-//! and the torque shift of the `time_delay` candidate.
+//! Data sets: processed samples in memory or behind a [`SampleSource`]
+//! (e.g. a scratch file), the zero-phase filter they passed and the raw
+//! log rows they came from.
 
-use aras_signal::{Samples, Sos};
-
-use aras_dyn::Model;
-use aras_kin::KinematicSample;
-use faer::Mat;
+use aras_signal::{Butterworth, ProcessSummary, Samples, Sos};
 
 use std::ops::Range;
 use std::sync::Arc;
 
-use crate::prepare::{RegressorColumns, columns_on, record_noise_gain};
-use crate::spool::{SpooledSamples, channels, channels_mut};
+use crate::filtering::noise_gain;
 use aras_ident::IdentError;
 
+/// Where a data set's samples are when they are not in memory: e.g. a long
+/// log processed block by block into a scratch file, read back window by
+/// window, so that its length costs disk space, not memory.
+pub trait SampleSource: std::fmt::Debug + Send + Sync {
+    /// Samples per joint.
+    fn len(&self) -> usize;
+    /// True if there are no samples.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Samples `rows` into `out` (its channels replaced).
+    fn read(&self, rows: Range<usize>, out: &mut Samples) -> Result<(), IdentError>;
+}
+
 /// A processed data set: the samples as `aras_signal::process` produced
-/// them, in memory or in a scratch file ([`Dataset::spooled`]), and the
+/// them, in memory or behind a [`SampleSource`] ([`Dataset::spooled`]), and the
 /// zero-phase filter it applied (so every regressor column is filtered the
 /// same way, `docs/processing.md`). The diagnosis reads it window by
 /// window either way.
@@ -44,7 +53,7 @@ pub struct Dataset {
 /// for a period-averaged set the block's sample on every period).
 #[derive(Debug, Clone)]
 pub(crate) struct LogRows {
-    /// The log's raw torques τ1, τ2, every row.
+    /// The log's raw torques per joint, every row.
     pub tau: Vec<Vec<f64>>,
     /// The sample of each row (`None` for rows lost at the derivative's edges).
     pub sample: Vec<Option<usize>>,
@@ -54,9 +63,9 @@ pub(crate) struct LogRows {
 #[derive(Debug, Clone)]
 enum Storage {
     Memory(Box<Samples>),
-    /// Shared: clones of the data set read the same file, removed with the
-    /// last of them.
-    Spooled(Arc<SpooledSamples>),
+    /// Shared: clones of the data set read the same source (a scratch
+    /// file is removed with the last of them).
+    Spooled(Arc<dyn SampleSource>),
 }
 
 impl Dataset {
@@ -68,7 +77,7 @@ impl Dataset {
         processed: &aras_signal::Processed,
     ) -> Result<Self, IdentError> {
         let s = &processed.summary;
-        let filter = crate::prepare::processing_filter(s)?;
+        let filter = processing_filter(s)?;
         Ok(Self {
             name: name.into(),
             storage: Storage::Memory(Box::new(processed.samples.clone())),
@@ -96,13 +105,12 @@ impl Dataset {
         Ok(d)
     }
 
-    /// A data set whose processed samples are in a scratch file (a long
-    /// log processed block by block,
-    /// [`crate::streaming::spool_log`]), filtered by `filter` (not
-    /// period-averaged).
+    /// A data set whose processed samples are read from `samples` (e.g. a
+    /// scratch file written while a long log was processed block by
+    /// block), filtered by `filter` (not period-averaged).
     pub fn spooled(
         name: impl Into<String>,
-        samples: SpooledSamples,
+        samples: impl SampleSource + 'static,
         filter: Option<Sos>,
         sample_rate_hz: f64,
     ) -> Self {
@@ -137,7 +145,7 @@ impl Dataset {
         }
     }
 
-    /// True if the samples are in a scratch file.
+    /// True if the samples are read from a [`SampleSource`].
     pub fn is_spooled(&self) -> bool {
         matches!(self.storage, Storage::Spooled(_))
     }
@@ -155,10 +163,7 @@ impl Dataset {
                         hint: "read windows inside the record",
                     });
                 }
-                for (dst, src) in channels_mut(out).into_iter().zip(channels(s)) {
-                    dst.clear();
-                    dst.extend_from_slice(&src[rows.clone()]);
-                }
+                copy_rows(s, rows, out);
                 Ok(())
             }
         }
@@ -169,6 +174,19 @@ impl Dataset {
         match &self.storage {
             Storage::Memory(s) => s.len(),
             Storage::Spooled(f) => f.len(),
+        }
+    }
+
+    /// Joints of the samples (read from one sample when they are not in
+    /// memory).
+    pub fn joints(&self) -> Result<usize, IdentError> {
+        match &self.storage {
+            Storage::Memory(s) => Ok(s.joints()),
+            Storage::Spooled(f) => {
+                let mut one = Samples::default();
+                f.read(0..f.len().min(1), &mut one)?;
+                Ok(one.joints())
+            }
         }
     }
 
@@ -218,7 +236,7 @@ impl Dataset {
     }
 
     /// Noise power gain of the zero-phase filter, `g = Σ h_k²` of its
-    /// impulse response on this record ([`crate::robot::noise_gain`]; 1
+    /// impulse response on this record ([`crate::filtering::noise_gain`]; 1
     /// without a filter). White noise of variance `σ²` leaves the filter
     /// with variance `g σ²`, correlated over about `1/g` samples; the OLS σ
     /// of a parameter whose regressor lies in the pass band is divided by
@@ -227,40 +245,6 @@ impl Dataset {
     /// `Σ h² = ∫ |H|⁴ df / f_s`), computed in the time domain.
     pub fn noise_gain(&self) -> Result<f64, IdentError> {
         record_noise_gain(self.filter.as_ref(), self.len(), self.periodic)
-    }
-
-    /// [`crate::prepare::columns_on`] a window's kinematics of this data
-    /// set, with its low-pass.
-    pub(crate) fn columns(
-        &self,
-        model: &Model,
-        columns: RegressorColumns<'_>,
-        kinematics: &[KinematicSample],
-    ) -> Result<Mat<f64>, IdentError> {
-        columns_on(
-            model,
-            columns,
-            kinematics,
-            self.filter.as_ref().map(|sos| (sos, self.periodic)),
-        )
-    }
-
-    /// [`Self::columns`] of several models on one window's kinematics,
-    /// filtered together ([`crate::robot::filter_many_columns`]).
-    pub(crate) fn columns_of_many(
-        &self,
-        models: &[(&Model, RegressorColumns<'_>)],
-        kinematics: &[KinematicSample],
-    ) -> Result<Vec<Mat<f64>>, IdentError> {
-        let mut out = models
-            .iter()
-            .map(|(m, c)| columns_on(m, *c, kinematics, None))
-            .collect::<Result<Vec<_>, _>>()?;
-        if let Some(sos) = &self.filter {
-            let mut refs: Vec<&mut Mat<f64>> = out.iter_mut().collect();
-            crate::robot::filter_many_columns(&mut refs, kinematics.len(), sos, self.periodic)?;
-        }
-        Ok(out)
     }
 
     pub(crate) fn check(&self) -> Result<(), IdentError> {
@@ -283,11 +267,62 @@ impl Dataset {
     }
 }
 
+/// Rows `rows` of every channel of `s` into `out` (its channels replaced,
+/// one per joint of `s` in each group).
+fn copy_rows(s: &Samples, rows: Range<usize>, out: &mut Samples) {
+    let copy = |dst: &mut Vec<f64>, src: &Vec<f64>| {
+        dst.clear();
+        dst.extend_from_slice(&src[rows.clone()]);
+    };
+    copy(&mut out.t, &s.t);
+    let groups = [
+        (&mut out.theta, &s.theta),
+        (&mut out.theta_dot, &s.theta_dot),
+        (&mut out.theta_ddot, &s.theta_ddot),
+        (&mut out.x, &s.x),
+        (&mut out.x_dot, &s.x_dot),
+        (&mut out.x_ddot, &s.x_ddot),
+        (&mut out.tau, &s.tau),
+    ];
+    for (dst, src) in groups {
+        dst.resize_with(src.len(), Vec::new);
+        for (d, s) in dst.iter_mut().zip(src) {
+            copy(d, s);
+        }
+    }
+}
+
+/// The processing's zero-phase low-pass, designed again from its summary
+/// (same order, cut-off and rate); `None` if it applied none.
+pub fn processing_filter(summary: &ProcessSummary) -> Result<Option<Sos>, IdentError> {
+    summary
+        .filter
+        .as_ref()
+        .map(|f| {
+            Butterworth::lowpass(f.order, f.cutoff_hz, summary.sample_rate_hz)
+                .map_err(|e| IdentError::external("re-designing the processing low-pass", e))
+        })
+        .transpose()
+}
+
+/// Noise power gain of the zero-phase `filter` applied to a record of `n`
+/// samples ([`noise_gain`]; 1 when nothing was filtered).
+pub fn record_noise_gain(
+    filter: Option<&Sos>,
+    n: usize,
+    periodic: bool,
+) -> Result<f64, IdentError> {
+    match filter {
+        Some(sos) => noise_gain(sos, n, periodic),
+        None => Ok(1.0),
+    }
+}
+
 /// The log rows of a processed log.
 fn log_rows(processed: &aras_signal::Processed) -> LogRows {
     LogRows {
         tau: processed.log_tau.clone(),
-        sample: (0..processed.log_tau[0].len())
+        sample: (0..processed.log_tau.first().map_or(0, Vec::len))
             .map(|r| processed.sample_of_row(r))
             .collect(),
     }
@@ -296,7 +331,7 @@ fn log_rows(processed: &aras_signal::Processed) -> LogRows {
 /// Checks that each joint keeps enough rows after the identification's
 /// reversal exclusion (`rows` per joint, as the passes counted them): joint
 /// `j`'s rows where `|θ̇_j| < min_speed`, widened by the zero-phase
-/// filter's reach ([`crate::robot::filter_reach`]; no widening without a
+/// filter's reach ([`crate::filtering::filter_reach`]; no widening without a
 /// filter), are left out. Near a velocity reversal the exact `sign` of (49)
 /// misfits real (sticking, creeping, smooth) friction far beyond the noise,
 /// and the filter spreads that misfit over its impulse response; a
@@ -305,10 +340,11 @@ pub(crate) fn check_rows(rows: &[usize]) -> Result<(), IdentError> {
     for (j, &kept) in rows.iter().enumerate() {
         if kept < MIN_ROWS {
             return Err(IdentError::InvalidSetting {
-                name: if j == 0 {
-                    "rows of joint 1 left after the reversal exclusion"
-                } else {
-                    "rows of joint 2 left after the reversal exclusion"
+                name: match j {
+                    0 => "rows of joint 1 left after the reversal exclusion",
+                    1 => "rows of joint 2 left after the reversal exclusion",
+                    2 => "rows of joint 3 left after the reversal exclusion",
+                    _ => "rows of a joint past the third left after the reversal exclusion",
                 },
                 value: kept as f64,
                 reason: "the joint is rarely faster than min_speed for a whole filter reach: \

@@ -14,21 +14,19 @@
 //! equals the whole record's exactly. A window touching an end of the
 //! record is padded exactly as the whole-record filter pads it.
 //! Period-averaged records (one period, short) are filtered whole with the
-//! periodic filter. A window's columns come from
-//! [`crate::prepare::columns_on`], the same regressor step a whole log goes
-//! through in [`crate::prepare::prepare`].
+//! periodic filter. A window's columns come from the robot model
+//! ([`crate::DiagnosisModel`]), unfiltered, and are filtered here.
 
-use aras_kin::{Geometry, KinematicSample};
 use aras_signal::Samples;
 use rayon::prelude::*;
 
-use super::data::Dataset;
-use crate::robot::{filter_reach, keep_every_row, reversal_mask};
+use crate::data::Dataset;
+use crate::filtering::{filter_reach, keep_every_row, reversal_mask};
 use aras_ident::IdentError;
 
 /// Samples per chunk, a measured trade-off (`docs/scale.md`): a chunk's
 /// window (the chunk plus the filter's reach each side, ≈ 1 700 samples at
-/// 10 Hz and 1 kHz) holds ≈ 175 columns of both joints, ≈ 18 MB per lane
+/// 10 Hz and 1 kHz) holds ≈ 175 columns of both joints of the ARAS-Diamond, ≈ 18 MB per lane
 /// at 3072 samples. Against 4096, the peak memory of a 160 s diagnosis
 /// falls from 167–191 to 93–96 MiB and of a 600 s one from 220–239 to
 /// 160–168 MiB, for ≈ 8 % more time on the longer log (larger windows
@@ -46,7 +44,7 @@ pub(crate) const WINDOW_TOL: f64 = 1e-9;
 pub(crate) const LANES: usize = 2;
 
 /// How a data set is cut, and which of its rows fits use.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub(crate) struct Plan {
     /// Samples of the record.
     pub n: usize,
@@ -60,8 +58,8 @@ pub(crate) struct Plan {
     /// to the data set's tolerance, [`filter_reach`]; 0 unfiltered) …
     pub guard: usize,
     /// … except on the joints marked here, whose every row is used
-    /// ([`super::DiagnoseOptions::all_rows`]).
-    pub all_rows: [bool; 2],
+    /// ([`crate::EngineOptions::all_rows`]; empty: none).
+    pub all_rows: Vec<bool>,
 }
 
 impl Plan {
@@ -85,7 +83,7 @@ impl Plan {
             chunk: n,
             min_speed,
             guard,
-            all_rows: [false; 2],
+            all_rows: Vec::new(),
         };
         if data.periodic {
             return Ok(whole);
@@ -107,7 +105,7 @@ impl Plan {
     }
 
     /// The same plan with every row of the joints in `all_rows` used.
-    pub(crate) fn with_all_rows(self, all_rows: [bool; 2]) -> Self {
+    pub(crate) fn with_all_rows(self, all_rows: Vec<bool>) -> Self {
         Self { all_rows, ..self }
     }
 
@@ -145,8 +143,9 @@ pub(crate) struct Window {
     pub lo: usize,
     /// Samples `lo..lo + len`.
     pub samples: Samples,
-    /// Torques low-passed by the data set's filter (as the columns are).
-    pub tau: [Vec<f64>; 2],
+    /// Torques low-passed by the data set's filter (as the columns are),
+    /// per joint.
+    pub tau: Vec<Vec<f64>>,
     /// Joint-major: true where the row is used by fits and scores.
     keep: Vec<bool>,
     /// The window is a whole period-averaged record: fractional torque
@@ -179,7 +178,9 @@ impl Window {
             Err(poisoned) => poisoned.into_inner(),
         }
         .clear();
-        for g in 0..2 {
+        let joints = self.samples.tau.len();
+        self.tau.resize_with(joints, Vec::new);
+        for g in 0..joints {
             self.tau[g] = match &data.filter {
                 None => self.samples.tau[g].clone(),
                 Some(sos) => sos
@@ -193,7 +194,9 @@ impl Window {
             plan.guard,
             data.periodic,
         )?;
-        keep_every_row(&mut self.keep, plan.all_rows);
+        if !plan.all_rows.is_empty() {
+            keep_every_row(&mut self.keep, &plan.all_rows);
+        }
         Ok(())
     }
 
@@ -230,21 +233,6 @@ impl Window {
         let v = y[i - self.lo];
         cache.push((g, key, y));
         v
-    }
-
-    /// The kinematics of every sample of the window, shared by every model
-    /// whose columns are built on it.
-    pub(crate) fn kinematics(
-        &self,
-        geometry: &Geometry,
-    ) -> Result<Vec<KinematicSample>, IdentError> {
-        (0..self.len())
-            .map(|i| {
-                aras_kin::evaluate(geometry, &self.samples.task(i)).map_err(|e| {
-                    IdentError::external(format!("kinematics of sample {}", self.lo + i), e)
-                })
-            })
-            .collect()
     }
 }
 

@@ -11,7 +11,7 @@ use aras_ident::stats::{integrated_time_of, ljung_box_of};
 use aras_ident::validate::FitnessSums;
 use aras_signal::{Autocorrelation, PowerSpectrum, SpectrumAccumulator};
 
-use super::histogram::{Coarse, Histogram};
+use crate::histogram::{Coarse, Histogram};
 
 /// What a residual is binned against.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -76,7 +76,7 @@ impl Bin {
 /// The residual of one joint binned against one axis.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Profile {
-    /// Joint (1 or 2).
+    /// Joint (1-based).
     pub joint: usize,
     /// The axis.
     pub axis: Axis,
@@ -88,7 +88,7 @@ pub struct Profile {
 /// the filter's independent-sample spacing).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Whiteness {
-    /// Joint (1 or 2).
+    /// Joint (1-based).
     pub joint: usize,
     /// Decimation step (samples).
     pub step: usize,
@@ -114,7 +114,7 @@ impl Whiteness {
 /// One statement about a residual, in words with numbers.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Finding {
-    /// Joint (1 or 2).
+    /// Joint (1-based).
     pub joint: usize,
     /// The sentence.
     pub text: String,
@@ -176,7 +176,7 @@ pub struct SampledRow {
 /// keeps between half and all of [`SAMPLE_ROWS`]. Deterministic.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RowSample {
-    /// Joint (1 or 2).
+    /// Joint (1-based).
     pub joint: usize,
     /// One row kept out of `stride`.
     pub stride: usize,
@@ -228,7 +228,7 @@ impl SampleBuilder {
 /// burst shows however long the record.
 #[derive(Debug, Clone, PartialEq, Default, Serialize)]
 pub struct Trace {
-    /// Joint (1 or 2).
+    /// Joint (1-based).
     pub joint: usize,
     /// Rows per bucket (the last bucket may hold fewer).
     pub rows_per_point: usize,
@@ -319,7 +319,7 @@ pub struct SpectrumBand {
 /// Where in frequency one joint's residual has its power.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ResidualSpectrum {
-    /// Joint (1 or 2).
+    /// Joint (1-based).
     pub joint: usize,
     /// Octave bands from the lowest resolved frequency to the pass band's
     /// end, with the mean (0 Hz) as a band of its own.
@@ -346,7 +346,7 @@ pub const SPECTRAL_EXCESS: f64 = 10.0;
 /// filter's reach), next to the fitted rows' figures.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct LeftOut {
-    /// Joint (1 or 2).
+    /// Joint (1-based).
     pub joint: usize,
     /// Rows left out.
     pub rows: usize,
@@ -358,7 +358,7 @@ pub struct LeftOut {
     pub fitted_rms: f64,
     /// Validation fitness (78) of the filtered (and period-averaged)
     /// torques on every processed row of the set, left out or fitted (%):
-    /// not the raw-torque figure ([`super::FitnessRow::fitness`]).
+    /// not the raw-torque figure ([`crate::FitnessRow::fitness`]).
     pub fitness_filtered_all_rows: f64,
     /// The same on the fitted rows (%).
     pub fitness_filtered_fitted_rows: f64,
@@ -372,12 +372,12 @@ pub struct LeftOut {
 }
 
 impl ResidualAnalysis {
-    /// True if no bin is systematic and both joints' residuals are white.
+    /// True if no bin is systematic and every joint's residual is white.
     pub fn noise_like(&self) -> bool {
         self.whiteness.iter().all(|w| w.is_white()) && !self.findings.iter().any(|f| f.systematic)
     }
 
-    /// The velocity profile of `joint` (1 or 2).
+    /// The velocity profile of `joint` (1-based).
     pub fn velocity_profile(&self, joint: usize) -> Option<&Profile> {
         self.profiles
             .iter()
@@ -465,7 +465,7 @@ struct JointSummary {
 /// data set of any length in fixed memory.
 pub(crate) struct ResidualSummary {
     dataset: String,
-    joints: [JointSummary; 2],
+    joints: Vec<JointSummary>,
     /// Independent fraction of the samples.
     dof_ratio: f64,
     /// Decimation of the Ljung–Box test: the filter's independent-sample
@@ -488,12 +488,13 @@ pub(crate) struct Row {
 }
 
 impl ResidualSummary {
-    /// A summary of data set `dataset` of `rows` rows per joint sampled at
-    /// `rate_hz` (`periodic`: one averaged period), of which `dof_ratio`
-    /// are independent, its filter's pass band ending at
+    /// A summary of data set `dataset` of `joints` joints and `rows` rows
+    /// per joint sampled at `rate_hz` (`periodic`: one averaged period), of
+    /// which `dof_ratio` are independent, its filter's pass band ending at
     /// `pass_band_end_hz`.
     pub fn new(
         dataset: &str,
+        joints: usize,
         rows: usize,
         rate_hz: f64,
         periodic: bool,
@@ -524,7 +525,7 @@ impl ResidualSummary {
         };
         Ok(Self {
             dataset: dataset.to_owned(),
-            joints: [joint()?, joint()?],
+            joints: (0..joints).map(|_| joint()).collect::<Result<_, _>>()?,
             dof_ratio,
             step: ((1.0 / dof_ratio).round() as usize).max(1),
             rate_hz,
@@ -964,7 +965,7 @@ mod tests {
             }
         }
         let dof_ratio = 0.1;
-        let mut sum = ResidualSummary::new("set", n, rate, false, dof_ratio, 20.0).unwrap();
+        let mut sum = ResidualSummary::new("set", 2, n, rate, false, dof_ratio, 20.0).unwrap();
         for i in 0..n {
             for g in 0..2 {
                 sum.push(g, &rows[g][i]).unwrap();
