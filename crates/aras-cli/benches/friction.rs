@@ -3,7 +3,7 @@
 //! four models (LuGre included), the diagnosis and its refinement.
 //! Target: ≤ 3 s on 2 cores (docs/friction.md).
 
-use aras_cli::friction::{FrictionSettings, analyse};
+use aras_friction::{FrictionSettings, analyse};
 use aras_friction::sim::{JointSimulation, Ripple};
 use criterion::{Criterion, criterion_group, criterion_main};
 

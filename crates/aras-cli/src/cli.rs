@@ -93,6 +93,11 @@ pub struct FrictionArgs {
     /// at this value (2 is the classical LuGre shape) instead of fitting it.
     #[arg(long, value_name = "DELTA", value_parser = positive, allow_hyphen_values = true)]
     pub shape: Option<f64>,
+    /// Configuration file (.toml or .json; docs/config.md): its
+    /// `[friction]` section holds the analysis settings (`--shape` overrides
+    /// `friction.fit.shape`).
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
     /// Replace an existing output directory, only if aras wrote it.
     #[arg(long)]
     pub force: bool,

@@ -35,7 +35,15 @@ pub struct Config {
     pub validation: ValidationConfig,
     /// The discrepancy diagnosis's selection (`docs/diagnose.md`).
     pub diagnose: DiagnoseConfig,
+    /// Joint friction (`aras friction`, `docs/friction.md`).
+    pub friction: FrictionConfig,
 }
+
+/// `[friction]` is the library's friction-analysis settings
+/// (`aras_friction::analyse`), defaults and checks included;
+/// `[friction.fit]` the model fits, `[friction.library]` the candidate
+/// effects of its diagnosis.
+pub use aras_friction::FrictionSettings as FrictionConfig;
 
 /// `[diagnose]`: the forward selection of missing effects
 /// (`aras_pipeline::diagnose::DiagnoseOptions`, whose defaults these are).
@@ -779,6 +787,9 @@ impl Config {
                 "diagnose.max_steps",
                 "must be at least 1 (the number of effects the diagnosis may add)".into(),
             );
+        }
+        if let Err(e) = self.friction.validate() {
+            return bad(&format!("friction.{}", e.key), e.reason);
         }
         let v = &self.validation;
         for &f in &v.frequencies_hz {

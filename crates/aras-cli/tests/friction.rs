@@ -6,7 +6,9 @@
 
 use std::process::Command;
 
-use aras_cli::friction::{FrictionRun, FrictionSettings, analyse};
+use std::path::Path;
+
+use aras_friction::{FrictionRun, FrictionSettings, analyse};
 use aras_friction::{
     JointLog,
     effects::Effect,
@@ -277,4 +279,77 @@ fn command_refuses_degrees_and_a_still_joint() {
         assert!(!err.contains("panicked"), "{err}");
         assert!(err.contains(want), "{file}: {err}");
     }
+}
+
+/// `[friction]` of the config file is the library's settings, defaults
+/// included: `aras pipeline --print-config` prints them, a run reads them
+/// (and `--shape` overrides `fit.shape`), and a value out of range is
+/// refused naming the file, the key and its line, writing nothing.
+#[test]
+fn config_friction_section_is_the_library_settings() {
+    let dir = aras_testkit::Scratch::new("friction-config");
+    let o = Command::new(env!("CARGO_BIN_EXE_aras"))
+        .args(["pipeline", "--print-config"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(
+        text.contains("[friction]") && text.contains("[friction.fit]"),
+        "{text}"
+    );
+    let c = aras_cli::config::Config::parse(&text, aras_cli::config::Format::Toml, "printed")
+        .unwrap();
+    assert_eq!(c.friction, FrictionSettings::default());
+    let sel = aras_ident::selection::SelectionOptions::default();
+    assert_eq!(
+        (c.friction.alpha, c.friction.min_gain, c.friction.max_steps),
+        (sel.alpha, sel.min_gain, sel.max_steps)
+    );
+
+    let sim = JointSimulation {
+        duration: 10.0,
+        ..JointSimulation::default()
+    };
+    std::fs::write(dir.join("train.csv"), sim.run("train").log.to_csv()).unwrap();
+    let cfg = dir.join("friction.toml");
+    std::fs::write(
+        &cfg,
+        "[friction]\nmax_steps = 2\n[friction.fit]\nstarts = 2\nshape = 1.5\n",
+    )
+    .unwrap();
+    let run = |config: &std::path::Path, extra: &[&str], out: &str| {
+        Command::new(env!("CARGO_BIN_EXE_aras"))
+            .args(["friction", "-q", "--data"])
+            .arg(dir.join("train.csv"))
+            .arg("--config")
+            .arg(config)
+            .args(extra)
+            .arg("--out")
+            .arg(dir.join(out))
+            .output()
+            .unwrap()
+    };
+    let o = run(&cfg, &["--shape", "2"], "out");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("out").join("friction.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(json["settings"]["max_steps"], 2);
+    assert_eq!(json["settings"]["fit"]["starts"], 2);
+    assert_eq!(json["settings"]["fit"]["shape"], 2.0);
+
+    let bad = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/bad/config/friction_shape.toml");
+    let o = run(&bad, &[], "out-bad");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains(
+            "friction_shape.toml:2:1: key `friction.fit.shape`: the Stribeck shape exponent \
+             must lie in [0.25, 5]"
+        ) && err.contains("found 9"),
+        "{err}"
+    );
+    assert!(!dir.join("out-bad").exists());
 }

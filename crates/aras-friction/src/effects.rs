@@ -204,7 +204,7 @@ impl Effect {
 
 /// Settings of the candidate library.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct LibrarySettings {
     /// Highest ripple harmonic (cycles per revolution) tried.
     pub max_harmonic: u32,

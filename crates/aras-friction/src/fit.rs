@@ -24,7 +24,7 @@ use crate::{
 
 /// Fitting settings (defaults in [`FitSettings::default`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct FitSettings {
     /// Number of local searches, started from the best points of the start
     /// grid.
@@ -92,28 +92,12 @@ pub struct Metrics {
     pub fitness: Option<f64>,
 }
 
-/// Fitness (78): `100 (1 − ‖τ − τ̂‖ / ‖τ − mean(τ)‖)`, the same definition as
-/// the identification's validation. 100 is perfect, 0 no better than the
-/// mean. `None` when the lengths differ, the input is empty or constant.
-pub fn fitness(measured: &[f64], estimated: &[f64]) -> Option<f64> {
-    let n = measured.len();
-    if n == 0 || estimated.len() != n {
-        return None;
-    }
-    let mean = measured.iter().sum::<f64>() / n as f64;
-    let den = measured
-        .iter()
-        .map(|m| (m - mean) * (m - mean))
-        .sum::<f64>()
-        .sqrt();
-    let num = measured
-        .iter()
-        .zip(estimated)
-        .map(|(m, e)| (m - e) * (m - e))
-        .sum::<f64>()
-        .sqrt();
-    (den > 0.0 && num.is_finite()).then(|| 100.0 * (1.0 - num / den))
-}
+/// Fitness (78), `100 (1 − ‖τ − τ̂‖ / ‖τ − mean(τ)‖)`: the identification's
+/// own ([`aras_ident::validate::fitness`]), so a friction model and a
+/// rigid-body model are scored alike. [`Metrics::fitness`] holds it as an
+/// `Option`: `None` where it is an error (lengths that differ, an empty,
+/// constant or non-finite input).
+pub use aras_ident::validate::fitness;
 
 /// RMS and fitness of a prediction.
 pub fn metrics(measured: &[f64], estimated: &[f64]) -> Metrics {
@@ -126,7 +110,7 @@ pub fn metrics(measured: &[f64], estimated: &[f64]) -> Metrics {
     Metrics {
         rows: n,
         rms: (ss / n.max(1) as f64).sqrt(),
-        fitness: fitness(measured, estimated),
+        fitness: fitness(measured, estimated).ok(),
     }
 }
 

@@ -36,6 +36,7 @@
 // Small dense linear algebra reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
+pub mod analysis;
 pub mod effects;
 mod error;
 pub mod fit;
@@ -45,6 +46,9 @@ pub mod models;
 pub mod sim;
 mod track;
 
+pub use analysis::{
+    AnalysisError, AnyModel, FrictionRun, FrictionSettings, ModelKind, ModelResult, analyse,
+};
 pub use error::FrictionError;
 pub use log::{ColumnMap, JointLog, LogError, read_joint_log, read_joint_log_from};
 pub use models::{

@@ -10,7 +10,9 @@ use anyhow::Result;
 use aras_friction::{ColumnMap, JointLog, read_joint_log};
 
 use crate::cli::FrictionArgs;
-use crate::friction::{FrictionRun, FrictionSettings, analyse};
+use aras_friction::{FrictionRun, FrictionSettings, analyse};
+
+use crate::friction::conclusion;
 use crate::output::OutDir;
 use crate::report::Report;
 use crate::report::plots::{Series, scatter};
@@ -22,8 +24,17 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
         Some(c) => c.parse()?,
         None => ColumnMap::default(),
     };
+    let mut settings = match &args.config {
+        Some(p) => crate::config::Config::load(p)?.config.friction,
+        None => FrictionSettings::default(),
+    };
+    if let Some(shape) = args.shape {
+        settings.fit.shape = Some(shape);
+    }
+    settings.validate()?;
     let inputs: Vec<PathBuf> = std::iter::once(args.data.clone())
         .chain(args.validate.iter().cloned())
+        .chain(args.config.iter().cloned())
         .collect();
     let out = OutDir::create(&args.out, args.force, &inputs)?;
     let mut stages = Stages::new(args.quiet);
@@ -47,8 +58,6 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
             .map(|p| read(p))
             .collect::<Result<Vec<_>>>()
     })?;
-    let mut settings = FrictionSettings::default();
-    settings.fit.shape = args.shape;
     let run = stages.run("fit models + diagnosis", |_| {
         analyse(&train, &vals, &settings)
     })?;
@@ -86,7 +95,7 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
             );
         }
     }
-    println!("{}", run.conclusion());
+    println!("{}", conclusion(&run));
     println!("outputs in {}", dir.display());
     Ok(())
 }
@@ -199,7 +208,7 @@ fn build(run: &FrictionRun, logs: &[&JointLog]) -> Result<Report> {
                 .join(", ")
         }
     ));
-    r.heading(2, "Conclusion").paragraph(run.conclusion());
+    r.heading(2, "Conclusion").paragraph(conclusion(run));
     r.heading(2, "Models");
     let mut header = vec![
         "model".to_string(),

@@ -1,0 +1,497 @@
+//! The friction analysis of one joint: every classical model fitted on a
+//! training log and scored on the validation logs, then the diagnosis of
+//! what the best of them still misses ([`analyse`]).
+//!
+//! 1. Offset + Coulomb + viscous, Stribeck, Dahl and LuGre are fitted on
+//!    TRAIN ([`crate::fit`]).
+//! 2. Each is scored on every validation log (RMS and fitness (78)); the
+//!    best is the one with the lowest mean validation RMS, or the lowest
+//!    TRAIN RMS without validation logs ([`BestBy`]).
+//! 3. With at least one validation log, the diagnosis tests the candidate
+//!    effects of [`crate::effects`] against the best model's residual with
+//!    the forward selection of [`aras_ident::selection`]: an effect is added
+//!    when its F-test on TRAIN is significant and it raises the fitness on
+//!    every validation log. The selected effects' columns then join the
+//!    best model's own in a nonlinear refit of its structure (the refined
+//!    final model).
+//!
+//! The result, [`FrictionRun`], serialises as the `aras-friction/1`
+//! document ([`FORMAT`]).
+
+mod diagnosis;
+mod settings;
+
+use rayon::prelude::*;
+use serde::{Serialize, Serializer};
+use thiserror::Error;
+
+use crate::{
+    CoulombViscous, Dahl, FrictionError, FrictionModel, JointLog, LuGre, ParamInfo, Separable,
+    Stribeck,
+    effects::{Effect, Profile, residual_profiles},
+    fit::{
+        Estimate, FitStatus, Fitted, Metrics, fit_coulomb_viscous, fit_dahl, fit_lugre,
+        fit_stribeck, metrics,
+    },
+    sgn,
+};
+
+pub use diagnosis::{DiagnosisResult, DiagnosisStep};
+pub use settings::{FrictionSettings, SettingError};
+
+/// Format tag of the serialised [`FrictionRun`].
+pub const FORMAT: &str = "aras-friction/1";
+
+/// Errors of [`analyse`]. Each names the log or model it concerns.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum AnalysisError {
+    /// A setting out of range.
+    #[error("friction {0}")]
+    Setting(#[from] SettingError),
+    /// A log whose samples cannot be a motion (lengths, non-finite values,
+    /// time not increasing).
+    #[error("log {name}")]
+    Log {
+        /// The log's name.
+        name: String,
+        /// What is wrong.
+        #[source]
+        source: FrictionError,
+    },
+    /// A model could not be fitted on TRAIN.
+    #[error("fitting {model}")]
+    Fit {
+        /// The model, in words.
+        model: &'static str,
+        /// Why.
+        #[source]
+        source: FrictionError,
+    },
+    /// A model or effect could not be evaluated on a log.
+    #[error(transparent)]
+    Friction(#[from] FrictionError),
+    /// The forward selection refused its input.
+    #[error(transparent)]
+    Selection(#[from] aras_ident::IdentError),
+    /// The selection engine named a column its layout does not have (a
+    /// defect of this crate, never of the input).
+    #[error(
+        "internal: the selection used column {column} but the layout has {columns} columns; \
+         please report this with the logs that caused it"
+    )]
+    Layout {
+        /// The column asked for.
+        column: usize,
+        /// Columns of the layout.
+        columns: usize,
+    },
+}
+
+/// The four classical models, by kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModelKind {
+    /// Offset + Coulomb + viscous.
+    CoulombViscous,
+    /// Stribeck.
+    Stribeck,
+    /// Dahl.
+    Dahl,
+    /// LuGre.
+    Lugre,
+}
+
+impl ModelKind {
+    /// Every kind, in the order [`FrictionRun::models`] lists them.
+    pub const ALL: [ModelKind; 4] = [
+        ModelKind::CoulombViscous,
+        ModelKind::Stribeck,
+        ModelKind::Dahl,
+        ModelKind::Lugre,
+    ];
+
+    /// The model in words, for messages.
+    pub fn label(self) -> &'static str {
+        match self {
+            ModelKind::CoulombViscous => "offset + Coulomb + viscous",
+            ModelKind::Stribeck => "Stribeck",
+            ModelKind::Dahl => "Dahl",
+            ModelKind::Lugre => "LuGre",
+        }
+    }
+
+    /// The structural parameters `θ` of the kind's separable form, with
+    /// their physical ranges.
+    pub fn structure_info(self) -> Vec<ParamInfo> {
+        match self {
+            ModelKind::CoulombViscous => CoulombViscous::structure_info(),
+            ModelKind::Stribeck => Stribeck::structure_info(),
+            ModelKind::Dahl => Dahl::structure_info(),
+            ModelKind::Lugre => LuGre::structure_info(),
+        }
+    }
+}
+
+/// Facts about one log.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LogInfo {
+    /// Name (file stem).
+    pub name: String,
+    /// Samples.
+    pub rows: usize,
+    /// Duration, s.
+    pub duration: f64,
+    /// Smallest and largest time step, s.
+    pub steps: [f64; 2],
+    /// True when the velocity was computed from the position.
+    pub dq_from_q: bool,
+}
+
+impl LogInfo {
+    /// The facts of `log`.
+    pub fn of(log: &JointLog) -> Self {
+        let (lo, hi) = log
+            .t
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .fold((f64::INFINITY, 0.0f64), |(a, b), d| (a.min(d), b.max(d)));
+        Self {
+            name: log.name.clone(),
+            rows: log.len(),
+            duration: log.t.last().copied().unwrap_or(0.0) - log.t.first().copied().unwrap_or(0.0),
+            steps: [if lo.is_finite() { lo } else { 0.0 }, hi],
+            dq_from_q: log.dq_from_q,
+        }
+    }
+}
+
+/// One model's result.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelResult {
+    /// Model name.
+    pub name: String,
+    /// The fitted parameters with σ.
+    pub parameters: Vec<Estimate>,
+    /// Metrics on TRAIN.
+    pub train: Metrics,
+    /// Metrics on each validation log, in order.
+    pub validation: Vec<Metrics>,
+    /// Iterations of the winning local search.
+    pub iterations: usize,
+    /// Cost evaluations.
+    pub evaluations: usize,
+    /// How the search ended.
+    pub status: FitStatus,
+}
+
+/// A fitted model of any of the four kinds.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "model", rename_all = "snake_case")]
+pub enum AnyModel {
+    /// Offset + Coulomb + viscous.
+    CoulombViscous(CoulombViscous),
+    /// Stribeck.
+    Stribeck(Stribeck),
+    /// Dahl.
+    Dahl(Dahl),
+    /// LuGre.
+    Lugre(LuGre),
+}
+
+impl AnyModel {
+    /// Which model this is.
+    pub fn kind(&self) -> ModelKind {
+        match self {
+            AnyModel::CoulombViscous(_) => ModelKind::CoulombViscous,
+            AnyModel::Stribeck(_) => ModelKind::Stribeck,
+            AnyModel::Dahl(_) => ModelKind::Dahl,
+            AnyModel::Lugre(_) => ModelKind::Lugre,
+        }
+    }
+
+    /// Prediction along a log.
+    pub fn predict(&self, log: &JointLog) -> Result<Vec<f64>, FrictionError> {
+        let m = log.motion()?;
+        Ok(match self {
+            AnyModel::CoulombViscous(x) => x.predict(&m),
+            AnyModel::Stribeck(x) => x.predict(&m),
+            AnyModel::Dahl(x) => x.predict(&m),
+            AnyModel::Lugre(x) => x.predict(&m),
+        })
+    }
+
+    /// Steady-state friction at constant velocity `v` (for LuGre the
+    /// Stribeck curve, for Dahl `±F_c` plus viscous and offset).
+    pub fn steady_state(&self, v: f64) -> f64 {
+        match self {
+            AnyModel::CoulombViscous(x) => x.offset + x.coulomb * sgn(v) + x.viscous * v,
+            AnyModel::Stribeck(x) => x.at(v),
+            AnyModel::Dahl(x) => x.offset + x.coulomb * sgn(v) + x.viscous * v,
+            AnyModel::Lugre(x) => x.steady_state().at(v),
+        }
+    }
+
+    /// Model name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            AnyModel::CoulombViscous(x) => x.name(),
+            AnyModel::Stribeck(x) => x.name(),
+            AnyModel::Dahl(x) => x.name(),
+            AnyModel::Lugre(x) => x.name(),
+        }
+    }
+}
+
+impl From<CoulombViscous> for AnyModel {
+    fn from(m: CoulombViscous) -> Self {
+        AnyModel::CoulombViscous(m)
+    }
+}
+impl From<Stribeck> for AnyModel {
+    fn from(m: Stribeck) -> Self {
+        AnyModel::Stribeck(m)
+    }
+}
+impl From<Dahl> for AnyModel {
+    fn from(m: Dahl) -> Self {
+        AnyModel::Dahl(m)
+    }
+}
+impl From<LuGre> for AnyModel {
+    fn from(m: LuGre) -> Self {
+        AnyModel::Lugre(m)
+    }
+}
+
+/// How the best classical model was chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BestBy {
+    /// Lowest mean RMS over the validation logs.
+    ValidationRms,
+    /// Lowest TRAIN RMS: there was no validation log.
+    TrainRms,
+}
+
+/// Why no diagnosis was run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NoDiagnosis {
+    /// No validation log was given: an effect is only added when it helps
+    /// every validation log.
+    NoValidationLog,
+}
+
+impl std::fmt::Display for NoDiagnosis {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NoDiagnosis::NoValidationLog => f.write_str(
+                "No diagnosis: give at least one validation log (--validate); an effect is \
+                 only added when it helps every validation log.",
+            ),
+        }
+    }
+}
+
+/// Serialised as its sentence (the document's `diagnosis_note`).
+impl Serialize for NoDiagnosis {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+/// Everything an analysis found; serialised as the `aras-friction/1`
+/// document.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FrictionRun {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// The settings used.
+    pub settings: FrictionSettings,
+    /// The training log.
+    pub train: LogInfo,
+    /// The validation logs.
+    pub validation: Vec<LogInfo>,
+    /// The four classical models, in [`ModelKind::ALL`] order:
+    /// coulomb_viscous, stribeck, dahl, lugre.
+    pub models: Vec<ModelResult>,
+    /// The fitted models themselves (same order).
+    pub fitted: Vec<AnyModel>,
+    /// Index of the best classical model (see [`FrictionRun::best_by`]).
+    pub best: usize,
+    /// How [`FrictionRun::best`] was chosen.
+    #[serde(skip)]
+    pub best_by: BestBy,
+    /// The best model's TRAIN residual against velocity, position, time,
+    /// acceleration and direction.
+    pub residual: Vec<Profile>,
+    /// The diagnosis (needs at least one validation log).
+    pub diagnosis: Option<DiagnosisResult>,
+    /// Why there is no diagnosis, when there is none.
+    pub diagnosis_note: Option<NoDiagnosis>,
+    /// The final model (best classical model plus the effects the diagnosis
+    /// added, refitted), when it differs from the best classical model.
+    pub final_model: Option<ModelResult>,
+    /// The final model's base friction model.
+    pub final_base: AnyModel,
+    /// Effects of the final model with their coefficients.
+    pub final_effects: Vec<(Effect, Vec<f64>)>,
+}
+
+impl FrictionRun {
+    /// The final model's prediction on a log: base model plus effects.
+    pub fn final_prediction(&self, log: &JointLog) -> Result<Vec<f64>, FrictionError> {
+        predict_with_effects(&self.final_base, &self.final_effects, log)
+    }
+
+    /// The best classical model's result.
+    pub fn best_model(&self) -> &ModelResult {
+        &self.models[self.best]
+    }
+}
+
+/// Prediction of a base model plus effects with their coefficients on one
+/// log (the effects' columns may depend on the base prediction).
+pub(crate) fn predict_with_effects(
+    base: &AnyModel,
+    effects: &[(Effect, Vec<f64>)],
+    log: &JointLog,
+) -> Result<Vec<f64>, FrictionError> {
+    let base = base.predict(log)?;
+    let mut out = base.clone();
+    for (e, coef) in effects {
+        for (c, b) in e.columns(log, &base)?.iter().zip(coef) {
+            for (o, x) in out.iter_mut().zip(c) {
+                *o += b * x;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// A fitted model's result: its TRAIN fit and its metrics on every
+/// validation log.
+fn result<M: Separable + Sync>(
+    f: &Fitted<M>,
+    vals: &[JointLog],
+) -> Result<ModelResult, FrictionError> {
+    let validation = vals
+        .par_iter()
+        .map(|v| Ok(metrics(&v.tau, &f.model.predict(&v.motion()?))))
+        .collect::<Result<Vec<_>, FrictionError>>()?;
+    Ok(ModelResult {
+        name: f.model.name().to_string(),
+        parameters: f.estimates.clone(),
+        train: f.train,
+        validation,
+        iterations: f.iterations,
+        evaluations: f.evaluations,
+        status: f.status,
+    })
+}
+
+/// The four classical models fitted on `train` (in [`ModelKind::ALL`]
+/// order), each scored on `vals`.
+fn fit_classical(
+    train: &JointLog,
+    vals: &[JointLog],
+    settings: &FrictionSettings,
+) -> Result<(Vec<ModelResult>, Vec<AnyModel>), AnalysisError> {
+    let m = train.motion().map_err(|source| AnalysisError::Log {
+        name: train.name.clone(),
+        source,
+    })?;
+    let fs = &settings.fit;
+    let tau = &train.tau;
+    let fit_error = |kind: ModelKind| {
+        move |source| AnalysisError::Fit {
+            model: kind.label(),
+            source,
+        }
+    };
+    let ((cv, st), dahl) = rayon::join(
+        || (fit_coulomb_viscous(&m, tau, fs), fit_stribeck(&m, tau, fs)),
+        || fit_dahl(&m, tau, fs),
+    );
+    let cv = cv.map_err(fit_error(ModelKind::CoulombViscous))?;
+    let st = st.map_err(fit_error(ModelKind::Stribeck))?;
+    let dahl = dahl.map_err(fit_error(ModelKind::Dahl))?;
+    let lugre = fit_lugre(&m, tau, &st.model, fs).map_err(fit_error(ModelKind::Lugre))?;
+    let models = vec![
+        result(&cv, vals)?,
+        result(&st, vals)?,
+        result(&dahl, vals)?,
+        result(&lugre, vals)?,
+    ];
+    let fitted = vec![
+        AnyModel::CoulombViscous(cv.model),
+        AnyModel::Stribeck(st.model),
+        AnyModel::Dahl(dahl.model),
+        AnyModel::Lugre(lugre.model),
+    ];
+    Ok((models, fitted))
+}
+
+/// The index of the best model and how it was chosen: lowest mean
+/// validation RMS, or lowest TRAIN RMS without validation logs. A NaN
+/// score never wins (`total_cmp` orders it above every number).
+fn best_model(models: &[ModelResult]) -> (usize, BestBy) {
+    let by = if models.iter().all(|m| m.validation.is_empty()) {
+        BestBy::TrainRms
+    } else {
+        BestBy::ValidationRms
+    };
+    let score = |r: &ModelResult| match by {
+        BestBy::TrainRms => r.train.rms,
+        BestBy::ValidationRms => {
+            r.validation.iter().map(|m| m.rms).sum::<f64>() / r.validation.len() as f64
+        }
+    };
+    let best = (0..models.len())
+        .min_by(|&a, &b| score(&models[a]).total_cmp(&score(&models[b])))
+        .unwrap_or(0);
+    (best, by)
+}
+
+/// The friction analysis of one joint (see the module docs): fits the four
+/// classical models on `train`, scores them on `vals`, and — with at least
+/// one validation log — diagnoses what the best one misses and refits it
+/// with the effects found.
+pub fn analyse(
+    train: &JointLog,
+    vals: &[JointLog],
+    settings: &FrictionSettings,
+) -> Result<FrictionRun, AnalysisError> {
+    settings.validate()?;
+    let (models, fitted) = fit_classical(train, vals, settings)?;
+    let (best, best_by) = best_model(&models);
+    let base = &fitted[best];
+    let pred = base.predict(train)?;
+    let resid: Vec<f64> = train.tau.iter().zip(&pred).map(|(a, b)| a - b).collect();
+    let (diagnosis, diagnosis_note, refined) = if vals.is_empty() {
+        (None, Some(NoDiagnosis::NoValidationLog), None)
+    } else {
+        let (d, r) = diagnosis::diagnose(base, train, vals, settings)?;
+        (Some(d), None, r)
+    };
+    let (final_model, final_base, final_effects) = match refined {
+        Some(r) => (Some(r.result), r.base, r.effects),
+        None => (None, base.clone(), Vec::new()),
+    };
+    Ok(FrictionRun {
+        format: FORMAT.into(),
+        settings: settings.clone(),
+        train: LogInfo::of(train),
+        validation: vals.iter().map(LogInfo::of).collect(),
+        models,
+        fitted,
+        best,
+        best_by,
+        residual: residual_profiles(train, &resid, 12),
+        diagnosis,
+        diagnosis_note,
+        final_model,
+        final_base,
+        final_effects,
+    })
+}
