@@ -173,7 +173,10 @@ where
     }
 
     fn name(&self, k: usize) -> String {
-        self.names.get(k).cloned().unwrap_or_else(|| format!("g[{k}]"))
+        self.names
+            .get(k)
+            .cloned()
+            .unwrap_or_else(|| format!("g[{k}]"))
     }
 
     fn eval(&self, x: &[f64], g: &mut [f64]) -> Result<(), Infallible> {
@@ -366,10 +369,12 @@ impl<'a, C: PoseConstraint> PoseGrid<'a, C> {
     }
 
     fn eval(&self, x: &[f64], g: &mut [f64]) -> Result<(), ExciteError> {
-        self.constraint.eval(x, g).map_err(|e| ExciteError::Constraint {
-            at: x.to_vec(),
-            source: Box::new(e),
-        })?;
+        self.constraint
+            .eval(x, g)
+            .map_err(|e| ExciteError::Constraint {
+                at: x.to_vec(),
+                source: Box::new(e),
+            })?;
         check_values(x, g)
     }
 
@@ -592,11 +597,15 @@ impl<'a, C: PoseConstraint> PoseGrid<'a, C> {
         let (m, pts) = (self.values(), self.check.len());
         let (mut values, mut allowance) = (vec![0.0; m * pts], vec![0.0; pts]);
         self.check_values(&base, 1.0, &mut values, &mut allowance)?;
-        let (idx, worst) = values
-            .iter()
-            .copied()
-            .enumerate()
-            .fold((0, f64::NEG_INFINITY), |b, (i, v)| if v > b.1 { (i, v) } else { b });
+        let (idx, worst) =
+            values
+                .iter()
+                .copied()
+                .enumerate()
+                .fold(
+                    (0, f64::NEG_INFINITY),
+                    |b, (i, v)| if v > b.1 { (i, v) } else { b },
+                );
         let k = idx / pts;
         let estimated_max = values
             .iter()
@@ -755,7 +764,9 @@ mod tests {
         assert!(matches!(e, ExciteError::ConstraintInfeasible { .. }), "{e}");
         let wrong = DualConstraint::new(3, 1, |x: &[Dual], g: &mut [Dual]| g[0] = x[0]);
         assert!(PoseGrid::new(&wrong, &settings, &cons).is_err());
-        let nan = DualConstraint::new(2, 1, |x: &[Dual], g: &mut [Dual]| g[0] = x[0].sqrt() * f64::NAN);
+        let nan = DualConstraint::new(2, 1, |x: &[Dual], g: &mut [Dual]| {
+            g[0] = x[0].sqrt() * f64::NAN
+        });
         assert!(matches!(
             PoseGrid::new(&nan, &settings, &cons).err().unwrap(),
             ExciteError::Constraint { .. }
@@ -770,16 +781,28 @@ mod tests {
             anchor: Some(vec![1.0, 0.9]),
         };
         let json = serde_json::to_string(&s).unwrap();
-        assert_eq!(serde_json::from_str::<ConstraintSettings>(&json).unwrap(), s);
+        assert_eq!(
+            serde_json::from_str::<ConstraintSettings>(&json).unwrap(),
+            s
+        );
         assert_eq!(
             serde_json::from_str::<ConstraintSettings>("{}").unwrap(),
             ConstraintSettings::default()
         );
         assert!(serde_json::from_str::<ConstraintSettings>(r#"{"margn": 1}"#).is_err());
         for bad in [
-            ConstraintSettings { margin: -1.0, ..Default::default() },
-            ConstraintSettings { check_factor: 0, ..Default::default() },
-            ConstraintSettings { anchor: Some(vec![f64::NAN]), ..Default::default() },
+            ConstraintSettings {
+                margin: -1.0,
+                ..Default::default()
+            },
+            ConstraintSettings {
+                check_factor: 0,
+                ..Default::default()
+            },
+            ConstraintSettings {
+                anchor: Some(vec![f64::NAN]),
+                ..Default::default()
+            },
         ] {
             assert!(bad.validate().is_err(), "{bad:?}");
         }

@@ -61,7 +61,10 @@ fn constrained_design_stays_in_the_cone() {
     assert!(free.constraint.is_none());
     let fine = 37 * s.constraint_points + 1;
     let free_worst = worst(&c, &free.trajectory, fine);
-    assert!(free_worst > 0.01, "the free design should leave the cone: {free_worst}");
+    assert!(
+        free_worst > 0.01,
+        "the free design should leave the cone: {free_worst}"
+    );
 
     let d = design_constrained(&reg, &e, &s, &c, &|_| {}).unwrap();
     let check = d.constraint.clone().unwrap();
@@ -81,7 +84,10 @@ fn constrained_design_stays_in_the_cone() {
         d.condition_number,
         check.worst,
         check.allowance,
-        d.starts.iter().map(|r| r.constraint_scale).collect::<Vec<_>>()
+        d.starts
+            .iter()
+            .map(|r| r.constraint_scale)
+            .collect::<Vec<_>>()
     );
     assert!(d.condition_number.is_finite() && d.condition_number > 1.0);
     // Same seed, same result.
