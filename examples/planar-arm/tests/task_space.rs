@@ -35,7 +35,12 @@ fn worst(c: &impl PoseConstraint, t: &FourierTrajectory<Dyn>, points: usize) -> 
     let (mut q, mut qd, mut qdd, mut g) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; m]);
     let mut w = f64::NEG_INFINITY;
     for j in 0..points {
-        t.eval_into(j as f64 * t.period() / points as f64, &mut q, &mut qd, &mut qdd);
+        t.eval_into(
+            j as f64 * t.period() / points as f64,
+            &mut q,
+            &mut qd,
+            &mut qdd,
+        );
         c.eval(&q, &mut g).unwrap();
         w = g.iter().copied().fold(w, f64::max);
     }
@@ -77,7 +82,10 @@ fn constrained_design_stays_above_the_table() {
     let check = d.constraint.clone().unwrap();
     assert!(check.estimated_max <= 0.0, "{check:?}");
     let fine_worst = worst(&c, &d.trajectory, fine);
-    assert!(fine_worst <= 1e-12, "{fine_worst} m above the limit ({check:?})");
+    assert!(
+        fine_worst <= 1e-12,
+        "{fine_worst} m above the limit ({check:?})"
+    );
     assert!(d.margins.worst_relative >= 0.0, "{:?}", d.margins);
     let finer = Margins::measure(&d.trajectory, &s.limits, fine);
     assert!(finer.worst_relative >= 0.0, "{finer:?}");
@@ -104,7 +112,10 @@ fn constrained_design_stays_above_the_table() {
         .map(|a| a.condition_number)
         .collect();
     random.sort_by(f64::total_cmp);
-    println!("random feasible κ (meeting the table) median {:.2}", random[7]);
+    println!(
+        "random feasible κ (meeting the table) median {:.2}",
+        random[7]
+    );
     assert!(d.condition_number < random[7]);
 }
 
