@@ -245,7 +245,12 @@ impl GridConstraints {
         }
     }
 
-    /// Number of constraint values (6N).
+    /// Tightened `(centre, half-range)` of coordinate `i`'s positions.
+    pub fn position_range(&self, i: usize) -> (f64, f64) {
+        self.tight[i][0]
+    }
+
+    /// Number of constraint values (3nN: three kinds per coordinate).
     pub fn len(&self) -> usize {
         self.lo.len()
     }

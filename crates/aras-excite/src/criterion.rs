@@ -606,8 +606,8 @@ mod tests {
         }
     }
 
-    /// A wrong-shaped or non-finite projection, or a model that is not
-    /// 2-DOF, is rejected by name.
+    /// A wrong-shaped or non-finite projection, or a model with no
+    /// coordinates or no outputs, is rejected by name.
     #[test]
     fn projection_is_checked() {
         let reg = StandIn::default();

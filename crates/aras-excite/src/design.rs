@@ -16,6 +16,11 @@
 //! its motion about the box centre (a no-op up to the ALM tolerance), so the
 //! grid theorem of [`constraints`](crate::constraints) guarantees the limits
 //! in continuous time.
+//!
+//! With a user [`PoseConstraint`] ([`design_constrained`]), `F1` also
+//! holds `g(X(t_j)) ≤ −margin` on the constraint grid, and the repair then
+//! scales the motion about a feasible rest pose until the constraint's
+//! check holds ([`pose`](crate::pose)).
 
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -39,6 +44,7 @@ use crate::criterion::{Assessment, Criterion, Evaluator, check_projection};
 use crate::error::{ExciteError, check_finite, with_causes};
 use crate::fourier::{DEFAULT_HARMONICS, DEFAULT_OMEGA_F, check_omega, coordinate_name};
 use crate::param::{Grid, Layout};
+use crate::pose::{ConstraintCheck, ConstraintSettings, PoseConstraint, PoseGrid};
 use crate::{FourierTrajectory, Regressor};
 
 /// Settings of [`design`]. `Default` gives the paper's problem (L = 5,
@@ -85,6 +91,9 @@ where
     pub max_time_per_start: Option<Duration>,
     /// Worker threads for the starts (0 = rayon's global pool).
     pub threads: usize,
+    /// How a pose constraint is met (margin, check grid, anchor); read only
+    /// by [`design_constrained`] and [`random_feasible_constrained`].
+    pub constraint: ConstraintSettings,
 }
 
 impl Default for DesignSettings {
@@ -117,6 +126,7 @@ where
             max_inner_iterations: 200,
             max_time_per_start: None,
             threads: 0,
+            constraint: ConstraintSettings::default(),
         }
     }
 }
@@ -180,6 +190,7 @@ where
             }
         }
         check_finite(|| "min_excursion".into(), self.min_excursion)?;
+        self.constraint.validate()?;
         if self.max_outer_iterations == 0 || self.max_inner_iterations == 0 {
             return Err(ExciteError::InvalidSetting {
                 name: "max_outer_iterations/max_inner_iterations",
@@ -256,19 +267,7 @@ where
                 poses.push((0..n).map(|c| at(c, ((corner >> c) & 1) as f64)).collect());
             }
         }
-        // A Kronecker sequence: coordinate c steps by the fractional part
-        // of √(c-th prime), so the poses fill the box evenly.
-        const PRIMES: [f64; 12] = [2., 3., 5., 7., 11., 13., 17., 19., 23., 29., 31., 37.];
-        for k in 0..K * K {
-            poses.push(
-                (0..n)
-                    .map(|c| {
-                        let a = PRIMES[c % 12].sqrt() + (c / 12) as f64;
-                        at(c, ((k as f64 + 0.5) * a).fract())
-                    })
-                    .collect(),
-            );
-        }
+        poses.extend(kronecker_poses(lo, hi));
     }
     for x in poses {
         rows.iter_mut().for_each(|v| *v = 0.0);
@@ -282,6 +281,24 @@ where
         }
     }
     Ok(())
+}
+
+/// 1681 poses filling the box `[lo, hi]` evenly: a Kronecker sequence in
+/// which coordinate `c` steps by the fractional part of √(c-th prime).
+pub(crate) fn kronecker_poses<'a>(
+    lo: &'a [f64],
+    hi: &'a [f64],
+) -> impl Iterator<Item = Vec<f64>> + 'a {
+    const K: usize = 41;
+    const PRIMES: [f64; 12] = [2., 3., 5., 7., 11., 13., 17., 19., 23., 29., 31., 37.];
+    (0..K * K).map(move |k| {
+        (0..lo.len())
+            .map(|c| {
+                let a = PRIMES[c % 12].sqrt() + (c / 12) as f64;
+                lo[c] + (hi[c] - lo[c]) * ((k as f64 + 0.5) * a).fract()
+            })
+            .collect()
+    })
 }
 
 /// How one start of the multi-start went.
@@ -301,6 +318,9 @@ pub struct StartReport {
     /// Scale applied to pull the end point onto the tightened bounds
     /// (1 = already feasible).
     pub repair_scale: f64,
+    /// Scale about the anchor applied after that to meet the pose
+    /// constraint (1 = already met, or no constraint).
+    pub constraint_scale: f64,
     /// Wall-clock time of the start.
     pub time: Duration,
 }
@@ -323,6 +343,9 @@ where
     pub assessment: Assessment,
     /// Limit margins on a grid 10× finer than the constraint grid.
     pub margins: Margins<D>,
+    /// How the pose constraint is met on its check grid
+    /// ([`design_constrained`]; `None` without one).
+    pub constraint: Option<ConstraintCheck>,
     /// Index of the winning start.
     pub best_start: usize,
     /// Every start, in order.
@@ -387,6 +410,35 @@ where
         .collect()
 }
 
+/// [`random_feasible`] that also meets a pose constraint: each trajectory
+/// is drawn in the same way (the same sequence for a seed), then its motion
+/// is scaled about the constraint's anchor until the constraint's check
+/// holds (`g ≤ −margin` with the curvature allowance on the check grid of
+/// [`DesignSettings::constraint`]), so it touches the box or the
+/// constraint.
+pub fn random_feasible_constrained<C: PoseConstraint, D: Dim>(
+    settings: &DesignSettings<D>,
+    constraint: &C,
+    count: usize,
+    seed: u64,
+) -> Result<Vec<FourierTrajectory<D>>, ExciteError>
+where
+    DefaultAllocator: Allocator<D>,
+{
+    settings.validate()?;
+    let layout = settings.layout();
+    let cons = GridConstraints::new(layout, &settings.limits, settings.constraint_points);
+    let pose = PoseGrid::new(constraint, &settings.constraint, &cons)?;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    (0..count)
+        .map(|_| {
+            let mut p = random_point(&cons, &mut rng);
+            pose.fit(&mut p, 1.0)?;
+            layout.trajectory(&p)
+        })
+        .collect()
+}
+
 /// One random feasible coefficient vector (see [`random_feasible`]).
 pub(crate) fn random_point(cons: &GridConstraints, rng: &mut Xoshiro256PlusPlus) -> Vec<f64> {
     let layout = cons.grid.layout;
@@ -423,6 +475,27 @@ where
     design_with_progress(regressor, projection, settings, &|_| {})
 }
 
+/// [`design_with_progress`] subject also to the pose constraint
+/// `constraint(X(t)) ≤ 0` ([`pose`](crate::pose)): the optimiser holds
+/// `g ≤ −margin` on the constraint grid, the repair scales the end point
+/// about a feasible rest pose until `g` plus its curvature allowance is
+/// `≤ −margin` on the check grid ([`DesignSettings::constraint`]), and
+/// [`Design::constraint`] reports the result. The starts meet the
+/// constraint too.
+pub fn design_constrained<R: Regressor, C: PoseConstraint, D: Dim>(
+    regressor: &R,
+    projection: &DMatrix<f64>,
+    settings: &DesignSettings<D>,
+    constraint: &C,
+    progress: &(dyn Fn(DesignProgress) + Sync),
+) -> Result<Design<D>, ExciteError>
+where
+    DefaultAllocator: Allocator<D>,
+    Limits<D>: Sync,
+{
+    design_inner(regressor, projection, settings, Some(constraint), progress)
+}
+
 /// How far a [`design`] has come: starts finished of the total.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DesignProgress {
@@ -439,6 +512,40 @@ pub fn design_with_progress<R: Regressor, D: Dim>(
     regressor: &R,
     projection: &DMatrix<f64>,
     settings: &DesignSettings<D>,
+    progress: &(dyn Fn(DesignProgress) + Sync),
+) -> Result<Design<D>, ExciteError>
+where
+    DefaultAllocator: Allocator<D>,
+    Limits<D>: Sync,
+{
+    design_inner::<R, Unconstrained, D>(regressor, projection, settings, None, progress)
+}
+
+/// The pose constraint of a design without one (never evaluated).
+struct Unconstrained;
+
+impl PoseConstraint for Unconstrained {
+    type Error = std::convert::Infallible;
+    fn coordinates(&self) -> usize {
+        0
+    }
+    fn values(&self) -> usize {
+        0
+    }
+    fn eval(&self, _: &[f64], _: &mut [f64]) -> Result<(), Self::Error> {
+        Ok(())
+    }
+    fn jacobian(&self, _: &[f64], _: &mut [f64], _: &mut [f64]) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// The design, with or without a pose constraint.
+fn design_inner<R: Regressor, C: PoseConstraint, D: Dim>(
+    regressor: &R,
+    projection: &DMatrix<f64>,
+    settings: &DesignSettings<D>,
+    constraint: Option<&C>,
     progress: &(dyn Fn(DesignProgress) + Sync),
 ) -> Result<Design<D>, ExciteError>
 where
@@ -464,16 +571,26 @@ where
     let layout = settings.layout();
     let cons = GridConstraints::new(layout, &settings.limits, settings.constraint_points);
     let grid = Grid::new(layout, settings.criterion_points, 0.5);
+    let pose = constraint
+        .map(|c| PoseGrid::new(c, &settings.constraint, &cons))
+        .transpose()?;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed);
     let points: Vec<Vec<f64>> = (0..settings.starts)
         .map(|_| {
             let mut p = random_point(&cons, &mut rng);
             // Start strictly inside, so the first iterations need no repair.
             cons.scale_to_fit(&mut p, false, false);
-            scale_motion(&cons, &mut p, 0.9);
-            p
+            match &pose {
+                None => scale_motion(&cons, &mut p, 0.9),
+                Some(pose) => {
+                    pose.fit(&mut p, 1.0)?;
+                    pose.scale(&mut p, 0.9);
+                    pose.fit(&mut p, 1.0)?;
+                }
+            }
+            Ok(p)
         })
-        .collect();
+        .collect::<Result<_, ExciteError>>()?;
 
     let done = AtomicUsize::new(0);
     let total = points.len();
@@ -481,7 +598,15 @@ where
         points
             .par_iter()
             .map(|p0| {
-                let r = run_start(regressor, projection, settings, &cons, &grid, p0.clone());
+                let r = run_start(
+                    regressor,
+                    projection,
+                    settings,
+                    &cons,
+                    pose.as_ref(),
+                    &grid,
+                    p0.clone(),
+                );
                 let done = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress(DesignProgress { done, total });
                 r
@@ -517,7 +642,9 @@ where
             last,
         });
     };
-    let trajectory = layout.trajectory(&outcomes[best_start].0)?;
+    let best_point = &outcomes[best_start].0;
+    let trajectory = layout.trajectory(best_point)?;
+    let constraint = pose.as_ref().map(|p| p.report(best_point)).transpose()?;
     let assessment = assess(
         regressor,
         projection,
@@ -536,6 +663,7 @@ where
         condition_number: assessment.condition_number,
         assessment,
         margins,
+        constraint,
         best_start,
         starts: outcomes.into_iter().map(|(_, r)| r).collect(),
         elapsed: started.elapsed(),
@@ -553,12 +681,15 @@ fn scale_motion(cons: &GridConstraints, p: &mut [f64], s: f64) {
     }
 }
 
-/// One start: ALM/PANOC from `p`, then exact repair onto the tightened bounds.
-fn run_start<R: Regressor, D: Dim>(
+/// One start: ALM/PANOC from `p`, then exact repair onto the tightened
+/// bounds (and into the pose constraint).
+#[allow(clippy::too_many_arguments)]
+fn run_start<R: Regressor, C: PoseConstraint, D: Dim>(
     regressor: &R,
     projection: &DMatrix<f64>,
     settings: &DesignSettings<D>,
     cons: &GridConstraints,
+    pose: Option<&PoseGrid<'_, C>>,
     grid: &Grid,
     mut p: Vec<f64>,
 ) -> (Vec<f64>, StartReport)
@@ -585,6 +716,7 @@ where
         outer_iterations: 0,
         inner_iterations: 0,
         repair_scale: 1.0,
+        constraint_scale: 1.0,
         time: Duration::ZERO,
     };
     let value_at = |p: &[f64]| ev.borrow_mut().objective(grid, p).map(|a| a.assessment);
@@ -613,17 +745,32 @@ where
         ev.borrow_mut().gradient(grid, u, grad).map_err(record)?;
         Ok(())
     };
+    // F1 = [X, Ẋ, Ẍ on the grid (box blocks); g(X) on the grid].
+    let nb = cons.len();
     let f1 = |u: &[f64], out: &mut [f64]| -> FunctionCallResult {
-        cons.map(u, out);
+        cons.map(u, &mut out[..nb]);
+        if let Some(pose) = pose {
+            pose.map(&cons.grid, u, &mut out[nb..]).map_err(record)?;
+        }
         Ok(())
     };
-    let jf1t = |_u: &[f64], d: &[f64], out: &mut [f64]| -> FunctionCallResult {
-        cons.jacobian_t(d, out);
+    let jf1t = |u: &[f64], d: &[f64], out: &mut [f64]| -> FunctionCallResult {
+        cons.jacobian_t(&d[..nb], out);
+        if let Some(pose) = pose {
+            pose.add_jacobian_t(&cons.grid, u, &d[nb..], out)
+                .map_err(record)?;
+        }
         Ok(())
     };
 
     let dim = p.len();
-    let n1 = cons.len();
+    let gn = pose.map_or(0, |c| c.values() * cons.grid.len());
+    let n1 = nb + gn;
+    let (mut c_lo, mut c_hi) = (cons.lo.clone(), cons.hi.clone());
+    if let Some(pose) = pose {
+        c_lo.resize(n1, f64::NEG_INFINITY);
+        c_hi.resize(n1, -pose.settings.margin);
+    }
     let w = cons.grid.layout.per_coord();
     let (mut umin, mut umax) = (vec![0.0; dim], vec![0.0; dim]);
     for i in 0..limits.coordinates() {
@@ -638,7 +785,7 @@ where
         }
     }
     let bounds = Rectangle::new(Some(&umin), Some(&umax));
-    let set_c = Rectangle::new(Some(&cons.lo), Some(&cons.hi));
+    let set_c = Rectangle::new(Some(&c_lo), Some(&c_hi));
     let ymax = vec![1e12; n1];
     let ymin = vec![-1e12; n1];
     let set_y = Rectangle::new(Some(&ymin), Some(&ymax));
@@ -701,6 +848,16 @@ where
         return (start, report);
     }
     report.repair_scale = cons.scale_to_fit(&mut p, false, false);
+    if let Some(pose) = pose {
+        match pose.fit(&mut p, 1.0) {
+            Ok(s) => report.constraint_scale = s,
+            Err(e) => {
+                report.outcome = Err(with_causes(&e));
+                report.time = t0.elapsed();
+                return (start, report);
+            }
+        }
+    }
     report.outcome = value_at(&p)
         .map(|a| a.value(settings.criterion))
         .map_err(|e| with_causes(&e));

@@ -117,6 +117,31 @@ pub enum ExciteError {
         /// The regressor's own error.
         source: Box<dyn std::error::Error + Send + Sync + 'static>,
     },
+    /// The user's pose constraint failed, or gave a non-finite value or
+    /// derivative, at a pose.
+    #[error("the pose constraint failed at {}", pose_degrees(at))]
+    Constraint {
+        /// The pose (rad).
+        at: Vec<f64>,
+        /// What the constraint reported.
+        source: Box<dyn std::error::Error + Send + Sync + 'static>,
+    },
+    /// No rest pose satisfies the pose constraint with its margin, so no
+    /// trajectory can (the repair scales towards such a pose).
+    #[error(
+        "the pose constraint cannot be met at rest: its best pose {} has max g = {worst:.6e}, \
+         above −margin = {neg:.6e}; loosen the constraint or the margin, widen the box, or \
+         give constraint.anchor, a pose inside the box where every g_k ≤ −margin",
+        pose_degrees(at), neg = -margin
+    )]
+    ConstraintInfeasible {
+        /// The best pose found, or the given anchor (rad).
+        at: Vec<f64>,
+        /// Its largest constraint value.
+        worst: f64,
+        /// The required clearance.
+        margin: f64,
+    },
     /// The stacked base regressor along a trajectory is degenerate
     /// (a zero column or numerically rank-deficient).
     #[error("the base regressor along the trajectory is degenerate: {reason}")]

@@ -9,9 +9,12 @@
 //!   *base* regressor ([`Criterion::Condition`]) or a D-optimality criterion
 //!   ([`Criterion::DOptimal`]) over the coefficients, subject to the box and
 //!   rate limits (77), an acceleration limit and zero velocity at the period
-//!   boundary, from several random feasible starts.
+//!   boundary, from several random feasible starts; [`design_constrained`]
+//!   adds a user [`PoseConstraint`] `g(X) ≤ 0` (task-space limits of an arm
+//!   designed in joint space, [`pose`]).
 //! * [`Regressor`]: the one thing the design needs from a dynamic model:
-//!   `aras-ident`'s `LinearModel` (its 2 × n regressor rows at `(X, Ẋ, Ẍ)`,
+//!   `aras-ident`'s `LinearModel` (its `m × p` regressor rows at `(X, Ẋ, Ẍ)`
+//!   for `m` actuators and `p` parameters,
 //!   the same model the identification uses) that also gives its rows in
 //!   [`Dual`] numbers for their exact derivatives.
 //!
@@ -69,6 +72,7 @@ mod design;
 mod error;
 mod fourier;
 mod param;
+pub mod pose;
 mod regressor;
 
 pub use aras_core::Motion;
@@ -77,11 +81,12 @@ pub use aras_diamond::MotorRow;
 pub use constraints::{DEFAULT_MAX_ACCEL_DEG, Limits, Margins};
 pub use criterion::{Assessment, Criterion, base_projection};
 pub use design::{
-    Design, DesignProgress, DesignSettings, StartReport, assess, design, design_with_progress,
-    random_feasible,
+    Design, DesignProgress, DesignSettings, StartReport, assess, design, design_constrained,
+    design_with_progress, random_feasible, random_feasible_constrained,
 };
 pub use error::ExciteError;
 pub use fourier::{DEFAULT_HARMONICS, DEFAULT_OMEGA_F, FORMAT, FourierTrajectory, TaskRow};
+pub use pose::{ConstraintCheck, ConstraintSettings, DualConstraint, PoseConstraint};
 pub use regressor::{Dual, Regressor};
 
 // Lets the shared test helpers name this crate the same way in unit tests,

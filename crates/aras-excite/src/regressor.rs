@@ -5,11 +5,13 @@
 use aras_ident::LinearModel;
 
 /// The forward-mode dual number the design differentiates with: six
-/// directions, seeded on `(X, Ẋ, Ẍ)` of one sample.
+/// directions, seeded on six of the `3n` inputs `(X, Ẋ, Ẍ)` of one sample
+/// per evaluation (one evaluation for two coordinates).
 pub type Dual = num_dual::DualSVec64<6>;
 
-/// A linear-in-parameters model `τ = Y(X, Ẋ, Ẍ) β` of a 2-DOF robot (two
-/// coordinates, two actuators) in the coordinates `X` the excitation is
+/// A linear-in-parameters model `τ = Y(X, Ẋ, Ẍ) β` of a robot with `n`
+/// coordinates and `m` actuators ([`LinearModel::coordinates`],
+/// [`LinearModel::outputs`]) in the coordinates `X` the excitation is
 /// designed in (joint angles for a serial arm, the task pose `[φ, γ]` for
 /// ARAS-Diamond, (42)/(51)) — the identification's own [`LinearModel`], so
 /// one model serves both — that can also evaluate its rows in [`Dual`]
@@ -25,7 +27,7 @@ pub type Dual = num_dual::DualSVec64<6>;
 /// design checks its box with [`LinearModel::fill`] before it starts.
 pub trait Regressor: LinearModel {
     /// [`LinearModel::fill`] in dual numbers: the same rows (column-major
-    /// `2 × columns`, zeroed before each call), with their derivatives along
+    /// `outputs × columns`, zeroed before each call), with their derivatives along
     /// the directions the inputs are seeded with. Should not allocate.
     fn fill_dual(
         &self,
