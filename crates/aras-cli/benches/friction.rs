@@ -3,8 +3,8 @@
 //! four models (LuGre included), the diagnosis and its refinement.
 //! Target: ≤ 3 s on 2 cores (docs/friction.md).
 
-use aras_friction::{FrictionSettings, analyse};
 use aras_friction::sim::{JointSimulation, Ripple};
+use aras_friction::{FrictionSettings, analyse};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn bench(c: &mut Criterion) {

@@ -298,8 +298,8 @@ fn config_friction_section_is_the_library_settings() {
         text.contains("[friction]") && text.contains("[friction.fit]"),
         "{text}"
     );
-    let c = aras_cli::config::Config::parse(&text, aras_cli::config::Format::Toml, "printed")
-        .unwrap();
+    let c =
+        aras_cli::config::Config::parse(&text, aras_cli::config::Format::Toml, "printed").unwrap();
     assert_eq!(c.friction, FrictionSettings::default());
     let sel = aras_ident::selection::SelectionOptions::default();
     assert_eq!(
@@ -340,7 +340,8 @@ fn config_friction_section_is_the_library_settings() {
     assert_eq!(json["settings"]["fit"]["starts"], 2);
     assert_eq!(json["settings"]["fit"]["shape"], 2.0);
 
-    let bad = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/bad/config/friction_shape.toml");
+    let bad =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/bad/config/friction_shape.toml");
     let o = run(&bad, &[], "out-bad");
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());

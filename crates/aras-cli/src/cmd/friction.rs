@@ -1,4 +1,4 @@
-//! `aras friction`: reads the joint logs, runs [`crate::friction::analyse`],
+//! `aras friction`: reads the joint logs, runs [`aras_friction::analyse`],
 //! writes `friction.json`, `report.html` (with its SVG figures) and
 //! `pred_<log>.csv` (columns `t,tau`: the final model's prediction) for TRAIN
 //! and every validation log.

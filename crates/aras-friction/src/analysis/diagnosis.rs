@@ -7,8 +7,8 @@
 //! selection on their sums, the summary of every step, the refinement.
 
 use aras_ident::selection::{
-    Accumulator, CandidateEvaluation, CandidateSpec, Layout, ModelFit, Selection,
-    SelectionOptions, SelectionStatus, select,
+    Accumulator, CandidateEvaluation, CandidateSpec, Layout, ModelFit, Selection, SelectionOptions,
+    SelectionStatus, select,
 };
 use rayon::prelude::*;
 use serde::Serialize;
@@ -201,7 +201,10 @@ fn run_selection(
         effective_fraction: (1.0 / tau_int).clamp(1e-6, 1.0),
         ..SelectionOptions::default()
     };
-    Ok((select(&sets[0], &sets[1..], &opts)?, opts.effective_fraction))
+    Ok((
+        select(&sets[0], &sets[1..], &opts)?,
+        opts.effective_fraction,
+    ))
 }
 
 /// Summaries of a selection: RMS per log, fitness per validation log and

@@ -125,7 +125,10 @@ mod tests {
         assert_eq!(with(|s| s.fit.max_iterations = 0).key, "fit.max_iterations");
         let e = with(|s| s.fit.shape = Some(9.0));
         assert_eq!(e.key, "fit.shape");
-        assert!(e.reason.contains("[0.25, 5]") && e.reason.contains("9"), "{e}");
+        assert!(
+            e.reason.contains("[0.25, 5]") && e.reason.contains("9"),
+            "{e}"
+        );
         assert!(with(|s| s.fit.shape = Some(f64::NAN)).key == "fit.shape");
         assert_eq!(with(|s| s.alpha = 1.5).key, "alpha");
         assert_eq!(with(|s| s.alpha = 0.0).key, "alpha");
