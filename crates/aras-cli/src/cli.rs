@@ -42,6 +42,9 @@ pub enum Command {
     /// dynamic models, then the diagnosis of what they miss →
     /// `friction.json`, `report.html`, `pred_<log>.csv` (docs/friction.md).
     Friction(FrictionArgs),
+    /// Apply a fitted friction model (`friction.json`) to a new log of the
+    /// joint → PRED.csv (t,tau), without refitting (docs/friction.md).
+    FrictionPredict(FrictionPredictArgs),
 }
 
 /// `aras export-mjcf`.
@@ -67,12 +70,43 @@ pub struct FrictionArgs {
     /// 2 bag (.mcap): one joint of its JointState messages (`--joint`).
     #[arg(long, value_name = "TRAIN.csv|BAG.mcap")]
     pub data: PathBuf,
-    /// A validation log, same format (repeat for several).
+    /// A validation log, same format (repeat for several): it scores the
+    /// models and takes part in the diagnosis's choices.
     #[arg(long, value_name = "VAL.csv")]
     pub validate: Vec<PathBuf>,
+    /// A log to predict with the final model, same format (repeat for
+    /// several): applied after every choice is made, never used for one;
+    /// writes `pred_<log>.csv` (its `tau` column is only compared with the
+    /// prediction).
+    #[arg(long, value_name = "LOG.csv")]
+    pub predict: Vec<PathBuf>,
     /// Output directory.
     #[arg(long, default_value = "out-friction", value_name = "DIR")]
     pub out: PathBuf,
+    /// How the joint logs are read.
+    #[command(flatten)]
+    pub log: JointLogArgs,
+    /// Hold the Stribeck shape exponent δ of the Stribeck and LuGre models
+    /// at this value (2 is the classical LuGre shape) instead of fitting it.
+    #[arg(long, value_name = "DELTA", value_parser = positive, allow_hyphen_values = true)]
+    pub shape: Option<f64>,
+    /// Configuration file (.toml or .json; docs/config.md): its
+    /// `[friction]` section holds the analysis settings (`--shape` overrides
+    /// `friction.fit.shape`).
+    #[arg(long, value_name = "FILE")]
+    pub config: Option<PathBuf>,
+    /// Replace an existing output directory, only if aras wrote it.
+    #[arg(long)]
+    pub force: bool,
+    /// No progress display and no stage lines on stderr.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// How a joint log is read: a CSV's column names, or a ROS 2 bag's topic,
+/// joint and time stamps.
+#[derive(Debug, Args)]
+pub struct JointLogArgs {
     /// Your column names, e.g. `t=time,q=q2,dq=dq2,tau=tau_f` (roles: t, q,
     /// dq, tau, ddq; roles not given keep their default names).
     #[arg(long, value_name = "ROLE=NAME,…")]
@@ -89,21 +123,28 @@ pub struct FrictionArgs {
     /// (the bag's receive time).
     #[arg(long, value_enum, default_value = "header")]
     pub stamps: StampsArg,
-    /// Hold the Stribeck shape exponent δ of the Stribeck and LuGre models
-    /// at this value (2 is the classical LuGre shape) instead of fitting it.
-    #[arg(long, value_name = "DELTA", value_parser = positive, allow_hyphen_values = true)]
-    pub shape: Option<f64>,
-    /// Configuration file (.toml or .json; docs/config.md): its
-    /// `[friction]` section holds the analysis settings (`--shape` overrides
-    /// `friction.fit.shape`).
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
-    /// Replace an existing output directory, only if aras wrote it.
+}
+
+/// `aras friction-predict`.
+#[derive(Debug, Args)]
+pub struct FrictionPredictArgs {
+    /// The model: `friction.json` written by `aras friction` (its final
+    /// model: the best classical model plus the effects it added).
+    #[arg(long, value_name = "friction.json")]
+    pub model: PathBuf,
+    /// The log to predict, in `aras friction`'s format; its `tau` column is
+    /// only compared with the prediction (RMS and fitness (78) printed).
+    #[arg(long, value_name = "LOG.csv|BAG.mcap")]
+    pub data: PathBuf,
+    /// Output CSV (`t,tau`).
+    #[arg(long, default_value = "pred.csv", value_name = "PRED.csv")]
+    pub out: PathBuf,
+    /// How the joint log is read.
+    #[command(flatten)]
+    pub log: JointLogArgs,
+    /// Replace an existing output file, only if aras wrote it.
     #[arg(long)]
     pub force: bool,
-    /// No progress display and no stage lines on stderr.
-    #[arg(long, short)]
-    pub quiet: bool,
 }
 
 /// `aras diagnose`.

@@ -31,10 +31,10 @@ pub fn conclusion(run: &FrictionRun) -> String {
             Some(note) => s.push_str(&note.to_string()),
             None => s.push_str("No diagnosis was run."),
         }
-    } else if run.final_effects.is_empty() {
+    } else if run.model.effects.is_empty() {
         s.push_str(" No further effect was added.");
     } else {
-        let names: Vec<String> = run.final_effects.iter().map(|(e, _)| e.label()).collect();
+        let names: Vec<String> = run.model.effects.iter().map(|(e, _)| e.label()).collect();
         s.push_str(&format!(" Added: {}.", names.join("; ")));
     }
     s

@@ -25,6 +25,7 @@ fn main() -> ExitCode {
         Command::Diagnose(a) => cmd::diagnose::run(a),
         Command::ExportMjcf(a) => cmd::export_mjcf::run(a),
         Command::Friction(a) => cmd::friction::run(a),
+        Command::FrictionPredict(a) => cmd::friction::predict(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

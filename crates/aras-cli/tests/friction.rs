@@ -354,3 +354,108 @@ fn config_friction_section_is_the_library_settings() {
     );
     assert!(!dir.join("out-bad").exists());
 }
+
+/// `--predict` logs are applied after every choice and take part in none:
+/// the analysis and every other output are byte-identical with or without
+/// another `--predict` log, and `aras friction-predict` with the written
+/// `friction.json` reproduces each prediction byte for byte (effects
+/// included), without replacing a file it did not write.
+#[test]
+fn predicted_logs_take_no_part_and_the_model_file_reproduces_them() {
+    let dir = aras_testkit::Scratch::new("friction-predict");
+    let mut sim = JointSimulation {
+        duration: 30.0,
+        ..JointSimulation::default()
+    };
+    sim.friction.ripple.push(Ripple {
+        harmonic: 12.0,
+        amplitude: 0.04,
+        phase: 0.3,
+    });
+    let write = |name: &str, speed: f64, seed: u64| {
+        let log = JointSimulation {
+            speed,
+            seed,
+            ..sim.clone()
+        }
+        .run(name)
+        .log;
+        std::fs::write(dir.join(format!("{name}.csv")), log.to_csv()).unwrap();
+    };
+    write("train", 1.0, 3);
+    write("val", 0.7, 4);
+    write("p1", 1.3, 5);
+    write("p2", 0.5, 6);
+    let friction = |predict: &[&str], out: &str| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_aras"));
+        c.args(["friction", "-q", "--data"])
+            .arg(dir.join("train.csv"))
+            .arg("--validate")
+            .arg(dir.join("val.csv"));
+        for p in predict {
+            c.arg("--predict").arg(dir.join(format!("{p}.csv")));
+        }
+        let o = c.arg("--out").arg(dir.join(out)).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let both = friction(&["p1", "p2"], "both");
+    let one = friction(&["p1"], "one");
+    assert!(both.contains("predicted p2 → pred_p2.csv: RMS"), "{both}");
+    let read = |out: &str, file: &str| std::fs::read(dir.join(out).join(file)).unwrap();
+    for file in ["friction.json", "pred_train.csv", "pred_val.csv", "pred_p1.csv"] {
+        assert!(read("both", file) == read("one", file), "{file} differs");
+    }
+    let json: serde_json::Value =
+        serde_json::from_slice(&read("both", "friction.json")).unwrap();
+    assert!(
+        !json["final_effects"].as_array().unwrap().is_empty(),
+        "the hidden ripple is added, so the model file carries an effect: {json}"
+    );
+
+    let predict = |data: &str, out: &Path, force: bool| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_aras"));
+        c.args(["friction-predict", "--model"])
+            .arg(dir.join("both").join("friction.json"))
+            .arg("--data")
+            .arg(dir.join(data))
+            .arg("--out")
+            .arg(out);
+        if force {
+            c.arg("--force");
+        }
+        c.output().unwrap()
+    };
+    let out = dir.join("p2-pred.csv");
+    let o = predict("p2.csv", &out, false);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(std::fs::read(&out).unwrap() == read("both", "pred_p2.csv"));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("fitness (78)"));
+    // An existing output needs --force; an input is never replaced.
+    let o = predict("p2.csv", &out, false);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--force"));
+    assert!(predict("p2.csv", &out, true).status.success());
+    let before = std::fs::read(dir.join("p1.csv")).unwrap();
+    let o = predict("p2.csv", &dir.join("p1.csv"), true);
+    assert!(!o.status.success());
+    assert!(std::fs::read(dir.join("p1.csv")).unwrap() == before);
+    // A file that is not a friction model is refused with the fix.
+    std::fs::write(dir.join("other.json"), "{\"format\": \"aras-params/1\"}").unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_aras"))
+        .args(["friction-predict", "--model"])
+        .arg(dir.join("other.json"))
+        .arg("--data")
+        .arg(dir.join("p2.csv"))
+        .arg("--out")
+        .arg(dir.join("x.csv"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("format `aras-params/1` is not `aras-friction/1`"),
+        "{err}"
+    );
+    assert!(!dir.join("x.csv").exists());
+}

@@ -17,6 +17,20 @@ pub enum FrictionError {
         /// Number of values given.
         found: usize,
     },
+    /// A stored effect whose coefficient count is not its column count
+    /// (an edited or damaged model file).
+    #[error(
+        "effect `{effect}` has {found} coefficients but {expected} columns; the model file was \
+         edited or damaged: write it again with `aras friction`"
+    )]
+    EffectCoefficients {
+        /// The effect's identifier.
+        effect: String,
+        /// Its number of columns.
+        expected: usize,
+        /// Coefficients given.
+        found: usize,
+    },
     /// A NaN or infinity in an input series.
     #[error("{what} has a non-finite value {value} at sample {index}; remove or repair the sample")]
     NonFinite {

@@ -13,6 +13,10 @@
 //! ([`aras_log::units`]): a position whose range looks like degrees is
 //! refused, and so are logged `dq` / `ddq` columns that are not the
 //! derivatives of `q` / `dq` (e.g. degrees per second, a reversed sign).
+//! A logged `dq` or `ddq` that holds one value on every row while the
+//! column it derives from moves is a logger's placeholder (often all zeros),
+//! not a measurement: it is dropped and derived instead, with a note in
+//! [`JointLog::notes`].
 
 use std::{fmt, io::BufRead, path::Path, str::FromStr};
 
@@ -238,8 +242,13 @@ pub struct JointLog {
     pub tau: Vec<f64>,
     /// Acceleration, rad/s², when logged.
     pub ddq: Option<Vec<f64>>,
-    /// True when `dq` was computed from `q` (no velocity column).
+    /// True when `dq` was computed from `q` (no velocity column, or a
+    /// placeholder one).
     pub dq_from_q: bool,
+    /// What the reader did that the user should know (a placeholder column
+    /// dropped), one sentence each.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 impl JointLog {
@@ -428,8 +437,22 @@ pub fn read_joint_log_from(
     let t = it.next().unwrap_or_default();
     let q = it.next().unwrap_or_default();
     let tau = it.next().unwrap_or_default();
-    let dq_logged = if idq.is_some() { it.next() } else { None };
-    let ddq = if iddq.is_some() { it.next() } else { None };
+    let mut dq_logged = if idq.is_some() { it.next() } else { None };
+    let mut ddq = if iddq.is_some() { it.next() } else { None };
+    let mut notes = Vec::new();
+    if let Some(v) = &dq_logged
+        && is_placeholder(&t, &q, v)
+    {
+        notes.push(placeholder_note(file, &columns.dq, v[0], &columns.q));
+        dq_logged = None;
+    }
+    if let Some(a) = &ddq {
+        let dq = dq_logged.clone().unwrap_or_else(|| derivative(&t, &q));
+        if is_placeholder(&t, &dq, a) {
+            notes.push(placeholder_note(file, &columns.ddq, a[0], &columns.dq));
+            ddq = None;
+        }
+    }
     check_units(
         file,
         columns,
@@ -447,7 +470,26 @@ pub fn read_joint_log_from(
         tau,
         ddq,
         dq_from_q,
+        notes,
     })
+}
+
+/// A logged derivative `dx` that holds one value on every row while `x`
+/// moves against it: a placeholder (a logger's zeros), not a derivative.
+/// A constant `dx` that *is* the derivative (a constant-speed log) passes
+/// the unit check and is kept.
+fn is_placeholder(t: &[f64], x: &[f64], dx: &[f64]) -> bool {
+    let constant = dx.iter().all(|&v| v == dx[0]);
+    constant
+        && aras_log::units::derivative_ratio(t, x, dx)
+            .is_some_and(|r| (r - 1.0).abs() > aras_log::units::RATIO_TOLERANCE)
+}
+
+fn placeholder_note(file: &str, name: &str, value: f64, of: &str) -> String {
+    format!(
+        "{file}: column `{name}` is {value} on every row while `{of}` moves: taken as a \
+         placeholder and derived from `{of}` instead"
+    )
 }
 
 /// The position in radians (not degrees, [`aras_log::units::check_angle_column`])
@@ -585,6 +627,39 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("sign is reversed"), "{e}");
+    }
+
+    #[test]
+    fn placeholder_derivative_columns_are_derived_with_a_note() {
+        // A logger's zeros in `ddq`, then in both `dq` and `ddq`.
+        let with_ddq = |zero_dq: bool| {
+            let mut s = String::from("t,q,dq,tau,ddq\n");
+            for i in 0..400 {
+                let t = i as f64 * 0.005;
+                let dq = if zero_dq { 0.0 } else { 1.6 * (2.0 * t).cos() };
+                s += &format!("{t},{},{dq},0.1,0\n", 0.8 * (2.0 * t).sin());
+            }
+            s
+        };
+        let log = read(&with_ddq(false), &ColumnMap::default()).unwrap();
+        assert!(log.ddq.is_none() && !log.dq_from_q);
+        assert_eq!(log.notes.len(), 1, "{:?}", log.notes);
+        assert!(log.notes[0].contains("`ddq` is 0 on every row while `dq` moves"));
+        // The acceleration is now the derivative of dq: −3.2 sin(2t).
+        let a = log.acceleration();
+        assert!((a[100] + 3.2 * (2.0 * log.t[100]).sin()).abs() < 1e-3);
+        let log = read(&with_ddq(true), &ColumnMap::default()).unwrap();
+        assert!(log.dq_from_q && log.ddq.is_none());
+        assert_eq!(log.notes.len(), 2, "{:?}", log.notes);
+        assert!((log.dq[100] - 1.6 * (2.0 * log.t[100]).cos()).abs() < 1e-3);
+        // A constant speed is a true constant derivative: kept, no note.
+        let mut s = String::from("t,q,dq,tau,ddq\n");
+        for i in 0..400 {
+            let t = i as f64 * 0.005;
+            s += &format!("{t},{},0.3,0.1,0\n", 0.3 * t);
+        }
+        let log = read(&s, &ColumnMap::default()).unwrap();
+        assert!(log.notes.is_empty() && log.ddq.is_some() && !log.dq_from_q);
     }
 
     #[test]

@@ -299,6 +299,7 @@ impl JointSimulation {
             tau: Vec::with_capacity(n),
             ddq: Some(Vec::with_capacity(n)),
             dq_from_q: false,
+            notes: Vec::new(),
         };
         for (k, &tk) in times.iter().enumerate() {
             let (q, v, a) = self.kinematics(tk);

@@ -1,16 +1,20 @@
 //! `aras friction`: reads the joint logs, runs [`aras_friction::analyse`],
 //! writes `friction.json`, `report.html` (with its SVG figures) and
-//! `pred_<log>.csv` (columns `t,tau`: the final model's prediction) for TRAIN
-//! and every validation log.
+//! `pred_<log>.csv` (columns `t,tau`: the final model's prediction) for TRAIN,
+//! every validation log and every `--predict` log. `aras friction-predict`:
+//! the final model of a `friction.json` applied to a new log.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::Result;
-use aras_friction::{ColumnMap, JointLog, read_joint_log};
+use anyhow::{Context, Result, bail};
+use aras_friction::fit::metrics;
+use aras_friction::{
+    ColumnMap, FinalModel, FrictionRun, FrictionSettings, JointLog, analyse, read_joint_log,
+};
 
-use crate::cli::FrictionArgs;
-use aras_friction::{FrictionRun, FrictionSettings, analyse};
+use crate::cli::{FrictionArgs, FrictionPredictArgs, JointLogArgs};
+use crate::output::{FileKind, NewFile};
 
 use crate::friction::conclusion;
 use crate::output::OutDir;
@@ -20,10 +24,7 @@ use crate::stages::Stages;
 
 /// Runs `friction`.
 pub fn run(args: &FrictionArgs) -> Result<()> {
-    let columns: ColumnMap = match &args.columns {
-        Some(c) => c.parse()?,
-        None => ColumnMap::default(),
-    };
+    let reader = LogReader::new(&args.log)?;
     let mut settings = match &args.config {
         Some(p) => crate::config::Config::load(p)?.config.friction,
         None => FrictionSettings::default(),
@@ -34,38 +35,28 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
     settings.validate()?;
     let inputs: Vec<PathBuf> = std::iter::once(args.data.clone())
         .chain(args.validate.iter().cloned())
+        .chain(args.predict.iter().cloned())
         .chain(args.config.iter().cloned())
         .collect();
     let out = OutDir::create(&args.out, args.force, &inputs)?;
     let mut stages = Stages::new(args.quiet);
-    let read = |p: &Path| {
-        if aras_log::is_bag(p) {
-            return read_bag(p, args);
-        }
-        if args.topic.is_some() || args.joint.is_some() {
-            anyhow::bail!(
-                "{}: --topic and --joint apply to ROS 2 bags (.mcap); a CSV's columns are named \
-                 with --columns",
-                p.display()
-            );
-        }
-        read_joint_log(p, &columns).map_err(anyhow::Error::from)
-    };
-    let train = stages.run("read TRAIN", |_| read(&args.data))?;
-    let vals = stages.run("read validation logs", |_| {
-        args.validate
+    let read_all = |paths: &[PathBuf]| {
+        paths
             .iter()
-            .map(|p| read(p))
+            .map(|p| reader.read(p))
             .collect::<Result<Vec<_>>>()
-    })?;
+    };
+    let train = stages.run("read TRAIN", |_| reader.read(&args.data))?;
+    let vals = stages.run("read validation logs", |_| read_all(&args.validate))?;
+    let predicted = stages.run("read logs to predict", |_| read_all(&args.predict))?;
     let run = stages.run("fit models + diagnosis", |_| {
         analyse(&train, &vals, &settings)
     })?;
     let logs: Vec<&JointLog> = std::iter::once(&train).chain(&vals).collect();
-    let names = prediction_names(&logs);
+    let names = prediction_names(logs.iter().copied().chain(&predicted));
     stages.run("write outputs", |_| -> Result<()> {
         out.write_json("friction.json", &run)?;
-        for (log, name) in logs.iter().zip(&names) {
+        for (log, name) in logs.iter().copied().chain(&predicted).zip(&names) {
             let pred = run.final_prediction(log)?;
             out.write(name, prediction_csv(&log.t, &pred))?;
         }
@@ -96,15 +87,111 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
         }
     }
     println!("{}", conclusion(&run));
+    for (log, name) in predicted.iter().zip(&names[logs.len()..]) {
+        let m = metrics(&log.tau, &run.final_prediction(log)?);
+        println!(
+            "predicted {} → {name}: RMS {:.4} N·m against its tau{}",
+            log.name,
+            m.rms,
+            m.fitness
+                .map_or_else(String::new, |f| format!(", fitness (78) {f:.2} %"))
+        );
+    }
     println!("outputs in {}", dir.display());
     Ok(())
+}
+
+/// Runs `friction-predict`: the final model of a `friction.json` applied to
+/// one log, written as `t,tau`.
+pub fn predict(args: &FrictionPredictArgs) -> Result<()> {
+    let model = read_model(&args.model)?;
+    let reader = LogReader::new(&args.log)?;
+    let inputs = [args.model.clone(), args.data.clone()];
+    let out = NewFile::create(&args.out, args.force, FileKind::FrictionPrediction, &inputs)?;
+    let log = reader.read(&args.data)?;
+    let pred = model.predict(&log)?;
+    out.write(prediction_csv(&log.t, &pred).as_bytes())?;
+    let path = out.commit()?;
+    let m = metrics(&log.tau, &pred);
+    println!(
+        "{}: RMS {:.4} N·m against its tau{}; prediction in {}",
+        log.name,
+        m.rms,
+        m.fitness
+            .map_or_else(String::new, |f| format!(", fitness (78) {f:.2} %")),
+        path.display()
+    );
+    Ok(())
+}
+
+/// The final model of an `aras-friction/1` document.
+fn read_model(path: &Path) -> Result<FinalModel> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read the model {}", path.display()))?;
+    let value: serde_json::Value = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: not JSON; give the friction.json that `aras friction` wrote",
+            path.display()
+        )
+    })?;
+    let format = value.get("format").and_then(|f| f.as_str());
+    if format != Some(aras_friction::analysis::FORMAT) {
+        bail!(
+            "{}: format {} is not `{}`; give the friction.json that `aras friction` wrote",
+            path.display(),
+            format.map_or_else(|| "missing".into(), |f| format!("`{f}`")),
+            aras_friction::analysis::FORMAT
+        );
+    }
+    serde_json::from_value(value).with_context(|| {
+        format!(
+            "{}: its final model (`final_base`, `final_effects`) cannot be read",
+            path.display()
+        )
+    })
+}
+
+/// Reads joint logs as the command line says: CSVs with `--columns`, ROS 2
+/// bags with `--topic`, `--joint`, `--stamps`. The reader's notes go to
+/// stderr.
+struct LogReader<'a> {
+    args: &'a JointLogArgs,
+    columns: ColumnMap,
+}
+
+impl<'a> LogReader<'a> {
+    fn new(args: &'a JointLogArgs) -> Result<Self> {
+        let columns = match &args.columns {
+            Some(c) => c.parse()?,
+            None => ColumnMap::default(),
+        };
+        Ok(Self { args, columns })
+    }
+
+    fn read(&self, p: &Path) -> Result<JointLog> {
+        if aras_log::is_bag(p) {
+            return read_bag(p, self.args);
+        }
+        if self.args.topic.is_some() || self.args.joint.is_some() {
+            anyhow::bail!(
+                "{}: --topic and --joint apply to ROS 2 bags (.mcap); a CSV's columns are named \
+                 with --columns",
+                p.display()
+            );
+        }
+        let log = read_joint_log(p, &self.columns)?;
+        for n in &log.notes {
+            eprintln!("note: {n}");
+        }
+        Ok(log)
+    }
 }
 
 /// One joint of a ROS 2 bag as a joint log: `--topic`, `--joint`,
 /// `--stamps`; position is `q`, velocity `dq` (computed from `q` when the
 /// messages have none), effort `tau`. The rows go through the CSV joint
 /// log's checks, labelled `BAG#TOPIC`.
-fn read_bag(path: &Path, args: &FrictionArgs) -> Result<JointLog> {
+fn read_bag(path: &Path, args: &JointLogArgs) -> Result<JointLog> {
     if args.columns.is_some() {
         anyhow::bail!(
             "{}: a ROS 2 bag's joint is chosen with --joint NAME, not --columns",
@@ -144,10 +231,9 @@ fn read_bag(path: &Path, args: &FrictionArgs) -> Result<JointLog> {
 }
 
 /// `pred_<stem>.csv` for each log; a stem used twice gets `_2`, `_3`, ….
-fn prediction_names(logs: &[&JointLog]) -> Vec<String> {
+fn prediction_names<'a>(logs: impl Iterator<Item = &'a JointLog>) -> Vec<String> {
     let mut seen: Vec<String> = Vec::new();
-    logs.iter()
-        .map(|l| {
+    logs.map(|l| {
             let mut name = format!("pred_{}.csv", l.name);
             let mut k = 2;
             while seen.contains(&name) {

@@ -1,4 +1,5 @@
-//! Single-file outputs (`predict`, `excite`, `simulate`, `export-mjcf`):
+//! Single-file outputs (`predict`, `excite`, `simulate`, `export-mjcf`,
+//! `friction-predict`):
 //! staged, placed without replacing anything unless asked, and recorded.
 
 use std::fs;
@@ -25,6 +26,8 @@ pub enum FileKind {
     SimulatedLog,
     /// `aras export-mjcf`: an MJCF file.
     Mjcf,
+    /// `aras friction-predict`: a CSV `t,tau`.
+    FrictionPrediction,
 }
 
 impl FileKind {
@@ -36,6 +39,7 @@ impl FileKind {
             Self::Trajectory => "trajectory",
             Self::SimulatedLog => "simulated-log",
             Self::Mjcf => "mjcf",
+            Self::FrictionPrediction => "friction-prediction",
         }
     }
 
@@ -46,6 +50,7 @@ impl FileKind {
             Self::Trajectory => "a trajectory written by `aras excite`",
             Self::SimulatedLog => "a log written by `aras simulate` (with its sidecar LOG.json)",
             Self::Mjcf => "an MJCF file written by `aras export-mjcf`",
+            Self::FrictionPrediction => "a prediction CSV written by `aras friction-predict`",
         }
     }
 

@@ -22,7 +22,7 @@ mod diagnosis;
 mod settings;
 
 use rayon::prelude::*;
-use serde::{Serialize, Serializer};
+use serde::{Deserialize, Serialize, Serializer};
 use thiserror::Error;
 
 use crate::{
@@ -146,6 +146,9 @@ pub struct LogInfo {
     pub steps: [f64; 2],
     /// True when the velocity was computed from the position.
     pub dq_from_q: bool,
+    /// The reader's notes on this log ([`JointLog::notes`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 impl LogInfo {
@@ -162,6 +165,7 @@ impl LogInfo {
             duration: log.t.last().copied().unwrap_or(0.0) - log.t.first().copied().unwrap_or(0.0),
             steps: [if lo.is_finite() { lo } else { 0.0 }, hi],
             dq_from_q: log.dq_from_q,
+            notes: log.notes.clone(),
         }
     }
 }
@@ -186,7 +190,7 @@ pub struct ModelResult {
 }
 
 /// A fitted model of any of the four kinds.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "model", rename_all = "snake_case")]
 pub enum AnyModel {
     /// Offset + Coulomb + viscous.
@@ -332,16 +336,51 @@ pub struct FrictionRun {
     /// The final model (best classical model plus the effects the diagnosis
     /// added, refitted), when it differs from the best classical model.
     pub final_model: Option<ModelResult>,
-    /// The final model's base friction model.
-    pub final_base: AnyModel,
-    /// Effects of the final model with their coefficients.
-    pub final_effects: Vec<(Effect, Vec<f64>)>,
+    /// The final model (its fields `final_base` and `final_effects` in the
+    /// document), ready to predict on any log.
+    #[serde(flatten)]
+    pub model: FinalModel,
+}
+
+/// The final model of an analysis: the best classical model, refitted, plus
+/// the effects the diagnosis added with their coefficients. It predicts on
+/// any log of the joint ([`FinalModel::predict`]) without refitting
+/// anything, and reads back from an `aras-friction/1` document (the
+/// document's other fields are ignored), so a model fitted once applies to
+/// every later log.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FinalModel {
+    /// The base friction model.
+    #[serde(rename = "final_base")]
+    pub base: AnyModel,
+    /// The effects with their coefficients (in the effect's column order).
+    #[serde(rename = "final_effects")]
+    pub effects: Vec<(Effect, Vec<f64>)>,
+}
+
+impl FinalModel {
+    /// The model's friction torque along `log` (its `tau` is not used):
+    /// the base model's prediction, its state integrated from rest at the
+    /// log's first sample, plus every effect's columns times their
+    /// coefficients. Every effect's coefficient count is checked.
+    pub fn predict(&self, log: &JointLog) -> Result<Vec<f64>, FrictionError> {
+        for (e, c) in &self.effects {
+            if c.len() != e.width() {
+                return Err(FrictionError::EffectCoefficients {
+                    effect: e.id(),
+                    expected: e.width(),
+                    found: c.len(),
+                });
+            }
+        }
+        predict_with_effects(&self.base, &self.effects, log)
+    }
 }
 
 impl FrictionRun {
     /// The final model's prediction on a log: base model plus effects.
     pub fn final_prediction(&self, log: &JointLog) -> Result<Vec<f64>, FrictionError> {
-        predict_with_effects(&self.final_base, &self.final_effects, log)
+        self.model.predict(log)
     }
 
     /// The best classical model's result.
@@ -491,7 +530,9 @@ pub fn analyse(
         diagnosis,
         diagnosis_note,
         final_model,
-        final_base,
-        final_effects,
+        model: FinalModel {
+            base: final_base,
+            effects: final_effects,
+        },
     })
 }
