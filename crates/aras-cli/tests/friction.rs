@@ -402,12 +402,22 @@ fn predicted_logs_take_no_part_and_the_model_file_reproduces_them() {
     let both = friction(&["p1", "p2"], "both");
     let one = friction(&["p1"], "one");
     assert!(both.contains("predicted p2 → pred_p2.csv: RMS"), "{both}");
+    let p1_line = |out: &str| {
+        out.lines()
+            .find(|l| l.starts_with("predicted p1"))
+            .map(str::to_owned)
+    };
+    assert!(p1_line(&one).is_some() && p1_line(&one) == p1_line(&both));
     let read = |out: &str, file: &str| std::fs::read(dir.join(out).join(file)).unwrap();
-    for file in ["friction.json", "pred_train.csv", "pred_val.csv", "pred_p1.csv"] {
+    for file in [
+        "friction.json",
+        "pred_train.csv",
+        "pred_val.csv",
+        "pred_p1.csv",
+    ] {
         assert!(read("both", file) == read("one", file), "{file} differs");
     }
-    let json: serde_json::Value =
-        serde_json::from_slice(&read("both", "friction.json")).unwrap();
+    let json: serde_json::Value = serde_json::from_slice(&read("both", "friction.json")).unwrap();
     assert!(
         !json["final_effects"].as_array().unwrap().is_empty(),
         "the hidden ripple is added, so the model file carries an effect: {json}"

@@ -47,7 +47,8 @@ pub mod sim;
 mod track;
 
 pub use analysis::{
-    AnalysisError, AnyModel, FinalModel, FrictionRun, FrictionSettings, ModelKind, ModelResult, analyse,
+    AnalysisError, AnyModel, FinalModel, FrictionRun, FrictionSettings, ModelKind, ModelResult,
+    analyse,
 };
 pub use error::FrictionError;
 pub use log::{ColumnMap, JointLog, LogError, read_joint_log, read_joint_log_from};

@@ -79,18 +79,28 @@ pub const RATIO_TOLERANCE: f64 = 0.1;
 /// a consistent column, 180/π for a rate in degrees per second beside angles
 /// in radians. Integrating rather than differentiating keeps the noise of
 /// `x` from biasing the ratio. `None` when `x` does not change (nothing to
-/// compare) or the lengths differ.
+/// compare) or the lengths differ. A gap in the stamps (a step longer
+/// than [`RATIO_GAP_STEPS`] times the median step) ends a span and is not
+/// integrated: one trapezoid over a gap says nothing about the column's
+/// units.
 pub fn derivative_ratio(t: &[f64], x: &[f64], dx: &[f64]) -> Option<f64> {
     let n = t.len();
     if n < 2 || x.len() != n || dx.len() != n {
         return None;
     }
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    let mid = steps.len() / 2;
+    let gap = RATIO_GAP_STEPS * *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
     let (mut sxy, mut sxx) = (0.0, 0.0);
     let mut i = 0;
     while i + 1 < n {
+        if t[i + 1] - t[i] > gap {
+            i += 1;
+            continue;
+        }
         let mut j = i;
         let mut integral = 0.0;
-        while j + 1 < n && (j == i || t[j] - t[i] < RATIO_SPAN_S) {
+        while j + 1 < n && (j == i || t[j] - t[i] < RATIO_SPAN_S) && t[j + 1] - t[j] <= gap {
             integral += 0.5 * (dx[j] + dx[j + 1]) * (t[j + 1] - t[j]);
             j += 1;
         }
@@ -101,6 +111,10 @@ pub fn derivative_ratio(t: &[f64], x: &[f64], dx: &[f64]) -> Option<f64> {
     }
     (sxx > 0.0 && sxy.is_finite() && sxx.is_finite()).then(|| sxy / sxx)
 }
+
+/// A step longer than this many median steps is a gap in the stamps
+/// ([`derivative_ratio`]).
+pub const RATIO_GAP_STEPS: f64 = 4.0;
 
 /// Refuses a logged derivative column `name` of `file` that is not the
 /// derivative of the column `of` ([`derivative_ratio`] outside
@@ -160,6 +174,31 @@ mod tests {
         let r = derivative_ratio(&t, &x, &dx).unwrap();
         // Trapezoid over 10 ms of a 3 rad/s sine: error ≈ (3·0.01)²/12.
         assert!((r - 1.0).abs() < 1e-4, "{r}");
+    }
+
+    #[test]
+    fn gaps_in_the_stamps_do_not_bias_the_ratio() {
+        // 1–16 ms irregular steps with 0.1–0.3 s gaps on a 3 rad/s sine:
+        // one trapezoid over a gap would be off by tens of percent.
+        let mut t = vec![0.0];
+        let mut k = 0u64;
+        while *t.last().unwrap() < 20.0 {
+            k = k
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let u = (k >> 11) as f64 / (1u64 << 53) as f64;
+            let step = if k.is_multiple_of(50) {
+                0.1 + 0.2 * u
+            } else {
+                0.001 + 0.015 * u
+            };
+            t.push(t.last().unwrap() + step);
+        }
+        let x: Vec<f64> = t.iter().map(|t| 0.5 * (6.0 * t).sin()).collect();
+        let dx: Vec<f64> = t.iter().map(|t| 3.0 * (6.0 * t).cos()).collect();
+        let r = derivative_ratio(&t, &x, &dx).unwrap();
+        // Trapezoid over ≤ 16 ms of a 6 rad/s sine: error ≤ (6·0.016)²/12.
+        assert!((r - 1.0).abs() < 1e-3, "{r}");
     }
 
     #[test]

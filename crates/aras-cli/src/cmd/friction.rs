@@ -234,16 +234,16 @@ fn read_bag(path: &Path, args: &JointLogArgs) -> Result<JointLog> {
 fn prediction_names<'a>(logs: impl Iterator<Item = &'a JointLog>) -> Vec<String> {
     let mut seen: Vec<String> = Vec::new();
     logs.map(|l| {
-            let mut name = format!("pred_{}.csv", l.name);
-            let mut k = 2;
-            while seen.contains(&name) {
-                name = format!("pred_{}_{k}.csv", l.name);
-                k += 1;
-            }
-            seen.push(name.clone());
-            name
-        })
-        .collect()
+        let mut name = format!("pred_{}.csv", l.name);
+        let mut k = 2;
+        while seen.contains(&name) {
+            name = format!("pred_{}_{k}.csv", l.name);
+            k += 1;
+        }
+        seen.push(name.clone());
+        name
+    })
+    .collect()
 }
 
 fn prediction_csv(t: &[f64], tau: &[f64]) -> String {
