@@ -87,20 +87,14 @@ pub struct FrictionArgs {
     #[command(flatten)]
     pub log: JointLogArgs,
     /// Hold the Stribeck shape exponent δ of the Stribeck and LuGre models
-    /// at this value (2 is the classical LuGre shape) instead of fitting it.
+    /// at this value (2 is the classical LuGre shape) instead of fitting it
+    /// (overrides the config's `friction.fit.shape`).
     #[arg(long, value_name = "DELTA", value_parser = positive, allow_hyphen_values = true)]
     pub shape: Option<f64>,
-    /// Configuration file (.toml or .json; docs/config.md): its
-    /// `[friction]` section holds the analysis settings (`--shape` overrides
-    /// `friction.fit.shape`).
-    #[arg(long, value_name = "FILE")]
-    pub config: Option<PathBuf>,
-    /// Replace an existing output directory, only if aras wrote it.
-    #[arg(long)]
-    pub force: bool,
-    /// No progress display and no stage lines on stderr.
-    #[arg(long, short)]
-    pub quiet: bool,
+    /// `--config` (its `[friction]` section holds the analysis settings),
+    /// `--force`, `--quiet`.
+    #[command(flatten)]
+    pub common: Common,
 }
 
 /// How a joint log is read: a CSV's column names, or a ROS 2 bag's topic,

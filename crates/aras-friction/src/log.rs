@@ -446,22 +446,21 @@ pub fn read_joint_log_from(
         notes.push(placeholder_note(file, &columns.dq, v[0], &columns.q));
         dq_logged = None;
     }
-    if let Some(a) = &ddq {
-        let dq = dq_logged.clone().unwrap_or_else(|| derivative(&t, &q));
-        if is_placeholder(&t, &dq, a) {
-            notes.push(placeholder_note(file, &columns.ddq, a[0], &columns.dq));
-            ddq = None;
-        }
+    let dq_from_q = dq_logged.is_none();
+    let dq = dq_logged.unwrap_or_else(|| derivative(&t, &q));
+    if let Some(a) = &ddq
+        && is_placeholder(&t, &dq, a)
+    {
+        notes.push(placeholder_note(file, &columns.ddq, a[0], &columns.dq));
+        ddq = None;
     }
     check_units(
         file,
         columns,
         (&t, &q, &data_lines),
-        dq_logged.as_deref(),
+        (&dq, !dq_from_q),
         ddq.as_deref(),
     )?;
-    let dq_from_q = dq_logged.is_none();
-    let dq = dq_logged.unwrap_or_else(|| derivative(&t, &q));
     Ok(JointLog {
         name: name.to_string(),
         t,
@@ -494,14 +493,14 @@ fn placeholder_note(file: &str, name: &str, value: f64, of: &str) -> String {
 
 /// The position in radians (not degrees, [`aras_log::units::check_angle_column`])
 /// and the logged derivatives consistent with it
-/// ([`aras_log::units::check_derivative_column`]; `ddq` against the logged
-/// `dq`, or against the derivative of `q` without one). `lines[i]` is the
+/// ([`aras_log::units::check_derivative_column`]: `dq` against `q` when it
+/// was `logged`, `ddq` against `dq`, logged or derived). `lines[i]` is the
 /// file line of sample `i`.
 fn check_units(
     file: &str,
     columns: &ColumnMap,
     (t, q, lines): (&[f64], &[f64], &[u64]),
-    dq: Option<&[f64]>,
+    (dq, logged): (&[f64], bool),
     ddq: Option<&[f64]>,
 ) -> Result<(), LogError> {
     use aras_log::units::{check_angle_column, check_derivative_column};
@@ -516,17 +515,9 @@ fn check_units(
     }
     let line = lines.get(at).copied().unwrap_or(0);
     check_angle_column(file, &columns.q, [lo, hi, top], line)?;
-    let from_q;
-    let dq = match dq {
-        Some(dq) => {
-            check_derivative_column(file, (&columns.dq, dq), (&columns.q, q), t)?;
-            dq
-        }
-        None => {
-            from_q = derivative(t, q);
-            &from_q
-        }
-    };
+    if logged {
+        check_derivative_column(file, (&columns.dq, dq), (&columns.q, q), t)?;
+    }
     if let Some(ddq) = ddq {
         check_derivative_column(file, (&columns.ddq, ddq), (&columns.dq, dq), t)?;
     }

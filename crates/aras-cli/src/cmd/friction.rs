@@ -9,9 +9,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use aras_friction::fit::metrics;
-use aras_friction::{
-    ColumnMap, FinalModel, FrictionRun, FrictionSettings, JointLog, analyse, read_joint_log,
-};
+use aras_friction::{ColumnMap, FinalModel, FrictionRun, JointLog, analyse, read_joint_log};
 
 use crate::cli::{FrictionArgs, FrictionPredictArgs, JointLogArgs};
 use crate::output::{FileKind, NewFile};
@@ -25,10 +23,7 @@ use crate::stages::Stages;
 /// Runs `friction`.
 pub fn run(args: &FrictionArgs) -> Result<()> {
     let reader = LogReader::new(&args.log)?;
-    let mut settings = match &args.config {
-        Some(p) => crate::config::Config::load(p)?.config.friction,
-        None => FrictionSettings::default(),
-    };
+    let mut settings = crate::cmd::load_config(&args.common)?.config.friction;
     if let Some(shape) = args.shape {
         settings.fit.shape = Some(shape);
     }
@@ -36,10 +31,10 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
     let inputs: Vec<PathBuf> = std::iter::once(args.data.clone())
         .chain(args.validate.iter().cloned())
         .chain(args.predict.iter().cloned())
-        .chain(args.config.iter().cloned())
+        .chain(args.common.config.iter().cloned())
         .collect();
-    let out = OutDir::create(&args.out, args.force, &inputs)?;
-    let mut stages = Stages::new(args.quiet);
+    let out = OutDir::create(&args.out, args.common.force, &inputs)?;
+    let mut stages = Stages::new(args.common.quiet);
     let read_all = |paths: &[PathBuf]| {
         paths
             .iter()
@@ -53,14 +48,19 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
         analyse(&train, &vals, &settings)
     })?;
     let logs: Vec<&JointLog> = std::iter::once(&train).chain(&vals).collect();
-    let names = prediction_names(logs.iter().copied().chain(&predicted));
+    // Every log the final model is written for: TRAIN, validation, --predict.
+    let written: Vec<&JointLog> = logs.iter().copied().chain(&predicted).collect();
+    let names = prediction_names(&written);
+    let predictions = written
+        .iter()
+        .map(|log| run.final_prediction(log))
+        .collect::<Result<Vec<_>, _>>()?;
     stages.run("write outputs", |_| -> Result<()> {
         out.write_json("friction.json", &run)?;
-        for (log, name) in logs.iter().copied().chain(&predicted).zip(&names) {
-            let pred = run.final_prediction(log)?;
-            out.write(name, prediction_csv(&log.t, &pred))?;
+        for ((log, name), pred) in written.iter().zip(&names).zip(&predictions) {
+            out.write(name, prediction_csv(&log.t, pred))?;
         }
-        let report = build(&run, &logs)?;
+        let report = build(&run, &logs, &predictions[0])?;
         for (file, svg) in report.figures() {
             out.write(file, svg)?;
         }
@@ -68,7 +68,7 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
         Ok(())
     })?;
     let dir = out.commit()?;
-    if !args.quiet {
+    if !args.common.quiet {
         for m in &run.models {
             let v: Vec<String> = m
                 .validation
@@ -87,8 +87,13 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
         }
     }
     println!("{}", conclusion(&run));
-    for (log, name) in predicted.iter().zip(&names[logs.len()..]) {
-        let m = metrics(&log.tau, &run.final_prediction(log)?);
+    let first = logs.len();
+    for ((log, name), pred) in predicted
+        .iter()
+        .zip(&names[first..])
+        .zip(&predictions[first..])
+    {
+        let m = metrics(&log.tau, pred);
         println!(
             "predicted {} → {name}: RMS {:.4} N·m against its tau{}",
             log.name,
@@ -231,19 +236,20 @@ fn read_bag(path: &Path, args: &JointLogArgs) -> Result<JointLog> {
 }
 
 /// `pred_<stem>.csv` for each log; a stem used twice gets `_2`, `_3`, ….
-fn prediction_names<'a>(logs: impl Iterator<Item = &'a JointLog>) -> Vec<String> {
+fn prediction_names(logs: &[&JointLog]) -> Vec<String> {
     let mut seen: Vec<String> = Vec::new();
-    logs.map(|l| {
-        let mut name = format!("pred_{}.csv", l.name);
-        let mut k = 2;
-        while seen.contains(&name) {
-            name = format!("pred_{}_{k}.csv", l.name);
-            k += 1;
-        }
-        seen.push(name.clone());
-        name
-    })
-    .collect()
+    logs.iter()
+        .map(|l| {
+            let mut name = format!("pred_{}.csv", l.name);
+            let mut k = 2;
+            while seen.contains(&name) {
+                name = format!("pred_{}_{k}.csv", l.name);
+                k += 1;
+            }
+            seen.push(name.clone());
+            name
+        })
+        .collect()
 }
 
 fn prediction_csv(t: &[f64], tau: &[f64]) -> String {
@@ -268,8 +274,9 @@ fn fmt_opt(x: Option<f64>) -> String {
 }
 
 /// The report: models table, τ–v scatter, hysteresis at a reversal,
-/// residuals against q and t, the diagnosis steps.
-fn build(run: &FrictionRun, logs: &[&JointLog]) -> Result<Report> {
+/// residuals against q and t, the diagnosis steps. `final_train` is the
+/// final model's prediction on TRAIN (`logs[0]`).
+fn build(run: &FrictionRun, logs: &[&JointLog], final_train: &[f64]) -> Result<Report> {
     let train = logs[0];
     let mut r = Report::new(format!("Friction of joint log `{}`", train.name));
     r.paragraph(format!(
@@ -434,7 +441,7 @@ fn build(run: &FrictionRun, logs: &[&JointLog]) -> Result<Report> {
     let rf: Vec<f64> = train
         .tau
         .iter()
-        .zip(run.final_prediction(train)?)
+        .zip(final_train)
         .map(|(a, b)| a - b)
         .collect();
     for (axis, x, unit, file) in [
