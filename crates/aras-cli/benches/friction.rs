@@ -15,7 +15,7 @@ fn bench(c: &mut Criterion) {
         ..JointSimulation::default()
     };
     sim.friction.ripple.push(Ripple {
-        harmonic: 12.0,
+        cycles: 12.0,
         amplitude: 0.04,
         phase: 0.3,
     });

@@ -62,6 +62,30 @@ pub fn report_diagnosis(run: &FrictionRun, r: &mut crate::report::Report) {
         100.0 * d.effective_fraction,
         run.settings.min_gain
     ));
+    let sp = &d.spectrum;
+    if sp.band.1 > sp.band.0 {
+        let mut text = format!(
+            "Ripple lines searched in the residual against position from {:.1} to {:.0}              cycles/rev (threshold z > {:.1}, false-alarm probability {} over the band): ",
+            sp.band.0, sp.band.1, sp.threshold, run.settings.library.spectrum.false_alarm
+        );
+        if sp.lines.is_empty() {
+            text.push_str("none found.");
+        } else {
+            let lines: Vec<String> = sp
+                .lines
+                .iter()
+                .map(|l| {
+                    format!(
+                        "{:.2} ± {:.2} cycles/rev ({:.2e} N·m, z = {:.1})",
+                        l.cycles, l.sigma, l.amplitude, l.z
+                    )
+                })
+                .collect();
+            text.push_str(&lines.join("; "));
+            text.push_str(". Each line and its harmonics are candidates.");
+        }
+        r.paragraph(text);
+    }
     let mut header = vec!["step".to_string(), "RMS TRAIN".into()];
     for v in &run.validation {
         header.push(format!("RMS {}", v.name));
@@ -96,6 +120,16 @@ pub fn report_diagnosis(run: &FrictionRun, r: &mut crate::report::Report) {
     r.table(&h, rows);
     if d.steps.is_empty() {
         r.paragraph("No effect was added: the best classical model explains the logs.");
+    }
+    if !d.dropped.is_empty() {
+        r.paragraph(format!(
+            "Taken out again after the refit of the model's structure (every coefficient below              3σ: the selection added them for the unrefined model): {}.",
+            d.dropped
+                .iter()
+                .map(|id| format!("`{id}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
     }
     for (k, st) in d.steps.iter().enumerate() {
         r.heading(3, format!("{}. {} (`{}`)", k + 1, st.label, st.id));

@@ -15,7 +15,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     match effect.as_str() {
         "none" => {}
         "ripple" => sim.friction.ripple.push(Ripple {
-            harmonic: 12.0,
+            cycles: 12.0,
             amplitude: 0.04,
             phase: 0.3,
         }),

@@ -9,7 +9,7 @@
 //!
 //! | effect | columns | coefficients |
 //! |---|---|---|
-//! | [`Effect::Ripple`] `k` | `sin(k q)`, `cos(k q)` | `a`, `b`: amplitude `√(a²+b²)` N·m |
+//! | [`Effect::Ripple`] `k` | `sin(k q)`, `cos(k q)` | `a`, `b`: amplitude `√(a²+b²)` N·m; `k` found by [`position_lines`] |
 //! | [`Effect::ViscousAsymmetry`] | `|v|` | N·m·s/rad: viscous friction differs by `±` that between directions |
 //! | [`Effect::CoulombDrift`] | `(t − t₀) sgn(v)` | N·m/s: the Coulomb level drifts (warming) |
 //! | [`Effect::OffsetDrift`] | `t − t₀` | N·m/s: the offset drifts |
@@ -21,17 +21,24 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{Dahl, FrictionError, JointLog, Separable, Track, log::derivative, sgn};
+use crate::{
+    Dahl, FrictionError, JointLog, Separable, Track,
+    log::derivative,
+    sgn,
+    spectrum::{PositionSpectrum, SpectrumSettings, position_lines},
+};
 
 /// A candidate effect (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Effect {
     /// Position ripple or load: `a sin(k q) + b cos(k q)`, `k` cycles per
-    /// revolution (`k = 1`: gravity-like load).
+    /// revolution (`k = 1`: gravity-like load), any positive real `k` (a
+    /// gear's teeth seen through a reduction are rarely an integer count).
     Ripple {
-        /// Cycles per revolution.
-        harmonic: u32,
+        /// Cycles per revolution `k`.
+        #[serde(alias = "harmonic")]
+        cycles: f64,
     },
     /// Viscous friction that differs between directions: `c |v|`.
     ViscousAsymmetry,
@@ -68,7 +75,7 @@ impl Effect {
     /// Short identifier, e.g. `ripple:12`, `coulomb_drift`.
     pub fn id(&self) -> String {
         match self {
-            Effect::Ripple { harmonic } => format!("ripple:{harmonic}"),
+            Effect::Ripple { cycles } => format!("ripple:{}", cycles_id(*cycles)),
             Effect::ViscousAsymmetry => "viscous_asymmetry".into(),
             Effect::CoulombDrift => "coulomb_drift".into(),
             Effect::OffsetDrift => "offset_drift".into(),
@@ -91,11 +98,15 @@ impl Effect {
     /// What the effect means, in words.
     pub fn label(&self) -> String {
         match self {
-            Effect::Ripple { harmonic: 1 } => {
+            Effect::Ripple { cycles } if *cycles == 1.0 => {
                 "position-dependent load (one cycle per revolution)".into()
             }
-            Effect::Ripple { harmonic } => {
-                format!("position ripple, {harmonic} cycles per revolution")
+            Effect::Ripple { cycles } => {
+                format!(
+                    "position ripple, {} cycles per revolution (period {:.3e} rad)",
+                    cycles_id(*cycles),
+                    std::f64::consts::TAU / cycles
+                )
             }
             Effect::ViscousAsymmetry => "direction asymmetry of the viscous friction".into(),
             Effect::CoulombDrift => "slow drift of the Coulomb level (e.g. warming)".into(),
@@ -126,8 +137,7 @@ impl Effect {
         let n = log.len();
         let t0 = log.t.first().copied().unwrap_or(0.0);
         Ok(match *self {
-            Effect::Ripple { harmonic } => {
-                let k = f64::from(harmonic);
+            Effect::Ripple { cycles: k } => {
                 let (s, c): (Vec<f64>, Vec<f64>) = log.q.iter().map(|&q| (k * q).sin_cos()).unzip();
                 vec![s, c]
             }
@@ -202,12 +212,26 @@ impl Effect {
     }
 }
 
+/// `k` as an identifier: an integer as such, otherwise to a hundredth.
+fn cycles_id(k: f64) -> String {
+    if k.fract() == 0.0 && k.abs() < 1e9 {
+        format!("{k:.0}")
+    } else {
+        format!("{k:.2}")
+    }
+}
+
 /// Settings of the candidate library.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct LibrarySettings {
-    /// Highest ripple harmonic (cycles per revolution) tried.
+    /// Highest integer ripple harmonic (cycles per revolution) tried below
+    /// the line search's band: the low-order position dependence (a load)
+    /// over a stroke too short to hold two of its periods.
     pub max_harmonic: u32,
+    /// The search for ripple lines at any spatial frequency in the
+    /// residual.
+    pub spectrum: SpectrumSettings,
     /// Hysteresis lengths tried: this many, log-spaced between 1e-5 rad and
     /// a hundredth of the travelled range.
     pub hysteresis_lengths: usize,
@@ -221,6 +245,7 @@ impl Default for LibrarySettings {
     fn default() -> Self {
         Self {
             max_harmonic: 40,
+            spectrum: SpectrumSettings::default(),
             hysteresis_lengths: 4,
             delay: true,
             inertia: true,
@@ -228,12 +253,28 @@ impl Default for LibrarySettings {
     }
 }
 
-/// The candidate effects for a training log: ripple harmonics up to the
-/// highest one the log resolves (at least 8 samples per ripple period at
-/// the 90th percentile of the position step, and at most
-/// [`LibrarySettings::max_harmonic`]), asymmetry, drifts, hysteresis,
-/// delay and inertia.
-pub fn library(train: &JointLog, settings: &LibrarySettings) -> Vec<Effect> {
+/// The candidates of a training log and the position spectrum their
+/// ripple lines come from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Library {
+    /// The candidate effects.
+    pub effects: Vec<Effect>,
+    /// The line search of the model's residual against position.
+    pub spectrum: PositionSpectrum,
+}
+
+/// The candidate effects for a training log and the residual of the model
+/// being diagnosed on it:
+/// * integer ripple harmonics from 1 below the line search's band, up to
+///   the highest one the log resolves (at least 8 samples per period at
+///   the 90th percentile of the position step) and at most
+///   [`LibrarySettings::max_harmonic`];
+/// * every line the search finds in the residual against position
+///   ([`position_lines`]) with its harmonics up to the band's top, one
+///   Fourier cell apart at least;
+/// * asymmetry, drifts, hysteresis, delay and inertia.
+pub fn library(train: &JointLog, residual: &[f64], settings: &LibrarySettings) -> Library {
+    let spectrum = position_lines(&train.q, residual, &settings.spectrum);
     let mut steps: Vec<f64> = train.q.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
     let resolved = if steps.is_empty() {
         1
@@ -247,8 +288,32 @@ pub fn library(train: &JointLog, settings: &LibrarySettings) -> Vec<Effect> {
             settings.max_harmonic
         }
     };
-    let kmax = settings.max_harmonic.min(resolved).max(1);
-    let mut v: Vec<Effect> = (1..=kmax).map(|k| Effect::Ripple { harmonic: k }).collect();
+    let below_band = if spectrum.lowest() > 1.0 {
+        (spectrum.lowest().ceil() - 1.0) as u32
+    } else {
+        u32::MAX
+    };
+    let kmax = settings.max_harmonic.min(resolved).min(below_band).max(1);
+    let mut v: Vec<Effect> = (1..=kmax)
+        .map(|k| Effect::Ripple {
+            cycles: f64::from(k),
+        })
+        .collect();
+    // A Fourier cell: the band starts two of them above zero.
+    let cell = 0.5 * spectrum.lowest();
+    let mut ripples: Vec<f64> = Vec::new();
+    for line in &spectrum.lines {
+        for h in 1..=settings.spectrum.harmonics.max(1) {
+            let k = f64::from(h) * line.cycles;
+            if k > spectrum.band.1 {
+                break;
+            }
+            if ripples.iter().all(|&r| (r - k).abs() >= cell) {
+                ripples.push(k);
+                v.push(Effect::Ripple { cycles: k });
+            }
+        }
+    }
     v.extend([
         Effect::ViscousAsymmetry,
         Effect::CoulombDrift,
@@ -269,7 +334,10 @@ pub fn library(train: &JointLog, settings: &LibrarySettings) -> Vec<Effect> {
     if settings.inertia {
         v.push(Effect::Inertia);
     }
-    v
+    Library {
+        effects: v,
+        spectrum,
+    }
 }
 
 /// What a residual is binned against.

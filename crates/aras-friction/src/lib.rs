@@ -17,6 +17,8 @@
 //! * [`effects`]: candidate effects beyond a model (ripple, asymmetry,
 //!   drift, hysteresis, delay, inertia) as column blocks for a forward
 //!   selection, and residual profiles.
+//! * [`spectrum`]: lines of the residual's spectrum against position
+//!   (ripple at any spatial frequency, refined with σ).
 //! * [`sim`]: a single-joint simulator with known friction (LuGre with
 //!   internal state, ripple, drift, asymmetry, noise, irregular sampling).
 //!
@@ -30,6 +32,8 @@
 //! * `nalgebra`: QR least squares on small tall regressors.
 //! * `rayon`: the finite-difference Jacobian columns of the nonlinear
 //!   search are independent model evaluations, run in parallel.
+//! * `rustfft`: the periodogram of a residual against position, over up
+//!   to a million bins.
 //! * `serde`: models and results serialise for reports; `thiserror`: the
 //!   error type.
 #![warn(missing_docs)]
@@ -44,6 +48,7 @@ mod linalg;
 pub mod log;
 pub mod models;
 pub mod sim;
+pub mod spectrum;
 mod track;
 
 pub use analysis::{

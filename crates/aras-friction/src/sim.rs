@@ -34,7 +34,8 @@ pub struct Sine {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Ripple {
     /// Cycles per revolution `k` (the ripple is `A sin(k q + φ)`).
-    pub harmonic: f64,
+    #[serde(alias = "harmonic")]
+    pub cycles: f64,
     /// Amplitude `A`, N·m.
     pub amplitude: f64,
     /// Phase `φ`, rad.
@@ -285,7 +286,7 @@ impl JointSimulation {
             let (q, v, a) = self.kinematics(target);
             let mut tau = m.offset + m.sigma0 * z + m.sigma1 * zdot(target, z) + m.sigma2 * v;
             for r in &f.ripple {
-                tau += r.amplitude * (r.harmonic * q + r.phase).sin();
+                tau += r.amplitude * (r.cycles * q + r.phase).sin();
             }
             tau += f.asymmetry * v.abs() + f.inertia * a;
             clean.push(tau);

@@ -13,12 +13,15 @@ use aras_ident::selection::{
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::{AnalysisError, AnyModel, FrictionSettings, ModelResult};
+use super::{AnalysisError, AnyModel, FrictionSettings, ModelKind, ModelResult};
 use crate::{
     FrictionError, JointLog, Separable, Track,
-    effects::{Effect, EffectValue, library},
-    fit::{Estimate, FitSettings, Problem, estimates_with_extra, lugre_starts, metrics},
+    effects::{Effect, EffectValue, Library, library},
+    fit::{
+        Estimate, FitSettings, Problem, estimates_with_extra, fit_stribeck, lugre_starts, metrics,
+    },
     models::combine,
+    spectrum::PositionSpectrum,
 };
 
 /// One effect the diagnosis added.
@@ -50,6 +53,9 @@ pub struct DiagnosisResult {
     pub base: String,
     /// Candidate effects tried.
     pub candidates: Vec<String>,
+    /// The search for ripple lines in the base residual against position,
+    /// where the ripple candidates above the integer harmonics come from.
+    pub spectrum: PositionSpectrum,
     /// Effective fraction of independent TRAIN samples used by the F-test
     /// (`1/τ`, `τ` the integrated autocorrelation time of the base residual).
     pub effective_fraction: f64,
@@ -63,29 +69,80 @@ pub struct DiagnosisResult {
     pub rounds: Vec<Vec<CandidateEvaluation>>,
     /// Why the selection stopped.
     pub status: SelectionStatus,
+    /// Added effects that the refit of the model's structure left below
+    /// 3σ (every coefficient): taken out of the final model again.
+    pub dropped: Vec<String>,
+    /// The models refitted with the effects: the diagnosed base, and LuGre
+    /// (the most general classical model) when it was not the base; the
+    /// lower mean validation RMS is the final model.
+    pub refits: Vec<RefitScore>,
 }
 
 /// The refined final model: its result, base model and effects with
 /// coefficients.
 pub(super) struct Refined {
     pub(super) result: ModelResult,
+    /// The refined structure `θ`.
+    structure: Vec<f64>,
     pub(super) base: AnyModel,
     pub(super) effects: Vec<(Effect, Vec<f64>)>,
 }
 
-/// The diagnosis of `base`, the best classical model fitted on `train`.
+/// The diagnosis of `base`, the best classical model fitted on `train`;
+/// `models` are every classical model fitted there (`base` among them).
 pub(super) fn diagnose(
     base: &AnyModel,
+    models: &[AnyModel],
     train: &JointLog,
     vals: &[JointLog],
     settings: &FrictionSettings,
 ) -> Result<(DiagnosisResult, Option<Refined>), AnalysisError> {
+    let logs = Logs {
+        train,
+        vals,
+        models,
+    };
     match base {
-        AnyModel::CoulombViscous(m) => diagnose_with(m, base, train, vals, settings),
-        AnyModel::Stribeck(m) => diagnose_with(m, base, train, vals, settings),
-        AnyModel::Dahl(m) => diagnose_with(m, base, train, vals, settings),
-        AnyModel::Lugre(m) => diagnose_with(m, base, train, vals, settings),
+        AnyModel::CoulombViscous(m) => diagnose_with(m, base, &logs, settings),
+        AnyModel::Stribeck(m) => diagnose_with(m, base, &logs, settings),
+        AnyModel::Dahl(m) => diagnose_with(m, base, &logs, settings),
+        AnyModel::Lugre(m) => diagnose_with(m, base, &logs, settings),
     }
+}
+
+/// The logs of a diagnosis and the classical models fitted on TRAIN.
+struct Logs<'a> {
+    train: &'a JointLog,
+    vals: &'a [JointLog],
+    models: &'a [AnyModel],
+}
+
+/// One model's refit with the effects found: its validation RMS, N·m.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RefitScore {
+    /// The model.
+    pub model: String,
+    /// RMS on each validation log.
+    pub validation_rms: Vec<f64>,
+}
+
+/// [`refine`] of any classical model.
+fn refine_any(
+    model: &AnyModel,
+    input: &RefineInput<'_>,
+    settings: &FrictionSettings,
+) -> Result<(Refined, Vec<f64>), AnalysisError> {
+    match model {
+        AnyModel::CoulombViscous(m) => refine(m, model, input, settings),
+        AnyModel::Stribeck(m) => refine(m, model, input, settings),
+        AnyModel::Dahl(m) => refine(m, model, input, settings),
+        AnyModel::Lugre(m) => refine(m, model, input, settings),
+    }
+}
+
+fn mean_validation_rms(r: &Refined) -> f64 {
+    let v = &r.result.validation;
+    v.iter().map(|m| m.rms).sum::<f64>() / v.len().max(1) as f64
 }
 
 /// Rows per chunk pushed into the selection sums (bounded memory).
@@ -100,13 +157,12 @@ struct LogColumns {
 }
 
 impl LogColumns {
-    /// The columns of `m` and of `effects` on every log. The logs, and the
-    /// effects on one log, are independent: computed in parallel (the
-    /// state models integrate a whole log per column), collected in order.
-    fn of_all<M: Separable + Sync>(
+    /// The columns and prediction of `m` on every log. The logs are
+    /// independent: computed in parallel (the state models integrate a
+    /// whole log per column), collected in order.
+    fn of_model<M: Separable + Sync>(
         m: &M,
         logs: &[&JointLog],
-        effects: &[Effect],
     ) -> Result<Vec<Self>, FrictionError> {
         let coefficients = m.coefficients();
         logs.par_iter()
@@ -114,23 +170,24 @@ impl LogColumns {
                 let base = M::columns(&m.structure(), &l.motion()?);
                 // The prediction is the columns times the coefficients: no
                 // second integration of the state.
-                Ok((base, l))
-            })
-            .collect::<Result<Vec<_>, FrictionError>>()?
-            .into_iter()
-            .map(|(base, l)| {
                 let prediction = combine(&base, &coefficients);
-                let candidates = effects
-                    .par_iter()
-                    .map(|e| e.columns(l, &prediction))
-                    .collect::<Result<Vec<_>, _>>()?;
                 Ok(Self {
                     base,
                     prediction,
-                    candidates,
+                    candidates: Vec::new(),
                 })
             })
             .collect()
+    }
+
+    /// Adds every candidate effect's block on `log` (independent effects:
+    /// in parallel).
+    fn with_effects(mut self, log: &JointLog, effects: &[Effect]) -> Result<Self, FrictionError> {
+        self.candidates = effects
+            .par_iter()
+            .map(|e| e.columns(log, &self.prediction))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(self)
     }
 
     /// The columns in the selection layout's row order (model columns,
@@ -263,13 +320,24 @@ fn validation_fitness(fit: &ModelFit) -> Vec<f64> {
 fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     m: &M,
     base: &AnyModel,
-    train: &JointLog,
-    vals: &[JointLog],
+    given: &Logs<'_>,
     settings: &FrictionSettings,
 ) -> Result<(DiagnosisResult, Option<Refined>), AnalysisError> {
-    let effects = library(train, &settings.library);
+    let (train, vals) = (given.train, given.vals);
     let logs: Vec<&JointLog> = std::iter::once(train).chain(vals).collect();
-    let columns = LogColumns::of_all(m, &logs, &effects)?;
+    let models = LogColumns::of_model(m, &logs)?;
+    let residual: Vec<f64> = train
+        .tau
+        .iter()
+        .zip(&models[0].prediction)
+        .map(|(a, b)| a - b)
+        .collect();
+    let Library { effects, spectrum } = library(train, &residual, &settings.library);
+    let columns = models
+        .into_iter()
+        .zip(&logs)
+        .map(|(c, l)| c.with_effects(l, &effects))
+        .collect::<Result<Vec<_>, _>>()?;
     let specs: Vec<CandidateSpec> = effects
         .iter()
         .map(|e| CandidateSpec::columns(e.id(), e.width()).in_family(e.family()))
@@ -305,18 +373,93 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     let diagnosis = DiagnosisResult {
         base: m.name().to_string(),
         candidates: effects.iter().map(Effect::id).collect(),
+        spectrum,
         effective_fraction,
         initial_rms: summary.rms(&sel.initial)?,
         initial_fitness: validation_fitness(&sel.initial),
         steps,
         rounds: sel.rounds,
         status: sel.status,
+        dropped: Vec::new(),
+        refits: Vec::new(),
     };
     if diagnosis.steps.is_empty() {
         return Ok((diagnosis, None));
     }
     let added: Vec<Effect> = diagnosis.steps.iter().map(|s| s.effect).collect();
-    let refined = refine(m, base, &logs, &columns[0].prediction, &added, settings)?;
+    let mut diagnosis = diagnosis;
+    // The effects' coefficients in the selection's last linear fit.
+    let last = &sel.steps[sel.steps.len() - 1].fit;
+    let selected: Vec<f64> = sel
+        .steps
+        .iter()
+        .flat_map(|st| summary.coefficients(last, st.candidate).0)
+        .collect();
+    let mut input = RefineInput {
+        logs: &logs,
+        train_prediction: &columns[0].prediction,
+        added,
+        selected,
+        spectrum: &diagnosis.spectrum,
+        from: None,
+    };
+    // A strong effect can make another classical model look best before
+    // it is modelled (a ripple of two thirds of the Coulomb level hides
+    // the Stribeck curve): LuGre, which holds every other classical model
+    // as a limit, is refitted with the effects too when it was not the
+    // base, and the lower mean validation RMS is the final model.
+    let general = given
+        .models
+        .iter()
+        .filter(|o| o.kind() == ModelKind::Lugre && base.kind() != ModelKind::Lugre);
+    let mut best: Option<(AnyModel, Refined, Vec<f64>)> = None;
+    for model in std::iter::once(base).chain(general) {
+        let (r, strength) = refine_any(model, &input, settings)?;
+        diagnosis.refits.push(RefitScore {
+            model: model.name().into(),
+            validation_rms: r.result.validation.iter().map(|v| v.rms).collect(),
+        });
+        if best
+            .as_ref()
+            .is_none_or(|(_, b, _)| mean_validation_rms(&r) < mean_validation_rms(b))
+        {
+            best = Some((model.clone(), r, strength));
+        }
+    }
+    let Some((model, mut refined, strength)) = best else {
+        return Ok((diagnosis, None));
+    };
+    // An effect the selection added for a distorted base (a strong ripple
+    // bends the fixed-θ columns, and an inertia or hysteresis column makes
+    // up for the bend) is not significant once the structure is refitted:
+    // it leaves the model, which is refitted without it from the refined
+    // structure.
+    let weak: Vec<bool> = strength.iter().map(|&z| z < DROP_Z).collect();
+    if weak.iter().any(|&w| w) {
+        diagnosis.dropped = input
+            .added
+            .iter()
+            .zip(&weak)
+            .filter(|(_, w)| **w)
+            .map(|(e, _)| e.id())
+            .collect();
+        if weak.iter().all(|&w| w) {
+            return Ok((diagnosis, None));
+        }
+        let mut kept_selected = Vec::new();
+        let mut k = 0;
+        for (e, &weak) in input.added.iter().zip(&weak) {
+            if !weak {
+                kept_selected.extend_from_slice(&input.selected[k..k + e.width()]);
+            }
+            k += e.width();
+        }
+        let mut keep = weak.iter().map(|w| !w);
+        input.added.retain(|_| keep.next() == Some(true));
+        input.selected = kept_selected;
+        input.from = Some(refined.structure.clone());
+        refined = refine_any(&model, &input, settings)?.0;
+    }
     Ok((diagnosis, Some(refined)))
 }
 
@@ -339,17 +482,68 @@ fn refinement_box(base: &AnyModel, motion: &Track, fit: &FitSettings) -> Vec<(f6
     }
 }
 
+/// The structure of `base`'s steady state refitted on `tau` (the TRAIN
+/// torque with the selected effects removed): Stribeck's own, LuGre's from
+/// a Stribeck fit with the base's presliding stiffness kept; none for the
+/// models whose structure carries no steady-state shape.
+fn cleaned_start(
+    base: &AnyModel,
+    motion: &Track,
+    tau: &[f64],
+    fit: &FitSettings,
+) -> Result<Option<Vec<f64>>, FrictionError> {
+    Ok(match base {
+        AnyModel::Stribeck(_) => Some(fit_stribeck(motion, tau, fit)?.model.structure()),
+        AnyModel::Lugre(l) => {
+            let s = fit_stribeck(motion, tau, fit)?.model;
+            (s.coulomb > 0.0).then(|| {
+                vec![
+                    l.sigma0 / s.coulomb,
+                    s.static_friction / s.coulomb,
+                    s.stribeck_velocity,
+                    s.shape,
+                ]
+            })
+        }
+        AnyModel::CoulombViscous(_) | AnyModel::Dahl(_) => None,
+    })
+}
+
+/// An effect stays in the refined model when one of its coefficients is at
+/// least this many σ from zero.
+const DROP_Z: f64 = 3.0;
+
+/// What a refinement refits: the logs (TRAIN first), the base prediction on
+/// TRAIN, the effects with their coefficients in the selection's last
+/// linear fit, the spectrum their ripple lines come from, and a structure to
+/// start from instead of the base's own and its cleaned refit.
+struct RefineInput<'a> {
+    logs: &'a [&'a JointLog],
+    train_prediction: &'a [f64],
+    added: Vec<Effect>,
+    selected: Vec<f64>,
+    spectrum: &'a PositionSpectrum,
+    from: Option<Vec<f64>>,
+}
+
 /// Nonlinear refinement: refits the structure of `m` on TRAIN with the
-/// added effects' columns as extra free columns, from `m`'s own structure,
-/// and scores the refined model on every log.
+/// added effects' columns as extra free columns and scores the refined
+/// model on every log. Also returns each effect's strength: its largest
+/// `|coefficient| / σ` (infinite without σ).
 fn refine<M: Separable + Sync + Clone + Into<AnyModel>>(
     m: &M,
     base: &AnyModel,
-    logs: &[&JointLog],
-    train_prediction: &[f64],
-    added: &[Effect],
+    input: &RefineInput<'_>,
     settings: &FrictionSettings,
-) -> Result<Refined, AnalysisError> {
+) -> Result<(Refined, Vec<f64>), AnalysisError> {
+    let RefineInput {
+        logs,
+        train_prediction,
+        added,
+        selected,
+        spectrum,
+        from,
+    } = input;
     let train = logs[0];
     let motion = train.motion()?;
     let extra: Vec<Vec<f64>> = added
@@ -361,13 +555,51 @@ fn refine<M: Separable + Sync + Clone + Into<AnyModel>>(
         .collect();
     let bounds = refinement_box(base, &motion, &settings.fit);
     let prob = Problem::<M>::new(motion, &train.tau, &extra, &bounds)?;
-    // One start, the base model's own fitted structure, already near the
-    // optimum: a local search on every row, no coarse search first.
+    // Two starts: the base model's own fitted structure, and its steady
+    // state refitted on TRAIN with the effects (at their selection
+    // coefficients) removed. A
+    // strong effect distorts the base fit (a ripple of a third of the
+    // Coulomb level bends the Stribeck curve), and from there alone the
+    // refit can end in a degenerate optimum.
+    let mut starts = vec![from.clone().unwrap_or_else(|| m.structure())];
+    let cleaned: Vec<f64> = extra
+        .iter()
+        .zip(selected)
+        .fold(train.tau.clone(), |mut y, (c, &b)| {
+            for (o, x) in y.iter_mut().zip(c) {
+                *o -= b * x;
+            }
+            y
+        });
+    if from.is_none()
+        && let Some(start) = cleaned_start(base, &motion, &cleaned, &settings.fit)?
+    {
+        let clamped: Vec<f64> = start
+            .iter()
+            .zip(&bounds)
+            .map(|(&x, &(lo, hi))| x.clamp(lo, hi))
+            .collect();
+        // A start within 5 % of the first in every component is the same
+        // start (the effects did not distort the base): one search.
+        let same = clamped
+            .iter()
+            .zip(&starts[0])
+            .all(|(a, b)| (a - b).abs() <= 0.05 * a.abs().max(b.abs()));
+        if !same {
+            starts.push(clamped);
+        }
+    }
     let fit = prob.solve(
-        &[m.structure()],
+        &starts,
         &FitSettings {
-            starts: 1,
-            coarse_rows: 0,
+            starts: starts.len(),
+            // One start: a local search on every row. Two: each searched
+            // on the coarse subsample first, the better refined on all.
+            coarse_rows: if starts.len() > 1 {
+                settings.fit.coarse_rows
+            } else {
+                0
+            },
             ..settings.fit.clone()
         },
     )?;
@@ -382,10 +614,17 @@ fn refine<M: Separable + Sync + Clone + Into<AnyModel>>(
     let (mut estimates, extra_sigma) =
         estimates_with_extra(&refined, &extra, extra_beta, &motion, fit.rss, &fixed);
     let mut effects = Vec::with_capacity(added.len());
+    let mut strength = Vec::with_capacity(added.len());
     let mut k = 0;
     for e in added {
         let w = e.width();
         let c = extra_beta[k..k + w].to_vec();
+        strength.push(
+            c.iter()
+                .zip(&extra_sigma[k..k + w])
+                .map(|(c, s)| s.map_or(f64::INFINITY, |s| c.abs() / s))
+                .fold(0.0, f64::max),
+        );
         for v in e.values(&c, &extra_sigma[k..k + w]) {
             estimates.push(Estimate {
                 name: format!("{}.{}", e.id(), v.name),
@@ -394,6 +633,18 @@ fn refine<M: Separable + Sync + Clone + Into<AnyModel>>(
                 sigma: v.sigma,
                 at_bound: false,
                 fixed: false,
+            });
+        }
+        if let Effect::Ripple { cycles } = *e {
+            estimates.push(Estimate {
+                name: format!("{}.cycles", e.id()),
+                unit: "cycles/rev".into(),
+                value: cycles,
+                sigma: spectrum.sigma_of(cycles),
+                at_bound: false,
+                // Held in the refit: found by the line search, or an
+                // integer harmonic.
+                fixed: true,
             });
         }
         effects.push((*e, c));
@@ -415,17 +666,22 @@ fn refine<M: Separable + Sync + Clone + Into<AnyModel>>(
         .chain(added.iter().map(Effect::id))
         .collect::<Vec<_>>()
         .join(" + ");
-    Ok(Refined {
-        result: ModelResult {
-            name,
-            parameters: estimates,
-            train: scored[0],
-            validation,
-            iterations: fit.iterations,
-            evaluations: fit.evaluations,
-            status: fit.status,
+    let structure = fit.theta.clone();
+    Ok((
+        Refined {
+            result: ModelResult {
+                name,
+                parameters: estimates,
+                train: scored[0],
+                validation,
+                iterations: fit.iterations,
+                evaluations: fit.evaluations,
+                status: fit.status,
+            },
+            base: base_out,
+            effects,
+            structure,
         },
-        base: base_out,
-        effects,
-    })
+        strength,
+    ))
 }

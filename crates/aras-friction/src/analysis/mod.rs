@@ -36,7 +36,7 @@ use crate::{
     sgn,
 };
 
-pub use diagnosis::{DiagnosisResult, DiagnosisStep};
+pub use diagnosis::{DiagnosisResult, DiagnosisStep, RefitScore};
 pub use settings::{FrictionSettings, SettingError};
 
 /// Format tag of the serialised [`FrictionRun`].
@@ -510,7 +510,7 @@ pub fn analyse(
     let (diagnosis, diagnosis_note, refined) = if vals.is_empty() {
         (None, Some(NoDiagnosis::NoValidationLog), None)
     } else {
-        let (d, r) = diagnosis::diagnose(base, train, vals, settings)?;
+        let (d, r) = diagnosis::diagnose(base, &fitted, train, vals, settings)?;
         (Some(d), None, r)
     };
     let (final_model, final_base, final_effects) = match refined {
