@@ -52,7 +52,8 @@ pub fn report_diagnosis(run: &FrictionRun, r: &mut crate::report::Report) {
     };
     r.paragraph(format!(
         "The residual of `{}` is tested against {} candidate effects. An effect is added when \
-         its F-test on TRAIN is significant (α = {} over the round's candidates, N_eff = {:.0} % \
+         its F-test on TRAIN is significant (α = {} over the round's candidates, with N_eff the \
+         independent samples of the residual with that effect; the base residual's are {:.0} % \
          of the rows) and it raises the fitness (78) by at least {} points on every validation \
          log; the refined model then refits the friction model's nonlinear parameters with the \
          added effects.",

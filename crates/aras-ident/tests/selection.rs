@@ -452,3 +452,44 @@ fn a_tie_on_training_data_is_broken_by_the_validation_gain() {
     assert_eq!(run(2.0), "x");
     assert_eq!(run(0.0), "y");
 }
+
+/// `select_with` judges each candidate with the fraction it is given for
+/// the fit that adds it: a constant is `select` with that fraction, and
+/// the F-test's `n_eff` of every candidate is the fraction of its own fit.
+#[test]
+fn select_with_counts_each_candidates_own_samples() {
+    let l = layout();
+    let truth = [0.5, -1.0, 2.0, 0.1, -0.08, 0.0];
+    let sets: Vec<Accumulator> = (0..3)
+        .map(|s| {
+            accumulate(
+                &l,
+                &[
+                    rows(70 + s, 1500, &truth, 0.5),
+                    rows(80 + s, 1500, &truth, 0.5),
+                ],
+                256,
+            )
+        })
+        .collect();
+    let few = SelectionOptions {
+        effective_fraction: 0.02,
+        ..SelectionOptions::default()
+    };
+    let starved = select(&sets[0], &sets[1..], &few).unwrap();
+    let same = aras_ident::selection::select_with(&sets[0], &sets[1..], &few, |_| 0.02).unwrap();
+    assert_eq!(starved.added(), same.added());
+    assert_eq!(starved.rounds, same.rounds);
+    // 60 samples cannot tell a 0.1 effect from noise 0.5 (1.5σ); 3000 can.
+    assert!(starved.added().is_empty());
+    // Fraction 1 for fits that hold candidate `a`'s columns (3, 4), 0.02
+    // for the others: `a` is counted with every row, `b` with 2 %.
+    let per = aras_ident::selection::select_with(&sets[0], &sets[1..], &few, |f| {
+        if f.columns.contains(&3) { 1.0 } else { 0.02 }
+    })
+    .unwrap();
+    assert_eq!(per.added(), vec![0]);
+    let first = &per.rounds[0];
+    assert_eq!(first[0].n_eff, 3000.0);
+    assert_eq!(first[1].n_eff, 60.0);
+}

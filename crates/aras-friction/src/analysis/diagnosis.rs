@@ -8,7 +8,7 @@
 
 use aras_ident::selection::{
     Accumulator, CandidateEvaluation, CandidateSpec, Layout, ModelFit, Selection, SelectionOptions,
-    SelectionStatus, select,
+    SelectionStatus, select_with,
 };
 use rayon::prelude::*;
 use serde::Serialize;
@@ -56,8 +56,10 @@ pub struct DiagnosisResult {
     /// The search for ripple lines in the base residual against position,
     /// where the ripple candidates above the integer harmonics come from.
     pub spectrum: PositionSpectrum,
-    /// Effective fraction of independent TRAIN samples used by the F-test
-    /// (`1/τ`, `τ` the integrated autocorrelation time of the base residual).
+    /// Effective fraction of independent TRAIN samples in the base residual
+    /// (`1/τ`, `τ` its integrated autocorrelation time). Each candidate's
+    /// F-test counts `1/τ` of the residual with that candidate instead
+    /// (its evaluation's `n_eff`).
     pub effective_fraction: f64,
     /// RMS on TRAIN and each validation log before any effect, N·m.
     pub initial_rms: Vec<f64>,
@@ -230,9 +232,12 @@ impl LogColumns {
 }
 
 /// The forward selection of effects on the model's columns: TRAIN's sums
-/// for the F-test, every validation log's for the gains. The F-test counts
-/// `1/τ` of the TRAIN rows as independent, `τ` the integrated
-/// autocorrelation time of the model's residual.
+/// for the F-test, every validation log's for the gains. The F-test of a
+/// candidate counts `1/τ` of the TRAIN rows as independent, `τ` the
+/// integrated autocorrelation time of the residual of the model *with* that
+/// candidate ([`select_with`]): the base residual is autocorrelated because
+/// of what it misses, and its `τ` would starve the candidate that explains
+/// it. Also returns the base residual's fraction `1/τ`.
 fn run_selection(
     layout: &Layout,
     logs: &[&JointLog],
@@ -244,24 +249,91 @@ fn run_selection(
         .zip(columns)
         .map(|(l, c)| c.accumulate(layout, &l.tau))
         .collect::<Result<_, _>>()?;
-    let resid: Vec<f64> = logs[0]
-        .tau
-        .iter()
-        .zip(&columns[0].prediction)
-        .map(|(a, b)| a - b)
-        .collect();
-    let tau_int = aras_ident::stats::integrated_time(&resid, 1000).max(1.0);
+    let train = logs[0];
+    let cols = columns[0].in_layout(layout)?;
+    let acf = Autocorrelation::new(train.len());
+    let base_fraction = 1.0 / acf.integrated_time(&residual_of(&train.tau, &columns[0].prediction));
     let opts = SelectionOptions {
         alpha: settings.alpha,
         min_gain: settings.min_gain,
         max_steps: settings.max_steps,
-        effective_fraction: (1.0 / tau_int).clamp(1e-6, 1.0),
+        effective_fraction: base_fraction.clamp(1e-6, 1.0),
         ..SelectionOptions::default()
     };
+    let effective = |fit: &ModelFit| {
+        let mut r = train.tau.clone();
+        for (&c, &b) in fit.columns.iter().zip(&fit.estimate) {
+            let Some(col) = cols.get(c) else {
+                return f64::NAN;
+            };
+            for (o, x) in r.iter_mut().zip(col.iter()) {
+                *o -= b * x;
+            }
+        }
+        1.0 / acf.integrated_time(&r)
+    };
     Ok((
-        select(&sets[0], &sets[1..], &opts)?,
+        select_with(&sets[0], &sets[1..], &opts, effective)?,
         opts.effective_fraction,
     ))
+}
+
+/// `τ − τ̂`.
+fn residual_of(measured: &[f64], predicted: &[f64]) -> Vec<f64> {
+    measured.iter().zip(predicted).map(|(a, b)| a - b).collect()
+}
+
+/// The integrated autocorrelation time of records of one length, by FFT:
+/// `O(n log n)` whatever the correlation length, so that it can be measured
+/// on every candidate's residual.
+struct Autocorrelation {
+    len: usize,
+    forward: std::sync::Arc<dyn rustfft::Fft<f64>>,
+    inverse: std::sync::Arc<dyn rustfft::Fft<f64>>,
+}
+
+/// Most lags summed (as [`aras_ident::stats::integrated_time`] is used
+/// elsewhere in the workspace).
+const MAX_LAG: usize = 1000;
+
+impl Autocorrelation {
+    fn new(n: usize) -> Self {
+        let len = (2 * n.max(1)).next_power_of_two();
+        let mut planner = rustfft::FftPlanner::new();
+        Self {
+            len,
+            forward: planner.plan_fft_forward(len),
+            inverse: planner.plan_fft_inverse(len),
+        }
+    }
+
+    /// `τ = 1 + 2 Σ ρ_k` over the initial run of positive `ρ_k`, at most
+    /// [`MAX_LAG`] lags (Geyer's initial positive sequence), at least 1.
+    fn integrated_time(&self, x: &[f64]) -> f64 {
+        use rustfft::num_complex::Complex;
+        let n = x.len();
+        if n < 2 || 2 * n > self.len {
+            return aras_ident::stats::integrated_time(x, MAX_LAG).max(1.0);
+        }
+        let mean = x.iter().sum::<f64>() / n as f64;
+        let mut buf: Vec<Complex<f64>> = x
+            .iter()
+            .map(|v| Complex::new(v - mean, 0.0))
+            .chain(std::iter::repeat(Complex::new(0.0, 0.0)))
+            .take(self.len)
+            .collect();
+        self.forward.process(&mut buf);
+        for c in &mut buf {
+            *c = Complex::new(c.norm_sqr(), 0.0);
+        }
+        self.inverse.process(&mut buf);
+        let c0 = buf[0].re;
+        if c0 <= 0.0 {
+            return 1.0;
+        }
+        let rho = buf[1..MAX_LAG.min(n)].iter().map(|c| c.re / c0);
+        aras_ident::stats::integrated_time_of(rho).max(1.0)
+    }
 }
 
 /// Summaries of a selection: RMS per log, fitness per validation log and
@@ -326,12 +398,7 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     let (train, vals) = (given.train, given.vals);
     let logs: Vec<&JointLog> = std::iter::once(train).chain(vals).collect();
     let models = LogColumns::of_model(m, &logs)?;
-    let residual: Vec<f64> = train
-        .tau
-        .iter()
-        .zip(&models[0].prediction)
-        .map(|(a, b)| a - b)
-        .collect();
+    let residual = residual_of(&train.tau, &models[0].prediction);
     let Library { effects, spectrum } = library(train, &residual, &settings.library);
     let columns = models
         .into_iter()

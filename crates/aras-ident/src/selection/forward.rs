@@ -312,6 +312,29 @@ pub fn select(
     validation: &[Accumulator],
     opts: &SelectionOptions,
 ) -> Result<Selection, IdentError> {
+    select_with(train, validation, opts, |_| opts.effective_fraction)
+}
+
+/// [`select`] with the independent fraction of the training rows judged per
+/// candidate: `effective(fit)` is the fraction for the F-test of the model
+/// `fit` that adds the candidate (e.g. `1/τ` of that model's residual,
+/// whose rows the caller holds), in (0, 1] (clamped there; a NaN counts
+/// as [`SelectionOptions::effective_fraction`]).
+///
+/// A residual autocorrelated *because* of an effect not yet modelled counts
+/// few independent samples, and a fraction measured on it before the
+/// effect is added would starve the very candidate that removes the
+/// structure; measured after, the fraction of a useless candidate stays
+/// that of the current residual.
+pub fn select_with<F>(
+    train: &Accumulator,
+    validation: &[Accumulator],
+    opts: &SelectionOptions,
+    effective: F,
+) -> Result<Selection, IdentError>
+where
+    F: Fn(&ModelFit) -> f64 + Sync,
+{
     opts.check()?;
     check_sets(train, validation)?;
     let layout = train.layout();
@@ -406,6 +429,14 @@ pub fn select(
                     eval.status = EvaluationStatus::NoNewParameters;
                     return (eval, None);
                 }
+                let fraction = effective(&f1);
+                let fraction = if fraction.is_nan() {
+                    opts.effective_fraction
+                } else {
+                    fraction.clamp(1e-9, 1.0)
+                };
+                let ne = fraction * n;
+                eval.n_eff = ne;
                 if ne > p1 + 1.0 && rss1 > 0.0 && rss0 > 0.0 {
                     let kk = k_add as f64;
                     let fs = (((rss0 - rss1) / kk) / (rss1 / (ne - p1))).max(0.0);

@@ -76,5 +76,5 @@ pub use accumulate::{Accumulator, CandidateSpec, Layout};
 pub use fit::{Accuracy, ModelFit};
 pub use forward::{
     CandidateEvaluation, EvaluationStatus, Selection, SelectionOptions, SelectionStatus,
-    SelectionStep, fit_model, select,
+    SelectionStep, fit_model, select, select_with,
 };

@@ -1,0 +1,90 @@
+//! The diagnosis's selection gate on simulated joints: a candidate's F-test
+//! counts the independent samples of the residual *with* that candidate, so
+//! a strong effect that makes the base residual autocorrelated does not
+//! starve a weaker one found after it, and a control joint stays clean.
+
+use aras_friction::{
+    FrictionRun, FrictionSettings, JointLog, analyse,
+    sim::{JointSimulation, Ripple},
+};
+
+/// TRAIN at speed 1, validation at 0.6 and 1.5, `duration` s each.
+fn run(sim: &JointSimulation, duration: f64, seed: u64) -> FrictionRun {
+    let log = |name: &str, speed: f64, seed: u64| -> JointLog {
+        JointSimulation {
+            duration,
+            speed,
+            seed,
+            ..sim.clone()
+        }
+        .run(name)
+        .log
+    };
+    let train = log("train", 1.0, seed);
+    let vals = [log("slow", 0.6, seed + 1), log("fast", 1.5, seed + 2)];
+    analyse(&train, &vals, &FrictionSettings::default()).unwrap()
+}
+
+/// A 0.1 N·m ripple leaves a base residual with τ ≈ 60 (under 5 % of the
+/// rows independent); a Coulomb drift a fifth of the size is still named
+/// after it, counted with the samples of its own residual.
+#[test]
+fn a_weak_effect_after_a_strong_one_is_not_starved() {
+    let mut sim = JointSimulation::default();
+    sim.friction.ripple.push(Ripple {
+        cycles: 12.0,
+        amplitude: 0.1,
+        phase: 0.3,
+    });
+    sim.friction.drift = -0.0004;
+    let r = run(&sim, 40.0, 11);
+    let d = r.diagnosis.as_ref().unwrap();
+    assert!(d.effective_fraction < 0.05, "{}", d.effective_fraction);
+    let drift = d
+        .steps
+        .iter()
+        .find(|s| s.id == "coulomb_drift")
+        .unwrap_or_else(|| panic!("{:?}", d.steps.iter().map(|s| &s.id).collect::<Vec<_>>()));
+    let rows = r.train.rows as f64;
+    assert!(
+        drift.evaluation.n_eff > 10.0 * d.effective_fraction * rows,
+        "n_eff {} vs base {}",
+        drift.evaluation.n_eff,
+        d.effective_fraction * rows
+    );
+    assert!(!d.dropped.contains(&"coulomb_drift".to_string()));
+    let fm = r.final_model.as_ref().unwrap();
+    let rate = fm
+        .parameters
+        .iter()
+        .find(|p| p.name == "coulomb_drift.rate")
+        .unwrap()
+        .value;
+    // The drift also changes LuGre's presliding length, which the column
+    // does not model (docs/friction.md: 13 % low at −1.5 mN·m/s).
+    assert!((rate / -0.0004 - 1.0).abs() < 0.25, "rate {rate}");
+}
+
+/// Twenty control joints (LuGre alone, 20 s logs, one seed each): the
+/// effects added and kept are false discoveries; at most one is allowed
+/// (each run's family-wise level is α = 0.01 per round, and a candidate must
+/// also help both held-out logs).
+#[test]
+fn control_false_discoveries_over_twenty_seeds() {
+    let sim = JointSimulation::default();
+    let found: Vec<(u64, Vec<String>)> = (0..20)
+        .map(|k| {
+            let r = run(&sim, 20.0, 1000 + 10 * k);
+            let d = r.diagnosis.unwrap();
+            let kept = d
+                .steps
+                .iter()
+                .map(|s| s.id.clone())
+                .filter(|id| !d.dropped.contains(id))
+                .collect();
+            (k, kept)
+        })
+        .filter(|(_, kept): &(u64, Vec<String>)| !kept.is_empty())
+        .collect();
+    assert!(found.len() <= 1, "false discoveries: {found:?}");
+}
