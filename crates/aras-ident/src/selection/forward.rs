@@ -319,7 +319,10 @@ pub fn select(
 /// candidate: `effective(fit)` is the fraction for the F-test of the model
 /// `fit` that adds the candidate (e.g. `1/τ` of that model's residual,
 /// whose rows the caller holds), in (0, 1] (clamped there; a NaN counts
-/// as [`SelectionOptions::effective_fraction`]).
+/// as [`SelectionOptions::effective_fraction`]). It is asked only for a
+/// candidate that passes with every row and gains on every validation set:
+/// the others fail at any fraction, and their evaluations count
+/// [`SelectionOptions::effective_fraction`].
 ///
 /// A residual autocorrelated *because* of an effect not yet modelled counts
 /// few independent samples, and a fraction measured on it before the
@@ -429,7 +432,23 @@ where
                     eval.status = EvaluationStatus::NoNewParameters;
                     return (eval, None);
                 }
-                let fraction = effective(&f1);
+                let every = eval.gain_per_set.iter().all(|g| *g >= opts.min_gain);
+                let test = |ne: f64| {
+                    (ne > p1 + 1.0 && rss1 > 0.0 && rss0 > 0.0).then(|| {
+                        let kk = k_add as f64;
+                        let fs = (((rss0 - rss1) / kk) / (rss1 / (ne - p1))).max(0.0);
+                        (
+                            fs,
+                            f_sf(fs, kk, ne - p1),
+                            ne * (rss1 / rss0).ln() + kk * ne.ln(),
+                        )
+                    })
+                };
+                // Fewer samples only weaken the F-test: a candidate that
+                // fails with every row, or on a validation set, fails at any
+                // fraction, and its own fraction is not measured.
+                let hopeless = !every || test(n).is_none_or(|(_, p, _)| p >= level);
+                let fraction = if hopeless { f64::NAN } else { effective(&f1) };
                 let fraction = if fraction.is_nan() {
                     opts.effective_fraction
                 } else {
@@ -437,14 +456,11 @@ where
                 };
                 let ne = fraction * n;
                 eval.n_eff = ne;
-                if ne > p1 + 1.0 && rss1 > 0.0 && rss0 > 0.0 {
-                    let kk = k_add as f64;
-                    let fs = (((rss0 - rss1) / kk) / (rss1 / (ne - p1))).max(0.0);
-                    eval.f = fs;
-                    eval.p_value = f_sf(fs, kk, ne - p1);
-                    eval.delta_bic = ne * (rss1 / rss0).ln() + kk * ne.ln();
+                if let Some((f, p, bic)) = test(ne) {
+                    eval.f = f;
+                    eval.p_value = p;
+                    eval.delta_bic = bic;
                 }
-                let every = eval.gain_per_set.iter().all(|g| *g >= opts.min_gain);
                 if eval.p_value < level && every {
                     eval.status = EvaluationStatus::Significant;
                     (eval, Some(f1))
