@@ -86,6 +86,23 @@ pub fn report_diagnosis(run: &FrictionRun, r: &mut crate::report::Report) {
             text.push_str(". Each line and its harmonics are candidates.");
         }
         r.paragraph(text);
+        for lp in d.phases.iter().filter(|p| !p.shared) {
+            let phases: Vec<String> = std::iter::once(&run.train.name)
+                .chain(run.validation.iter().map(|v| &v.name))
+                .zip(&lp.per_log)
+                .map(|(name, p)| match p {
+                    Some(p) => format!("{name} {:.2} ± {:.2} rad", p.phase, p.sigma),
+                    None => format!("{name} —"),
+                })
+                .collect();
+            r.paragraph(format!(
+                "**The line at {:.2} cycles/rev has another phase on another log** ({}): the \
+                 logs do not share a position zero (an encoder zeroed per log) or the ripple \
+                 moved, and one phase, TRAIN's, cannot predict them.",
+                lp.cycles,
+                phases.join(", ")
+            ));
+        }
     }
     let mut header = vec!["step".to_string(), "RMS TRAIN".into()];
     for v in &run.validation {

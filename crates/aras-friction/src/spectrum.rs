@@ -261,6 +261,49 @@ impl Grid {
     }
 }
 
+/// A line on one log: `A sin(k q + φ)` fitted to that log's residual at a
+/// given `k`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LinePhase {
+    /// Amplitude `A`, N·m.
+    pub amplitude: f64,
+    /// Phase `φ`, rad in (−π, π].
+    pub phase: f64,
+    /// σ of `φ` (white-noise σ inflated by the residual's autocorrelation
+    /// time).
+    pub sigma: f64,
+}
+
+/// The line at `k` on one log's residual `r` at positions `q`; `None` when
+/// the log holds too few rows or its positions do not separate the columns.
+pub fn line_phase(q: &[f64], r: &[f64], k: f64) -> Option<LinePhase> {
+    let n = q.len().min(r.len());
+    if n < 8 {
+        return None;
+    }
+    let fit = line_fit(&q[..n], &r[..n], k)?;
+    let [a, b, c] = fit.coef;
+    let amplitude = a.hypot(b);
+    let left: Vec<f64> = q[..n]
+        .iter()
+        .zip(&r[..n])
+        .map(|(&x, &y)| {
+            let (s, co) = (k * x).sin_cos();
+            y - a * s - b * co - c
+        })
+        .collect();
+    let tau = aras_ident::stats::integrated_time(&left, 1000).max(1.0);
+    // sin and cos over many periods: each coefficient has σ ≈ s √(2/n),
+    // and the phase σ is that over the amplitude.
+    let s = (fit.rss / (n - 3) as f64).sqrt();
+    let sigma = s * (2.0 * tau / n as f64).sqrt() / amplitude.max(f64::MIN_POSITIVE);
+    Some(LinePhase {
+        amplitude,
+        phase: b.atan2(a),
+        sigma,
+    })
+}
+
 /// The least-squares fit of `r ≈ a sin kq + b cos kq + c` at one `k`.
 struct LineFit {
     coef: [f64; 3],

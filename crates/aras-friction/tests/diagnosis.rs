@@ -88,3 +88,42 @@ fn control_false_discoveries_over_twenty_seeds() {
         .collect();
     assert!(found.len() <= 1, "false discoveries: {found:?}");
 }
+
+/// A ripple line's phase on every log: the same on logs that share the
+/// encoder zero, and told apart when a validation log's zero is shifted
+/// (its ripple phase moves by 1.5 rad).
+#[test]
+fn a_ripple_phase_tells_whether_the_logs_share_a_zero() {
+    let mut sim = JointSimulation::default();
+    sim.friction.ripple.push(Ripple {
+        cycles: 12.0,
+        amplitude: 0.04,
+        phase: 0.3,
+    });
+    let d = run(&sim, 20.0, 21).diagnosis.unwrap();
+    let lp = d.phases.first().expect("a line");
+    assert!(lp.shared, "{lp:?}");
+    let t = lp.per_log[0].unwrap();
+    assert!((t.phase - 0.3).abs() < 5.0 * t.sigma + 0.02, "{t:?}");
+
+    let shifted = |speed: f64, seed: u64, phase: f64| {
+        let mut s = JointSimulation {
+            duration: 20.0,
+            speed,
+            seed,
+            ..sim.clone()
+        };
+        s.friction.ripple[0].phase = phase;
+        s.run("log").log
+    };
+    let r = analyse(
+        &shifted(1.0, 21, 0.3),
+        &[shifted(0.6, 22, 0.3), shifted(1.5, 23, 1.8)],
+        &FrictionSettings::default(),
+    )
+    .unwrap();
+    let lp = r.diagnosis.unwrap().phases.remove(0);
+    assert!(!lp.shared, "{lp:?}");
+    let fast = lp.per_log[2].unwrap();
+    assert!((fast.phase - 1.8).abs() < 0.1, "{fast:?}");
+}

@@ -21,7 +21,7 @@ use crate::{
         Estimate, FitSettings, Problem, estimates_with_extra, fit_stribeck, lugre_starts, metrics,
     },
     models::combine,
-    spectrum::PositionSpectrum,
+    spectrum::{LinePhase, PositionSpectrum, line_phase},
 };
 
 /// One effect the diagnosis added.
@@ -56,6 +56,9 @@ pub struct DiagnosisResult {
     /// The search for ripple lines in the base residual against position,
     /// where the ripple candidates above the integer harmonics come from.
     pub spectrum: PositionSpectrum,
+    /// Each line on every log (TRAIN first): whether the logs share the
+    /// position zero its phase is measured from.
+    pub phases: Vec<LinePhases>,
     /// Effective fraction of independent TRAIN samples in the base residual
     /// (`1/τ`, `τ` its integrated autocorrelation time). Each candidate's
     /// F-test counts `1/τ` of the residual with that candidate instead
@@ -117,6 +120,46 @@ struct Logs<'a> {
     train: &'a JointLog,
     vals: &'a [JointLog],
     models: &'a [AnyModel],
+}
+
+/// One spectral line's phase on every log.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LinePhases {
+    /// The line's `k`, cycles per revolution.
+    pub cycles: f64,
+    /// Its amplitude and phase on each log (TRAIN first), fitted at `k` on
+    /// that log's base residual; `None` where the log cannot tell.
+    pub per_log: Vec<Option<LinePhase>>,
+    /// Whether every log's phase agrees with TRAIN's within 5σ: one phase,
+    /// one position zero, serves them all. When not, the logs' encoder
+    /// zeros (or the line's phase) differ, and a model with TRAIN's phase
+    /// mispredicts the others.
+    pub shared: bool,
+}
+
+impl LinePhases {
+    /// The line at `cycles` on every log, from each log's residual.
+    fn of(cycles: f64, logs: &[&JointLog], residuals: &[Vec<f64>]) -> Self {
+        let per_log: Vec<Option<LinePhase>> = logs
+            .iter()
+            .zip(residuals)
+            .map(|(l, r)| line_phase(&l.q, r, cycles))
+            .collect();
+        let shared = match per_log.first() {
+            Some(Some(t)) => per_log.iter().skip(1).flatten().all(|p| {
+                let d = (p.phase - t.phase + std::f64::consts::PI)
+                    .rem_euclid(std::f64::consts::TAU)
+                    - std::f64::consts::PI;
+                d.abs() <= 5.0 * t.sigma.hypot(p.sigma)
+            }),
+            _ => true,
+        };
+        Self {
+            cycles,
+            per_log,
+            shared,
+        }
+    }
 }
 
 /// One model's refit with the effects found: its validation RMS, N·m.
@@ -440,6 +483,18 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     let diagnosis = DiagnosisResult {
         base: m.name().to_string(),
         candidates: effects.iter().map(Effect::id).collect(),
+        phases: {
+            let residuals: Vec<Vec<f64>> = logs
+                .iter()
+                .zip(&columns)
+                .map(|(l, c)| residual_of(&l.tau, &c.prediction))
+                .collect();
+            spectrum
+                .lines
+                .iter()
+                .map(|line| LinePhases::of(line.cycles, &logs, &residuals))
+                .collect()
+        },
         spectrum,
         effective_fraction,
         initial_rms: summary.rms(&sel.initial)?,

@@ -36,7 +36,7 @@ use crate::{
     sgn,
 };
 
-pub use diagnosis::{DiagnosisResult, DiagnosisStep, RefitScore};
+pub use diagnosis::{DiagnosisResult, DiagnosisStep, LinePhases, RefitScore};
 pub use settings::{FrictionSettings, SettingError};
 
 /// Format tag of the serialised [`FrictionRun`].
