@@ -66,7 +66,8 @@ pub fn report_diagnosis(run: &FrictionRun, r: &mut crate::report::Report) {
     let sp = &d.spectrum;
     if sp.band.1 > sp.band.0 {
         let mut text = format!(
-            "Ripple lines searched in the residual against position from {:.1} to {:.0}              cycles/rev (threshold z > {:.1}, false-alarm probability {} over the band): ",
+            "Ripple lines searched in the residual against position from {:.1} to {:.0} \
+             cycles/rev (threshold z > {:.1}, false-alarm probability {} over the band): ",
             sp.band.0, sp.band.1, sp.threshold, run.settings.library.spectrum.false_alarm
         );
         if sp.lines.is_empty() {
@@ -141,7 +142,8 @@ pub fn report_diagnosis(run: &FrictionRun, r: &mut crate::report::Report) {
     }
     if !d.dropped.is_empty() {
         r.paragraph(format!(
-            "Taken out again after the refit of the model's structure (every coefficient below              3σ: the selection added them for the unrefined model): {}.",
+            "Taken out again after the refit of the model's structure (every coefficient below \
+             3σ: the selection added them for the unrefined model): {}.",
             d.dropped
                 .iter()
                 .map(|id| format!("`{id}`"))

@@ -34,6 +34,8 @@
 //!   search are independent model evaluations, run in parallel.
 //! * `rustfft`: the periodogram of a residual against position, over up
 //!   to a million bins.
+//! * `aras-signal`: the autocorrelation of a residual by FFT blocks, for
+//!   the selection's independent-sample count.
 //! * `serde`: models and results serialise for reports; `thiserror`: the
 //!   error type.
 #![warn(missing_docs)]

@@ -285,6 +285,7 @@ fn run_selection(
     layout: &Layout,
     logs: &[&JointLog],
     columns: &[LogColumns],
+    train_residual: &[f64],
     settings: &FrictionSettings,
 ) -> Result<(Selection, f64), AnalysisError> {
     let sets: Vec<Accumulator> = logs
@@ -294,8 +295,7 @@ fn run_selection(
         .collect::<Result<_, _>>()?;
     let train = logs[0];
     let cols = columns[0].in_layout(layout)?;
-    let acf = Autocorrelation::new(train.len());
-    let base_fraction = 1.0 / acf.integrated_time(&residual_of(&train.tau, &columns[0].prediction));
+    let base_fraction = 1.0 / integrated_time(train_residual);
     let opts = SelectionOptions {
         alpha: settings.alpha,
         min_gain: settings.min_gain,
@@ -313,7 +313,7 @@ fn run_selection(
                 *o -= b * x;
             }
         }
-        1.0 / acf.integrated_time(&r)
+        1.0 / integrated_time(&r)
     };
     Ok((
         select_with(&sets[0], &sets[1..], &opts, effective)?,
@@ -326,57 +326,22 @@ fn residual_of(measured: &[f64], predicted: &[f64]) -> Vec<f64> {
     measured.iter().zip(predicted).map(|(a, b)| a - b).collect()
 }
 
-/// The integrated autocorrelation time of records of one length, by FFT:
-/// `O(n log n)` whatever the correlation length, so that it can be measured
-/// on every candidate's residual.
-struct Autocorrelation {
-    len: usize,
-    forward: std::sync::Arc<dyn rustfft::Fft<f64>>,
-    inverse: std::sync::Arc<dyn rustfft::Fft<f64>>,
-}
-
-/// Most lags summed (as [`aras_ident::stats::integrated_time`] is used
-/// elsewhere in the workspace).
+/// Most lags of an integrated autocorrelation time (as
+/// [`aras_ident::stats::integrated_time`] is used elsewhere in the
+/// workspace).
 const MAX_LAG: usize = 1000;
 
-impl Autocorrelation {
-    fn new(n: usize) -> Self {
-        let len = (2 * n.max(1)).next_power_of_two();
-        let mut planner = rustfft::FftPlanner::new();
-        Self {
-            len,
-            forward: planner.plan_fft_forward(len),
-            inverse: planner.plan_fft_inverse(len),
-        }
+/// `τ = 1 + 2 Σ ρ_k` over the initial run of positive `ρ_k` (Geyer's
+/// initial positive sequence), at least 1. By FFT blocks
+/// ([`aras_signal::Autocorrelation`]): `O(n log MAX_LAG)` whatever the
+/// correlation length, so that it can be measured on every candidate's
+/// residual.
+fn integrated_time(x: &[f64]) -> f64 {
+    let mut acf = aras_signal::Autocorrelation::new(MAX_LAG);
+    for &v in x {
+        acf.push(v);
     }
-
-    /// `τ = 1 + 2 Σ ρ_k` over the initial run of positive `ρ_k`, at most
-    /// [`MAX_LAG`] lags (Geyer's initial positive sequence), at least 1.
-    fn integrated_time(&self, x: &[f64]) -> f64 {
-        use rustfft::num_complex::Complex;
-        let n = x.len();
-        if n < 2 || 2 * n > self.len {
-            return aras_ident::stats::integrated_time(x, MAX_LAG).max(1.0);
-        }
-        let mean = x.iter().sum::<f64>() / n as f64;
-        let mut buf: Vec<Complex<f64>> = x
-            .iter()
-            .map(|v| Complex::new(v - mean, 0.0))
-            .chain(std::iter::repeat(Complex::new(0.0, 0.0)))
-            .take(self.len)
-            .collect();
-        self.forward.process(&mut buf);
-        for c in &mut buf {
-            *c = Complex::new(c.norm_sqr(), 0.0);
-        }
-        self.inverse.process(&mut buf);
-        let c0 = buf[0].re;
-        if c0 <= 0.0 {
-            return 1.0;
-        }
-        let rho = buf[1..MAX_LAG.min(n)].iter().map(|c| c.re / c0);
-        aras_ident::stats::integrated_time_of(rho).max(1.0)
-    }
+    aras_ident::stats::integrated_time_of(acf.finish()).max(1.0)
 }
 
 /// Summaries of a selection: RMS per log, fitness per validation log and
@@ -441,8 +406,13 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     let (train, vals) = (given.train, given.vals);
     let logs: Vec<&JointLog> = std::iter::once(train).chain(vals).collect();
     let models = LogColumns::of_model(m, &logs)?;
-    let residual = residual_of(&train.tau, &models[0].prediction);
-    let Library { effects, spectrum } = library(train, &residual, &settings.library);
+    // The base model's residual on every log, TRAIN first.
+    let residuals: Vec<Vec<f64>> = logs
+        .iter()
+        .zip(&models)
+        .map(|(l, c)| residual_of(&l.tau, &c.prediction))
+        .collect();
+    let Library { effects, spectrum } = library(train, &residuals[0], &settings.library);
     let columns = models
         .into_iter()
         .zip(&logs)
@@ -453,7 +423,8 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
         .map(|e| CandidateSpec::columns(e.id(), e.width()).in_family(e.family()))
         .collect();
     let layout = Layout::new(columns[0].base.len(), specs, 1)?;
-    let (sel, effective_fraction) = run_selection(&layout, &logs, &columns, settings)?;
+    let (sel, effective_fraction) =
+        run_selection(&layout, &logs, &columns, &residuals[0], settings)?;
     let summary = Summary {
         layout: &layout,
         logs: &logs,
@@ -483,18 +454,11 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     let diagnosis = DiagnosisResult {
         base: m.name().to_string(),
         candidates: effects.iter().map(Effect::id).collect(),
-        phases: {
-            let residuals: Vec<Vec<f64>> = logs
-                .iter()
-                .zip(&columns)
-                .map(|(l, c)| residual_of(&l.tau, &c.prediction))
-                .collect();
-            spectrum
-                .lines
-                .iter()
-                .map(|line| LinePhases::of(line.cycles, &logs, &residuals))
-                .collect()
-        },
+        phases: spectrum
+            .lines
+            .iter()
+            .map(|line| LinePhases::of(line.cycles, &logs, &residuals))
+            .collect(),
         spectrum,
         effective_fraction,
         initial_rms: summary.rms(&sel.initial)?,
@@ -568,17 +532,18 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
         if weak.iter().all(|&w| w) {
             return Ok((diagnosis, None));
         }
-        let mut kept_selected = Vec::new();
-        let mut k = 0;
+        let (mut added, mut selected) = (Vec::new(), Vec::new());
+        let mut end = 0;
         for (e, &weak) in input.added.iter().zip(&weak) {
+            let span = end..end + e.width();
+            end = span.end;
             if !weak {
-                kept_selected.extend_from_slice(&input.selected[k..k + e.width()]);
+                added.push(*e);
+                selected.extend_from_slice(&input.selected[span]);
             }
-            k += e.width();
         }
-        let mut keep = weak.iter().map(|w| !w);
-        input.added.retain(|_| keep.next() == Some(true));
-        input.selected = kept_selected;
+        input.added = added;
+        input.selected = selected;
         input.from = Some(refined.structure.clone());
         refined = refine_any(&model, &input, settings)?.0;
     }
@@ -679,10 +644,9 @@ fn refine<M: Separable + Sync + Clone + Into<AnyModel>>(
     let prob = Problem::<M>::new(motion, &train.tau, &extra, &bounds)?;
     // Two starts: the base model's own fitted structure, and its steady
     // state refitted on TRAIN with the effects (at their selection
-    // coefficients) removed. A
-    // strong effect distorts the base fit (a ripple of a third of the
-    // Coulomb level bends the Stribeck curve), and from there alone the
-    // refit can end in a degenerate optimum.
+    // coefficients) removed. A strong effect distorts the base fit (a
+    // ripple of a third of the Coulomb level bends the Stribeck curve), and
+    // from there alone the refit can end in a degenerate optimum.
     let mut starts = vec![from.clone().unwrap_or_else(|| m.structure())];
     let cleaned: Vec<f64> = extra
         .iter()
