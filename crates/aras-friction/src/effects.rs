@@ -16,8 +16,17 @@
 //! | [`Effect::Hysteresis`] `x_d` | Dahl state `w(x_d)` | N·m: a presliding hysteresis of length `x_d` |
 //! | [`Effect::Delay`] | `−dτ̂/dt` | s: the torque lags the motion |
 //! | [`Effect::Inertia`] | `q̈` | kg·m²: inertia not removed by the rigid-body model |
+//! | [`Effect::PositionMap`] `m` | `P_j(x) · [w, 1, v]`, `j = 1…m` | N·m, N·m, N·m·s/rad: friction that depends on position and direction |
 //!
 //! `t₀` is each log's first time stamp: every log starts its own drift.
+//! In the position map, `P_j` is the Legendre polynomial of degree `j` of
+//! the position scaled to the TRAIN stroke, `x = (2q − lo − hi)/(hi − lo)`,
+//! held at ±1 beyond it (a polynomial extrapolated off the stroke diverges;
+//! a held edge value is the least surprising guess), and `w` is the
+//! direction as a presliding state: the normalised Dahl state of a length
+//! of 1e-4 of the stroke (at least 1e-5 rad), so that it is `sgn v` while
+//! sliding and does not chatter on sensor noise at rest. Degree 0 is left
+//! out: it is the model's own offset, Coulomb and viscous terms.
 
 use serde::{Deserialize, Serialize};
 
@@ -56,6 +65,22 @@ pub enum Effect {
     Delay,
     /// Residual inertia: `J q̈`.
     Inertia,
+    /// Friction that depends on position and direction: a Legendre series
+    /// of degree `order` over the TRAIN stroke `[lo, hi]` times the
+    /// direction (presliding state), times 1 and times the velocity. Low
+    /// orders only: a fine map memorises the trajectory.
+    PositionMap {
+        /// Highest Legendre degree `m` (`3m` columns).
+        order: u32,
+        /// Lower end of the stroke the map is scaled to, rad.
+        lo: f64,
+        /// Upper end of the stroke, rad.
+        hi: f64,
+        /// Presliding length of the direction state `w` (normalised Dahl
+        /// state), rad: the map follows the joint's own transition at a
+        /// reversal, which the diagnosis searches for.
+        length: f64,
+    },
 }
 
 /// One physical value of a fitted effect.
@@ -82,6 +107,7 @@ impl Effect {
             Effect::Hysteresis { length } => format!("hysteresis:{length:.3e}"),
             Effect::Delay => "delay".into(),
             Effect::Inertia => "inertia".into(),
+            Effect::PositionMap { order, .. } => format!("position_map:{order}"),
         }
     }
 
@@ -91,6 +117,7 @@ impl Effect {
     pub fn family(&self) -> String {
         match self {
             Effect::Hysteresis { .. } => "hysteresis".into(),
+            Effect::PositionMap { .. } => "position_map".into(),
             other => other.id(),
         }
     }
@@ -116,6 +143,9 @@ impl Effect {
             }
             Effect::Delay => "delay of the torque behind the motion".into(),
             Effect::Inertia => "inertia not removed by the rigid-body model".into(),
+            Effect::PositionMap { order, lo, hi, .. } => format!(
+                "friction depending on position and direction (degree {order} over {lo:.4} … {hi:.4} rad)"
+            ),
         }
     }
 
@@ -123,6 +153,7 @@ impl Effect {
     pub fn width(&self) -> usize {
         match self {
             Effect::Ripple { .. } => 2,
+            Effect::PositionMap { order, .. } => MAP_FACTORS * *order as usize,
             _ => 1,
         }
     }
@@ -171,6 +202,12 @@ impl Effect {
                 ]
             }
             Effect::Inertia => vec![log.acceleration()],
+            Effect::PositionMap {
+                order,
+                lo,
+                hi,
+                length,
+            } => position_map(log, order, lo, hi, length)?,
         })
     }
 
@@ -208,8 +245,105 @@ impl Effect {
             ],
             Effect::Delay => vec![v("delay", coef[0], s0, "s")],
             Effect::Inertia => vec![v("inertia", coef[0], s0, "kg·m²")],
+            Effect::PositionMap { lo, hi, length, .. } => {
+                // The map's swing over the stroke, per factor: what a user
+                // reads first (the coefficients are in the model file).
+                let swing = |factor: usize| {
+                    let mut p = vec![0.0; coef.len() / MAP_FACTORS + 1];
+                    let (mut min, mut max) = (f64::INFINITY, f64::NEG_INFINITY);
+                    for i in 0..=MAP_SWING_POINTS {
+                        let x = -1.0 + 2.0 * i as f64 / MAP_SWING_POINTS as f64;
+                        legendre(x, &mut p);
+                        let f: f64 = coef
+                            .chunks(MAP_FACTORS)
+                            .zip(&p[1..])
+                            .map(|(c, pj)| c[factor] * pj)
+                            .sum();
+                        min = min.min(f);
+                        max = max.max(f);
+                    }
+                    if min.is_finite() { max - min } else { 0.0 }
+                };
+                vec![
+                    v("direction_swing", swing(0), None, "N·m"),
+                    v("offset_swing", swing(1), None, "N·m"),
+                    v("viscous_swing", swing(2), None, "N·m·s/rad"),
+                    v("lo", *lo, None, "rad"),
+                    v("hi", *hi, None, "rad"),
+                    v("length", *length, None, "rad"),
+                ]
+            }
         }
     }
+}
+
+/// Factors of each Legendre degree in the position map: direction, 1, v.
+const MAP_FACTORS: usize = 3;
+
+/// Points over the stroke at which the map's swing is evaluated.
+const MAP_SWING_POINTS: usize = 200;
+
+/// Shortest presliding length searched, rad (a stiff gear's presliding is
+/// tens of µrad).
+const PRESLIDING_MIN: f64 = 1e-5;
+
+/// Longest presliding length searched on a stroke of `range` rad: a
+/// hundredth of it.
+fn presliding_max(range: f64) -> f64 {
+    (0.01 * range).max(2.0 * PRESLIDING_MIN)
+}
+
+/// `count` presliding lengths, log-spaced from [`PRESLIDING_MIN`] to
+/// [`presliding_max`]: the lengths searched for hysteresis and for the
+/// position map's direction state.
+pub(crate) fn presliding_lengths(range: f64, count: usize) -> Vec<f64> {
+    crate::fit::log_grid(PRESLIDING_MIN, presliding_max(range), count)
+}
+
+/// `P_0(x) … P_{p.len()-1}(x)` by Bonnet's recursion.
+fn legendre(x: f64, p: &mut [f64]) {
+    if let Some(p0) = p.first_mut() {
+        *p0 = 1.0;
+    }
+    if p.len() > 1 {
+        p[1] = x;
+    }
+    for j in 2..p.len() {
+        let jf = j as f64;
+        p[j] = ((2.0 * jf - 1.0) * x * p[j - 1] - (jf - 1.0) * p[j - 2]) / jf;
+    }
+}
+
+/// The position map's columns (degree by degree, each `P_j · [w, 1, v]`).
+fn position_map(
+    log: &JointLog,
+    order: u32,
+    lo: f64,
+    hi: f64,
+    length: f64,
+) -> Result<Vec<Vec<f64>>, FrictionError> {
+    let n = log.len();
+    let order = order as usize;
+    let m = Track::new(&log.t, &log.q, &log.dq)?;
+    let w = Dahl::normalised_state(length, &m);
+    let mut cols = vec![Vec::with_capacity(n); MAP_FACTORS * order];
+    let mut p = vec![0.0; order + 1];
+    let (mid, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
+    for i in 0..n {
+        let x = if half > 0.0 {
+            ((log.q[i] - mid) / half).clamp(-1.0, 1.0)
+        } else {
+            0.0
+        };
+        legendre(x, &mut p);
+        for j in 1..=order {
+            let c = MAP_FACTORS * (j - 1);
+            cols[c].push(p[j] * w[i]);
+            cols[c + 1].push(p[j]);
+            cols[c + 2].push(p[j] * log.dq[i]);
+        }
+    }
+    Ok(cols)
 }
 
 /// `k` as an identifier: an integer as such, otherwise to a hundredth.
@@ -239,6 +373,11 @@ pub struct LibrarySettings {
     pub delay: bool,
     /// Try a residual inertia.
     pub inertia: bool,
+    /// Highest Legendre degree of the position × direction map tried
+    /// ([`Effect::PositionMap`]; 0: none). Every degree up to it is a
+    /// member of one family; with validation logs the diagnosis keeps the
+    /// degree with the best held-out fitness.
+    pub position_map: u32,
 }
 
 impl Default for LibrarySettings {
@@ -249,6 +388,7 @@ impl Default for LibrarySettings {
             hysteresis_lengths: 4,
             delay: true,
             inertia: true,
+            position_map: 6,
         }
     }
 }
@@ -272,7 +412,9 @@ pub struct Library {
 /// * every line the search finds in the residual against position
 ///   ([`position_lines`]) with its harmonics up to the band's top, one
 ///   Fourier cell apart at least;
-/// * asymmetry, drifts, hysteresis, delay and inertia.
+/// * asymmetry, drifts, hysteresis, delay and inertia;
+/// * the position × direction map of every degree up to
+///   [`LibrarySettings::position_map`] over TRAIN's stroke.
 pub fn library(train: &JointLog, residual: &[f64], settings: &LibrarySettings) -> Library {
     let spectrum = position_lines(&train.q, residual, &settings.spectrum);
     let mut steps: Vec<f64> = train.q.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
@@ -322,9 +464,7 @@ pub fn library(train: &JointLog, residual: &[f64], settings: &LibrarySettings) -
     let range = train.q.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
         - train.q.iter().cloned().fold(f64::INFINITY, f64::min);
     if settings.hysteresis_lengths > 0 && range > 0.0 {
-        for length in
-            crate::fit::log_grid(1e-5, (0.01 * range).max(2e-5), settings.hysteresis_lengths)
-        {
+        for length in presliding_lengths(range, settings.hysteresis_lengths) {
             v.push(Effect::Hysteresis { length });
         }
     }
@@ -333,6 +473,20 @@ pub fn library(train: &JointLog, residual: &[f64], settings: &LibrarySettings) -
     }
     if settings.inertia {
         v.push(Effect::Inertia);
+    }
+    if range > 0.0 {
+        let lo = train.q.iter().cloned().fold(f64::INFINITY, f64::min);
+        // The grid's geometric middle: the diagnosis then searches the
+        // length of the map it adds over the grid.
+        let length = (PRESLIDING_MIN * presliding_max(range)).sqrt();
+        v.extend(
+            (1..=settings.position_map).map(|order| Effect::PositionMap {
+                order,
+                lo,
+                hi: lo + range,
+                length,
+            }),
+        );
     }
     Library {
         effects: v,

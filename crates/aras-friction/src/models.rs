@@ -518,7 +518,7 @@ impl Dahl {
 
     /// The normalised state `w = F / F_c ∈ [−1, 1]` for a presliding
     /// displacement `x_d`.
-    fn normalised_state(x_d: f64, motion: &Track) -> Vec<f64> {
+    pub(crate) fn normalised_state(x_d: f64, motion: &Track) -> Vec<f64> {
         let (mut z, _) = integrate_state(motion, 1.0 / x_d, |_| 1.0);
         // z is in rad with steady state ±x_d; w = z / x_d.
         for v in &mut z {

@@ -4,7 +4,8 @@
 //! fast components, many reversals; `s` scales the speed for held-out logs).
 //! The friction torque is a LuGre model with optional hidden effects
 //! ([`TrueFriction`]): position ripple, a slow drift of the Coulomb level
-//! (warming), direction asymmetry of the viscous term, a residual inertia
+//! (warming), a Coulomb level that varies along the stroke, direction
+//! asymmetry of the viscous term, a residual inertia
 //! and a delay of the torque signal. Samples are taken at irregular times
 //! (uniform steps in `[min_step, max_step]`, occasional gaps) with Gaussian
 //! sensor noise.
@@ -58,6 +59,12 @@ pub struct TrueFriction {
     pub inertia: f64,
     /// Delay of the logged torque behind the motion, s.
     pub delay: f64,
+    /// Position dependence of the Coulomb and static levels, N·m:
+    /// `g(v, q) = g(v) + Σ A sin(k q + φ)` (a seal or a preload that varies
+    /// along the stroke). Inside the LuGre law, so presliding and sliding
+    /// both see it; the torque deviation is odd in the direction.
+    #[serde(default)]
+    pub coulomb_map: Vec<Ripple>,
 }
 
 impl TrueFriction {
@@ -70,6 +77,7 @@ impl TrueFriction {
             asymmetry: 0.0,
             inertia: 0.0,
             delay: 0.0,
+            coulomb_map: Vec::new(),
         }
     }
 }
@@ -245,14 +253,25 @@ impl JointSimulation {
         let times = self.sample_times(&mut rng);
         let f = &self.friction;
         let m = &f.lugre;
-        // The law at time t: the Coulomb level drifts, the breakaway
-        // excess over it does not.
-        let law = |t: f64| aras_core::LuGreLaw {
-            coulomb: m.coulomb + f.drift * t,
-            static_level: m.static_friction + f.drift * t,
-            stribeck_velocity: m.stribeck_velocity,
-            shape: m.shape,
-            stiffness: m.sigma0,
+        // The law at time t: the Coulomb level drifts and varies along the
+        // stroke, the breakaway excess over it does not.
+        let law = |t: f64| {
+            let mut shift = f.drift * t;
+            if !f.coulomb_map.is_empty() {
+                let q = self.kinematics(t).0;
+                shift += f
+                    .coulomb_map
+                    .iter()
+                    .map(|r| r.amplitude * (r.cycles * q + r.phase).sin())
+                    .sum::<f64>();
+            }
+            aras_core::LuGreLaw {
+                coulomb: m.coulomb + shift,
+                static_level: m.static_friction + shift,
+                stribeck_velocity: m.stribeck_velocity,
+                shape: m.shape,
+                stiffness: m.sigma0,
+            }
         };
         let g = |v: f64, t: f64| law(t).level(v);
         let zdot = |t: f64, z: f64| law(t).rate(self.kinematics(t).1, z);
@@ -262,7 +281,8 @@ impl JointSimulation {
         let v0 = self.kinematics(t0).1;
         let mut z = sgn(v0) * g(v0, t0) / m.sigma0;
         let mut tz = t0;
-        let gmin = m.coulomb.min(m.static_friction).max(1e-9);
+        let swing: f64 = f.coulomb_map.iter().map(|r| r.amplitude.abs()).sum();
+        let gmin = (m.coulomb.min(m.static_friction) - swing).max(1e-9);
         let mut clean = Vec::with_capacity(times.len());
         for &tk in &times {
             let target = tk - f.delay;

@@ -8,7 +8,7 @@
 
 use aras_ident::selection::{
     Accumulator, CandidateEvaluation, CandidateSpec, Layout, ModelFit, Selection, SelectionOptions,
-    SelectionStatus, select_with,
+    SelectionStatus, fit_model, select_with,
 };
 use rayon::prelude::*;
 use serde::Serialize;
@@ -16,7 +16,7 @@ use serde::Serialize;
 use super::{AnalysisError, AnyModel, FrictionSettings, ModelKind, ModelResult};
 use crate::{
     FrictionError, JointLog, Separable, Track,
-    effects::{Effect, EffectValue, Library, library},
+    effects::{Effect, EffectValue, Library, library, presliding_lengths},
     fit::{
         Estimate, FitSettings, Problem, estimates_with_extra, fit_stribeck, lugre_starts, metrics,
     },
@@ -321,6 +321,124 @@ fn run_selection(
     ))
 }
 
+/// The position map's direction length and degree chosen by held-out
+/// error. The map of the highest degree is fitted on TRAIN with the
+/// model's columns and scored on every validation log, first for each
+/// presliding length of a log grid over the stroke (the direction state
+/// must follow the joint's own transition at a reversal, or the map's
+/// direction factor is wrong on every reversal), then at the best length
+/// degree by degree (the series are nested): the lowest degree whose mean
+/// validation fitness is within [`FrictionSettings::min_gain`] of the best
+/// stays in the library with that length, the others leave it. A map's
+/// training error falls with every degree, its error on motions it was not
+/// fitted on does not: a fine map memorises the trajectory. Without
+/// validation logs every degree stays at the library's length and the
+/// selection's ΔBIC decides.
+fn choose_map(
+    effects: Vec<Effect>,
+    logs: &[&JointLog],
+    models: &[LogColumns],
+    settings: &FrictionSettings,
+) -> Result<Vec<Effect>, AnalysisError> {
+    let top = effects
+        .iter()
+        .filter(|e| matches!(e, Effect::PositionMap { .. }))
+        .max_by_key(|e| e.width())
+        .copied();
+    let Some(Effect::PositionMap { order, lo, hi, .. }) = top else {
+        return Ok(effects);
+    };
+    if logs.len() < 2 {
+        return Ok(effects);
+    }
+    let map = |length: f64| Effect::PositionMap {
+        order,
+        lo,
+        hi,
+        length,
+    };
+    // One candidate per degree: the degree's columns of the top map.
+    let per_degree = map(0.0).width() / order as usize;
+    let specs: Vec<CandidateSpec> = (1..=order)
+        .map(|j| CandidateSpec::columns(format!("degree {j}"), per_degree))
+        .collect();
+    let layout = Layout::new(models[0].base.len(), specs, 1)?;
+    let sets = |length: f64| -> Result<Vec<Accumulator>, AnalysisError> {
+        logs.iter()
+            .zip(models)
+            .map(|(l, m)| {
+                let columns = LogColumns {
+                    base: m.base.clone(),
+                    prediction: Vec::new(),
+                    candidates: map(length)
+                        .columns(l, &m.prediction)?
+                        .chunks(per_degree)
+                        .map(<[Vec<f64>]>::to_vec)
+                        .collect(),
+                };
+                columns.accumulate(&layout, &l.tau)
+            })
+            .collect()
+    };
+    let opts = SelectionOptions::default();
+    let score = |sets: &[Accumulator], degree: usize| -> Result<f64, AnalysisError> {
+        let degrees: Vec<usize> = (0..degree).collect();
+        let fit = fit_model(&sets[0], &sets[1..], &degrees, &opts)?;
+        let v = validation_fitness(&fit);
+        Ok(v.iter().sum::<f64>() / v.len().max(1) as f64)
+    };
+    let grid = presliding_lengths(hi - lo, MAP_LENGTHS);
+    let fitness: Vec<f64> = grid
+        .iter()
+        .map(|&l| score(&sets(l)?, order as usize))
+        .collect::<Result<_, AnalysisError>>()?;
+    let i = (0..grid.len())
+        .max_by(|&a, &b| fitness[a].total_cmp(&fitness[b]))
+        .unwrap_or(0);
+    let mut length = grid[i];
+    // An interior best is refined by the parabola through it and its
+    // neighbours in log length (the grid is uniform there).
+    if i > 0 && i + 1 < grid.len() {
+        let (a, b, c) = (fitness[i - 1], fitness[i], fitness[i + 1]);
+        let curvature = a - 2.0 * b + c;
+        if curvature < 0.0 {
+            let step = 0.5 * (a - c) / curvature;
+            let l = grid[i] * (grid[i + 1] / grid[i]).powf(step.clamp(-0.5, 0.5));
+            if score(&sets(l)?, order as usize)? > b {
+                length = l;
+            }
+        }
+    }
+    let sets = sets(length)?;
+    let scores: Vec<f64> = (1..=order as usize)
+        .map(|m| score(&sets, m))
+        .collect::<Result<_, AnalysisError>>()?;
+    let best = scores.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    let chosen = scores
+        .iter()
+        .position(|&s| s >= best - settings.min_gain)
+        .map_or(1, |i| i as u32 + 1);
+    Ok(effects
+        .into_iter()
+        .filter_map(|e| match e {
+            Effect::PositionMap { order, lo, hi, .. } if order == chosen => {
+                Some(Effect::PositionMap {
+                    order,
+                    lo,
+                    hi,
+                    length,
+                })
+            }
+            Effect::PositionMap { .. } => None,
+            other => Some(other),
+        })
+        .collect())
+}
+
+/// Presliding lengths searched for the position map's direction state
+/// (neighbours under a factor 2 apart over the grid's three decades).
+const MAP_LENGTHS: usize = 13;
+
 /// `τ − τ̂`.
 fn residual_of(measured: &[f64], predicted: &[f64]) -> Vec<f64> {
     measured.iter().zip(predicted).map(|(a, b)| a - b).collect()
@@ -413,6 +531,7 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
         .map(|(l, c)| residual_of(&l.tau, &c.prediction))
         .collect();
     let Library { effects, spectrum } = library(train, &residuals[0], &settings.library);
+    let effects = choose_map(effects, &logs, &models, settings)?;
     let columns = models
         .into_iter()
         .zip(&logs)

@@ -52,6 +52,11 @@ pub struct SettingError {
     pub reason: String,
 }
 
+/// Highest degree [`crate::effects::LibrarySettings::position_map`] may
+/// take: 3 columns a degree, and a map of more than 20 degrees over one
+/// stroke fits the noise of the rows it passes through.
+const MAX_MAP_DEGREE: u32 = 20;
+
 impl FrictionSettings {
     /// Checks every setting; the first one out of range is the error.
     pub fn validate(&self) -> Result<(), SettingError> {
@@ -99,6 +104,16 @@ impl FrictionSettings {
                 ),
             );
         }
+        if self.library.position_map > MAX_MAP_DEGREE {
+            return bad(
+                "library.position_map",
+                format!(
+                    "the position map's highest Legendre degree must be at most {MAX_MAP_DEGREE} \
+                     (a finer map memorises the trajectory; default 6, 0 for none), found {}",
+                    self.library.position_map
+                ),
+            );
+        }
         if self.max_steps == 0 {
             return bad(
                 "max_steps",
@@ -134,5 +149,9 @@ mod tests {
         assert_eq!(with(|s| s.alpha = 0.0).key, "alpha");
         assert_eq!(with(|s| s.min_gain = -1.0).key, "min_gain");
         assert_eq!(with(|s| s.max_steps = 0).key, "max_steps");
+        assert_eq!(
+            with(|s| s.library.position_map = 21).key,
+            "library.position_map"
+        );
     }
 }
