@@ -102,7 +102,7 @@ pub struct FrictionArgs {
 #[derive(Debug, Args)]
 pub struct JointLogArgs {
     /// Your column names, e.g. `t=time,q=q2,dq=dq2,tau=tau_f` (roles: t, q,
-    /// dq, tau, ddq; roles not given keep their default names).
+    /// dq, tau, ddq, load; roles not given keep their default names).
     #[arg(long, value_name = "ROLE=NAME,…")]
     pub columns: Option<String>,
     /// ROS 2 bag (.mcap) only: the sensor_msgs/msg/JointState topic (needed

@@ -17,16 +17,18 @@
 //! | [`Effect::Delay`] | `−dτ̂/dt` | s: the torque lags the motion |
 //! | [`Effect::Inertia`] | `q̈` | kg·m²: inertia not removed by the rigid-body model |
 //! | [`Effect::PositionMap`] `m` | `P_j(x) · [w, 1, v]`, `j = 1…m` | N·m, N·m, N·m·s/rad: friction that depends on position and direction |
+//! | [`Effect::Load`] `x_d` | `|L| w(x_d)` | N·m per N·m: the Coulomb level grows with the load torque `L` (the log's `load` column) |
 //!
 //! `t₀` is each log's first time stamp: every log starts its own drift.
 //! In the position map, `P_j` is the Legendre polynomial of degree `j` of
 //! the position scaled to the TRAIN stroke, `x = (2q − lo − hi)/(hi − lo)`,
 //! held at ±1 beyond it (a polynomial extrapolated off the stroke diverges;
 //! a held edge value is the least surprising guess), and `w` is the
-//! direction as a presliding state: the normalised Dahl state of a length
-//! of 1e-4 of the stroke (at least 1e-5 rad), so that it is `sgn v` while
-//! sliding and does not chatter on sensor noise at rest. Degree 0 is left
-//! out: it is the model's own offset, Coulomb and viscous terms.
+//! direction as a presliding state: the normalised Dahl state, `sgn v`
+//! while sliding, that does not chatter on sensor noise at rest and follows
+//! the joint's transition at a reversal with the length the diagnosis
+//! chooses on held-out error. Degree 0 is left out: it is the model's own
+//! offset, Coulomb and viscous terms.
 
 use serde::{Deserialize, Serialize};
 
@@ -81,6 +83,13 @@ pub enum Effect {
         /// reversal, which the diagnosis searches for.
         length: f64,
     },
+    /// Friction that grows with the torque the joint carries: `μ |L| w`,
+    /// `L` the log's `load` column, `w` the normalised Dahl state with
+    /// presliding length `x_d` (offered only when TRAIN has a load column).
+    Load {
+        /// Presliding length `x_d`, rad.
+        length: f64,
+    },
 }
 
 /// One physical value of a fitted effect.
@@ -108,6 +117,7 @@ impl Effect {
             Effect::Delay => "delay".into(),
             Effect::Inertia => "inertia".into(),
             Effect::PositionMap { order, .. } => format!("position_map:{order}"),
+            Effect::Load { length } => format!("load:{length:.3e}"),
         }
     }
 
@@ -118,6 +128,7 @@ impl Effect {
         match self {
             Effect::Hysteresis { .. } => "hysteresis".into(),
             Effect::PositionMap { .. } => "position_map".into(),
+            Effect::Load { .. } => "load".into(),
             other => other.id(),
         }
     }
@@ -146,6 +157,7 @@ impl Effect {
             Effect::PositionMap { order, lo, hi, .. } => format!(
                 "friction depending on position and direction (degree {order} over {lo:.4} … {hi:.4} rad)"
             ),
+            Effect::Load { .. } => "friction growing with the load torque".into(),
         }
     }
 
@@ -208,6 +220,16 @@ impl Effect {
                 hi,
                 length,
             } => position_map(log, order, lo, hi, length)?,
+            Effect::Load { length } => {
+                let load = log
+                    .load
+                    .as_ref()
+                    .ok_or_else(|| FrictionError::MissingLoad {
+                        log: log.name.clone(),
+                    })?;
+                let w = Dahl::normalised_state(length, &log.motion()?);
+                vec![load.iter().zip(&w).map(|(l, w)| l.abs() * w).collect()]
+            }
         })
     }
 
@@ -244,6 +266,10 @@ impl Effect {
                 v("length", *length, None, "rad"),
             ],
             Effect::Delay => vec![v("delay", coef[0], s0, "s")],
+            Effect::Load { length } => vec![
+                v("coefficient", coef[0], s0, "N·m/N·m"),
+                v("length", *length, None, "rad"),
+            ],
             Effect::Inertia => vec![v("inertia", coef[0], s0, "kg·m²")],
             Effect::PositionMap { lo, hi, length, .. } => {
                 // The map's swing over the stroke, per factor: what a user
@@ -367,7 +393,8 @@ pub struct LibrarySettings {
     /// residual.
     pub spectrum: SpectrumSettings,
     /// Hysteresis lengths tried: this many, log-spaced between 1e-5 rad and
-    /// a hundredth of the travelled range.
+    /// a hundredth of the travelled range (also the presliding lengths of
+    /// the load term's direction state).
     pub hysteresis_lengths: usize,
     /// Try a delay of the torque.
     pub delay: bool,
@@ -413,6 +440,7 @@ pub struct Library {
 ///   ([`position_lines`]) with its harmonics up to the band's top, one
 ///   Fourier cell apart at least;
 /// * asymmetry, drifts, hysteresis, delay and inertia;
+/// * with a `load` column in TRAIN, the load term at each hysteresis length;
 /// * the position × direction map of every degree up to
 ///   [`LibrarySettings::position_map`] over TRAIN's stroke.
 pub fn library(train: &JointLog, residual: &[f64], settings: &LibrarySettings) -> Library {
@@ -466,6 +494,11 @@ pub fn library(train: &JointLog, residual: &[f64], settings: &LibrarySettings) -
     if settings.hysteresis_lengths > 0 && range > 0.0 {
         for length in presliding_lengths(range, settings.hysteresis_lengths) {
             v.push(Effect::Hysteresis { length });
+        }
+    }
+    if train.load.is_some() && settings.hysteresis_lengths > 0 && range > 0.0 {
+        for length in presliding_lengths(range, settings.hysteresis_lengths) {
+            v.push(Effect::Load { length });
         }
     }
     if settings.delay {

@@ -31,6 +31,16 @@ pub enum FrictionError {
         /// Coefficients given.
         found: usize,
     },
+    /// A model with a load-dependent friction term applied to a log without
+    /// a load column.
+    #[error(
+        "log `{log}` has no `load` column, but the model's friction grows with the load torque: \
+         log the torque the joint carries as `load` (or map a column to it, e.g. `load=tau_rb`)"
+    )]
+    MissingLoad {
+        /// The log's name.
+        log: String,
+    },
     /// A NaN or infinity in an input series.
     #[error("{what} has a non-finite value {value} at sample {index}; remove or repair the sample")]
     NonFinite {

@@ -2,8 +2,9 @@
 //!
 //! Required columns: `t` (s), `q` (rad), `tau` (N·m, the joint's friction
 //! torque: measured torque minus the rigid-body model). Optional: `dq` (rad/s)
-//! — used as given; only when it is absent it is computed from `q` —, and
-//! `ddq` (rad/s²). Other columns are ignored; [`ColumnMap`] maps a lab's own
+//! — used as given; only when it is absent it is computed from `q` —,
+//! `ddq` (rad/s²) and `load` (N·m, the torque the joint carries, e.g. the
+//! rigid-body model's: for friction that grows with load). Other columns are ignored; [`ColumnMap`] maps a lab's own
 //! names (`t=time,q=q2,dq=dq2,tau=tau_f`). Lines starting with `#` and blank
 //! lines are skipped. Time must increase strictly; the steps may be irregular
 //! (jitter, gaps). Every defect is a [`LogError`] naming the file, line,
@@ -161,6 +162,9 @@ pub struct ColumnMap {
     pub tau: String,
     /// Acceleration column (rad/s²), optional.
     pub ddq: String,
+    /// Load torque column (N·m), optional: the torque the joint carries
+    /// (e.g. the rigid-body model's), for friction that grows with load.
+    pub load: String,
     /// True when the user named the velocity column explicitly, so its
     /// absence is an error instead of a reason to differentiate `q`.
     pub dq_required: bool,
@@ -174,6 +178,7 @@ impl Default for ColumnMap {
             dq: "dq".into(),
             tau: "tau".into(),
             ddq: "ddq".into(),
+            load: "load".into(),
             dq_required: false,
         }
     }
@@ -206,9 +211,10 @@ impl FromStr for ColumnMap {
                 }
                 "tau" => m.tau = name.into(),
                 "ddq" => m.ddq = name.into(),
+                "load" => m.load = name.into(),
                 other => {
                     return Err(bad(format!(
-                        "unknown role `{other}` (roles: t, q, dq, tau, ddq)"
+                        "unknown role `{other}` (roles: t, q, dq, tau, ddq, load)"
                     )));
                 }
             }
@@ -221,8 +227,8 @@ impl fmt::Display for ColumnMap {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "t={},q={},dq={},tau={},ddq={}",
-            self.t, self.q, self.dq, self.tau, self.ddq
+            "t={},q={},dq={},tau={},ddq={},load={}",
+            self.t, self.q, self.dq, self.tau, self.ddq, self.load
         )
     }
 }
@@ -242,6 +248,9 @@ pub struct JointLog {
     pub tau: Vec<f64>,
     /// Acceleration, rad/s², when logged.
     pub ddq: Option<Vec<f64>>,
+    /// Load torque the joint carries, N·m, when logged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load: Option<Vec<f64>>,
     /// True when `dq` was computed from `q` (no velocity column, or a
     /// placeholder one).
     pub dq_from_q: bool,
@@ -267,24 +276,27 @@ impl JointLog {
         self.t.is_empty()
     }
 
-    /// The log as CSV text with header `t,q,dq,tau[,ddq]`, every number in
-    /// its shortest exact (round-trip) form.
+    /// The log as CSV text with header `t,q,dq,tau[,ddq][,load]`, every
+    /// number in its shortest exact (round-trip) form.
     pub fn to_csv(&self) -> String {
         use std::fmt::Write;
         let mut s = String::with_capacity(self.len() * 90);
-        s.push_str(if self.ddq.is_some() {
-            "t,q,dq,tau,ddq\n"
-        } else {
-            "t,q,dq,tau\n"
-        });
+        s.push_str("t,q,dq,tau");
+        if self.ddq.is_some() {
+            s.push_str(",ddq");
+        }
+        if self.load.is_some() {
+            s.push_str(",load");
+        }
+        s.push('\n');
         for i in 0..self.len() {
             let _ = write!(
                 s,
                 "{},{},{},{}",
                 self.t[i], self.q[i], self.dq[i], self.tau[i]
             );
-            if let Some(a) = &self.ddq {
-                let _ = write!(s, ",{}", a[i]);
+            for c in [&self.ddq, &self.load].into_iter().flatten() {
+                let _ = write!(s, ",{}", c[i]);
             }
             s.push('\n');
         }
@@ -363,12 +375,14 @@ pub fn read_joint_log_from(
         return Err(missing("dq", &columns.dq));
     }
     let iddq = find(&columns.ddq);
+    let iload = find(&columns.load);
     let used: Vec<(usize, &str)> = [
         Some((it, columns.t.as_str())),
         Some((iq, columns.q.as_str())),
         Some((itau, columns.tau.as_str())),
         idq.map(|i| (i, columns.dq.as_str())),
         iddq.map(|i| (i, columns.ddq.as_str())),
+        iload.map(|i| (i, columns.load.as_str())),
     ]
     .into_iter()
     .flatten()
@@ -439,6 +453,7 @@ pub fn read_joint_log_from(
     let tau = it.next().unwrap_or_default();
     let mut dq_logged = if idq.is_some() { it.next() } else { None };
     let mut ddq = if iddq.is_some() { it.next() } else { None };
+    let load = if iload.is_some() { it.next() } else { None };
     let mut notes = Vec::new();
     if let Some(v) = &dq_logged
         && is_placeholder(&t, &q, v)
@@ -468,6 +483,7 @@ pub fn read_joint_log_from(
         dq,
         tau,
         ddq,
+        load,
         dq_from_q,
         notes,
     })
@@ -580,7 +596,16 @@ mod tests {
         assert_eq!(log.len(), 20);
         assert!(!log.dq_from_q);
         assert!((log.dq[3] - log.t[3].cos()).abs() < 1e-12);
-        assert!(log.ddq.is_none());
+        assert!(log.ddq.is_none() && log.load.is_none());
+        // The fifth column as the load torque, by its default name or
+        // mapped; written back by `to_csv`.
+        let log = read(&rows("t,q,dq,tau,load", 20), &ColumnMap::default()).unwrap();
+        assert_eq!(log.load.as_deref(), Some(&[7.0; 20][..]));
+        let again = read(&log.to_csv(), &ColumnMap::default()).unwrap();
+        assert_eq!(again.load, log.load);
+        let map: ColumnMap = "load=tau_rb".parse().unwrap();
+        let log = read(&rows("t,q,dq,tau,tau_rb", 20), &map).unwrap();
+        assert_eq!(log.load.as_ref().map(Vec::len), Some(20));
     }
 
     /// `t, q, dq, tau` of a sine, `q` and `dq` scaled by `kq`, `kv`.

@@ -65,6 +65,11 @@ pub struct TrueFriction {
     /// both see it; the torque deviation is odd in the direction.
     #[serde(default)]
     pub coulomb_map: Vec<Ripple>,
+    /// Load dependence of the Coulomb and static levels, N·m per N·m:
+    /// `g(v, L) = g(v) + μ |L|` (gear and bearing friction grow with the
+    /// torque transmitted), `L` the simulation's [`JointSimulation::load`].
+    #[serde(default)]
+    pub load_coefficient: f64,
 }
 
 impl TrueFriction {
@@ -78,7 +83,28 @@ impl TrueFriction {
             inertia: 0.0,
             delay: 0.0,
             coulomb_map: Vec::new(),
+            load_coefficient: 0.0,
         }
+    }
+}
+
+/// The torque a simulated joint carries, N·m: `gravity · cos(q + phase) +
+/// inertia · q̈` (a link's weight and its acceleration, as a rigid-body
+/// model would give it). Logged as the `load` column.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LoadTorque {
+    /// Gravity amplitude, N·m.
+    pub gravity: f64,
+    /// Angle of the gravity term's maximum, rad.
+    pub phase: f64,
+    /// Inertia of the carried link, kg·m².
+    pub inertia: f64,
+}
+
+impl LoadTorque {
+    /// The load at position `q` and acceleration `a`.
+    pub fn at(&self, q: f64, a: f64) -> f64 {
+        self.gravity * (q + self.phase).cos() + self.inertia * a
     }
 }
 
@@ -124,6 +150,9 @@ pub struct JointSimulation {
     pub noise: SensorNoise,
     /// Random seed (sampling and noise).
     pub seed: u64,
+    /// The torque the joint carries, logged as `load` when given.
+    #[serde(default)]
+    pub load: Option<LoadTorque>,
 }
 
 /// A typical joint: `F_c = 0.3`, `F_s = 0.42` N·m, `v_s = 0.04` rad/s,
@@ -181,6 +210,7 @@ impl Default for JointSimulation {
                 dq: 2e-4,
             },
             seed: 1,
+            load: None,
         }
     }
 }
@@ -257,6 +287,12 @@ impl JointSimulation {
         // stroke, the breakaway excess over it does not.
         let law = |t: f64| {
             let mut shift = f.drift * t;
+            if let Some(l) = self.load
+                && f.load_coefficient != 0.0
+            {
+                let (q, _, a) = self.kinematics(t);
+                shift += f.load_coefficient * l.at(q, a).abs();
+            }
             if !f.coulomb_map.is_empty() {
                 let q = self.kinematics(t).0;
                 shift += f
@@ -319,6 +355,7 @@ impl JointSimulation {
             dq: Vec::with_capacity(n),
             tau: Vec::with_capacity(n),
             ddq: Some(Vec::with_capacity(n)),
+            load: self.load.map(|_| Vec::with_capacity(n)),
             dq_from_q: false,
             notes: Vec::new(),
         };
@@ -328,6 +365,9 @@ impl JointSimulation {
             log.dq.push(v + self.noise.dq * rng.normal());
             if let Some(d) = log.ddq.as_mut() {
                 d.push(a);
+            }
+            if let (Some(l), Some(c)) = (self.load, log.load.as_mut()) {
+                c.push(l.at(q, a));
             }
             log.tau.push(clean[k] + self.noise.tau * rng.normal());
         }

@@ -389,7 +389,7 @@ fn choose_map(
     };
     let grid = presliding_lengths(hi - lo, MAP_LENGTHS);
     let fitness: Vec<f64> = grid
-        .iter()
+        .par_iter()
         .map(|&l| score(&sets(l)?, order as usize))
         .collect::<Result<_, AnalysisError>>()?;
     let i = (0..grid.len())
