@@ -37,6 +37,13 @@ pub fn conclusion(run: &FrictionRun) -> String {
         let names: Vec<String> = run.model.effects.iter().map(|(e, _)| e.label()).collect();
         s.push_str(&format!(" Added: {}.", names.join("; ")));
     }
+    // A doubtful fit of a model the conclusion names is said here, where
+    // the user reads first.
+    for m in std::iter::once(best).chain(run.final_model.iter()) {
+        for w in &m.warnings {
+            s.push_str(&format!(" **`{}`: {w}.**", m.name));
+        }
+    }
     s
 }
 

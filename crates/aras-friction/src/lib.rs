@@ -54,8 +54,8 @@ pub mod spectrum;
 mod track;
 
 pub use analysis::{
-    AnalysisError, AnyModel, FinalModel, FrictionRun, FrictionSettings, ModelKind, ModelResult,
-    analyse,
+    AnalysisError, AnyModel, FinalModel, FitWarning, FrictionRun, FrictionSettings, ModelKind,
+    ModelResult, analyse,
 };
 pub use error::FrictionError;
 pub use log::{ColumnMap, JointLog, LogError, read_joint_log, read_joint_log_from};

@@ -4,7 +4,7 @@
 //! starve a weaker one found after it, and a control joint stays clean.
 
 use aras_friction::{
-    FrictionRun, FrictionSettings, JointLog, analyse,
+    FitWarning, FrictionRun, FrictionSettings, JointLog, analyse,
     sim::{JointSimulation, LoadTorque, Ripple},
 };
 
@@ -268,4 +268,54 @@ fn friction_that_grows_with_load_is_named() {
     bare.load = None;
     let e = r.model.predict(&bare).unwrap_err().to_string();
     assert!(e.contains("no `load` column"), "{e}");
+}
+
+/// A joint with viscous friction only: the models with a Coulomb level fit
+/// it near zero, and the result says so instead of reporting presliding
+/// parameters as if identified; the typical joint's fits carry no such
+/// warning.
+#[test]
+fn a_vanished_coulomb_level_is_not_silent() {
+    let viscous = |speed: f64, seed: u64| -> JointLog {
+        let mut log = JointSimulation {
+            duration: 20.0,
+            speed,
+            seed,
+            ..JointSimulation::default()
+        }
+        .run("viscous")
+        .log;
+        // Deterministic noise of RMS 5 mN·m from a Weyl sequence.
+        log.tau = log
+            .dq
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                let u = (i as f64 * 0.618_033_988_75 + seed as f64 * 0.1).fract();
+                0.12 * v + 0.005 * 3f64.sqrt() * (2.0 * u - 1.0)
+            })
+            .collect();
+        log
+    };
+    let collapsed = |r: &FrictionRun| -> Vec<String> {
+        r.models
+            .iter()
+            .filter(|m| {
+                m.warnings
+                    .iter()
+                    .any(|w| matches!(w, FitWarning::CoulombVanished { .. }))
+            })
+            .map(|m| m.name.clone())
+            .collect()
+    };
+    let r = analyse(
+        &viscous(1.0, 41),
+        &[viscous(0.7, 42)],
+        &FrictionSettings::default(),
+    )
+    .unwrap();
+    let names = collapsed(&r);
+    assert!(names.iter().any(|n| n == "lugre"), "{names:?}");
+    let typical = run(&JointSimulation::default(), 20.0, 43);
+    assert!(collapsed(&typical).is_empty(), "{:?}", collapsed(&typical));
 }

@@ -350,6 +350,9 @@ fn build(run: &FrictionRun, logs: &[&JointLog], final_train: &[f64]) -> Result<R
                 })
                 .collect(),
         );
+        for w in &m.warnings {
+            r.paragraph(format!("**{w}.**"));
+        }
     }
 
     // τ–v scatter with each model's steady-state curve.

@@ -876,6 +876,7 @@ fn refine<M: Separable + Sync + Clone + Into<AnyModel>>(
         Refined {
             result: ModelResult {
                 name,
+                warnings: super::fit_warnings(&estimates, &train.tau),
                 parameters: estimates,
                 train: scored[0],
                 validation,

@@ -187,6 +187,86 @@ pub struct ModelResult {
     pub evaluations: usize,
     /// How the search ended.
     pub status: FitStatus,
+    /// What makes the fit doubtful although it converged (a model that
+    /// lost its Coulomb level, a parameter at its search bound).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<FitWarning>,
+}
+
+/// A fit that converged to a doubtful point: said in the report, not
+/// left for the user to spot in the parameter table.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum FitWarning {
+    /// The Coulomb level `F_c` fell below [`COULOMB_VANISHED`] of the
+    /// TRAIN torque's RMS: the fit collapsed onto its viscous and presliding
+    /// terms (seen with LuGre on joints with several presliding lengths),
+    /// and its presliding parameters are not identified.
+    CoulombVanished {
+        /// Fitted `F_c`, N·m.
+        value: f64,
+        /// RMS of the TRAIN torque about its mean, N·m.
+        torque_rms: f64,
+    },
+    /// A nonlinear parameter ended on its search bound: the optimum lies
+    /// outside the box, and its σ is not meaningful.
+    AtBound {
+        /// Parameter name.
+        parameter: String,
+        /// Its value, in `unit`.
+        value: f64,
+        /// SI unit.
+        unit: String,
+    },
+}
+
+impl std::fmt::Display for FitWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FitWarning::CoulombVanished { value, torque_rms } => write!(
+                f,
+                "its Coulomb level vanished (F_c = {value:.2e} N·m against a torque RMS of \
+                 {torque_rms:.3} N·m): either the joint has no Coulomb friction, or the fit \
+                 collapsed onto its other terms (a joint with several presliding lengths), and \
+                 its presliding parameters are then not identified"
+            ),
+            FitWarning::AtBound {
+                parameter,
+                value,
+                unit,
+            } => write!(
+                f,
+                "`{parameter}` = {value:.3e} {unit} is at its search bound: the optimum lies \
+                 outside the search box and its σ is not meaningful"
+            ),
+        }
+    }
+}
+
+/// `F_c` below this fraction of the torque's RMS is a collapsed fit.
+pub const COULOMB_VANISHED: f64 = 1e-3;
+
+/// The warnings of a fit with `parameters` on a TRAIN torque `tau`.
+fn fit_warnings(parameters: &[Estimate], tau: &[f64]) -> Vec<FitWarning> {
+    let n = tau.len().max(1) as f64;
+    let mean = tau.iter().sum::<f64>() / n;
+    let torque_rms = (tau.iter().map(|t| (t - mean).powi(2)).sum::<f64>() / n).sqrt();
+    let mut out = Vec::new();
+    for p in parameters {
+        if p.name == "Fc" && p.value.abs() < COULOMB_VANISHED * torque_rms {
+            out.push(FitWarning::CoulombVanished {
+                value: p.value,
+                torque_rms,
+            });
+        } else if p.at_bound && !p.fixed {
+            out.push(FitWarning::AtBound {
+                parameter: p.name.clone(),
+                value: p.value,
+                unit: p.unit.clone(),
+            });
+        }
+    }
+    out
 }
 
 /// A fitted model of any of the four kinds.
@@ -412,6 +492,7 @@ pub(crate) fn predict_with_effects(
 /// validation log.
 fn result<M: Separable + Sync>(
     f: &Fitted<M>,
+    train: &JointLog,
     vals: &[JointLog],
 ) -> Result<ModelResult, FrictionError> {
     let validation = vals
@@ -426,6 +507,7 @@ fn result<M: Separable + Sync>(
         iterations: f.iterations,
         evaluations: f.evaluations,
         status: f.status,
+        warnings: fit_warnings(&f.estimates, &train.tau),
     })
 }
 
@@ -457,10 +539,10 @@ fn fit_classical(
     let dahl = dahl.map_err(fit_error(ModelKind::Dahl))?;
     let lugre = fit_lugre(&m, tau, &st.model, fs).map_err(fit_error(ModelKind::Lugre))?;
     let models = vec![
-        result(&cv, vals)?,
-        result(&st, vals)?,
-        result(&dahl, vals)?,
-        result(&lugre, vals)?,
+        result(&cv, train, vals)?,
+        result(&st, train, vals)?,
+        result(&dahl, train, vals)?,
+        result(&lugre, train, vals)?,
     ];
     let fitted = vec![
         AnyModel::CoulombViscous(cv.model),
