@@ -4,8 +4,9 @@
 //! fast components, many reversals; `s` scales the speed for held-out logs).
 //! The friction torque is a LuGre model with optional hidden effects
 //! ([`TrueFriction`]): position ripple, a slow drift of the Coulomb level
-//! (warming), a Coulomb level that varies along the stroke, direction
-//! asymmetry of the viscous term, a residual inertia
+//! (warming), a Coulomb level that varies along the stroke or grows with
+//! the load the joint carries (logged as `load`), direction asymmetry of
+//! the viscous term, a residual inertia
 //! and a delay of the torque signal. Samples are taken at irregular times
 //! (uniform steps in `[min_step, max_step]`, occasional gaps) with Gaussian
 //! sensor noise.
@@ -67,7 +68,9 @@ pub struct TrueFriction {
     pub coulomb_map: Vec<Ripple>,
     /// Load dependence of the Coulomb and static levels, N·m per N·m:
     /// `g(v, L) = g(v) + μ |L|` (gear and bearing friction grow with the
-    /// torque transmitted), `L` the simulation's [`JointSimulation::load`].
+    /// torque transmitted), `L` the simulation's [`JointSimulation::load`];
+    /// `μ ≥ 0` (the integration step is sized for levels that do not fall
+    /// below the Coulomb level minus the map's swing).
     #[serde(default)]
     pub load_coefficient: f64,
 }

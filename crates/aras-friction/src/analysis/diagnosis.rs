@@ -436,7 +436,8 @@ fn choose_map(
 }
 
 /// Presliding lengths searched for the position map's direction state
-/// (neighbours under a factor 2 apart over the grid's three decades).
+/// (neighbours under a factor 2 apart on a stroke of 2 rad, closer on a
+/// shorter one).
 const MAP_LENGTHS: usize = 13;
 
 /// `τ − τ̂`.

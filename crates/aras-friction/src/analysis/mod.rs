@@ -208,8 +208,9 @@ pub enum FitWarning {
         /// RMS of the TRAIN torque about its mean, N·m.
         torque_rms: f64,
     },
-    /// A nonlinear parameter ended on its search bound: the optimum lies
-    /// outside the box, and its σ is not meaningful.
+    /// A free parameter ended on a bound of its search box or physical
+    /// range: the unconstrained optimum lies outside, and its σ means
+    /// little.
     AtBound {
         /// Parameter name.
         parameter: String,
@@ -236,8 +237,8 @@ impl std::fmt::Display for FitWarning {
                 unit,
             } => write!(
                 f,
-                "`{parameter}` = {value:.3e} {unit} is at its search bound: the optimum lies \
-                 outside the search box and its σ is not meaningful"
+                "`{parameter}` = {value:.3e} {unit} is on a bound of its search box or \
+                 physical range: the unconstrained optimum lies outside, and its σ means little"
             ),
         }
     }
