@@ -5,7 +5,8 @@
 //! The friction torque is a LuGre model with optional hidden effects
 //! ([`TrueFriction`]): position ripple, a slow drift of the Coulomb level
 //! (warming), a Coulomb level that varies along the stroke or grows with
-//! the load the joint carries (logged as `load`), direction asymmetry of
+//! the load the joint carries (logged as `load`), Maxwell-slip elements
+//! beside LuGre (several presliding lengths), direction asymmetry of
 //! the viscous term, a residual inertia
 //! and a delay of the torque signal. Samples are taken at irregular times
 //! (uniform steps in `[min_step, max_step]`, occasional gaps) with Gaussian
@@ -44,6 +45,18 @@ pub struct Ripple {
     pub phase: f64,
 }
 
+/// An elastoplastic (Maxwell-slip) element: a spring that deflects with the
+/// position and slips at its level, adding `F · x / x_s`, `x ∈ [−x_s, x_s]`.
+/// Several of them are the generalized Maxwell-slip picture of a joint with
+/// several presliding lengths (gear stages, bearings, seals).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SlipElement {
+    /// Slip level `F`, N·m.
+    pub level: f64,
+    /// Deflection at slip `x_s`, rad.
+    pub length: f64,
+}
+
 /// The true friction of the simulated joint: LuGre plus hidden effects.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TrueFriction {
@@ -73,6 +86,11 @@ pub struct TrueFriction {
     /// below the Coulomb level minus the map's swing).
     #[serde(default)]
     pub load_coefficient: f64,
+    /// Maxwell-slip elements in parallel with LuGre (evaluated on the
+    /// sample grid from the true positions: exact for an elastoplastic
+    /// element, whose state is piecewise linear in `q`).
+    #[serde(default)]
+    pub slip: Vec<SlipElement>,
 }
 
 impl TrueFriction {
@@ -87,6 +105,7 @@ impl TrueFriction {
             delay: 0.0,
             coulomb_map: Vec::new(),
             load_coefficient: 0.0,
+            slip: Vec::new(),
         }
     }
 }
@@ -323,6 +342,10 @@ impl JointSimulation {
         let swing: f64 = f.coulomb_map.iter().map(|r| r.amplitude.abs()).sum();
         let gmin = (m.coulomb.min(m.static_friction) - swing).max(1e-9);
         let mut clean = Vec::with_capacity(times.len());
+        // Each slip element starts slipping in the direction of the
+        // initial motion, as the LuGre state does.
+        let mut slip: Vec<f64> = f.slip.iter().map(|e| sgn(v0) * e.length).collect();
+        let mut q_prev = self.kinematics(t0).0;
         for &tk in &times {
             let target = tk - f.delay;
             while tz < target {
@@ -348,6 +371,11 @@ impl JointSimulation {
                 tau += r.amplitude * (r.cycles * q + r.phase).sin();
             }
             tau += f.asymmetry * v.abs() + f.inertia * a;
+            for (x, e) in slip.iter_mut().zip(&f.slip) {
+                *x = (*x + q - q_prev).clamp(-e.length, e.length);
+                tau += e.level * *x / e.length;
+            }
+            q_prev = q;
             clean.push(tau);
         }
         let n = times.len();
