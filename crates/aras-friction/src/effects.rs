@@ -350,8 +350,7 @@ fn position_map(
 ) -> Result<Vec<Vec<f64>>, FrictionError> {
     let n = log.len();
     let order = order as usize;
-    let m = Track::new(&log.t, &log.q, &log.dq)?;
-    let w = Dahl::normalised_state(length, &m);
+    let w = Dahl::normalised_state(length, &log.motion()?);
     let mut cols = vec![Vec::with_capacity(n); MAP_FACTORS * order];
     let mut p = vec![0.0; order + 1];
     let (mid, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
@@ -489,17 +488,19 @@ pub fn library(train: &JointLog, residual: &[f64], settings: &LibrarySettings) -
         Effect::CoulombDrift,
         Effect::OffsetDrift,
     ]);
-    let range = train.q.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
-        - train.q.iter().cloned().fold(f64::INFINITY, f64::min);
-    if settings.hysteresis_lengths > 0 && range > 0.0 {
-        for length in presliding_lengths(range, settings.hysteresis_lengths) {
-            v.push(Effect::Hysteresis { length });
-        }
-    }
-    if train.load.is_some() && settings.hysteresis_lengths > 0 && range > 0.0 {
-        for length in presliding_lengths(range, settings.hysteresis_lengths) {
-            v.push(Effect::Load { length });
-        }
+    let lo = train.q.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = train.q.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    let range = hi - lo;
+    // One grid of presliding lengths for the hysteresis element and the
+    // load term's direction state.
+    let lengths = if settings.hysteresis_lengths > 0 && range > 0.0 {
+        presliding_lengths(range, settings.hysteresis_lengths)
+    } else {
+        Vec::new()
+    };
+    v.extend(lengths.iter().map(|&length| Effect::Hysteresis { length }));
+    if train.load.is_some() {
+        v.extend(lengths.iter().map(|&length| Effect::Load { length }));
     }
     if settings.delay {
         v.push(Effect::Delay);
@@ -508,7 +509,6 @@ pub fn library(train: &JointLog, residual: &[f64], settings: &LibrarySettings) -
         v.push(Effect::Inertia);
     }
     if range > 0.0 {
-        let lo = train.q.iter().cloned().fold(f64::INFINITY, f64::min);
         // The grid's geometric middle: the diagnosis then searches the
         // length of the map it adds over the grid.
         let length = (PRESLIDING_MIN * presliding_max(range)).sqrt();
@@ -516,7 +516,7 @@ pub fn library(train: &JointLog, residual: &[f64], settings: &LibrarySettings) -
             (1..=settings.position_map).map(|order| Effect::PositionMap {
                 order,
                 lo,
-                hi: lo + range,
+                hi,
                 length,
             }),
         );

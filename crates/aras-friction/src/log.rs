@@ -4,8 +4,9 @@
 //! torque: measured torque minus the rigid-body model). Optional: `dq` (rad/s)
 //! — used as given; only when it is absent it is computed from `q` —,
 //! `ddq` (rad/s²) and `load` (N·m, the torque the joint carries, e.g. the
-//! rigid-body model's: for friction that grows with load). Other columns are ignored; [`ColumnMap`] maps a lab's own
-//! names (`t=time,q=q2,dq=dq2,tau=tau_f`). Lines starting with `#` and blank
+//! rigid-body model's: for friction that grows with load). Other columns
+//! are ignored; [`ColumnMap`] maps a lab's own names
+//! (`t=time,q=q2,dq=dq2,tau=tau_f`). Lines starting with `#` and blank
 //! lines are skipped. Time must increase strictly; the steps may be irregular
 //! (jitter, gaps). Every defect is a [`LogError`] naming the file, line,
 //! column and value.

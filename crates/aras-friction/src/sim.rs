@@ -305,18 +305,17 @@ impl JointSimulation {
         let times = self.sample_times(&mut rng);
         let f = &self.friction;
         let m = &f.lugre;
-        // The law at time t: the Coulomb level drifts and varies along the
-        // stroke, the breakaway excess over it does not.
+        // The law at time t: the Coulomb level drifts, varies along the
+        // stroke and grows with the load; the breakaway excess over it does
+        // not.
+        let load = self.load.filter(|_| f.load_coefficient != 0.0);
         let law = |t: f64| {
             let mut shift = f.drift * t;
-            if let Some(l) = self.load
-                && f.load_coefficient != 0.0
-            {
+            if load.is_some() || !f.coulomb_map.is_empty() {
                 let (q, _, a) = self.kinematics(t);
-                shift += f.load_coefficient * l.at(q, a).abs();
-            }
-            if !f.coulomb_map.is_empty() {
-                let q = self.kinematics(t).0;
+                if let Some(l) = load {
+                    shift += f.load_coefficient * l.at(q, a).abs();
+                }
                 shift += f
                     .coulomb_map
                     .iter()

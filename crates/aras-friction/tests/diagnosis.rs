@@ -35,6 +35,42 @@ fn run_with(
     analyse(&train, &vals, settings).unwrap()
 }
 
+/// The id of the effect the diagnosis named with `prefix`, which the refit
+/// kept (panics with the named ids otherwise).
+fn kept_effect(r: &FrictionRun, prefix: &str) -> String {
+    let d = r.diagnosis.as_ref().unwrap();
+    let ids: Vec<&str> = d.steps.iter().map(|s| s.id.as_str()).collect();
+    let id = ids
+        .iter()
+        .find(|id| id.starts_with(prefix))
+        .unwrap_or_else(|| panic!("{ids:?}"));
+    assert!(!d.dropped.iter().any(|x| x == id), "{:?}", d.dropped);
+    id.to_string()
+}
+
+/// The final model's parameter `name`, if it has one.
+fn parameter(r: &FrictionRun, name: &str) -> Option<f64> {
+    let fm = r.final_model.as_ref().unwrap();
+    fm.parameters
+        .iter()
+        .find(|p| p.name == name)
+        .map(|p| p.value)
+}
+
+/// Asserts the final model's RMS on every validation log is at most
+/// `factor` times the best classical model's.
+fn assert_held_out_below(r: &FrictionRun, factor: f64, what: &str) {
+    let fm = r.final_model.as_ref().unwrap();
+    for (f, c) in fm.validation.iter().zip(&r.models[r.best].validation) {
+        assert!(
+            f.rms <= factor * c.rms,
+            "{what}: {} vs classical {}",
+            f.rms,
+            c.rms
+        );
+    }
+}
+
 /// A 0.1 N·m ripple leaves a base residual with τ ≈ 60 (under 5 % of the
 /// rows independent); a Coulomb drift a fifth of the size is still named
 /// after it, counted with the samples of its own residual.
@@ -172,31 +208,12 @@ fn friction_that_depends_on_position_and_direction_is_mapped() {
         },
     ];
     let r = run(&sim, 40.0, 21);
-    let d = r.diagnosis.as_ref().unwrap();
-    let ids: Vec<&str> = d.steps.iter().map(|s| s.id.as_str()).collect();
-    let map = ids
-        .iter()
-        .find(|id| id.starts_with("position_map:"))
-        .unwrap_or_else(|| panic!("{ids:?}"));
-    assert!(!d.dropped.iter().any(|id| id == map), "{:?}", d.dropped);
-    let classical = &r.models[r.best];
-    let fm = r.final_model.as_ref().unwrap();
-    for (f, c) in fm.validation.iter().zip(&classical.validation) {
-        assert!(
-            f.rms <= 0.7 * c.rms,
-            "{map}: {} vs classical {}",
-            f.rms,
-            c.rms
-        );
-    }
+    let map = kept_effect(&r, "position_map:");
+    assert_held_out_below(&r, 0.7, &map);
     // The map's direction swing against the true Coulomb shift's over the
     // stroke it was scaled to.
     let value = |name: &str| {
-        fm.parameters
-            .iter()
-            .find(|p| p.name == format!("{map}.{name}"))
-            .unwrap_or_else(|| panic!("{map}.{name}"))
-            .value
+        parameter(&r, &format!("{map}.{name}")).unwrap_or_else(|| panic!("{map}.{name}"))
     };
     let (lo, hi) = (value("lo"), value("hi"));
     let shift = |q: f64| -> f64 {
@@ -250,29 +267,10 @@ fn friction_that_grows_with_load_is_named() {
     };
     sim.friction.load_coefficient = 0.03;
     let r = run(&sim, 40.0, 31);
-    let d = r.diagnosis.as_ref().unwrap();
-    let ids: Vec<&str> = d.steps.iter().map(|s| s.id.as_str()).collect();
-    let load = ids
-        .iter()
-        .find(|id| id.starts_with("load:"))
-        .unwrap_or_else(|| panic!("{ids:?}"));
-    assert!(!d.dropped.iter().any(|id| id == load), "{:?}", d.dropped);
-    let fm = r.final_model.as_ref().unwrap();
-    let mu = fm
-        .parameters
-        .iter()
-        .find(|p| p.name == format!("{load}.coefficient"))
-        .unwrap();
-    assert!((mu.value - 0.03).abs() < 0.003, "{ids:?}: μ = {}", mu.value);
-    let classical = &r.models[r.best];
-    for (f, c) in fm.validation.iter().zip(&classical.validation) {
-        assert!(
-            f.rms <= 0.7 * c.rms,
-            "{ids:?}: {} vs classical {}",
-            f.rms,
-            c.rms
-        );
-    }
+    let load = kept_effect(&r, "load:");
+    let mu = parameter(&r, &format!("{load}.coefficient")).unwrap();
+    assert!((mu - 0.03).abs() < 0.003, "{load}: μ = {mu}");
+    assert_held_out_below(&r, 0.7, &load);
     // A log without the load column is refused by name, not predicted.
     let mut bare = sim.run("bare").log;
     bare.load = None;
@@ -356,20 +354,13 @@ fn several_presliding_lengths_are_one_element() {
     let r = run_with(&sim, 40.0, 51, &settings);
     let d = r.diagnosis.as_ref().unwrap();
     let ids: Vec<&str> = d.steps.iter().map(|s| s.id.as_str()).collect();
-    let fm = r.final_model.as_ref().unwrap();
-    let value = |name: &str| {
-        fm.parameters
-            .iter()
-            .find(|p| p.name == name)
-            .map(|p| p.value)
-    };
     let (level, length) = ids
         .iter()
         .filter(|id| id.starts_with("hysteresis:"))
         .find_map(|id| {
             Some((
-                value(&format!("{id}.level"))?,
-                value(&format!("{id}.length"))?,
+                parameter(&r, &format!("{id}.level"))?,
+                parameter(&r, &format!("{id}.length"))?,
             ))
         })
         .unwrap_or_else(|| panic!("{ids:?}"));
@@ -377,13 +368,5 @@ fn several_presliding_lengths_are_one_element() {
         (3e-4..8e-3).contains(&length) && (0.06..0.16).contains(&level),
         "{ids:?}: level {level} over {length}"
     );
-    let classical = &r.models[r.best];
-    for (f, c) in fm.validation.iter().zip(&classical.validation) {
-        assert!(
-            f.rms <= 0.4 * c.rms,
-            "{ids:?}: {} vs classical {}",
-            f.rms,
-            c.rms
-        );
-    }
+    assert_held_out_below(&r, 0.4, &format!("{ids:?}"));
 }

@@ -387,29 +387,36 @@ fn choose_map(
         let v = validation_fitness(&fit);
         Ok(v.iter().sum::<f64>() / v.len().max(1) as f64)
     };
+    // Each length's sums are kept: the degree search reuses the best's.
     let grid = presliding_lengths(hi - lo, MAP_LENGTHS);
-    let fitness: Vec<f64> = grid
+    let mut scored: Vec<(f64, Vec<Accumulator>)> = grid
         .par_iter()
-        .map(|&l| score(&sets(l)?, order as usize))
+        .map(|&l| {
+            let s = sets(l)?;
+            Ok((score(&s, order as usize)?, s))
+        })
         .collect::<Result<_, AnalysisError>>()?;
     let i = (0..grid.len())
-        .max_by(|&a, &b| fitness[a].total_cmp(&fitness[b]))
+        .max_by(|&a, &b| scored[a].0.total_cmp(&scored[b].0))
         .unwrap_or(0);
     let mut length = grid[i];
+    let mut best_sets = None;
     // An interior best is refined by the parabola through it and its
     // neighbours in log length (the grid is uniform there).
     if i > 0 && i + 1 < grid.len() {
-        let (a, b, c) = (fitness[i - 1], fitness[i], fitness[i + 1]);
+        let (a, b, c) = (scored[i - 1].0, scored[i].0, scored[i + 1].0);
         let curvature = a - 2.0 * b + c;
         if curvature < 0.0 {
             let step = 0.5 * (a - c) / curvature;
             let l = grid[i] * (grid[i + 1] / grid[i]).powf(step.clamp(-0.5, 0.5));
-            if score(&sets(l)?, order as usize)? > b {
+            let s = sets(l)?;
+            if score(&s, order as usize)? > b {
                 length = l;
+                best_sets = Some(s);
             }
         }
     }
-    let sets = sets(length)?;
+    let sets = best_sets.unwrap_or_else(|| scored.swap_remove(i).1);
     let scores: Vec<f64> = (1..=order as usize)
         .map(|m| score(&sets, m))
         .collect::<Result<_, AnalysisError>>()?;
