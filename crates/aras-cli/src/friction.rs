@@ -103,10 +103,21 @@ pub fn report_diagnosis(run: &FrictionRun, r: &mut crate::report::Report) {
                     None => format!("{name} —"),
                 })
                 .collect();
+            let harmonic = |k: f64| {
+                let n = (k / lp.cycles).round();
+                n >= 1.0 && (k - n * lp.cycles).abs() <= 1e-9 * k
+            };
+            let modelled = if !run.model.per_log_phase.iter().any(|&k| harmonic(k)) {
+                "The final model has no ripple from this line, so nothing is set per log."
+            } else {
+                "The final model sets the phase of its ripple from this line per log: on every \
+                 log with a torque it is measured from that torque (one parameter per line and \
+                 log, like the position zero it stands for); a log without torque gets TRAIN's."
+            };
             r.paragraph(format!(
                 "**The line at {:.2} cycles/rev has another phase on another log** ({}): the \
                  logs do not share a position zero (an encoder zeroed per log) or the ripple \
-                 moved, and one phase, TRAIN's, cannot predict them.",
+                 moved, and one phase, TRAIN's, cannot predict them. {modelled}",
                 lp.cycles,
                 phases.join(", ")
             ));

@@ -445,6 +445,23 @@ fn predicted_logs_take_no_part_and_the_model_file_reproduces_them() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(std::fs::read(&out).unwrap() == read("both", "pred_p2.csv"));
     assert!(String::from_utf8_lossy(&o.stdout).contains("fitness (78)"));
+    // The motion alone predicts: the same file from p2 without its tau
+    // column (the logs share a zero, so no phase is measured from it).
+    let p2 = std::fs::read_to_string(dir.join("p2.csv")).unwrap();
+    let no_tau: String = p2
+        .lines()
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            format!("{},{},{},{}\n", f[0], f[1], f[2], f[4..].join(","))
+        })
+        .collect();
+    assert!(no_tau.starts_with("t,q,dq,ddq\n"), "{}", &no_tau[..40]);
+    std::fs::write(dir.join("p2_motion.csv"), no_tau).unwrap();
+    let motion_out = dir.join("p2-motion-pred.csv");
+    let o = predict("p2_motion.csv", &motion_out, false);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(std::fs::read(&motion_out).unwrap() == read("both", "pred_p2.csv"));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("no tau column to compare with"));
     // An existing output needs --force; an input is never replaced.
     let o = predict("p2.csv", &out, false);
     assert!(!o.status.success());

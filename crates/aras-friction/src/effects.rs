@@ -33,7 +33,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::{
-    Dahl, FrictionError, JointLog, Separable, Track,
+    Dahl, FrictionError, JointLog, JointMotion, Separable, Track,
     log::derivative,
     sgn,
     spectrum::{PositionSpectrum, SpectrumSettings, position_lines},
@@ -174,7 +174,7 @@ impl Effect {
     /// model's prediction on that log (used by [`Effect::Delay`]).
     pub fn columns(
         &self,
-        log: &JointLog,
+        log: &JointMotion,
         prediction: &[f64],
     ) -> Result<Vec<Vec<f64>>, FrictionError> {
         let n = log.len();
@@ -227,7 +227,7 @@ impl Effect {
                     .ok_or_else(|| FrictionError::MissingLoad {
                         log: log.name.clone(),
                     })?;
-                let w = Dahl::normalised_state(length, &log.motion()?);
+                let w = Dahl::normalised_state(length, &log.track()?);
                 vec![load.iter().zip(&w).map(|(l, w)| l.abs() * w).collect()]
             }
         })
@@ -340,9 +340,26 @@ fn legendre(x: f64, p: &mut [f64]) {
     }
 }
 
+/// A ripple's columns `sin(kq)`, `cos(kq)` turned into `sin(kq + Δ)`,
+/// `cos(kq + Δ)`: the same line on a log whose position zero puts it
+/// `Δ` rad further on.
+pub(crate) fn shift_ripple(columns: &mut [Vec<f64>], shift: f64) {
+    if shift == 0.0 {
+        return;
+    }
+    let (sd, cd) = shift.sin_cos();
+    if let [s, c] = columns {
+        for (s, c) in s.iter_mut().zip(c.iter_mut()) {
+            let (a, b) = (*s, *c);
+            *s = a * cd + b * sd;
+            *c = b * cd - a * sd;
+        }
+    }
+}
+
 /// The position map's columns (degree by degree, each `P_j · [w, 1, v]`).
 fn position_map(
-    log: &JointLog,
+    log: &JointMotion,
     order: u32,
     lo: f64,
     hi: f64,
@@ -350,7 +367,7 @@ fn position_map(
 ) -> Result<Vec<Vec<f64>>, FrictionError> {
     let n = log.len();
     let order = order as usize;
-    let w = Dahl::normalised_state(length, &log.motion()?);
+    let w = Dahl::normalised_state(length, &log.track()?);
     let mut cols = vec![Vec::with_capacity(n); MAP_FACTORS * order];
     let mut p = vec![0.0; order + 1];
     let (mid, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
@@ -572,7 +589,7 @@ pub struct Profile {
 
 /// The residual binned against velocity, position, time, acceleration
 /// (equal-count bins) and direction.
-pub fn residual_profiles(log: &JointLog, residual: &[f64], bins: usize) -> Vec<Profile> {
+pub fn residual_profiles(log: &JointMotion, residual: &[f64], bins: usize) -> Vec<Profile> {
     let acc = log.acceleration();
     let dir: Vec<f64> = log.dq.iter().map(|&v| sgn(v)).collect();
     let axes: [(Axis, &[f64]); 5] = [

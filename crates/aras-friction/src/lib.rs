@@ -58,7 +58,10 @@ pub use analysis::{
     ModelResult, analyse,
 };
 pub use error::FrictionError;
-pub use log::{ColumnMap, JointLog, LogError, read_joint_log, read_joint_log_from};
+pub use log::{
+    ColumnMap, JointLog, JointMotion, LogError, read_joint_log, read_joint_log_from,
+    read_joint_motion, read_joint_motion_from,
+};
 pub use models::{
     CoulombViscous, Dahl, FrictionModel, LuGre, ParamInfo, Separable, Stribeck, predict_parts, sgn,
     stribeck_decay,

@@ -1,7 +1,8 @@
 //! Reading a joint log: a CSV file with a header and one row per sample.
 //!
 //! Required columns: `t` (s), `q` (rad), `tau` (N·m, the joint's friction
-//! torque: measured torque minus the rigid-body model). Optional: `dq` (rad/s)
+//! torque: measured torque minus the rigid-body model; optional in a log
+//! that is only predicted, [`read_joint_motion`]). Optional: `dq` (rad/s)
 //! — used as given; only when it is absent it is computed from `q` —,
 //! `ddq` (rad/s²) and `load` (N·m, the torque the joint carries, e.g. the
 //! rigid-body model's: for friction that grows with load). Other columns
@@ -18,7 +19,7 @@
 //! A logged `dq` or `ddq` that holds one value on every row while the
 //! column it derives from moves is a logger's placeholder (often all zeros),
 //! not a measurement: it is dropped and derived instead, with a note in
-//! [`JointLog::notes`].
+//! [`JointMotion::notes`].
 
 use std::{fmt, io::BufRead, path::Path, str::FromStr};
 
@@ -234,9 +235,12 @@ impl fmt::Display for ColumnMap {
     }
 }
 
-/// One joint's log: samples on the log's own time grid.
+/// One joint's motion on the log's own time grid: everything a log holds
+/// except the friction torque. A fitted model predicts from it alone
+/// ([`crate::FinalModel::predict`]), so a log to be predicted needs no
+/// torque column ([`read_joint_motion`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct JointLog {
+pub struct JointMotion {
     /// Name for reports and output files (the file stem).
     pub name: String,
     /// Time, s.
@@ -245,8 +249,6 @@ pub struct JointLog {
     pub q: Vec<f64>,
     /// Velocity, rad/s.
     pub dq: Vec<f64>,
-    /// Friction torque, N·m.
-    pub tau: Vec<f64>,
     /// Acceleration, rad/s², when logged.
     pub ddq: Option<Vec<f64>>,
     /// Load torque the joint carries, N·m, when logged.
@@ -261,9 +263,9 @@ pub struct JointLog {
     pub notes: Vec<String>,
 }
 
-impl JointLog {
-    /// The motion (t, q, dq) of this log.
-    pub fn motion(&self) -> Result<Track<'_>, FrictionError> {
+impl JointMotion {
+    /// The motion (t, q, dq) as a [`Track`].
+    pub fn track(&self) -> Result<Track<'_>, FrictionError> {
         Track::new(&self.t, &self.q, &self.dq)
     }
 
@@ -277,33 +279,6 @@ impl JointLog {
         self.t.is_empty()
     }
 
-    /// The log as CSV text with header `t,q,dq,tau[,ddq][,load]`, every
-    /// number in its shortest exact (round-trip) form.
-    pub fn to_csv(&self) -> String {
-        use std::fmt::Write;
-        let mut s = String::with_capacity(self.len() * 90);
-        s.push_str("t,q,dq,tau");
-        if self.ddq.is_some() {
-            s.push_str(",ddq");
-        }
-        if self.load.is_some() {
-            s.push_str(",load");
-        }
-        s.push('\n');
-        for i in 0..self.len() {
-            let _ = write!(
-                s,
-                "{},{},{},{}",
-                self.t[i], self.q[i], self.dq[i], self.tau[i]
-            );
-            for c in [&self.ddq, &self.load].into_iter().flatten() {
-                let _ = write!(s, ",{}", c[i]);
-            }
-            s.push('\n');
-        }
-        s
-    }
-
     /// Acceleration: the logged `ddq`, or the derivative of `dq` on the
     /// log's own grid ([`derivative`]).
     pub fn acceleration(&self) -> Vec<f64> {
@@ -314,11 +289,106 @@ impl JointLog {
     }
 }
 
+/// One joint's log: its motion and the friction torque measured along it,
+/// one value per sample. The motion's fields read through the log
+/// (`log.q`, `log.len()`): a log is a motion with a torque.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JointLog {
+    /// The motion.
+    #[serde(flatten)]
+    pub motion: JointMotion,
+    /// Friction torque, N·m, one per sample of the motion.
+    pub tau: Vec<f64>,
+}
+
+impl std::ops::Deref for JointLog {
+    type Target = JointMotion;
+    fn deref(&self) -> &JointMotion {
+        &self.motion
+    }
+}
+
+impl std::ops::DerefMut for JointLog {
+    fn deref_mut(&mut self) -> &mut JointMotion {
+        &mut self.motion
+    }
+}
+
+impl JointLog {
+    /// The log as CSV text with header `t,q,dq,tau[,ddq][,load]`, every
+    /// number in its shortest exact (round-trip) form.
+    pub fn to_csv(&self) -> String {
+        use std::fmt::Write;
+        let m = &self.motion;
+        let mut s = String::with_capacity(m.len() * 90);
+        s.push_str("t,q,dq,tau");
+        if m.ddq.is_some() {
+            s.push_str(",ddq");
+        }
+        if m.load.is_some() {
+            s.push_str(",load");
+        }
+        s.push('\n');
+        for i in 0..m.len() {
+            let _ = write!(s, "{},{},{},{}", m.t[i], m.q[i], m.dq[i], self.tau[i]);
+            for c in [&m.ddq, &m.load].into_iter().flatten() {
+                let _ = write!(s, ",{}", c[i]);
+            }
+            s.push('\n');
+        }
+        s
+    }
+}
+
 /// Minimum number of rows for a log to be usable.
 pub const MIN_ROWS: usize = 10;
 
 /// Reads a joint log from a file (see the module docs).
 pub fn read_joint_log(path: &Path, columns: &ColumnMap) -> Result<JointLog, LogError> {
+    let (file, name, reader) = open(path)?;
+    read_joint_log_from(reader, &file, &name, columns)
+}
+
+/// Reads a joint log from any reader; `file` names the source in errors and
+/// `name` becomes [`JointMotion::name`].
+pub fn read_joint_log_from(
+    reader: impl BufRead,
+    file: &str,
+    name: &str,
+    columns: &ColumnMap,
+) -> Result<JointLog, LogError> {
+    let (motion, tau) = read(reader, file, name, columns, true)?;
+    Ok(JointLog {
+        motion,
+        tau: tau.unwrap_or_default(),
+    })
+}
+
+/// Reads a log whose torque column may be absent (a log to be predicted):
+/// its motion, and its torque when the file has the column. Every other
+/// rule is [`read_joint_log`]'s.
+pub fn read_joint_motion(
+    path: &Path,
+    columns: &ColumnMap,
+) -> Result<(JointMotion, Option<Vec<f64>>), LogError> {
+    let (file, name, reader) = open(path)?;
+    read_joint_motion_from(reader, &file, &name, columns)
+}
+
+/// [`read_joint_motion`] from any reader (`file` and `name` as in
+/// [`read_joint_log_from`]).
+pub fn read_joint_motion_from(
+    reader: impl BufRead,
+    file: &str,
+    name: &str,
+    columns: &ColumnMap,
+) -> Result<(JointMotion, Option<Vec<f64>>), LogError> {
+    read(reader, file, name, columns, false)
+}
+
+/// The file's name for errors, its stem for the log's name, and a buffered
+/// reader of it.
+fn open(path: &Path) -> Result<(String, String, std::io::BufReader<std::fs::File>), LogError> {
     let file = path.display().to_string();
     let f = std::fs::File::open(path).map_err(|e| LogError::Io {
         file: file.clone(),
@@ -328,17 +398,18 @@ pub fn read_joint_log(path: &Path, columns: &ColumnMap) -> Result<JointLog, LogE
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "log".into());
-    read_joint_log_from(std::io::BufReader::new(f), &file, &name, columns)
+    Ok((file, name, std::io::BufReader::new(f)))
 }
 
-/// Reads a joint log from any reader; `file` names the source in errors and
-/// `name` becomes [`JointLog::name`].
-pub fn read_joint_log_from(
+/// The reader behind both entry points: the torque column is required when
+/// `need_tau`, and read when present otherwise.
+fn read(
     reader: impl BufRead,
     file: &str,
     name: &str,
     columns: &ColumnMap,
-) -> Result<JointLog, LogError> {
+    need_tau: bool,
+) -> Result<(JointMotion, Option<Vec<f64>>), LogError> {
     let io = |e: std::io::Error| LogError::Io {
         file: file.to_string(),
         source: e,
@@ -370,7 +441,10 @@ pub fn read_joint_log_from(
     };
     let it = find(&columns.t).ok_or_else(|| missing("t", &columns.t))?;
     let iq = find(&columns.q).ok_or_else(|| missing("q", &columns.q))?;
-    let itau = find(&columns.tau).ok_or_else(|| missing("tau", &columns.tau))?;
+    let itau = find(&columns.tau);
+    if itau.is_none() && need_tau {
+        return Err(missing("tau", &columns.tau));
+    }
     let idq = find(&columns.dq);
     if idq.is_none() && columns.dq_required {
         return Err(missing("dq", &columns.dq));
@@ -380,7 +454,7 @@ pub fn read_joint_log_from(
     let used: Vec<(usize, &str)> = [
         Some((it, columns.t.as_str())),
         Some((iq, columns.q.as_str())),
-        Some((itau, columns.tau.as_str())),
+        itau.map(|i| (i, columns.tau.as_str())),
         idq.map(|i| (i, columns.dq.as_str())),
         iddq.map(|i| (i, columns.ddq.as_str())),
         iload.map(|i| (i, columns.load.as_str())),
@@ -451,7 +525,7 @@ pub fn read_joint_log_from(
     let mut it = cols.into_iter();
     let t = it.next().unwrap_or_default();
     let q = it.next().unwrap_or_default();
-    let tau = it.next().unwrap_or_default();
+    let tau = if itau.is_some() { it.next() } else { None };
     let mut dq_logged = if idq.is_some() { it.next() } else { None };
     let mut ddq = if iddq.is_some() { it.next() } else { None };
     let load = if iload.is_some() { it.next() } else { None };
@@ -477,17 +551,17 @@ pub fn read_joint_log_from(
         (&dq, !dq_from_q),
         ddq.as_deref(),
     )?;
-    Ok(JointLog {
+    let motion = JointMotion {
         name: name.to_string(),
         t,
         q,
         dq,
-        tau,
         ddq,
         load,
         dq_from_q,
         notes,
-    })
+    };
+    Ok((motion, tau))
 }
 
 /// A logged derivative `dx` that holds one value on every row while `x`

@@ -19,7 +19,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{JointLog, LuGre, sgn};
+use crate::{JointLog, JointMotion, LuGre, sgn};
 
 /// One sine of the motion: amplitude (rad), frequency (Hz), phase (rad).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -379,15 +379,17 @@ impl JointSimulation {
         }
         let n = times.len();
         let mut log = JointLog {
-            name: name.to_string(),
-            t: times.clone(),
-            q: Vec::with_capacity(n),
-            dq: Vec::with_capacity(n),
+            motion: JointMotion {
+                name: name.to_string(),
+                t: times.clone(),
+                q: Vec::with_capacity(n),
+                dq: Vec::with_capacity(n),
+                ddq: Some(Vec::with_capacity(n)),
+                load: self.load.map(|_| Vec::with_capacity(n)),
+                dq_from_q: false,
+                notes: Vec::new(),
+            },
             tau: Vec::with_capacity(n),
-            ddq: Some(Vec::with_capacity(n)),
-            load: self.load.map(|_| Vec::with_capacity(n)),
-            dq_from_q: false,
-            notes: Vec::new(),
         };
         for (k, &tk) in times.iter().enumerate() {
             let (q, v, a) = self.kinematics(tk);

@@ -274,6 +274,13 @@ pub struct LinePhase {
     pub sigma: f64,
 }
 
+/// `x` wrapped to (−π, π]: the difference of two phases.
+pub fn wrapped(x: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let w = (x + PI).rem_euclid(TAU) - PI;
+    if w == -PI { PI } else { w }
+}
+
 /// The line at `k` on one log's residual `r` at positions `q`; `None` when
 /// the log holds too few rows or its positions do not separate the columns.
 pub fn line_phase(q: &[f64], r: &[f64], k: f64) -> Option<LinePhase> {

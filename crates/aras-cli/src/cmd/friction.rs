@@ -9,7 +9,10 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use aras_friction::fit::metrics;
-use aras_friction::{ColumnMap, FinalModel, FrictionRun, JointLog, analyse, read_joint_log};
+use aras_friction::{
+    ColumnMap, FinalModel, FrictionRun, JointLog, JointMotion, analyse, read_joint_log,
+    read_joint_motion,
+};
 
 use crate::cli::{FrictionArgs, FrictionPredictArgs, JointLogArgs};
 use crate::output::{FileKind, NewFile};
@@ -43,18 +46,30 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
     };
     let train = stages.run("read TRAIN", |_| reader.read(&args.data))?;
     let vals = stages.run("read validation logs", |_| read_all(&args.validate))?;
-    let predicted = stages.run("read logs to predict", |_| read_all(&args.predict))?;
+    let predicted = stages.run("read logs to predict", |_| {
+        args.predict
+            .iter()
+            .map(|p| reader.read_motion(p))
+            .collect::<Result<Vec<_>>>()
+    })?;
     let run = stages.run("fit models + diagnosis", |_| {
         analyse(&train, &vals, &settings)
     })?;
     let logs: Vec<&JointLog> = std::iter::once(&train).chain(&vals).collect();
     // Every log the final model is written for: TRAIN, validation, --predict.
-    let written: Vec<&JointLog> = logs.iter().copied().chain(&predicted).collect();
-    let names = prediction_names(&written);
-    let predictions = written
+    let written: Vec<&JointMotion> = logs
         .iter()
-        .map(|log| run.final_prediction(log))
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|l| &l.motion)
+        .chain(predicted.iter().map(ToPredict::motion))
+        .collect();
+    let names = prediction_names(&written);
+    let mut predictions = vec![run.model.predict(&train)?];
+    for v in &vals {
+        predictions.push(run.model.predict_log(v)?);
+    }
+    for p in &predicted {
+        predictions.push(p.prediction(&run.model)?);
+    }
     stages.run("write outputs", |_| -> Result<()> {
         out.write_json("friction.json", &run)?;
         for ((log, name), pred) in written.iter().zip(&names).zip(&predictions) {
@@ -93,13 +108,10 @@ pub fn run(args: &FrictionArgs) -> Result<()> {
         .zip(&names[first..])
         .zip(&predictions[first..])
     {
-        let m = metrics(&log.tau, pred);
         println!(
-            "predicted {} → {name}: RMS {:.4} N·m against its tau{}",
-            log.name,
-            m.rms,
-            m.fitness
-                .map_or_else(String::new, |f| format!(", fitness (78) {f:.2} %"))
+            "predicted {} → {name}{}",
+            log.motion().name,
+            log.compared(pred)
         );
     }
     println!("outputs in {}", dir.display());
@@ -113,20 +125,77 @@ pub fn predict(args: &FrictionPredictArgs) -> Result<()> {
     let reader = LogReader::new(&args.log)?;
     let inputs = [args.model.clone(), args.data.clone()];
     let out = NewFile::create(&args.out, args.force, FileKind::FrictionPrediction, &inputs)?;
-    let log = reader.read(&args.data)?;
-    let pred = model.predict(&log)?;
-    out.write(prediction_csv(&log.t, &pred).as_bytes())?;
+    let log = reader.read_motion(&args.data)?;
+    let pred = log.prediction(&model)?;
+    out.write(prediction_csv(&log.motion().t, &pred).as_bytes())?;
     let path = out.commit()?;
-    let m = metrics(&log.tau, &pred);
     println!(
-        "{}: RMS {:.4} N·m against its tau{}; prediction in {}",
-        log.name,
-        m.rms,
-        m.fitness
-            .map_or_else(String::new, |f| format!(", fitness (78) {f:.2} %")),
+        "{}{}; prediction in {}",
+        log.motion().name,
+        log.compared(&pred),
         path.display()
     );
     Ok(())
+}
+
+/// A log to predict: with its torque when the file has one.
+enum ToPredict {
+    /// A log with its torque.
+    Measured(JointLog),
+    /// A motion only.
+    Motion(JointMotion),
+}
+
+impl ToPredict {
+    fn motion(&self) -> &JointMotion {
+        match self {
+            ToPredict::Measured(l) => &l.motion,
+            ToPredict::Motion(m) => m,
+        }
+    }
+
+    /// The final model on this log: with its torque, each line whose phase
+    /// each log sets at this log's phase ([`FinalModel::predict_log`]);
+    /// without, at TRAIN's (with a note when the model has such lines).
+    fn prediction(&self, model: &FinalModel) -> Result<Vec<f64>> {
+        Ok(match self {
+            ToPredict::Measured(log) => model.predict_log(log)?,
+            ToPredict::Motion(m) => {
+                if !model.per_log_phase.is_empty() {
+                    eprintln!(
+                        "note: {}: no torque column, so the ripple lines whose phase each log \
+                         sets ({}) keep TRAIN's phase; log the torque to have this log's own",
+                        m.name,
+                        fmt_cycles(&model.per_log_phase)
+                    );
+                }
+                model.predict(m)?
+            }
+        })
+    }
+
+    /// `: RMS … N·m against its tau, fitness (78) … %`, or a note that the
+    /// log has no torque to compare with.
+    fn compared(&self, pred: &[f64]) -> String {
+        match self {
+            ToPredict::Measured(log) => {
+                let m = metrics(&log.tau, pred);
+                format!(
+                    ": RMS {:.4} N·m against its tau{}",
+                    m.rms,
+                    m.fitness
+                        .map_or_else(String::new, |f| format!(", fitness (78) {f:.2} %"))
+                )
+            }
+            ToPredict::Motion(_) => " (no tau column to compare with)".into(),
+        }
+    }
+}
+
+/// `12.00, 5013.27 cycles/rev`.
+fn fmt_cycles(k: &[f64]) -> String {
+    let k: Vec<String> = k.iter().map(|k| format!("{k:.2}")).collect();
+    format!("{} cycles/rev", k.join(", "))
 }
 
 /// The final model of an `aras-friction/1` document.
@@ -165,6 +234,18 @@ struct LogReader<'a> {
 }
 
 impl<'a> LogReader<'a> {
+    /// Refuses the bag-only options for a CSV.
+    fn check_csv(&self, p: &Path) -> Result<()> {
+        if self.args.topic.is_some() || self.args.joint.is_some() {
+            anyhow::bail!(
+                "{}: --topic and --joint apply to ROS 2 bags (.mcap); a CSV's columns are named \
+                 with --columns",
+                p.display()
+            );
+        }
+        Ok(())
+    }
+
     fn new(args: &'a JointLogArgs) -> Result<Self> {
         let columns = match &args.columns {
             Some(c) => c.parse()?,
@@ -177,18 +258,29 @@ impl<'a> LogReader<'a> {
         if aras_log::is_bag(p) {
             return read_bag(p, self.args);
         }
-        if self.args.topic.is_some() || self.args.joint.is_some() {
-            anyhow::bail!(
-                "{}: --topic and --joint apply to ROS 2 bags (.mcap); a CSV's columns are named \
-                 with --columns",
-                p.display()
-            );
-        }
+        self.check_csv(p)?;
         let log = read_joint_log(p, &self.columns)?;
         for n in &log.notes {
             eprintln!("note: {n}");
         }
         Ok(log)
+    }
+
+    /// A log to predict: as [`LogReader::read`], the torque column optional
+    /// in a CSV.
+    fn read_motion(&self, p: &Path) -> Result<ToPredict> {
+        if aras_log::is_bag(p) {
+            return Ok(ToPredict::Measured(read_bag(p, self.args)?));
+        }
+        self.check_csv(p)?;
+        let (motion, tau) = read_joint_motion(p, &self.columns)?;
+        for n in &motion.notes {
+            eprintln!("note: {n}");
+        }
+        Ok(match tau {
+            Some(tau) => ToPredict::Measured(JointLog { motion, tau }),
+            None => ToPredict::Motion(motion),
+        })
     }
 }
 
@@ -236,7 +328,7 @@ fn read_bag(path: &Path, args: &JointLogArgs) -> Result<JointLog> {
 }
 
 /// `pred_<stem>.csv` for each log; a stem used twice gets `_2`, `_3`, ….
-fn prediction_names(logs: &[&JointLog]) -> Vec<String> {
+fn prediction_names(logs: &[&JointMotion]) -> Vec<String> {
     let mut seen: Vec<String> = Vec::new();
     logs.iter()
         .map(|l| {

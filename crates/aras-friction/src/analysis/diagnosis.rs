@@ -13,15 +13,15 @@ use aras_ident::selection::{
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::{AnalysisError, AnyModel, FrictionSettings, ModelKind, ModelResult};
+use super::{AnalysisError, AnyModel, FinalModel, FrictionSettings, ModelKind, ModelResult};
 use crate::{
     FrictionError, JointLog, Separable, Track,
-    effects::{Effect, EffectValue, Library, library, presliding_lengths},
+    effects::{Effect, EffectValue, Library, library, presliding_lengths, shift_ripple},
     fit::{
         Estimate, FitSettings, Problem, estimates_with_extra, fit_stribeck, lugre_starts, metrics,
     },
     models::combine,
-    spectrum::{LinePhase, PositionSpectrum, line_phase},
+    spectrum::{LinePhase, PositionSpectrum, line_phase, wrapped},
 };
 
 /// One effect the diagnosis added.
@@ -83,14 +83,12 @@ pub struct DiagnosisResult {
     pub refits: Vec<RefitScore>,
 }
 
-/// The refined final model: its result, base model and effects with
-/// coefficients.
+/// The refined final model: its result and the model itself.
 pub(super) struct Refined {
     pub(super) result: ModelResult,
     /// The refined structure `θ`.
     structure: Vec<f64>,
-    pub(super) base: AnyModel,
-    pub(super) effects: Vec<(Effect, Vec<f64>)>,
+    pub(super) model: FinalModel,
 }
 
 /// The diagnosis of `base`, the best classical model fitted on `train`;
@@ -146,12 +144,11 @@ impl LinePhases {
             .map(|(l, r)| line_phase(&l.q, r, cycles))
             .collect();
         let shared = match per_log.first() {
-            Some(Some(t)) => per_log.iter().skip(1).flatten().all(|p| {
-                let d = (p.phase - t.phase + std::f64::consts::PI)
-                    .rem_euclid(std::f64::consts::TAU)
-                    - std::f64::consts::PI;
-                d.abs() <= 5.0 * t.sigma.hypot(p.sigma)
-            }),
+            Some(Some(t)) => per_log
+                .iter()
+                .skip(1)
+                .flatten()
+                .all(|p| wrapped(p.phase - t.phase).abs() <= 5.0 * t.sigma.hypot(p.sigma)),
             _ => true,
         };
         Self {
@@ -160,6 +157,44 @@ impl LinePhases {
             shared,
         }
     }
+
+    /// How far log `l`'s phase is from TRAIN's, rad (0 where either cannot
+    /// tell).
+    fn shift(&self, l: usize) -> f64 {
+        match (self.per_log.first(), self.per_log.get(l)) {
+            (Some(Some(t)), Some(Some(p))) => wrapped(p.phase - t.phase),
+            _ => 0.0,
+        }
+    }
+}
+
+/// The ripple candidates whose phase each log sets, with log `l`'s shift
+/// from TRAIN's for each (`shifts[l]`, TRAIN's empty): every harmonic `n k`
+/// of a line `k` the logs do not share, turned by `n` times the line's
+/// shift, as a position zero moved by `Δ/k` turns it.
+fn per_log_shifts(
+    effects: &[Effect],
+    phases: &[LinePhases],
+    logs: usize,
+) -> (Vec<f64>, Vec<Vec<(f64, f64)>>) {
+    let mut own = Vec::new();
+    let mut shifts = vec![Vec::new(); logs];
+    for e in effects {
+        let Effect::Ripple { cycles } = *e else {
+            continue;
+        };
+        let line = phases.iter().filter(|p| !p.shared).find_map(|p| {
+            let n = (cycles / p.cycles).round();
+            (n >= 1.0 && (cycles - n * p.cycles).abs() <= 1e-9 * cycles).then_some((p, n))
+        });
+        if let Some((p, n)) = line {
+            own.push(cycles);
+            for (l, s) in shifts.iter_mut().enumerate().skip(1) {
+                s.push((cycles, wrapped(n * p.shift(l))));
+            }
+        }
+    }
+    (own, shifts)
 }
 
 /// One model's refit with the effects found: its validation RMS, N·m.
@@ -212,7 +247,7 @@ impl LogColumns {
         let coefficients = m.coefficients();
         logs.par_iter()
             .map(|l| {
-                let base = M::columns(&m.structure(), &l.motion()?);
+                let base = M::columns(&m.structure(), &l.track()?);
                 // The prediction is the columns times the coefficients: no
                 // second integration of the state.
                 let prediction = combine(&base, &coefficients);
@@ -226,12 +261,25 @@ impl LogColumns {
     }
 
     /// Adds every candidate effect's block on `log` (independent effects:
-    /// in parallel).
-    fn with_effects(mut self, log: &JointLog, effects: &[Effect]) -> Result<Self, FrictionError> {
+    /// in parallel), a ripple whose `k` is in `shifts` turned by its shift.
+    fn with_effects(
+        mut self,
+        log: &JointLog,
+        effects: &[Effect],
+        shifts: &[(f64, f64)],
+    ) -> Result<Self, FrictionError> {
         self.candidates = effects
             .par_iter()
-            .map(|e| e.columns(log, &self.prediction))
-            .collect::<Result<Vec<_>, _>>()?;
+            .map(|e| {
+                let mut c = e.columns(log, &self.prediction)?;
+                if let Effect::Ripple { cycles } = e
+                    && let Some(&(_, shift)) = shifts.iter().find(|(k, _)| k == cycles)
+                {
+                    shift_ripple(&mut c, shift);
+                }
+                Ok(c)
+            })
+            .collect::<Result<Vec<_>, FrictionError>>()?;
         Ok(self)
     }
 
@@ -540,10 +588,18 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
         .collect();
     let Library { effects, spectrum } = library(train, &residuals[0], &settings.library);
     let effects = choose_map(effects, &logs, &models, settings)?;
+    let phases: Vec<LinePhases> = spectrum
+        .lines
+        .iter()
+        .map(|line| LinePhases::of(line.cycles, &logs, &residuals))
+        .collect();
+    // A line the logs do not share is fitted with each log's own phase.
+    let (per_log, shifts) = per_log_shifts(&effects, &phases, logs.len());
     let columns = models
         .into_iter()
         .zip(&logs)
-        .map(|(c, l)| c.with_effects(l, &effects))
+        .zip(&shifts)
+        .map(|((c, l), s)| c.with_effects(l, &effects, s))
         .collect::<Result<Vec<_>, _>>()?;
     let specs: Vec<CandidateSpec> = effects
         .iter()
@@ -581,11 +637,7 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
     let diagnosis = DiagnosisResult {
         base: m.name().to_string(),
         candidates: effects.iter().map(Effect::id).collect(),
-        phases: spectrum
-            .lines
-            .iter()
-            .map(|line| LinePhases::of(line.cycles, &logs, &residuals))
-            .collect(),
+        phases,
         spectrum,
         effective_fraction,
         initial_rms: summary.rms(&sel.initial)?,
@@ -614,6 +666,7 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
         added,
         selected,
         spectrum: &diagnosis.spectrum,
+        per_log: &per_log,
         from: None,
     };
     // A strong effect can make another classical model look best before
@@ -729,14 +782,16 @@ const DROP_Z: f64 = 3.0;
 
 /// What a refinement refits: the logs (TRAIN first), the base prediction on
 /// TRAIN, the effects with their coefficients in the selection's last
-/// linear fit, the spectrum their ripple lines come from, and a structure to
-/// start from instead of the base's own and its cleaned refit.
+/// linear fit, the spectrum their ripple lines come from, the ripples whose
+/// phase each log sets, and a structure to start from instead of the base's
+/// own and its cleaned refit.
 struct RefineInput<'a> {
     logs: &'a [&'a JointLog],
     train_prediction: &'a [f64],
     added: Vec<Effect>,
     selected: Vec<f64>,
     spectrum: &'a PositionSpectrum,
+    per_log: &'a [f64],
     from: Option<Vec<f64>>,
 }
 
@@ -756,10 +811,11 @@ fn refine<M: Separable + Sync + Clone + Into<AnyModel>>(
         added,
         selected,
         spectrum,
+        per_log,
         from,
     } = input;
     let train = logs[0];
-    let motion = train.motion()?;
+    let motion = train.track()?;
     let extra: Vec<Vec<f64>> = added
         .iter()
         .map(|e| e.columns(train, train_prediction))
@@ -863,15 +919,28 @@ fn refine<M: Separable + Sync + Clone + Into<AnyModel>>(
         effects.push((*e, c));
         k += w;
     }
-    let base_out: AnyModel = refined.into();
+    let model = FinalModel {
+        base: refined.into(),
+        per_log_phase: per_log
+            .iter()
+            .copied()
+            .filter(|k| added.contains(&Effect::Ripple { cycles: *k }))
+            .collect(),
+        effects,
+    };
     // Every log's prediction integrates the refined state: in parallel.
+    // TRAIN holds the fitted phases; every other log gets its own phase of
+    // the lines the logs do not share.
     let mut scored = logs
         .par_iter()
-        .map(|l| {
-            Ok(metrics(
-                &l.tau,
-                &super::predict_with_effects(&base_out, &effects, l)?,
-            ))
+        .enumerate()
+        .map(|(i, l)| {
+            let p = if i == 0 {
+                model.predict(l)?
+            } else {
+                model.predict_log(l)?
+            };
+            Ok(metrics(&l.tau, &p))
         })
         .collect::<Result<Vec<_>, FrictionError>>()?;
     let validation = scored.split_off(1);
@@ -892,8 +961,7 @@ fn refine<M: Separable + Sync + Clone + Into<AnyModel>>(
                 evaluations: fit.evaluations,
                 status: fit.status,
             },
-            base: base_out,
-            effects,
+            model,
             structure,
         },
         strength,

@@ -26,8 +26,8 @@ use serde::{Deserialize, Serialize, Serializer};
 use thiserror::Error;
 
 use crate::{
-    CoulombViscous, Dahl, FrictionError, FrictionModel, JointLog, LuGre, ParamInfo, Separable,
-    Stribeck,
+    CoulombViscous, Dahl, FrictionError, FrictionModel, JointLog, JointMotion, LuGre, ParamInfo,
+    Separable, Stribeck,
     effects::{Effect, Profile, residual_profiles},
     fit::{
         Estimate, FitStatus, Fitted, Metrics, fit_coulomb_viscous, fit_dahl, fit_lugre,
@@ -153,7 +153,7 @@ pub struct LogInfo {
 
 impl LogInfo {
     /// The facts of `log`.
-    pub fn of(log: &JointLog) -> Self {
+    pub fn of(log: &JointMotion) -> Self {
         let (lo, hi) = log
             .t
             .windows(2)
@@ -295,9 +295,9 @@ impl AnyModel {
         }
     }
 
-    /// Prediction along a log.
-    pub fn predict(&self, log: &JointLog) -> Result<Vec<f64>, FrictionError> {
-        let m = log.motion()?;
+    /// Prediction along a log's motion.
+    pub fn predict(&self, log: &JointMotion) -> Result<Vec<f64>, FrictionError> {
+        let m = log.track()?;
         Ok(match self {
             AnyModel::CoulombViscous(x) => x.predict(&m),
             AnyModel::Stribeck(x) => x.predict(&m),
@@ -437,14 +437,82 @@ pub struct FinalModel {
     /// The effects with their coefficients (in the effect's column order).
     #[serde(rename = "final_effects")]
     pub effects: Vec<(Effect, Vec<f64>)>,
+    /// The ripple effects (their `k`, cycles per revolution) whose phase
+    /// each log sets: the logs the model was fitted on did not share a
+    /// position zero (an encoder zeroed per log). Their coefficients hold
+    /// TRAIN's phase; [`FinalModel::predict_log`] measures each log's own.
+    #[serde(
+        rename = "final_per_log_phase",
+        default,
+        skip_serializing_if = "Vec::is_empty"
+    )]
+    pub per_log_phase: Vec<f64>,
 }
 
 impl FinalModel {
-    /// The model's friction torque along `log` (its `tau` is not used):
-    /// the base model's prediction, its state integrated from rest at the
-    /// log's first sample, plus every effect's columns times their
-    /// coefficients. Every effect's coefficient count is checked.
-    pub fn predict(&self, log: &JointLog) -> Result<Vec<f64>, FrictionError> {
+    /// The model's friction torque along a motion: the base model's
+    /// prediction, its state integrated from rest at the log's first
+    /// sample, plus every effect's columns times their coefficients, every
+    /// ripple at the phase it was fitted with (TRAIN's, also for the lines
+    /// of [`FinalModel::per_log_phase`]). Every effect's coefficient count
+    /// is checked.
+    pub fn predict(&self, log: &JointMotion) -> Result<Vec<f64>, FrictionError> {
+        self.check()?;
+        predict_with_effects(&self.base, &self.effects, log, &[])
+    }
+
+    /// [`FinalModel::predict`] on a log with its measured torque, each line
+    /// of [`FinalModel::per_log_phase`] at the log's own phase
+    /// ([`FinalModel::phase_shifts`]). Without such lines it is
+    /// [`FinalModel::predict`].
+    pub fn predict_log(&self, log: &JointLog) -> Result<Vec<f64>, FrictionError> {
+        self.check()?;
+        let shifts: Vec<(f64, f64)> = self
+            .per_log_phase
+            .iter()
+            .copied()
+            .zip(self.phase_shifts(log)?)
+            .collect();
+        predict_with_effects(&self.base, &self.effects, log, &shifts)
+    }
+
+    /// How far each line of [`FinalModel::per_log_phase`] is turned on
+    /// `log`, rad in (−π, π]: its phase fitted at its `k` on the log's
+    /// residual (the torque minus the model without those lines) minus the
+    /// model's phase. One nuisance parameter per line and log, like the
+    /// log's position zero it stands for; 0 where the log cannot tell.
+    pub fn phase_shifts(&self, log: &JointLog) -> Result<Vec<f64>, FrictionError> {
+        if self.per_log_phase.is_empty() {
+            return Ok(Vec::new());
+        }
+        self.check()?;
+        let own = |e: &Effect| matches!(e, Effect::Ripple { cycles } if self.per_log_phase.contains(cycles));
+        let others: Vec<(Effect, Vec<f64>)> = self
+            .effects
+            .iter()
+            .filter(|(e, _)| !own(e))
+            .cloned()
+            .collect();
+        let rest = predict_with_effects(&self.base, &others, log, &[])?;
+        let residual: Vec<f64> = log.tau.iter().zip(&rest).map(|(a, b)| a - b).collect();
+        Ok(self
+            .per_log_phase
+            .iter()
+            .map(|&k| {
+                let model = self.effects.iter().find_map(|(e, c)| match e {
+                    Effect::Ripple { cycles } if *cycles == k => Some(c[1].atan2(c[0])),
+                    _ => None,
+                });
+                match (model, crate::spectrum::line_phase(&log.q, &residual, k)) {
+                    (Some(m), Some(p)) => crate::spectrum::wrapped(p.phase - m),
+                    _ => 0.0,
+                }
+            })
+            .collect())
+    }
+
+    /// Every effect's coefficient count against its width.
+    fn check(&self) -> Result<(), FrictionError> {
         for (e, c) in &self.effects {
             if c.len() != e.width() {
                 return Err(FrictionError::EffectCoefficients {
@@ -454,13 +522,13 @@ impl FinalModel {
                 });
             }
         }
-        predict_with_effects(&self.base, &self.effects, log)
+        Ok(())
     }
 }
 
 impl FrictionRun {
     /// The final model's prediction on a log: base model plus effects.
-    pub fn final_prediction(&self, log: &JointLog) -> Result<Vec<f64>, FrictionError> {
+    pub fn final_prediction(&self, log: &JointMotion) -> Result<Vec<f64>, FrictionError> {
         self.model.predict(log)
     }
 
@@ -471,16 +539,24 @@ impl FrictionRun {
 }
 
 /// Prediction of a base model plus effects with their coefficients on one
-/// log (the effects' columns may depend on the base prediction).
+/// log (the effects' columns may depend on the base prediction); a ripple
+/// whose `k` is in `shifts` is turned by its shift there.
 pub(crate) fn predict_with_effects(
     base: &AnyModel,
     effects: &[(Effect, Vec<f64>)],
-    log: &JointLog,
+    log: &JointMotion,
+    shifts: &[(f64, f64)],
 ) -> Result<Vec<f64>, FrictionError> {
     let base = base.predict(log)?;
     let mut out = base.clone();
     for (e, coef) in effects {
-        for (c, b) in e.columns(log, &base)?.iter().zip(coef) {
+        let mut columns = e.columns(log, &base)?;
+        if let Effect::Ripple { cycles } = e
+            && let Some(&(_, shift)) = shifts.iter().find(|(k, _)| k == cycles)
+        {
+            crate::effects::shift_ripple(&mut columns, shift);
+        }
+        for (c, b) in columns.iter().zip(coef) {
             for (o, x) in out.iter_mut().zip(c) {
                 *o += b * x;
             }
@@ -498,7 +574,7 @@ fn result<M: Separable + Sync>(
 ) -> Result<ModelResult, FrictionError> {
     let validation = vals
         .par_iter()
-        .map(|v| Ok(metrics(&v.tau, &f.model.predict(&v.motion()?))))
+        .map(|v| Ok(metrics(&v.tau, &f.model.predict(&v.track()?))))
         .collect::<Result<Vec<_>, FrictionError>>()?;
     Ok(ModelResult {
         name: f.model.name().to_string(),
@@ -519,7 +595,7 @@ fn fit_classical(
     vals: &[JointLog],
     settings: &FrictionSettings,
 ) -> Result<(Vec<ModelResult>, Vec<AnyModel>), AnalysisError> {
-    let m = train.motion().map_err(|source| AnalysisError::Log {
+    let m = train.track().map_err(|source| AnalysisError::Log {
         name: train.name.clone(),
         source,
     })?;
@@ -596,15 +672,22 @@ pub fn analyse(
         let (d, r) = diagnosis::diagnose(base, &fitted, train, vals, settings)?;
         (Some(d), None, r)
     };
-    let (final_model, final_base, final_effects) = match refined {
-        Some(r) => (Some(r.result), r.base, r.effects),
-        None => (None, base.clone(), Vec::new()),
+    let (final_model, model) = match refined {
+        Some(r) => (Some(r.result), r.model),
+        None => (
+            None,
+            FinalModel {
+                base: base.clone(),
+                effects: Vec::new(),
+                per_log_phase: Vec::new(),
+            },
+        ),
     };
     Ok(FrictionRun {
         format: FORMAT.into(),
         settings: settings.clone(),
         train: LogInfo::of(train),
-        validation: vals.iter().map(LogInfo::of).collect(),
+        validation: vals.iter().map(|v| LogInfo::of(v)).collect(),
         models,
         fitted,
         best,
@@ -613,9 +696,6 @@ pub fn analyse(
         diagnosis,
         diagnosis_note,
         final_model,
-        model: FinalModel {
-            base: final_base,
-            effects: final_effects,
-        },
+        model,
     })
 }
