@@ -1,6 +1,7 @@
 //! `aras friction` analysis time: a 120 s joint log of about 30 000 rows
 //! (irregular 1–7 ms steps) with two validation logs of the same size, the
-//! four models (LuGre included), the diagnosis and its refinement.
+//! five models (LuGre and Maxwell-slip included), the diagnosis and its
+//! refinement.
 //! Target: ≤ 3 s on 2 cores (docs/friction.md).
 
 use aras_friction::sim::{JointSimulation, Ripple};

@@ -35,7 +35,15 @@ pub fn conclusion(run: &FrictionRun) -> String {
         s.push_str(" No further effect was added.");
     } else {
         let names: Vec<String> = run.model.effects.iter().map(|(e, _)| e.label()).collect();
-        s.push_str(&format!(" Added: {}.", names.join("; ")));
+        if run.model.base.name() != best.name {
+            s.push_str(&format!(
+                " Final model: {} (its path predicts the validation logs better), with",
+                run.model.base.name()
+            ));
+        } else {
+            s.push_str(" Added:");
+        }
+        s.push_str(&format!(" {}.", names.join("; ")));
     }
     // A doubtful fit of a model the conclusion names is said here, where
     // the user reads first.
@@ -70,6 +78,15 @@ pub fn report_diagnosis(run: &FrictionRun, r: &mut crate::report::Report) {
         100.0 * d.effective_fraction,
         run.settings.min_gain
     ));
+    let best = &run.models[run.best].name;
+    if &d.base != best {
+        r.paragraph(format!(
+            "`{best}` is the best classical model, but `{}` with the effects its diagnosis \
+             adds predicts the validation logs better than `{best}`'s own path: this is the \
+             diagnosis shown, and its final model is the one kept.",
+            d.base
+        ));
+    }
     let sp = &d.spectrum;
     if sp.band.1 > sp.band.0 {
         let mut text = format!(

@@ -185,7 +185,10 @@ fn command_writes_json_report_and_predictions() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("friction.json")).unwrap()).unwrap();
     assert_eq!(json["format"], "aras-friction/1");
-    assert_eq!(json["models"].as_array().unwrap().len(), 4);
+    assert_eq!(
+        json["models"].as_array().unwrap().len(),
+        aras_friction::ModelKind::ALL.len()
+    );
     assert_eq!(json["validation"][0]["dq_from_q"], true);
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(html.contains("<svg") && html.contains("Diagnosis"));

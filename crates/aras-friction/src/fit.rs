@@ -20,6 +20,7 @@ use serde::{Deserialize, Serialize};
 use crate::{
     CoulombViscous, Dahl, FrictionError, LuGre, ParamInfo, Separable, Stribeck, Track,
     linalg::{Qr, bounded_lstsq},
+    models::MaxwellSlip,
 };
 
 /// Fitting settings (defaults in [`FitSettings::default`]).
@@ -739,16 +740,8 @@ pub fn lugre_starts(
     let db = settings.shape.map_or((0.3, 4.0), |d| (d, d));
     // Presliding displacement F_c/σ₀ from 1e-7 rad to the travelled range.
     let kb = (1.0 / s.range, 1e7);
-    let rb = (0.05, 20.0);
-    // The Stribeck fit's F_s/F_c, and 1.3 in case a static map could not
-    // see the breakaway (presliding hides it from a static model).
-    let mut ratios = vec![1.3];
-    if stribeck.coulomb > 0.0 {
-        let r = (stribeck.static_friction / stribeck.coulomb).clamp(rb.0, rb.1);
-        if (r - 1.3).abs() > 0.05 {
-            ratios.push(r);
-        }
-    }
+    let rb = RATIO_BOX;
+    let ratios = static_ratios(stribeck);
     let vs = stribeck.stribeck_velocity.clamp(vsb.0, vsb.1);
     let delta = settings.shape.unwrap_or(stribeck.shape).clamp(db.0, db.1);
     let mut starts = Vec::new();
@@ -758,6 +751,23 @@ pub fn lugre_starts(
         }
     }
     (vec![kb, rb, vsb, db], starts)
+}
+
+/// Box of `F_s/F_c` in the state models' structure.
+const RATIO_BOX: (f64, f64) = (0.05, 20.0);
+
+/// The starts of `F_s/F_c`: the Stribeck fit's, and 1.3 in case a static
+/// map could not see the breakaway (presliding hides it from a static
+/// model).
+fn static_ratios(stribeck: &Stribeck) -> Vec<f64> {
+    let mut ratios = vec![1.3];
+    if stribeck.coulomb > 0.0 {
+        let r = (stribeck.static_friction / stribeck.coulomb).clamp(RATIO_BOX.0, RATIO_BOX.1);
+        if (r - 1.3).abs() > 0.05 {
+            ratios.push(r);
+        }
+    }
+    ratios
 }
 
 /// Fits the LuGre model. The steady-state parameters start from a Stribeck
@@ -782,6 +792,47 @@ pub fn fit_lugre(
         false,
         false,
     ];
+    Ok(finish(&fit, motion, tau, &fixed))
+}
+
+/// The search box and start grid of the Maxwell-slip structure
+/// `θ = (L, F_s/F_c, v_s, δ)` around a Stribeck fit of the same data: the
+/// longest presliding length `L` from 1e-6 rad to the travelled range
+/// (started on 7 log-spaced values up to half of it), the Stribeck shape as
+/// for LuGre ([`lugre_starts`]).
+pub fn maxwell_starts(
+    motion: &Track,
+    stribeck: &Stribeck,
+    settings: &FitSettings,
+) -> (Vec<(f64, f64)>, Vec<Vec<f64>>) {
+    let (lugre_box, lugre) = lugre_starts(motion, stribeck, settings);
+    let s = scales(motion);
+    let lb = (1e-6f64.min(0.5 * s.range), s.range);
+    let mut starts = Vec::new();
+    for l in log_grid(1e-5f64.min(0.1 * s.range), 0.5 * s.range, 7) {
+        for r in static_ratios(stribeck) {
+            starts.push(vec![l, r, lugre[0][2], lugre[0][3]]);
+        }
+    }
+    (vec![lb, lugre_box[1], lugre_box[2], lugre_box[3]], starts)
+}
+
+/// Fits the generalized Maxwell-slip model ([`MaxwellSlip`]), its levels
+/// held ≥ 0, from [`maxwell_starts`].
+pub fn fit_maxwell_slip(
+    motion: &Track,
+    tau: &[f64],
+    stribeck: &Stribeck,
+    settings: &FitSettings,
+) -> Result<Fitted<MaxwellSlip>, FrictionError> {
+    let (bounds, starts) = maxwell_starts(motion, stribeck, settings);
+    let prob = Problem::<MaxwellSlip>::new(*motion, tau, &[], &bounds)?;
+    let fit = prob.solve(&starts, settings)?;
+    let mut fixed =
+        vec![false; MaxwellSlip::structure_info().len() + MaxwellSlip::coefficient_info().len()];
+    // δ: the parameter vector's third-last.
+    let n = fixed.len();
+    fixed[n - 2] = settings.shape.is_some();
     Ok(finish(&fit, motion, tau, &fixed))
 }
 

@@ -6,7 +6,8 @@
 //!
 //! * [`Track`]: time, position and velocity on the log's own, possibly
 //!   irregular, time grid.
-//! * [`models`]: [`CoulombViscous`], [`Stribeck`], [`Dahl`] and [`LuGre`],
+//! * [`models`]: [`CoulombViscous`], [`Stribeck`], [`Dahl`], [`LuGre`] and
+//!   the generalized Maxwell-slip model [`MaxwellSlip`],
 //!   each with its equations, parameter vector with physical bounds
 //!   ([`ParamInfo`]), prediction along a motion ([`FrictionModel`]) and its
 //!   separable structure `τ = Φ(θ) β` ([`Separable`]) for fitting.
@@ -63,7 +64,7 @@ pub use log::{
     read_joint_motion, read_joint_motion_from,
 };
 pub use models::{
-    CoulombViscous, Dahl, FrictionModel, LuGre, ParamInfo, Separable, Stribeck, predict_parts, sgn,
-    stribeck_decay,
+    CoulombViscous, Dahl, FrictionModel, LuGre, MaxwellSlip, ParamInfo, Separable, Stribeck,
+    predict_parts, sgn, stribeck_decay,
 };
 pub use track::Track;

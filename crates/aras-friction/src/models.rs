@@ -6,6 +6,7 @@
 //! | [`CoulombViscous`] | `τ = f₀ + F_c sgn(v) + F_v v` |
 //! | [`Stribeck`] | `τ = f₀ + [F_c + (F_s − F_c) e^{−|v/v_s|^δ}] sgn(v) + F_v v` |
 //! | [`Dahl`] | `dF/dt = σ₀ v (1 − F sgn(v)/F_c)`, `τ = f₀ + F + F_v v` |
+//! | [`MaxwellSlip`] | `w_i` elastoplastic to `±h(v)` over `L_i`, `τ = f₀ + Σ F_i w_i + F_v v` |
 //! | [`LuGre`] | `dz/dt = v − σ₀ |v| z / g(v)`, `g(v) = F_c + (F_s − F_c) e^{−|v/v_s|^δ}`, `τ = f₀ + σ₀ z + σ₁ dz/dt + σ₂ v` |
 //!
 //! `v` is the joint velocity `dq` (rad/s), `sgn(0) = 0`.
@@ -39,6 +40,9 @@
 use serde::{Deserialize, Serialize};
 
 use crate::{FrictionError, Track, track::HermiteInterval};
+
+mod maxwell;
+pub use maxwell::{MAXWELL_ELEMENTS, MAXWELL_SPACING, MaxwellSlip};
 
 /// Largest change of the normalised Stribeck function `h(v)` over one
 /// integration piece. The state error grows in proportion to it where the

@@ -18,7 +18,8 @@ use crate::{
     FrictionError, JointLog, Separable, Track,
     effects::{Effect, EffectValue, Library, library, presliding_lengths, shift_ripple},
     fit::{
-        Estimate, FitSettings, Problem, estimates_with_extra, fit_stribeck, lugre_starts, metrics,
+        Estimate, FitSettings, Problem, estimates_with_extra, fit_stribeck, lugre_starts,
+        maxwell_starts, metrics,
     },
     models::combine,
     spectrum::{LinePhase, PositionSpectrum, line_phase, wrapped},
@@ -110,6 +111,7 @@ pub(super) fn diagnose(
         AnyModel::Stribeck(m) => diagnose_with(m, base, &logs, settings),
         AnyModel::Dahl(m) => diagnose_with(m, base, &logs, settings),
         AnyModel::Lugre(m) => diagnose_with(m, base, &logs, settings),
+        AnyModel::MaxwellSlip(m) => diagnose_with(m, base, &logs, settings),
     }
 }
 
@@ -217,6 +219,7 @@ fn refine_any(
         AnyModel::Stribeck(m) => refine(m, model, input, settings),
         AnyModel::Dahl(m) => refine(m, model, input, settings),
         AnyModel::Lugre(m) => refine(m, model, input, settings),
+        AnyModel::MaxwellSlip(m) => refine(m, model, input, settings),
     }
 }
 
@@ -737,6 +740,7 @@ fn diagnose_with<M: Separable + Sync + Clone + Into<AnyModel>>(
 fn refinement_box(base: &AnyModel, motion: &Track, fit: &FitSettings) -> Vec<(f64, f64)> {
     match base {
         AnyModel::Lugre(l) => lugre_starts(motion, &l.steady_state(), fit).0,
+        AnyModel::MaxwellSlip(g) => maxwell_starts(motion, &g.steady_state(), fit).0,
         other => other
             .kind()
             .structure_info()
@@ -766,6 +770,17 @@ fn cleaned_start(
             (s.coulomb > 0.0).then(|| {
                 vec![
                     l.sigma0 / s.coulomb,
+                    s.static_friction / s.coulomb,
+                    s.stribeck_velocity,
+                    s.shape,
+                ]
+            })
+        }
+        AnyModel::MaxwellSlip(g) => {
+            let s = fit_stribeck(motion, tau, fit)?.model;
+            (s.coulomb > 0.0).then(|| {
+                vec![
+                    g.length,
                     s.static_friction / s.coulomb,
                     s.stribeck_velocity,
                     s.shape,

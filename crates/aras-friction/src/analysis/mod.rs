@@ -26,12 +26,12 @@ use serde::{Deserialize, Serialize, Serializer};
 use thiserror::Error;
 
 use crate::{
-    CoulombViscous, Dahl, FrictionError, FrictionModel, JointLog, JointMotion, LuGre, ParamInfo,
-    Separable, Stribeck,
+    CoulombViscous, Dahl, FrictionError, FrictionModel, JointLog, JointMotion, LuGre, MaxwellSlip,
+    ParamInfo, Separable, Stribeck,
     effects::{Effect, Profile, residual_profiles},
     fit::{
         Estimate, FitStatus, Fitted, Metrics, fit_coulomb_viscous, fit_dahl, fit_lugre,
-        fit_stribeck, metrics,
+        fit_maxwell_slip, fit_stribeck, metrics,
     },
     sgn,
 };
@@ -88,7 +88,7 @@ pub enum AnalysisError {
     },
 }
 
-/// The four classical models, by kind.
+/// The classical models, by kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ModelKind {
@@ -100,15 +100,18 @@ pub enum ModelKind {
     Dahl,
     /// LuGre.
     Lugre,
+    /// Generalized Maxwell-slip.
+    MaxwellSlip,
 }
 
 impl ModelKind {
     /// Every kind, in the order [`FrictionRun::models`] lists them.
-    pub const ALL: [ModelKind; 4] = [
+    pub const ALL: [ModelKind; 5] = [
         ModelKind::CoulombViscous,
         ModelKind::Stribeck,
         ModelKind::Dahl,
         ModelKind::Lugre,
+        ModelKind::MaxwellSlip,
     ];
 
     /// The model in words, for messages.
@@ -118,6 +121,7 @@ impl ModelKind {
             ModelKind::Stribeck => "Stribeck",
             ModelKind::Dahl => "Dahl",
             ModelKind::Lugre => "LuGre",
+            ModelKind::MaxwellSlip => "generalized Maxwell-slip",
         }
     }
 
@@ -129,6 +133,7 @@ impl ModelKind {
             ModelKind::Stribeck => Stribeck::structure_info(),
             ModelKind::Dahl => Dahl::structure_info(),
             ModelKind::Lugre => LuGre::structure_info(),
+            ModelKind::MaxwellSlip => MaxwellSlip::structure_info(),
         }
     }
 }
@@ -146,7 +151,7 @@ pub struct LogInfo {
     pub steps: [f64; 2],
     /// True when the velocity was computed from the position.
     pub dq_from_q: bool,
-    /// The reader's notes on this log ([`JointLog::notes`]).
+    /// The reader's notes on this log ([`JointMotion::notes`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub notes: Vec<String>,
 }
@@ -270,7 +275,7 @@ fn fit_warnings(parameters: &[Estimate], tau: &[f64]) -> Vec<FitWarning> {
     out
 }
 
-/// A fitted model of any of the four kinds.
+/// A fitted model of any of the classical kinds.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "model", rename_all = "snake_case")]
 pub enum AnyModel {
@@ -282,6 +287,8 @@ pub enum AnyModel {
     Dahl(Dahl),
     /// LuGre.
     Lugre(LuGre),
+    /// Generalized Maxwell-slip.
+    MaxwellSlip(MaxwellSlip),
 }
 
 impl AnyModel {
@@ -292,6 +299,7 @@ impl AnyModel {
             AnyModel::Stribeck(_) => ModelKind::Stribeck,
             AnyModel::Dahl(_) => ModelKind::Dahl,
             AnyModel::Lugre(_) => ModelKind::Lugre,
+            AnyModel::MaxwellSlip(_) => ModelKind::MaxwellSlip,
         }
     }
 
@@ -303,6 +311,7 @@ impl AnyModel {
             AnyModel::Stribeck(x) => x.predict(&m),
             AnyModel::Dahl(x) => x.predict(&m),
             AnyModel::Lugre(x) => x.predict(&m),
+            AnyModel::MaxwellSlip(x) => x.predict(&m),
         })
     }
 
@@ -314,6 +323,7 @@ impl AnyModel {
             AnyModel::Stribeck(x) => x.at(v),
             AnyModel::Dahl(x) => x.offset + x.coulomb * sgn(v) + x.viscous * v,
             AnyModel::Lugre(x) => x.steady_state().at(v),
+            AnyModel::MaxwellSlip(x) => x.steady_state().at(v),
         }
     }
 
@@ -324,6 +334,7 @@ impl AnyModel {
             AnyModel::Stribeck(x) => x.name(),
             AnyModel::Dahl(x) => x.name(),
             AnyModel::Lugre(x) => x.name(),
+            AnyModel::MaxwellSlip(x) => x.name(),
         }
     }
 }
@@ -346,6 +357,11 @@ impl From<Dahl> for AnyModel {
 impl From<LuGre> for AnyModel {
     fn from(m: LuGre) -> Self {
         AnyModel::Lugre(m)
+    }
+}
+impl From<MaxwellSlip> for AnyModel {
+    fn from(m: MaxwellSlip) -> Self {
+        AnyModel::MaxwellSlip(m)
     }
 }
 
@@ -397,8 +413,8 @@ pub struct FrictionRun {
     pub train: LogInfo,
     /// The validation logs.
     pub validation: Vec<LogInfo>,
-    /// The four classical models, in [`ModelKind::ALL`] order:
-    /// coulomb_viscous, stribeck, dahl, lugre.
+    /// The classical models, in [`ModelKind::ALL`] order:
+    /// coulomb_viscous, stribeck, dahl, lugre, maxwell_slip.
     pub models: Vec<ModelResult>,
     /// The fitted models themselves (same order).
     pub fitted: Vec<AnyModel>,
@@ -588,7 +604,7 @@ fn result<M: Separable + Sync>(
     })
 }
 
-/// The four classical models fitted on `train` (in [`ModelKind::ALL`]
+/// The classical models fitted on `train` (in [`ModelKind::ALL`]
 /// order), each scored on `vals`.
 fn fit_classical(
     train: &JointLog,
@@ -614,20 +630,66 @@ fn fit_classical(
     let cv = cv.map_err(fit_error(ModelKind::CoulombViscous))?;
     let st = st.map_err(fit_error(ModelKind::Stribeck))?;
     let dahl = dahl.map_err(fit_error(ModelKind::Dahl))?;
-    let lugre = fit_lugre(&m, tau, &st.model, fs).map_err(fit_error(ModelKind::Lugre))?;
+    // Both state models start from the Stribeck fit's steady state.
+    let (lugre, gms) = rayon::join(
+        || fit_lugre(&m, tau, &st.model, fs),
+        || fit_maxwell_slip(&m, tau, &st.model, fs),
+    );
+    let lugre = lugre.map_err(fit_error(ModelKind::Lugre))?;
+    let gms = gms.map_err(fit_error(ModelKind::MaxwellSlip))?;
     let models = vec![
         result(&cv, train, vals)?,
         result(&st, train, vals)?,
         result(&dahl, train, vals)?,
         result(&lugre, train, vals)?,
+        result(&gms, train, vals)?,
     ];
     let fitted = vec![
         AnyModel::CoulombViscous(cv.model),
         AnyModel::Stribeck(st.model),
         AnyModel::Dahl(dahl.model),
         AnyModel::Lugre(lugre.model),
+        AnyModel::MaxwellSlip(gms.model),
     ];
     Ok((models, fitted))
+}
+
+/// The diagnosis of the best classical model and, when that is not LuGre,
+/// of LuGre too: the two families hold different physics (LuGre a rate-
+/// dependent bristle with one presliding length, Maxwell-slip several
+/// rate-independent lengths), and what the diagnosis adds to the one can
+/// make it better than the other. The path with the lower mean validation
+/// RMS of its final model (its classical model's when nothing is added)
+/// is kept.
+fn diagnose_best(
+    best: usize,
+    models: &[ModelResult],
+    fitted: &[AnyModel],
+    train: &JointLog,
+    vals: &[JointLog],
+    settings: &FrictionSettings,
+) -> Result<(DiagnosisResult, Option<diagnosis::Refined>), AnalysisError> {
+    let mean = |v: &[Metrics]| v.iter().map(|m| m.rms).sum::<f64>() / v.len().max(1) as f64;
+    let score = |i: usize, r: &Option<diagnosis::Refined>| {
+        r.as_ref().map_or_else(
+            || mean(&models[i].validation),
+            |r| mean(&r.result.validation),
+        )
+    };
+    let first = diagnosis::diagnose(&fitted[best], fitted, train, vals, settings)?;
+    let Some(lugre) = fitted
+        .iter()
+        .position(|m| m.kind() == ModelKind::Lugre)
+        .filter(|&i| i != best)
+    else {
+        return Ok(first);
+    };
+    let second = diagnosis::diagnose(&fitted[lugre], fitted, train, vals, settings)?;
+    Ok(if score(lugre, &second.1) < score(best, &first.1) {
+        second
+    } else {
+        first
+    })
 }
 
 /// The index of the best model and how it was chosen: lowest mean
@@ -669,7 +731,7 @@ pub fn analyse(
     let (diagnosis, diagnosis_note, refined) = if vals.is_empty() {
         (None, Some(NoDiagnosis::NoValidationLog), None)
     } else {
-        let (d, r) = diagnosis::diagnose(base, &fitted, train, vals, settings)?;
+        let (d, r) = diagnose_best(best, &models, &fitted, train, vals, settings)?;
         (Some(d), None, r)
     };
     let (final_model, model) = match refined {
