@@ -640,12 +640,13 @@ fn finish<M: Separable + Sync>(
     fit: &SeparableFit,
     motion: &Track,
     y: &[f64],
-    fixed: &[bool],
+    settings: &FitSettings,
 ) -> Fitted<M> {
     let nb = M::coefficient_info().len();
     let model = M::from_parts(&fit.theta, &fit.beta[..nb]);
     let pred = model.predict(motion);
-    let (estimates, _) = estimates(&model, &pred, &[], &[], motion, fit.rss, fixed);
+    let fixed = held(&model.parameter_info(), settings);
+    let (estimates, _) = estimates(&model, &pred, &[], &[], motion, fit.rss, &fixed);
     Fitted {
         model,
         estimates,
@@ -654,6 +655,14 @@ fn finish<M: Separable + Sync>(
         evaluations: fit.evaluations,
         status: fit.status,
     }
+}
+
+/// Which parameters a fit holds instead of estimating: the Stribeck shape
+/// `δ` when [`FitSettings::shape`] gives it.
+pub(crate) fn held(info: &[ParamInfo], settings: &FitSettings) -> Vec<bool> {
+    info.iter()
+        .map(|i| settings.shape.is_some() && i.name == crate::models::DELTA.name)
+        .collect()
 }
 
 /// σ and metrics for a model fitted with extra columns (the diagnosis'
@@ -679,7 +688,7 @@ pub fn fit_coulomb_viscous(
 ) -> Result<Fitted<CoulombViscous>, FrictionError> {
     let prob = Problem::<CoulombViscous>::new(*motion, tau, &[], &[])?;
     let fit = prob.solve(&[], settings)?;
-    Ok(finish(&fit, motion, tau, &[]))
+    Ok(finish(&fit, motion, tau, settings))
 }
 
 /// Search box of the Stribeck velocity: from 1e-4 of the velocity scale
@@ -707,8 +716,7 @@ pub fn fit_stribeck(
         }
     }
     let fit = prob.solve(&starts, settings)?;
-    let fixed = [false, false, false, false, settings.shape.is_some(), false];
-    Ok(finish(&fit, motion, tau, &fixed))
+    Ok(finish(&fit, motion, tau, settings))
 }
 
 /// Fits the Dahl model; starts on 9 log-spaced presliding displacements
@@ -725,32 +733,49 @@ pub fn fit_dahl(
         .map(|x| vec![x])
         .collect();
     let fit = prob.solve(&starts, settings)?;
-    Ok(finish(&fit, motion, tau, &[]))
+    Ok(finish(&fit, motion, tau, settings))
 }
 
 /// The search box and start grid of the LuGre structure
-/// `θ = (κ, F_s/F_c, v_s, δ)` around a Stribeck fit of the same data.
+/// `θ = (κ, F_s/F_c, v_s, δ)` around a Stribeck fit of the same data: the
+/// presliding displacement `F_c/σ₀ = 1/κ` from 1e-7 rad to the travelled
+/// range, started on 9 log-spaced values up to a tenth of it.
 pub fn lugre_starts(
     motion: &Track,
     stribeck: &Stribeck,
     settings: &FitSettings,
 ) -> (Vec<(f64, f64)>, Vec<Vec<f64>>) {
     let s = scales(motion);
-    let vsb = vs_box(s);
+    let kappa: Vec<f64> = log_grid(1e-6, 0.1 * s.range, 9)
+        .into_iter()
+        .map(|x| 1.0 / x)
+        .collect();
+    state_starts(motion, stribeck, settings, (1.0 / s.range, 1e7), &kappa)
+}
+
+/// The box and starts of a state model's structure `θ = (p, F_s/F_c, v_s,
+/// δ)`: `p` (the presliding scale) over `p_box` from each of `p_starts`,
+/// the static ratio from [`static_ratios`], the Stribeck velocity and shape
+/// from the Stribeck fit (`δ` held when [`FitSettings::shape`] gives it).
+fn state_starts(
+    motion: &Track,
+    stribeck: &Stribeck,
+    settings: &FitSettings,
+    p_box: (f64, f64),
+    p_starts: &[f64],
+) -> (Vec<(f64, f64)>, Vec<Vec<f64>>) {
+    let vsb = vs_box(scales(motion));
     let db = settings.shape.map_or((0.3, 4.0), |d| (d, d));
-    // Presliding displacement F_c/σ₀ from 1e-7 rad to the travelled range.
-    let kb = (1.0 / s.range, 1e7);
-    let rb = RATIO_BOX;
     let ratios = static_ratios(stribeck);
     let vs = stribeck.stribeck_velocity.clamp(vsb.0, vsb.1);
     let delta = settings.shape.unwrap_or(stribeck.shape).clamp(db.0, db.1);
     let mut starts = Vec::new();
-    for x in log_grid(1e-6, 0.1 * s.range, 9) {
+    for &p in p_starts {
         for &r in &ratios {
-            starts.push(vec![1.0 / x, r, vs, delta]);
+            starts.push(vec![p, r, vs, delta]);
         }
     }
-    (vec![kb, rb, vsb, db], starts)
+    (vec![p_box, RATIO_BOX, vsb, db], starts)
 }
 
 /// Box of `F_s/F_c` in the state models' structure.
@@ -782,39 +807,23 @@ pub fn fit_lugre(
     let (bounds, starts) = lugre_starts(motion, stribeck, settings);
     let prob = Problem::<LuGre>::new(*motion, tau, &[], &bounds)?;
     let fit = prob.solve(&starts, settings)?;
-    let fixed = [
-        false,
-        false,
-        false,
-        false,
-        settings.shape.is_some(),
-        false,
-        false,
-        false,
-    ];
-    Ok(finish(&fit, motion, tau, &fixed))
+    Ok(finish(&fit, motion, tau, settings))
 }
 
 /// The search box and start grid of the Maxwell-slip structure
 /// `θ = (L, F_s/F_c, v_s, δ)` around a Stribeck fit of the same data: the
-/// longest presliding length `L` from 1e-6 rad to the travelled range
-/// (started on 7 log-spaced values up to half of it), the Stribeck shape as
-/// for LuGre ([`lugre_starts`]).
+/// longest presliding length `L` from 1e-6 rad to the travelled range,
+/// started on 7 log-spaced values up to half of it (the shortest element
+/// is a thousandth of `L`), the rest as for LuGre ([`lugre_starts`]).
 pub fn maxwell_starts(
     motion: &Track,
     stribeck: &Stribeck,
     settings: &FitSettings,
 ) -> (Vec<(f64, f64)>, Vec<Vec<f64>>) {
-    let (lugre_box, lugre) = lugre_starts(motion, stribeck, settings);
     let s = scales(motion);
-    let lb = (1e-6f64.min(0.5 * s.range), s.range);
-    let mut starts = Vec::new();
-    for l in log_grid(1e-5f64.min(0.1 * s.range), 0.5 * s.range, 7) {
-        for r in static_ratios(stribeck) {
-            starts.push(vec![l, r, lugre[0][2], lugre[0][3]]);
-        }
-    }
-    (vec![lb, lugre_box[1], lugre_box[2], lugre_box[3]], starts)
+    let lengths = log_grid(1e-5f64.min(0.1 * s.range), 0.5 * s.range, 7);
+    let l_box = (1e-6f64.min(0.5 * s.range), s.range);
+    state_starts(motion, stribeck, settings, l_box, &lengths)
 }
 
 /// Fits the generalized Maxwell-slip model ([`MaxwellSlip`]), its levels
@@ -828,12 +837,7 @@ pub fn fit_maxwell_slip(
     let (bounds, starts) = maxwell_starts(motion, stribeck, settings);
     let prob = Problem::<MaxwellSlip>::new(*motion, tau, &[], &bounds)?;
     let fit = prob.solve(&starts, settings)?;
-    let mut fixed =
-        vec![false; MaxwellSlip::structure_info().len() + MaxwellSlip::coefficient_info().len()];
-    // δ: the parameter vector's third-last.
-    let n = fixed.len();
-    fixed[n - 2] = settings.shape.is_some();
-    Ok(finish(&fit, motion, tau, &fixed))
+    Ok(finish(&fit, motion, tau, settings))
 }
 
 /// Names of a model's parameters (for reports).

@@ -394,6 +394,20 @@ fn several_presliding_lengths_are_one_element() {
         r.final_model.map(|f| f.name)
     );
     assert_eq!(r.model.base.kind(), aras_friction::ModelKind::MaxwellSlip);
+    // The model file reads back (serde_json with `float_roundtrip`, as the
+    // CLI reads it) and predicts the same bits.
+    let text = serde_json::to_string(&r.model).unwrap();
+    let back: aras_friction::FinalModel = serde_json::from_str(&text).unwrap();
+    let later = JointSimulation {
+        duration: 10.0,
+        speed: 1.2,
+        seed: 59,
+        ..sim.clone()
+    }
+    .run("later")
+    .log;
+    assert_eq!(back, r.model);
+    assert!(back.predict(&later).unwrap() == r.model.predict(&later).unwrap());
 
     let mut settings = FrictionSettings::default();
     settings.library.hysteresis_lengths = 8;

@@ -18,7 +18,7 @@ use crate::{
     FrictionError, JointLog, Separable, Track,
     effects::{Effect, EffectValue, Library, library, presliding_lengths, shift_ripple},
     fit::{
-        Estimate, FitSettings, Problem, estimates_with_extra, fit_stribeck, lugre_starts,
+        Estimate, FitSettings, Problem, estimates_with_extra, fit_stribeck, held, lugre_starts,
         maxwell_starts, metrics,
     },
     models::combine,
@@ -890,11 +890,7 @@ fn refine<M: Separable + Sync + Clone + Into<AnyModel>>(
     let nc = M::coefficient_info().len();
     let refined = M::from_parts(&fit.theta, &fit.beta[..nc]);
     let extra_beta = &fit.beta[nc..];
-    let fixed: Vec<bool> = refined
-        .parameter_info()
-        .iter()
-        .map(|i| settings.fit.shape.is_some() && i.name == "delta")
-        .collect();
+    let fixed = held(&refined.parameter_info(), &settings.fit);
     let (mut estimates, extra_sigma) =
         estimates_with_extra(&refined, &extra, extra_beta, &motion, fit.rss, &fixed);
     let mut effects = Vec::with_capacity(added.len());
