@@ -394,6 +394,71 @@ impl UrdfModel {
         self.joint_columns_into(qd, qdd, |c, j, v| tau[j] += v * params[c]);
     }
 
+    /// The joint-space mass matrix `M(q)` (row-major, `dof × dof`, armature
+    /// included) and the bias `b(q, q̇) = τ(q, q̇, 0)` (gravity, Coriolis and
+    /// centrifugal torques, friction) of `params`, so that the torques are
+    /// `τ = M q̈ + b`: column `j` of `M` by RNEA without gravity at `q̇ = 0`,
+    /// `q̈ = e_j`, less the same at `q̈ = 0` (the offset column).
+    pub fn mass_matrix_and_bias(
+        &self,
+        ws: &mut Workspace<f64>,
+        params: &[f64],
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>), UrdfError> {
+        let n = self.dof();
+        let mut bias = vec![0.0; n];
+        let zero = vec![0.0; n];
+        self.inverse_dynamics_with(ws, params, q, qd, &zero, &mut bias)?;
+        let mut rest = vec![0.0; n];
+        self.rnea_unchecked(ws, params, q, &zero, &zero, &mut rest, false);
+        let mut m = vec![0.0; n * n];
+        let mut e = zero.clone();
+        let mut col = vec![0.0; n];
+        for j in 0..n {
+            e[j] = 1.0;
+            self.rnea_unchecked(ws, params, q, &zero, &e, &mut col, false);
+            e[j] = 0.0;
+            for i in 0..n {
+                m[i * n + j] = col[i] - rest[i];
+            }
+        }
+        Ok((m, bias))
+    }
+
+    /// Joint accelerations `q̈ = M⁻¹ (τ − b)` under the torques `tau`
+    /// (forward dynamics from the mass matrix,
+    /// [`mass_matrix_and_bias`](Self::mass_matrix_and_bias), by Cholesky).
+    /// A mass matrix that is not positive definite (parameters that are
+    /// not physical) is an error.
+    pub fn forward_dynamics(
+        &self,
+        ws: &mut Workspace<f64>,
+        params: &[f64],
+        q: &[f64],
+        qd: &[f64],
+        tau: &[f64],
+    ) -> Result<Vec<f64>, UrdfError> {
+        let n = self.dof();
+        if tau.len() != n {
+            return Err(UrdfError::Dimension {
+                what: "torques",
+                expected: n,
+                found: tau.len(),
+            });
+        }
+        let (m, b) = self.mass_matrix_and_bias(ws, params, q, qd)?;
+        let m = nalgebra::DMatrix::from_row_slice(n, n, &m);
+        let rhs = nalgebra::DVector::from_iterator(n, tau.iter().zip(&b).map(|(t, b)| t - b));
+        let chol = m.cholesky().ok_or_else(|| UrdfError::Setting {
+            name: "parameters".into(),
+            problem: "the mass matrix is not positive definite at this state: the \
+                      parameters are not those of a physical robot"
+                .into(),
+        })?;
+        Ok(chol.solve(&rhs).iter().copied().collect())
+    }
+
     /// Joint torques by RNEA (see
     /// [`inverse_dynamics_with`](Self::inverse_dynamics_with)) for the
     /// standard parameters `params`, e.g. [`urdf_parameters`](Self::urdf_parameters).

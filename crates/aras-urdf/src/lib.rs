@@ -33,6 +33,11 @@
 //! `<mimic>`, closed loops, several roots, impossible inertials) is
 //! refused with a [`UrdfError`] saying where and what to do.
 //!
+//! [`sim`] simulates such an arm under PD control with the ARAS-Diamond
+//! simulator's drive and sensor models, for logs of known parameters
+//! (`nalgebra` for the Cholesky solve of the mass matrix; `rand` and
+//! `rand_distr` for its seeded sensor noise).
+//!
 //! The crate depends on neither `aras-kin` nor `aras-dyn`.
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the equations
@@ -41,6 +46,7 @@ mod dynamics;
 mod error;
 mod model;
 mod parse;
+pub mod sim;
 mod spatial;
 
 pub use dynamics::{Pose, Workspace};

@@ -1,0 +1,403 @@
+//! A simulated serial arm: the stand-in for a lab's robot (`docs/urdf.md`,
+//! "Simulator").
+//!
+//! The drive, controller and sensor models are the ARAS-Diamond
+//! simulator's (`docs/simulator.md`), per joint of any number of joints:
+//!
+//! * **Plant**: `M(q) q̈ = τ − b(q, q̇)` of the truth parameters (rigid
+//!   bodies, armature and the model's friction columns, Coulomb as
+//!   `tanh(q̇/w)`), from the mass matrix by RNEA
+//!   ([`UrdfModel::forward_dynamics`]), integrated by classical RK4 at the
+//!   output rate times `substeps`, the torque held between controller ticks
+//!   (zero-order hold, as a digital amplifier does).
+//! * **Controller** at the output rate: PD in joint space on the quantised
+//!   encoder angles, the velocity from a first-order low-pass of their
+//!   backward difference, feedforward `τ_ff = RNEA(q_d, q̇_d, q̈_d)` of a
+//!   nominal parameter vector, torque limits.
+//! * **Sensors**: encoder quantisation (`counts_per_rev × gear_ratio` counts
+//!   per joint revolution or per metre), Gaussian current noise times torque
+//!   constant times gear ratio on the logged torque.
+//! * **Lead-in**: the log starts once the controller has settled on the
+//!   trajectory, as a real excitation log does.
+//!
+//! Seeded: the same settings give the same bytes.
+
+use rand::SeedableRng;
+use rand::rngs::StdRng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use crate::{UrdfError, UrdfModel, Workspace};
+
+/// Drives and sensors, one entry per joint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ArmSensors {
+    /// Encoder counts per motor revolution (after quadrature decoding).
+    pub counts_per_rev: Vec<u32>,
+    /// Gear ratio: motor revolutions per joint revolution (per metre for a
+    /// prismatic joint).
+    pub gear_ratios: Vec<f64>,
+    /// Motor torque constants, N·m/A.
+    pub torque_constants: Vec<f64>,
+    /// Standard deviation of the current measurement noise, A.
+    pub current_noise_std: Vec<f64>,
+}
+
+impl ArmSensors {
+    /// `joints` alike: a 4096-count encoder behind a 100:1 gear (1.5e-5 rad
+    /// per count at the joint), `K_t` = 0.05 N·m/A and 10 mA current noise
+    /// (0.05 N·m joint torque noise): a harmonic-drive arm joint.
+    pub fn uniform(joints: usize) -> Self {
+        Self {
+            counts_per_rev: vec![4096; joints],
+            gear_ratios: vec![100.0; joints],
+            torque_constants: vec![0.05; joints],
+            current_noise_std: vec![0.010; joints],
+        }
+    }
+
+    /// Joint position resolution `2π/(counts · ratio)`.
+    pub fn resolution(&self) -> Vec<f64> {
+        self.counts_per_rev
+            .iter()
+            .zip(&self.gear_ratios)
+            .map(|(&c, &r)| std::f64::consts::TAU / (c as f64 * r))
+            .collect()
+    }
+
+    /// Joint torque noise `σ_i K_t N`, N·m.
+    pub fn torque_noise_std(&self) -> Vec<f64> {
+        self.current_noise_std
+            .iter()
+            .zip(&self.torque_constants)
+            .zip(&self.gear_ratios)
+            .map(|((s, k), r)| s * k * r)
+            .collect()
+    }
+}
+
+/// PD control in joint space with model feedforward.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ArmController {
+    /// Proportional gains, N·m/rad (N/m).
+    pub kp: Vec<f64>,
+    /// Derivative gains, N·m·s/rad (N·s/m).
+    pub kd: Vec<f64>,
+    /// Cut-off of the first-order low-pass on the differentiated encoder
+    /// angle, Hz.
+    pub velocity_cutoff_hz: f64,
+    /// Standard parameters of the feedforward model (`None`: pure PD).
+    pub feedforward: Option<Vec<f64>>,
+}
+
+impl ArmController {
+    /// Gains for a closed-loop bandwidth of `bandwidth_hz` on each joint's
+    /// own inertia at `q` (the mass matrix's diagonal of `params`),
+    /// critically damped: `Kp = M_jj ω²`, `Kd = 2 M_jj ω`; a 100 Hz velocity
+    /// filter and feedforward of `params`.
+    pub fn for_model(
+        model: &UrdfModel,
+        params: &[f64],
+        q: &[f64],
+        bandwidth_hz: f64,
+    ) -> Result<Self, UrdfError> {
+        let n = model.dof();
+        let mut ws = Workspace::new(model);
+        let (m, _) = model.mass_matrix_and_bias(&mut ws, params, q, &vec![0.0; n])?;
+        let w = std::f64::consts::TAU * bandwidth_hz;
+        let diag: Vec<f64> = (0..n).map(|j| m[j * n + j]).collect();
+        Ok(Self {
+            kp: diag.iter().map(|d| d * w * w).collect(),
+            kd: diag.iter().map(|d| 2.0 * d * w).collect(),
+            velocity_cutoff_hz: 100.0,
+            feedforward: Some(params.to_vec()),
+        })
+    }
+}
+
+/// Everything about a run except the robot and the trajectory.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ArmSimulation {
+    /// Recorded time, s (`floor(duration · rate)` rows).
+    pub duration_s: f64,
+    /// Time the robot tracks the trajectory before the log starts, s.
+    pub lead_in_s: f64,
+    /// Controller and log rate, Hz.
+    pub output_rate_hz: f64,
+    /// RK4 steps per output sample.
+    pub substeps: usize,
+    /// The controller.
+    pub controller: ArmController,
+    /// Symmetric torque limits per joint, N·m (N); `None`: unlimited.
+    pub torque_limit: Option<Vec<f64>>,
+    /// Drives and sensors.
+    pub sensors: ArmSensors,
+    /// Seed of the noise generator.
+    pub seed: u64,
+}
+
+impl ArmSimulation {
+    /// 60 s at 1 kHz after a 2 s lead-in, 2 RK4 substeps, no torque limit,
+    /// seed 1, with `controller` and `sensors`.
+    pub fn new(controller: ArmController, sensors: ArmSensors) -> Self {
+        Self {
+            duration_s: 60.0,
+            lead_in_s: 2.0,
+            output_rate_hz: 1000.0,
+            substeps: 2,
+            controller,
+            torque_limit: None,
+            sensors,
+            seed: 1,
+        }
+    }
+
+    /// Checks every setting against the model's joint count.
+    fn validate(&self, joints: usize) -> Result<(), UrdfError> {
+        let bad = |name: &str, problem: String| UrdfError::Setting {
+            name: name.into(),
+            problem,
+        };
+        for (name, v) in [
+            ("duration_s", self.duration_s),
+            ("output_rate_hz", self.output_rate_hz),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(name, format!("{v} must be a positive number")));
+            }
+        }
+        if !(self.lead_in_s.is_finite() && self.lead_in_s >= 0.0) {
+            return Err(bad(
+                "lead_in_s",
+                format!("{} must be a number ≥ 0", self.lead_in_s),
+            ));
+        }
+        if self.substeps == 0 {
+            return Err(bad("substeps", "0 must be at least 1".into()));
+        }
+        let c = &self.controller;
+        let s = &self.sensors;
+        let lengths = [
+            ("controller.kp", c.kp.len()),
+            ("controller.kd", c.kd.len()),
+            ("sensors.counts_per_rev", s.counts_per_rev.len()),
+            ("sensors.gear_ratios", s.gear_ratios.len()),
+            ("sensors.torque_constants", s.torque_constants.len()),
+            ("sensors.current_noise_std", s.current_noise_std.len()),
+        ];
+        for (name, len) in lengths.into_iter().chain(
+            self.torque_limit
+                .as_ref()
+                .map(|l| ("torque_limit", l.len())),
+        ) {
+            if len != joints {
+                return Err(bad(
+                    name,
+                    format!("{len} entries for a robot of {joints} joints: give one per joint"),
+                ));
+            }
+        }
+        if s.counts_per_rev.contains(&0)
+            || s.gear_ratios.iter().any(|r| !(r.is_finite() && *r > 0.0))
+        {
+            return Err(bad(
+                "sensors",
+                "counts per revolution and gear ratios must be positive".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A simulated log: one row per controller tick, every joint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArmLog {
+    /// The URDF's joint names, in joint order.
+    pub joint_names: Vec<String>,
+    /// Time of each row, s (the trajectory's time).
+    pub t: Vec<f64>,
+    /// Quantised encoder positions, `q[joint][row]`.
+    pub q: Vec<Vec<f64>>,
+    /// Exact positions.
+    pub q_exact: Vec<Vec<f64>>,
+    /// Logged torques: the held command plus current noise.
+    pub tau: Vec<Vec<f64>>,
+    /// The held command without noise.
+    pub tau_clean: Vec<Vec<f64>>,
+    /// Exact velocity at each row.
+    pub qd: Vec<Vec<f64>>,
+    /// Exact acceleration at each row (under the held command).
+    pub qdd: Vec<Vec<f64>>,
+}
+
+impl ArmLog {
+    /// The log in the toolkit's CSV format (`docs/log-format.md`):
+    /// `t, theta1 … thetaN, tau1 … tauN`, with the exact `dthetaJ`,
+    /// `ddthetaJ` when `derivatives`; the joint names in a comment line.
+    pub fn to_csv(&self, derivatives: bool) -> String {
+        use std::fmt::Write;
+        let n = self.q.len();
+        let mut s = format!("# joints: {}\nt", self.joint_names.join(","));
+        let mut kinds = vec!["theta", "tau"];
+        if derivatives {
+            kinds.extend(["dtheta", "ddtheta"]);
+        }
+        for k in &kinds {
+            for j in 1..=n {
+                let _ = write!(s, ",{k}{j}");
+            }
+        }
+        s.push('\n');
+        for r in 0..self.t.len() {
+            let _ = write!(s, "{}", self.t[r]);
+            let mut blocks = vec![&self.q, &self.tau];
+            if derivatives {
+                blocks.extend([&self.qd, &self.qdd]);
+            }
+            for b in blocks {
+                for c in b {
+                    let _ = write!(s, ",{}", c[r]);
+                }
+            }
+            s.push('\n');
+        }
+        s
+    }
+}
+
+/// A desired motion: `(q_d, q̇_d, q̈_d)` written into the slices at time `t`.
+pub trait ArmTrajectory {
+    /// The desired state at `t`, s.
+    fn eval_into(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]);
+}
+
+impl ArmTrajectory for aras_excite::FourierTrajectory<nalgebra::Dyn> {
+    fn eval_into(&self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
+        aras_excite::FourierTrajectory::eval_into(self, t, q, qd, qdd);
+    }
+}
+
+/// Simulates `model` with standard parameters `truth` tracking
+/// `trajectory` (see the module docs). The robot starts on the trajectory
+/// `lead_in_s` before its time 0; row `k` holds `t_k = k / rate`, the
+/// quantised (and exact) positions at `t_k`, the torque commanded at `t_k` (held until
+/// `t_{k+1}`) with and without noise, and the exact `q̇`, `q̈` at `t_k`.
+pub fn simulate(
+    model: &UrdfModel,
+    truth: &[f64],
+    trajectory: &dyn ArmTrajectory,
+    sim: &ArmSimulation,
+) -> Result<ArmLog, UrdfError> {
+    let n = model.dof();
+    sim.validate(n)?;
+    if truth.len() != model.parameter_count() {
+        return Err(UrdfError::Dimension {
+            what: "truth parameters",
+            expected: model.parameter_count(),
+            found: truth.len(),
+        });
+    }
+    let mut ws = Workspace::new(model);
+    let rows = (sim.duration_s * sim.output_rate_hz).floor() as usize;
+    let lead = (sim.lead_in_s * sim.output_rate_hz).round() as i64;
+    let dt = 1.0 / sim.output_rate_hz;
+    let h = dt / sim.substeps as f64;
+    let res = sim.sensors.resolution();
+    let noise = sim.sensors.torque_noise_std();
+    let c = &sim.controller;
+    let alpha = 1.0 - (-std::f64::consts::TAU * c.velocity_cutoff_hz * dt).exp();
+    let mut rng = StdRng::seed_from_u64(sim.seed);
+    let (mut qd_des, mut vd_des, mut ad_des) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let t0 = -lead as f64 * dt;
+    trajectory.eval_into(t0, &mut qd_des, &mut vd_des, &mut ad_des);
+    let (mut q, mut v) = (qd_des.clone(), vd_des.clone());
+    let quantise = |q: &[f64]| -> Vec<f64> {
+        q.iter()
+            .zip(&res)
+            .map(|(x, r)| (x / r).round() * r)
+            .collect()
+    };
+    let mut q_prev = quantise(&q);
+    let mut v_est = v.clone();
+    let mut log = ArmLog {
+        joint_names: model.joint_names(),
+        t: Vec::with_capacity(rows),
+        q: vec![Vec::with_capacity(rows); n],
+        q_exact: vec![Vec::with_capacity(rows); n],
+        tau: vec![Vec::with_capacity(rows); n],
+        tau_clean: vec![Vec::with_capacity(rows); n],
+        qd: vec![Vec::with_capacity(rows); n],
+        qdd: vec![Vec::with_capacity(rows); n],
+    };
+    let mut tau = vec![0.0; n];
+    for k in -lead..rows as i64 {
+        let t = k as f64 * dt;
+        let q_meas = quantise(&q);
+        if k > -lead {
+            for j in 0..n {
+                let raw = (q_meas[j] - q_prev[j]) / dt;
+                v_est[j] += (raw - v_est[j]) * alpha;
+            }
+        }
+        q_prev.clone_from(&q_meas);
+        trajectory.eval_into(t, &mut qd_des, &mut vd_des, &mut ad_des);
+        match &c.feedforward {
+            Some(p) => {
+                model.inverse_dynamics_with(&mut ws, p, &qd_des, &vd_des, &ad_des, &mut tau)?
+            }
+            None => tau.fill(0.0),
+        }
+        for j in 0..n {
+            tau[j] += c.kp[j] * (qd_des[j] - q_meas[j]) + c.kd[j] * (vd_des[j] - v_est[j]);
+            if let Some(l) = &sim.torque_limit {
+                tau[j] = tau[j].clamp(-l[j], l[j]);
+            }
+        }
+        if k >= 0 {
+            let a = model.forward_dynamics(&mut ws, truth, &q, &v, &tau)?;
+            log.t.push(t);
+            for j in 0..n {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                log.q[j].push(q_meas[j]);
+                log.q_exact[j].push(q[j]);
+                log.tau[j].push(tau[j] + noise[j] * z);
+                log.tau_clean[j].push(tau[j]);
+                log.qd[j].push(v[j]);
+                log.qdd[j].push(a[j]);
+            }
+        }
+        for _ in 0..sim.substeps {
+            rk4(model, &mut ws, truth, &mut q, &mut v, &tau, h)?;
+        }
+    }
+    Ok(log)
+}
+
+/// One classical RK4 step of `(q, q̇)` under the held torques.
+fn rk4(
+    model: &UrdfModel,
+    ws: &mut Workspace<f64>,
+    params: &[f64],
+    q: &mut [f64],
+    v: &mut [f64],
+    tau: &[f64],
+    h: f64,
+) -> Result<(), UrdfError> {
+    let n = q.len();
+    let mut f = |q: &[f64], v: &[f64]| model.forward_dynamics(ws, params, q, v, tau);
+    let at = |x: &[f64], d: &[f64], s: f64| -> Vec<f64> {
+        x.iter().zip(d).map(|(x, d)| x + s * d).collect()
+    };
+    let a1 = f(q, v)?;
+    let (q2, v2) = (at(q, v, 0.5 * h), at(v, &a1, 0.5 * h));
+    let a2 = f(&q2, &v2)?;
+    let (q3, v3) = (at(q, &v2, 0.5 * h), at(v, &a2, 0.5 * h));
+    let a3 = f(&q3, &v3)?;
+    let (q4, v4) = (at(q, &v3, h), at(v, &a3, h));
+    let a4 = f(&q4, &v4)?;
+    for j in 0..n {
+        q[j] += h / 6.0 * (v[j] + 2.0 * v2[j] + 2.0 * v3[j] + v4[j]);
+        v[j] += h / 6.0 * (a1[j] + 2.0 * a2[j] + 2.0 * a3[j] + a4[j]);
+    }
+    Ok(())
+}
