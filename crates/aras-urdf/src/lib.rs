@@ -15,6 +15,10 @@
 //!   viscous, Coulomb (`tanh(q̇/w)`), offset and armature columns
 //!   ([`JointColumns`]).
 //!
+//! * the identified URDF: the robot's own file with identified inertials
+//!   in place of its own, every other byte kept
+//!   ([`UrdfModel::identified_urdf`]).
+//!
 //! The regressor is written once over the number type, so the model is
 //! both `aras-ident`'s [`aras_ident::LinearModel`] (base parameters, OLS,
 //! the SDP with one pseudo-inertia per body via
@@ -48,6 +52,7 @@ mod model;
 mod parse;
 pub mod sim;
 mod spatial;
+mod write;
 
 pub use dynamics::{Pose, Workspace};
 pub use error::UrdfError;
