@@ -13,8 +13,7 @@
 //!   parameters: per body `m, m·c, I` about the body (joint) frame's origin
 //!   in Pinocchio's order ([`LINK_PARAMETERS`]), then per joint the enabled
 //!   viscous, Coulomb (`tanh(q̇/w)`), offset and armature columns
-//!   ([`JointColumns`]).
-//!
+//!   ([`JointColumns`]),
 //! * the identified URDF: the robot's own file with identified inertials
 //!   in place of its own, every other byte kept
 //!   ([`UrdfModel::identified_urdf`]).
