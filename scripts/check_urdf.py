@@ -16,6 +16,9 @@ example of aras-urdf, creates a throwaway virtual environment with `pin`,
    regressors themselves entry by entry.
 3. Our base-parameter count (aras-ident on our stacked regressor) against
    the numerical rank of Pinocchio's stacked regressor (column-scaled SVD).
+4. Our MJCF export (`UrdfModel::to_mjcf`, with viscous damping and armature
+   of random sizes) loaded in MuJoCo: its inverse dynamics (`mj_inverse`)
+   against our RNEA with the same joint columns, to `MUJOCO_TOL`.
 
 The robots: the Panda with its fingers fixed (7 joints, the hand merged into
 link 7), the Panda with free fingers (9 joints, two prismatic; the `<mimic>`
@@ -30,6 +33,7 @@ import os
 import subprocess
 import sys
 
+import mujoco
 import numpy as np
 import pinocchio as pin
 
@@ -42,6 +46,10 @@ PARAM_TOL = 1e-12
 # Rank: singular values of the column-scaled stacked regressor below this
 # fraction of the largest count as zero (aras-ident's default 1e-8).
 RANK_TOL = 1e-8
+# MuJoCo's inverse dynamics of our MJCF: the issue's bound (the text's
+# shortest round-trip numbers carry every bit, so the agreement is near
+# rounding).
+MUJOCO_TOL = 1e-6
 STATES = 1000
 GRAVITY = [1.3, -0.8, -9.7]
 BASE_RPY = [0.2, -0.15, 0.4]
@@ -113,18 +121,22 @@ def check(name, urdf, ours_bin, work, rng):
     rot = pin.rpy.rpyToMatrix(np.array(BASE_RPY))
     model.gravity.linear = rot.T @ np.array(GRAVITY)
     joint_names = [model.names[i] for i in range(1, model.njoints)]
-    def ours_for(q, qd, qdd):
+    def ours_for(q, qd, qdd, joint_values=None, mjcf=None):
+        columns = joint_values is not None
         request = {
             "urdf": urdf,
             "settings": {
                 "gravity": GRAVITY,
                 "base_rpy": BASE_RPY,
-                "columns": {"viscous": False, "coulomb": False, "offset": False, "armature": False},
+                "columns": {"viscous": columns, "coulomb": False, "offset": False, "armature": columns},
             },
             "q": q.tolist(),
             "q_dot": qd.tolist(),
             "q_ddot": qdd.tolist(),
         }
+        if columns:
+            request["joint_values"] = joint_values
+            request["mjcf"] = mjcf
         inp = os.path.join(work, name + ".in.json")
         outp = os.path.join(work, name + ".out.json")
         for path in (inp, outp):
@@ -188,7 +200,36 @@ def check(name, urdf, ours_bin, work, rng):
         failures.append(f"{name}: regressor·π differs from Pinocchio's by {reg_err:.3e} N·m")
     if ours["base_parameters"] != rank:
         failures.append(f"{name}: {ours['base_parameters']} base parameters, Pinocchio's rank {rank}")
+    failures += check_mujoco(name, order, q, qd, qdd, ours_for, work, rng)
     return failures
+
+
+def check_mujoco(name, order, q, qd, qdd, ours_for, work, rng):
+    """Our MJCF in MuJoCo: mj_inverse against our RNEA, viscous damping and
+    armature included."""
+    n = len(order)
+    fv = rng.uniform(0.1, 2.0, n)
+    ia = rng.uniform(0.01, 0.5, n)
+    values = [v for j in range(n) for v in (fv[j], ia[j])]
+    mjcf = os.path.join(work, name + ".xml")
+    if os.path.exists(mjcf):
+        os.remove(mjcf)
+    ours = ours_for(q, qd, qdd, values, mjcf)
+    model = mujoco.MjModel.from_xml_path(mjcf)
+    data = mujoco.MjData(model)
+    qadr = [model.joint(j).qposadr[0] for j in order]
+    vadr = [model.joint(j).dofadr[0] for j in order]
+    err = 0.0
+    for s in range(len(q)):
+        data.qpos[qadr] = q[s]
+        data.qvel[vadr] = qd[s]
+        data.qacc[vadr] = qdd[s]
+        mujoco.mj_inverse(model, data)
+        err = max(err, np.max(np.abs(data.qfrc_inverse[vadr] - np.array(ours["tau"][s]))))
+    print(f"{name}: MuJoCo {mujoco.__version__} inverse dynamics of our MJCF, {len(q)} states | max |τ − mj_inverse| {err:.2e} N·m")
+    if err > MUJOCO_TOL:
+        return [f"{name}: MuJoCo's inverse dynamics of our MJCF differs by {err:.3e} N·m"]
+    return []
 
 
 def main():
@@ -202,7 +243,7 @@ def main():
         failures += check(name, urdf, args.ours, args.work, rng)
     for f in failures:
         print("FAILED: " + f)
-    print(f"check-urdf: {'failed' if failures else 'passed'}, Pinocchio {pin.__version__}")
+    print(f"check-urdf: {'failed' if failures else 'passed'}, Pinocchio {pin.__version__}, MuJoCo {mujoco.__version__}")
     return 1 if failures else 0
 
 

@@ -14,9 +14,9 @@
 //!   keep an existing one) and runs `scripts/check_mjcf.py` (ARGS go to the script,
 //!   e.g. `--params P.json`).
 //! * `cargo xtask check-urdf [--reuse-venv]`: cross-checks `aras-urdf` against Pinocchio
-//!   (`docs/urdf.md`): builds its `urdf_torques` example, creates a throwaway environment
-//!   with `pin`, `example-robot-data` and `numpy` in `target/check-urdf/venv` and runs
-//!   `scripts/check_urdf.py`.
+//!   and its MJCF export in MuJoCo (`docs/urdf.md`): builds its `urdf_torques` example,
+//!   creates a throwaway environment with `pin`, `example-robot-data`, `mujoco` and `numpy`
+//!   in `target/check-urdf/venv` and runs `scripts/check_urdf.py`.
 //! * `cargo xtask <command> [ARGS…]`: every other command (`pipeline`, `excite`,
 //!   `simulate`, `identify`, `validate`, `predict`, `diagnose`, `friction`, `--help`) is
 //!   passed to the `aras` binary of the `aras-cli` package (`export-mjcf` too).
@@ -428,7 +428,12 @@ fn check_mjcf(args: &[String]) -> ExitCode {
 
 /// Python packages of the URDF check, pinned so that every machine checks
 /// against the same Pinocchio (update together).
-const CHECK_URDF_PACKAGES: [&str; 3] = ["pin==4.1.0", "example-robot-data==6.0.0", "numpy==2.4.6"];
+const CHECK_URDF_PACKAGES: [&str; 4] = [
+    "pin==4.1.0",
+    "example-robot-data==6.0.0",
+    "mujoco==4.0.0",
+    "numpy==2.4.6",
+];
 
 /// `cargo xtask check-urdf`: build the example, make the throwaway venv, run the script.
 fn check_urdf(args: &[String]) -> ExitCode {

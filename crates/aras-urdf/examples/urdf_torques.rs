@@ -12,6 +12,10 @@
 //! `joint_names`, `parameter_names`, `parameters` (the URDF's), per state
 //! `tau` (RNEA) and `regressor` (row-major `dof × parameters`), and
 //! `base_parameters` (their count on the stacked regressor of all states).
+//! Optional in `IN.json`: `joint_values`, the values of the joint columns
+//! (viscous, Coulomb, offset, armature as the settings enable them, in the
+//! parameter order) used with the URDF's inertials, and `mjcf`, a new path
+//! to write the model's MJCF with those parameters to (`to_mjcf`).
 
 use std::error::Error;
 use std::path::Path;
@@ -29,6 +33,10 @@ struct Input {
     q: Vec<Vec<f64>>,
     q_dot: Vec<Vec<f64>>,
     q_ddot: Vec<Vec<f64>>,
+    #[serde(default)]
+    joint_values: Vec<f64>,
+    #[serde(default)]
+    mjcf: Option<String>,
 }
 
 #[derive(Serialize)]
@@ -52,8 +60,26 @@ fn main() -> Result<(), Box<dyn Error>> {
     }
     let input: Input = serde_json::from_str(&std::fs::read_to_string(input)?)?;
     let model = UrdfModel::from_file(&input.urdf, input.settings)?;
-    let params = model.urdf_parameters();
+    let mut params = model.urdf_parameters();
     let (n, cols) = (model.dof(), model.parameter_count());
+    let links = 10 * n;
+    if !input.joint_values.is_empty() {
+        if input.joint_values.len() != cols - links {
+            return Err(format!(
+                "joint_values: {} values for {} joint columns",
+                input.joint_values.len(),
+                cols - links
+            )
+            .into());
+        }
+        params[links..].copy_from_slice(&input.joint_values);
+    }
+    if let Some(path) = &input.mjcf {
+        if Path::new(path).exists() {
+            return Err(format!("{path} exists; give a new MJCF path").into());
+        }
+        std::fs::write(path, model.to_mjcf(&params)?)?;
+    }
     let states = input.q.len();
     if input.q_dot.len() != states || input.q_ddot.len() != states {
         return Err("q, q_dot and q_ddot need the same number of states".into());

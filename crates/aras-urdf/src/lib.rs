@@ -16,7 +16,8 @@
 //!   ([`JointColumns`]),
 //! * the identified URDF: the robot's own file with identified inertials
 //!   in place of its own, every other byte kept
-//!   ([`UrdfModel::identified_urdf`]).
+//!   ([`UrdfModel::identified_urdf`]), and the robot as MuJoCo MJCF
+//!   ([`UrdfModel::to_mjcf`]).
 //!
 //! The regressor is written once over the number type, so the model is
 //! both `aras-ident`'s [`aras_ident::LinearModel`] (base parameters, OLS,
@@ -47,6 +48,7 @@
 
 mod dynamics;
 mod error;
+mod mjcf;
 mod model;
 mod parse;
 pub mod sim;

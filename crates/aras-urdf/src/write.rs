@@ -143,9 +143,11 @@ fn indented(text: &str, indent: &str) -> String {
         .collect()
 }
 
-/// A body's standard parameters as a URDF `<inertial>` at its centre of
-/// mass; `None` when they are not physical.
-fn inertial_text(p: &[f64]) -> Option<String> {
+/// A body's mass, centre of mass and central inertia from its standard
+/// parameters (`m, m·c, I_O` about its frame's origin); `None` when they
+/// are not physical (mass ≤ 0, not finite, or a central inertia that is not
+/// positive semidefinite).
+pub(crate) fn central(p: &[f64]) -> Option<(f64, [f64; 3], [[f64; 3]; 3])> {
     let m = p[0];
     if !(m.is_finite() && m > 0.0) || p.iter().any(|x| !x.is_finite()) {
         return None;
@@ -161,8 +163,8 @@ fn inertial_text(p: &[f64]) -> Option<String> {
             ic[r][k] = io[r][k] - m * (e - c[r] * c[k]);
         }
     }
-    // Positive semidefinite: the leading minors of I_c + ε E, ε a rounding
-    // allowance on its scale.
+    // Positive semidefinite: the leading minors of I_c + ε E positive, ε a
+    // rounding allowance on its scale.
     let eps = 1e-12 * (ic[0][0].abs() + ic[1][1].abs() + ic[2][2].abs()).max(f64::MIN_POSITIVE);
     let a = |r: usize, k: usize| ic[r][k] + if r == k { eps } else { 0.0 };
     let d1 = a(0, 0);
@@ -170,9 +172,13 @@ fn inertial_text(p: &[f64]) -> Option<String> {
     let d3 = a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1))
         - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
         + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0));
-    if d1 <= 0.0 || d2 <= 0.0 || d3 <= 0.0 {
-        return None;
-    }
+    (d1 > 0.0 && d2 > 0.0 && d3 > 0.0).then_some((m, c, ic))
+}
+
+/// A body's standard parameters as a URDF `<inertial>` at its centre of
+/// mass; `None` when they are not physical ([`central`]).
+fn inertial_text(p: &[f64]) -> Option<String> {
+    let (m, c, ic) = central(p)?;
     Some(format!(
         "<inertial>\n  <origin xyz=\"{} {} {}\" rpy=\"0 0 0\"/>\n  <mass value=\"{m}\"/>\n  \
          <inertia ixx=\"{}\" ixy=\"{}\" ixz=\"{}\" iyy=\"{}\" iyz=\"{}\" izz=\"{}\"/>\n</inertial>",

@@ -143,3 +143,54 @@ fn links_without_inertial_get_one_and_unphysical_bodies_are_refused() {
         .to_string();
     assert!(e.contains("not the robot this model was built from"), "{e}");
 }
+
+/// The MJCF of a two-link arm: bodies nested as the tree, joint columns as
+/// MuJoCo's armature and damping, Coulomb and offset named in a comment,
+/// negative armature refused. (MuJoCo's own inverse dynamics of the
+/// Panda's and the UR5's MJCF is checked by `cargo xtask check-urdf`.)
+#[test]
+fn the_mjcf_nests_the_bodies_and_carries_armature_and_damping() {
+    let source = r#"<robot name="two">
+  <link name="base"/>
+  <link name="a"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/></inertial></link>
+  <link name="b"><inertial><origin xyz="0.1 0 0"/><mass value="2"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+  <joint name="j1" type="revolute">
+    <parent link="base"/><child link="a"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="10" velocity="1"/>
+  </joint>
+  <joint name="j2" type="prismatic">
+    <parent link="a"/><child link="b"/><origin xyz="0.3 0 0" rpy="0 0.5 0"/><axis xyz="1 0 0"/>
+    <limit lower="0" upper="0.2" effort="10" velocity="1"/>
+  </joint>
+</robot>
+"#;
+    let model = UrdfModel::from_urdf_str(source, "two.urdf", ModelSettings::default()).unwrap();
+    let mut p = model.urdf_parameters();
+    let names = model.parameter_names();
+    let set = |p: &mut Vec<f64>, name: &str, v: f64| {
+        let i = names.iter().position(|n| n == name).unwrap();
+        p[i] = v;
+    };
+    set(&mut p, "j1.Ia", 0.2);
+    set(&mut p, "j2.Fv", 1.5);
+    set(&mut p, "j2.Fc", 0.7);
+    let xml = model.to_mjcf(&p).unwrap();
+    let a = xml.find("<body name=\"a\"").unwrap();
+    let b = xml.find("<body name=\"b\"").unwrap();
+    let a_end = xml.rfind("</body>").unwrap();
+    assert!(a < b && b < a_end, "{xml}");
+    assert!(
+        xml.contains("type=\"hinge\" axis=\"0 0 1\" range=\"-1 1\" armature=\"0.2\" damping=\"0\""),
+        "{xml}"
+    );
+    assert!(xml.contains("type=\"slide\""), "{xml}");
+    assert!(xml.contains("damping=\"1.5\""), "{xml}");
+    assert!(xml.contains("torque): j2: Coulomb 0.7 -->"), "{xml}");
+    assert!(xml.contains("mass=\"2\""), "{xml}");
+    set(&mut p, "j1.Ia", -0.1);
+    let e = model.to_mjcf(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("armature -0.1 is negative") && e.contains("link `a`"),
+        "{e}"
+    );
+}
