@@ -3,7 +3,10 @@
 //! Each link's pseudo-inertia (`docs/model.md`, "Physical consistency")
 //! `𝒥_k = [[½tr(I_k)·1 − I_k, h_k], [h_kᵀ, m_k]]` is linear in
 //! `(I_k, h_k, m_k)`, and `𝒥_k ⪰ 0` is exactly (67)–(69). With the mass an
-//! extra decision variable per link (it does not enter the dynamics), mass
+//! extra decision variable per link (for ARAS-Diamond it does not enter the
+//! dynamics; for a robot whose standard vector holds the mass, such as a
+//! serial arm's `m` per link, [`LinkLayout::with_mass_column`] ties the two
+//! by an equality), mass
 //! bounds, optional box bounds (73) and sign constraints (70), the problem
 //!
 //! ```text
@@ -66,6 +69,13 @@ pub struct LinkLayout {
     pub mass_reference: f64,
     /// Mass bounds, kg.
     pub mass_bounds: (f64, f64),
+    /// Index of the link's mass in the standard vector, when the dynamics
+    /// holds it (a serial arm's `m`): the pseudo-inertia's mass is then
+    /// that parameter. `None` (ARAS-Diamond's links): the mass is a
+    /// variable of its own that only the constraints and the regulariser
+    /// fix.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mass_column: Option<usize>,
 }
 
 impl LinkLayout {
@@ -82,7 +92,15 @@ impl LinkLayout {
             first_moment,
             mass_reference,
             mass_bounds: (0.8 * mass_reference, 1.2 * mass_reference),
+            mass_column: None,
         }
+    }
+
+    /// The link's mass is the standard parameter at `index` (see
+    /// [`LinkLayout::mass_column`]).
+    pub fn with_mass_column(mut self, index: usize) -> Self {
+        self.mass_column = Some(index);
+        self
     }
 
     /// Replaces the mass bounds.
@@ -271,6 +289,7 @@ impl ConsistentLs {
             .inertia
             .iter()
             .chain(&layout.first_moment)
+            .chain(&layout.mass_column)
             .copied()
             .collect();
         for &i in &idx {
@@ -283,11 +302,9 @@ impl ConsistentLs {
                     self.names[i]
                 )));
             }
-            if let Some(other) = self
-                .links
-                .iter()
-                .find(|l| l.inertia.contains(&i) || l.first_moment.contains(&i))
-            {
+            if let Some(other) = self.links.iter().find(|l| {
+                l.inertia.contains(&i) || l.first_moment.contains(&i) || l.mass_column == Some(i)
+            }) {
                 return Err(bad(format!(
                     "parameter `{}` already belongs to link `{}`",
                     self.names[i], other.name
@@ -539,7 +556,21 @@ impl ConsistentLs {
             row += 1;
         }
         cones.push(SupportedConeT::SecondOrderConeT(1 + b + n + nl));
-        // 2. Linear inequalities s = rhs − A x ≥ 0.
+        // 2. A link's mass variable is its standard parameter where the
+        // dynamics holds it: β_j − m_k = 0.
+        let tied = row;
+        for (kk, l) in self.links.iter().enumerate() {
+            if let Some(j) = l.mass_column {
+                push(row, j, 1.0);
+                push(row, n + kk, -1.0);
+                rhs.push(0.0);
+                row += 1;
+            }
+        }
+        if row > tied {
+            cones.push(SupportedConeT::ZeroConeT(row - tied));
+        }
+        // 3. Linear inequalities s = rhs − A x ≥ 0.
         let lin_start = row;
         let mut lin: Vec<(ConstraintKind, String, usize, f64)> = Vec::new(); // kind, name, var, scale
         for (kk, l) in self.links.iter().enumerate() {
@@ -590,7 +621,7 @@ impl ConsistentLs {
         if row > lin_start {
             cones.push(SupportedConeT::NonnegativeConeT(row - lin_start));
         }
-        // 3. PSD: svec(T𝒥T − εI) ∈ S⁴₊ per link (upper triangle by columns,
+        // 4. PSD: svec(T𝒥T − εI) ∈ S⁴₊ per link (upper triangle by columns,
         // off-diagonals × √2, as clarabel packs them).
         let r2 = std::f64::consts::SQRT_2;
         let basis = pseudo_inertia_basis();
