@@ -579,6 +579,67 @@ impl UrdfModel {
         p
     }
 
+    /// The excitation design's limits ([`aras_excite::Limits`]) from the
+    /// URDF: each joint's `<limit lower upper velocity>` (positions in rad
+    /// or m, rates per second), shrunk by `margin` (a fraction in `[0, 1)`
+    /// of each half-range and of each rate, so the design stays clear of
+    /// the hard stops), and `max_accel` for every joint. A joint without
+    /// position or velocity limits (a continuous joint, an incomplete
+    /// `<limit>`) is an error naming it: give the limits to excite it in.
+    pub fn excitation_limits(
+        &self,
+        margin: f64,
+        max_accel: f64,
+    ) -> Result<aras_excite::Limits<nalgebra::Dyn>, UrdfError> {
+        if !(0.0..1.0).contains(&margin) {
+            return Err(UrdfError::Setting {
+                name: "margin".into(),
+                problem: format!("{margin} must be a fraction in [0, 1)"),
+            });
+        }
+        if !(max_accel.is_finite() && max_accel > 0.0) {
+            return Err(UrdfError::Setting {
+                name: "max_accel".into(),
+                problem: format!("{max_accel} must be a positive number"),
+            });
+        }
+        let n = self.dof();
+        let (mut lo, mut hi, mut rate) = (Vec::new(), Vec::new(), Vec::new());
+        for j in &self.joints {
+            let l = j.limits.unwrap_or(JointLimits {
+                lower: None,
+                upper: None,
+                effort: None,
+                velocity: None,
+            });
+            let bounded = j.kind != JointKind::Continuous;
+            match (l.lower, l.upper, l.velocity) {
+                (Some(a), Some(b), Some(v)) if bounded && b > a && v > 0.0 => {
+                    let (mid, half) = (0.5 * (a + b), 0.5 * (b - a) * (1.0 - margin));
+                    lo.push(mid - half);
+                    hi.push(mid + half);
+                    rate.push(v * (1.0 - margin));
+                }
+                _ => {
+                    return Err(UrdfError::Setting {
+                        name: format!("limits of joint `{}`", j.name),
+                        problem: "the URDF gives no lower < upper position limits (or the \
+                                  joint is continuous) and a positive velocity limit: add them \
+                                  to its <limit> (or give aras-excite the limits yourself)"
+                            .into(),
+                    });
+                }
+            }
+        }
+        let v = |x: &[f64]| nalgebra::DVector::from_column_slice(x);
+        Ok(aras_excite::Limits {
+            min: v(&lo),
+            max: v(&hi),
+            max_rate: v(&rate),
+            max_accel: nalgebra::DVector::from_element(n, max_accel),
+        })
+    }
+
     /// Where each body's parameters sit in the standard vector, in the
     /// order `aras-ident`'s `LinkLayout` takes them, for the physically
     /// consistent identification (one pseudo-inertia per body).
