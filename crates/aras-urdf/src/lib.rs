@@ -48,6 +48,7 @@
 
 mod dynamics;
 mod error;
+pub mod identify;
 mod mjcf;
 mod model;
 mod parse;

@@ -44,12 +44,14 @@ pub struct ArmSensors {
 }
 
 impl ArmSensors {
-    /// `joints` alike: a 4096-count encoder behind a 100:1 gear (1.5e-5 rad
-    /// per count at the joint), `K_t` = 0.05 N·m/A and 10 mA current noise
-    /// (0.05 N·m joint torque noise): a harmonic-drive arm joint.
+    /// `joints` alike: a 16-bit (65 536-count) motor encoder behind a 100:1
+    /// gear (9.6e-7 rad per count at the joint), `K_t` = 0.05 N·m/A and
+    /// 10 mA current noise (0.05 N·m joint torque noise): a harmonic-drive
+    /// arm joint. (Coarser encoders make the PD loop's reaction to the
+    /// quantisation a torque the angles do not show: `docs/urdf.md`.)
     pub fn uniform(joints: usize) -> Self {
         Self {
-            counts_per_rev: vec![4096; joints],
+            counts_per_rev: vec![65_536; joints],
             gear_ratios: vec![100.0; joints],
             torque_constants: vec![0.05; joints],
             current_noise_std: vec![0.010; joints],
@@ -93,8 +95,8 @@ pub struct ArmController {
 impl ArmController {
     /// Gains for a closed-loop bandwidth of `bandwidth_hz` on each joint's
     /// own inertia at `q` (the mass matrix's diagonal of `params`),
-    /// critically damped: `Kp = M_jj ω²`, `Kd = 2 M_jj ω`; a 100 Hz velocity
-    /// filter and feedforward of `params`.
+    /// critically damped: `Kp = M_jj ω²`, `Kd = 2 M_jj ω`; a 30 Hz velocity
+    /// filter (the ARAS-Diamond simulator's) and feedforward of `params`.
     pub fn for_model(
         model: &UrdfModel,
         params: &[f64],
@@ -109,7 +111,7 @@ impl ArmController {
         Ok(Self {
             kp: diag.iter().map(|d| d * w * w).collect(),
             kd: diag.iter().map(|d| 2.0 * d * w).collect(),
-            velocity_cutoff_hz: 100.0,
+            velocity_cutoff_hz: 30.0,
             feedforward: Some(params.to_vec()),
         })
     }

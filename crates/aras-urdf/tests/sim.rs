@@ -57,6 +57,92 @@ fn truth(model: &UrdfModel) -> Vec<f64> {
     p
 }
 
+/// The 10 s excitation of the tests (five harmonics per joint of random
+/// sizes about the middle of its limits; `skip` draws discarded first, for
+/// another trajectory), and the offsets.
+fn excitation(model: &UrdfModel, skip: usize) -> (Vec<f64>, FourierTrajectory<Dyn>) {
+    let mut next = sequence();
+    for _ in 0..skip {
+        next();
+    }
+    let (mut offset, mut a, mut b) = (Vec::new(), Vec::new(), Vec::new());
+    for j in model.joints() {
+        let l = j.limits.unwrap();
+        offset.push(0.5 * (l.lower.unwrap() + l.upper.unwrap()));
+        a.push((0..5).map(|_| 0.25 * next()).collect::<Vec<_>>());
+        b.push((0..5).map(|_| 0.25 * next()).collect::<Vec<_>>());
+    }
+    let omega = std::f64::consts::TAU / 10.0;
+    let trajectory = FourierTrajectory::<Dyn>::new(omega, offset.clone(), a, b).unwrap();
+    (offset, trajectory)
+}
+
+/// The Panda's 60 s run: gains on the drive's inertia as its designer
+/// knows it (armature included) for 10 Hz, feedforward from the URDF alone
+/// (no friction, no armature), `sensors`.
+fn panda_run(
+    model: &UrdfModel,
+    p: &[f64],
+    sensors: ArmSensors,
+) -> (
+    FourierTrajectory<Dyn>,
+    ArmSimulation,
+    aras_urdf::sim::ArmLog,
+) {
+    let (offset, trajectory) = excitation(model, 0);
+    let mut controller = ArmController::for_model(model, p, &offset, 10.0).unwrap();
+    controller.feedforward = Some(model.urdf_parameters());
+    let sim = ArmSimulation::new(controller, sensors);
+    let log = simulate(model, p, &trajectory, &sim).unwrap();
+    (trajectory, sim, log)
+}
+
+/// Fitness (78) of `params` on a 20 s run of another trajectory (another
+/// noise seed), and the noise ceiling (the true torques against the
+/// logged), per joint.
+fn cross_validation(
+    model: &UrdfModel,
+    p: &[f64],
+    params: &[f64],
+    sim: &ArmSimulation,
+) -> Vec<(f64, f64)> {
+    let n = model.dof();
+    let (_, other) = excitation(model, 40);
+    let check = simulate(
+        model,
+        p,
+        &other,
+        &ArmSimulation {
+            duration_s: 20.0,
+            seed: 7,
+            ..sim.clone()
+        },
+    )
+    .unwrap();
+    let mut predicted = vec![Vec::new(); n];
+    for r in 0..check.t.len() {
+        let q: Vec<f64> = check.q_exact.iter().map(|c| c[r]).collect();
+        let v: Vec<f64> = check.qd.iter().map(|c| c[r]).collect();
+        let acc: Vec<f64> = check.qdd.iter().map(|c| c[r]).collect();
+        let t = model.inverse_dynamics(params, &q, &v, &acc).unwrap();
+        for (c, t) in predicted.iter_mut().zip(t) {
+            c.push(t);
+        }
+    }
+    check
+        .tau
+        .iter()
+        .zip(&check.tau_clean)
+        .zip(&predicted)
+        .map(|((tau, clean), pred)| {
+            (
+                aras_ident::validate::fitness(tau, pred).unwrap(),
+                aras_ident::validate::fitness(tau, clean).unwrap(),
+            )
+        })
+        .collect()
+}
+
 #[test]
 fn forward_dynamics_inverts_rnea() {
     let model = panda(ALL, [0.4, -0.3, -9.8]);
@@ -134,22 +220,7 @@ fn ols_on_a_simulated_panda_log_recovers_the_base_parameters() {
     let model = panda(ALL, [0.4, -0.3, -9.8]);
     let n = model.dof();
     let p = truth(&model);
-    let mut next = sequence();
-    let (mut offset, mut a, mut b) = (Vec::new(), Vec::new(), Vec::new());
-    for j in model.joints() {
-        let l = j.limits.unwrap();
-        offset.push(0.5 * (l.lower.unwrap() + l.upper.unwrap()));
-        a.push((0..5).map(|_| 0.25 * next()).collect::<Vec<_>>());
-        b.push((0..5).map(|_| 0.25 * next()).collect::<Vec<_>>());
-    }
-    let omega = std::f64::consts::TAU / 10.0;
-    let trajectory = FourierTrajectory::<Dyn>::new(omega, offset.clone(), a, b).unwrap();
-    // Gains on the drive's inertia as its designer knows it (armature
-    // included); feedforward from the URDF alone (no friction, no armature).
-    let mut controller = ArmController::for_model(&model, &p, &offset, 10.0).unwrap();
-    controller.feedforward = Some(model.urdf_parameters());
-    let sim = ArmSimulation::new(controller, ArmSensors::uniform(n));
-    let log = simulate(&model, &p, &trajectory, &sim).unwrap();
+    let (trajectory, sim, log) = panda_run(&model, &p, ArmSensors::uniform(n));
     let rows = log.t.len();
     assert_eq!(rows, 60_000);
     // The robot tracks to a fraction of a milliradian.
@@ -161,7 +232,7 @@ fn ols_on_a_simulated_panda_log_recovers_the_base_parameters() {
             per[j] = per[j].max((log.q_exact[j][r] - qd[j]).abs());
         }
     }
-    // 0.2–0.9 mrad measured: the friction the feedforward leaves out over
+    // 0.3–0.8 mrad measured: the friction the feedforward leaves out over
     // gains of 10 Hz bandwidth.
     let worst = per.iter().fold(0.0f64, |a, &b| a.max(b));
     assert!(worst < 2e-3, "tracking error {per:?} rad");
@@ -268,54 +339,85 @@ fn ols_on_a_simulated_panda_log_recovers_the_base_parameters() {
 
     // Cross-validation on another trajectory (other coefficients, 20 s):
     // the consistent parameters predict its logged torques within 0.05
-    // points of the noise ceiling (the true torques against the logged) per
-    // joint.
-    let mut next = sequence();
-    for _ in 0..40 {
-        next();
-    }
-    let (mut a, mut b) = (Vec::new(), Vec::new());
-    for _ in 0..n {
-        a.push((0..5).map(|_| 0.25 * next()).collect::<Vec<_>>());
-        b.push((0..5).map(|_| 0.25 * next()).collect::<Vec<_>>());
-    }
-    let other = FourierTrajectory::<Dyn>::new(omega, offset, a, b).unwrap();
-    let check = simulate(
-        &model,
-        &p,
-        &other,
-        &ArmSimulation {
-            duration_s: 20.0,
-            seed: 7,
-            ..sim.clone()
-        },
-    )
-    .unwrap();
-    let mut predicted = vec![Vec::new(); n];
-    for r in 0..check.t.len() {
-        let q: Vec<f64> = check.q_exact.iter().map(|c| c[r]).collect();
-        let v: Vec<f64> = check.qd.iter().map(|c| c[r]).collect();
-        let acc: Vec<f64> = check.qdd.iter().map(|c| c[r]).collect();
-        let t = model.inverse_dynamics(&sdp.standard, &q, &v, &acc).unwrap();
-        for j in 0..n {
-            predicted[j].push(t[j]);
-        }
-    }
-    for (j, ((tau, clean), predicted)) in check
-        .tau
+    // points of the noise ceiling per joint (0.0009–0.013 measured: 71
+    // parameters from 84 000 rows leave a prediction error far under the
+    // noise).
+    for (j, (fit, ceiling)) in cross_validation(&model, &p, &sdp.standard, &sim)
         .iter()
-        .zip(&check.tau_clean)
-        .zip(&predicted)
         .enumerate()
     {
-        let fit = aras_ident::validate::fitness(tau, predicted).unwrap();
-        let ceiling = aras_ident::validate::fitness(tau, clean).unwrap();
-        // 0.0009–0.0070 points below measured: 71 parameters from 84 000
-        // rows leave a prediction error far under the noise.
         assert!(
-            fit > ceiling - 0.05,
+            fit > &(ceiling - 0.05),
             "joint {}: {fit} vs ceiling {ceiling}",
             j + 1
         );
     }
+}
+
+/// The recipe from the log alone (`aras_urdf::identify`): the 60 s Panda
+/// log written in the toolkit's format and read back, processed from its
+/// quantised angles (one averaged period, the data-chosen bandwidth), OLS
+/// and the consistent estimate, which predicts another trajectory's
+/// torques within 0.1 points of the noise ceiling per joint (0.0009–0.010
+/// measured).
+#[test]
+fn the_recipe_identifies_the_panda_from_its_log() {
+    let model = panda(ALL, [0.4, -0.3, -9.8]);
+    let n = model.dof();
+    let p = truth(&model);
+    let (_, sim, log) = panda_run(&model, &p, ArmSensors::uniform(n));
+    let gaps = recipe_gaps(&model, &p, &sim, &log);
+    for (j, gap) in gaps.iter().enumerate() {
+        assert!(
+            *gap < 0.1,
+            "joint {}: {gap} points below the ceiling",
+            j + 1
+        );
+    }
+}
+
+/// The limit of the angles: with 4096-count encoders (1.5e-5 rad at the
+/// joint, 16 times coarser) the controller's reaction to the quantisation
+/// puts torque into the log that the angles do not show, and the recipe's
+/// estimate falls 4.7 points below the ceiling on joint 1 (0.3–1.5 on the
+/// others). Behind `--ignored`: it documents a limit, not a guarantee.
+#[test]
+#[ignore]
+fn coarse_encoders_cost_the_recipe_fitness() {
+    let model = panda(ALL, [0.4, -0.3, -9.8]);
+    let n = model.dof();
+    let p = truth(&model);
+    let mut sensors = ArmSensors::uniform(n);
+    sensors.counts_per_rev = vec![4096; n];
+    let (_, sim, log) = panda_run(&model, &p, sensors);
+    let gaps = recipe_gaps(&model, &p, &sim, &log);
+    assert!(gaps[0] > 2.0, "{gaps:?}");
+}
+
+/// The recipe on `log`, then the points by which its consistent estimate
+/// falls below the ceiling on another trajectory, per joint.
+fn recipe_gaps(
+    model: &UrdfModel,
+    p: &[f64],
+    sim: &ArmSimulation,
+    log: &aras_urdf::sim::ArmLog,
+) -> Vec<f64> {
+    let csv = log.to_csv(false);
+    let read = aras_log::read_log_from(csv.as_bytes(), "panda.csv", &Default::default()).unwrap();
+    let settings = aras_urdf::identify::IdentifySettings {
+        period: Some(10.0),
+        ..Default::default()
+    };
+    let id = aras_urdf::identify::identify(model, &read, &settings).unwrap();
+    assert_eq!(id.samples, 10_000);
+    assert_eq!(id.status, aras_ident::SolverStatus::Solved);
+    assert!(
+        id.min_eigenvalues.iter().all(|&e| e > 0.0),
+        "{:?}",
+        id.min_eigenvalues
+    );
+    cross_validation(model, p, &id.standard, sim)
+        .iter()
+        .map(|(fit, ceiling)| ceiling - fit)
+        .collect()
 }
