@@ -18,7 +18,9 @@ example of aras-urdf, creates a throwaway virtual environment with `pin`,
    the numerical rank of Pinocchio's stacked regressor (column-scaled SVD).
 4. Our MJCF export (`UrdfModel::to_mjcf`, with viscous damping and armature
    of random sizes) loaded in MuJoCo: its inverse dynamics (`mj_inverse`)
-   against our RNEA with the same joint columns, to `MUJOCO_TOL`.
+   against our RNEA with the same joint columns, to `MUJOCO_TOL`, and its
+   body positions against our forward kinematics (base placement and
+   orientation included), to `POSITION_TOL`.
 
 The robots: the Panda with its fingers fixed (7 joints, the hand merged into
 link 7), the Panda with free fingers (9 joints, two prismatic; the `<mimic>`
@@ -50,9 +52,14 @@ RANK_TOL = 1e-8
 # shortest round-trip numbers carry every bit, so the agreement is near
 # rounding).
 MUJOCO_TOL = 1e-6
+# Body positions of the MJCF in MuJoCo against our forward kinematics (the
+# base placement included), m: rounding of a few chained transforms.
+POSITION_TOL = 1e-12
 STATES = 1000
 GRAVITY = [1.3, -0.8, -9.7]
 BASE_RPY = [0.2, -0.15, 0.4]
+# Where the base sits (torques do not depend on it; the MJCF must carry it).
+BASE_XYZ = [0.3, -0.2, 0.5]
 SEED = 20261121
 
 
@@ -128,6 +135,7 @@ def check(name, urdf, ours_bin, work, rng):
             "settings": {
                 "gravity": GRAVITY,
                 "base_rpy": BASE_RPY,
+                "base_xyz": BASE_XYZ,
                 "columns": {"viscous": columns, "coulomb": False, "offset": False, "armature": columns},
             },
             "q": q.tolist(),
@@ -219,17 +227,26 @@ def check_mujoco(name, order, q, qd, qdd, ours_for, work, rng):
     data = mujoco.MjData(model)
     qadr = [model.joint(j).qposadr[0] for j in order]
     vadr = [model.joint(j).dofadr[0] for j in order]
-    err = 0.0
+    links = ours_for(q[:1], qd[:1], qdd[:1])["parameter_names"]
+    bodies = [model.body(p.split(".")[0]).id for p in links[: 10 * n : 10]]
+    err = pos_err = 0.0
     for s in range(len(q)):
         data.qpos[qadr] = q[s]
         data.qvel[vadr] = qd[s]
         data.qacc[vadr] = qdd[s]
         mujoco.mj_inverse(model, data)
         err = max(err, np.max(np.abs(data.qfrc_inverse[vadr] - np.array(ours["tau"][s]))))
-    print(f"{name}: MuJoCo {mujoco.__version__} inverse dynamics of our MJCF, {len(q)} states | max |τ − mj_inverse| {err:.2e} N·m")
+        pos_err = max(pos_err, np.max(np.abs(data.xpos[bodies] - np.array(ours["positions"][s]))))
+    print(
+        f"{name}: MuJoCo {mujoco.__version__} on our MJCF, {len(q)} states | max |τ − mj_inverse| {err:.2e} N·m | "
+        f"max |body position − ours| {pos_err:.2e} m"
+    )
+    failures = []
     if err > MUJOCO_TOL:
-        return [f"{name}: MuJoCo's inverse dynamics of our MJCF differs by {err:.3e} N·m"]
-    return []
+        failures.append(f"{name}: MuJoCo's inverse dynamics of our MJCF differs by {err:.3e} N·m")
+    if pos_err > POSITION_TOL:
+        failures.append(f"{name}: MuJoCo's body positions of our MJCF differ by {pos_err:.3e} m")
+    return failures
 
 
 def main():

@@ -11,7 +11,8 @@
 //! model's joint order, which `OUT.json` names). `OUT.json`:
 //! `joint_names`, `parameter_names`, `parameters` (the URDF's), per state
 //! `tau` (RNEA) and `regressor` (row-major `dof × parameters`), and
-//! `base_parameters` (their count on the stacked regressor of all states).
+//! `base_parameters` (their count on the stacked regressor of all states)
+//! and `positions` (every body frame's origin in the world, per state).
 //! Optional in `IN.json`: `joint_values`, the values of the joint columns
 //! (viscous, Coulomb, offset, armature as the settings enable them, in the
 //! parameter order) used with the URDF's inertials, and `mjcf`, a new path
@@ -47,6 +48,8 @@ struct Output {
     tau: Vec<Vec<f64>>,
     regressor: Vec<Vec<f64>>,
     base_parameters: usize,
+    /// Every body frame's origin in the world, per state (joint order).
+    positions: Vec<Vec<[f64; 3]>>,
 }
 
 fn main() -> Result<(), Box<dyn Error>> {
@@ -85,11 +88,13 @@ fn main() -> Result<(), Box<dyn Error>> {
         return Err("q, q_dot and q_ddot need the same number of states".into());
     }
     let mut tau = Vec::with_capacity(states);
+    let mut positions = Vec::with_capacity(states);
     let mut regressor = Vec::with_capacity(states);
     let mut stacked = faer::Mat::<f64>::zeros(n * states, cols);
     for s in 0..states {
         let (q, qd, qdd) = (&input.q[s], &input.q_dot[s], &input.q_ddot[s]);
         tau.push(model.inverse_dynamics(&params, q, qd, qdd)?);
+        positions.push(model.body_poses(q)?.iter().map(|p| p.translation).collect());
         let y = model.regressor(q, qd, qdd)?;
         let mut rows = vec![0.0; n * cols];
         for j in 0..n {
@@ -112,6 +117,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         tau,
         regressor,
         base_parameters: base.n_base(),
+        positions,
     };
     // Atomically: a temporary file beside the output, then a rename.
     let tmp = out.with_extension("json.partial");

@@ -14,8 +14,8 @@ impl UrdfModel {
     /// `<inertial>` at the centre of mass (`fullinertia` about it, in the
     /// body's axes) and, where the model has the columns, `armature` (the
     /// rotor inertia `Ia`) and `damping` (the viscous `Fv`). The base sits
-    /// in the world turned by the settings' `base_rpy`; gravity is the
-    /// settings'. MuJoCo has no smooth Coulomb law nor a constant joint
+    /// in the world at the settings' `base_xyz`, turned by `base_rpy`;
+    /// gravity is the settings'. MuJoCo has no smooth Coulomb law nor a constant joint
     /// torque: their values are listed in a comment, not simulated.
     /// Refused: a wrong parameter count and a body that is not physical
     /// (mass ≤ 0, a central inertia that is not positive semidefinite,
@@ -91,10 +91,11 @@ impl UrdfModel {
         }
         let _ = writeln!(s, "  <worldbody>");
         let base = quat_of(&crate::spatial::rpy_matrix(self.settings().base_rpy));
+        let at = self.settings().base_xyz;
         let _ = writeln!(
             s,
-            "    <body name=\"base\" quat=\"{} {} {} {}\">",
-            base[0], base[1], base[2], base[3]
+            "    <body name=\"base\" pos=\"{} {} {}\" quat=\"{} {} {} {}\">",
+            at[0], at[1], at[2], base[0], base[1], base[2], base[3]
         );
         for j in (0..n).filter(|&j| self.joints()[j].parent.is_none()) {
             self.body_xml(j, &bodies, 3, &mut s);
