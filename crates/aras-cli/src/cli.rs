@@ -487,6 +487,13 @@ pub struct IdentifyArgs {
     /// sensor_msgs/msg/JointState.
     #[arg(long, value_name = "LOG.csv|BAG.mcap")]
     pub data: PathBuf,
+    /// A serial or tree robot from its URDF (docs/urdf.md), identified in
+    /// place of ARAS-Diamond: writes params.json (`aras-urdf-params/1`),
+    /// robot_identified.urdf (its inertials identified, every other byte
+    /// kept) and robot.xml (MJCF). The log holds one angle and torque
+    /// column per movable joint, in the URDF's joint order.
+    #[arg(long, value_name = "R.urdf")]
+    pub urdf: Option<PathBuf>,
     /// The log's period and sidecar.
     #[command(flatten)]
     pub log: LogArgs,

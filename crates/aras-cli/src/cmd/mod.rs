@@ -8,6 +8,7 @@ pub mod fit;
 pub mod friction;
 pub mod identify;
 pub mod identify_streaming;
+pub mod identify_urdf;
 pub mod pipeline;
 pub mod predict;
 pub mod simulate;
