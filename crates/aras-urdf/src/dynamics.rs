@@ -330,21 +330,7 @@ impl UrdfModel {
         tau: &mut [T],
     ) -> Result<(), UrdfError> {
         self.check_state(q, qd, qdd, ("torques", self.dof(), tau.len()))?;
-        let np = self.parameter_count();
-        if params.len() != np {
-            return Err(UrdfError::Dimension {
-                what: "parameters",
-                expected: np,
-                found: params.len(),
-            });
-        }
-        if let Some((index, x)) = params.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-            return Err(UrdfError::NonFinite {
-                what: "parameters",
-                index,
-                value: *x,
-            });
-        }
+        self.check_parameters(params)?;
         self.rnea_unchecked(ws, params, q, qd, qdd, tau, true);
         Ok(())
     }
@@ -392,6 +378,27 @@ impl UrdfModel {
             }
         }
         self.joint_columns_into(qd, qdd, |c, j, v| tau[j] += v * params[c]);
+    }
+
+    /// A standard parameter vector of this model's length, every entry
+    /// finite.
+    pub(crate) fn check_parameters(&self, params: &[f64]) -> Result<(), UrdfError> {
+        let np = self.parameter_count();
+        if params.len() != np {
+            return Err(UrdfError::Dimension {
+                what: "parameters",
+                expected: np,
+                found: params.len(),
+            });
+        }
+        if let Some((index, x)) = params.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return Err(UrdfError::NonFinite {
+                what: "parameters",
+                index,
+                value: *x,
+            });
+        }
+        Ok(())
     }
 
     /// The joint-space mass matrix `M(q)` (row-major, `dof × dof`, armature

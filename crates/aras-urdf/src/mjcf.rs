@@ -21,14 +21,7 @@ impl UrdfModel {
     /// (mass ≤ 0, a central inertia that is not positive semidefinite,
     /// negative armature or damping).
     pub fn to_mjcf(&self, params: &[f64]) -> Result<String, UrdfError> {
-        let np = self.parameter_count();
-        if params.len() != np {
-            return Err(UrdfError::Dimension {
-                what: "parameters",
-                expected: np,
-                found: params.len(),
-            });
-        }
+        self.check_parameters(params)?;
         let n = self.dof();
         let names = self.parameter_names();
         let joint_value = |j: usize, kind: &str| -> Option<f64> {

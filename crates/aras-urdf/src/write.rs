@@ -26,14 +26,7 @@ impl UrdfModel {
         file: &str,
         params: &[f64],
     ) -> Result<String, UrdfError> {
-        let np = self.parameter_count();
-        if params.len() != np {
-            return Err(UrdfError::Dimension {
-                what: "parameters",
-                expected: np,
-                found: params.len(),
-            });
-        }
+        self.check_parameters(params)?;
         let again = UrdfModel::from_urdf_str(source, file, self.settings().clone())?;
         let same = again.joints().len() == self.joints().len()
             && again

@@ -2,49 +2,17 @@
 //! joint and velocity limits: feasible, and far better conditioned than
 //! random feasible trajectories.
 
+mod common;
+
 use aras_excite::{DesignSettings, assess, base_projection, design, random_feasible};
-use aras_ident::{BaseParameters, LinearModel};
-use aras_urdf::{CoulombWidth, JointColumns, ModelSettings, UrdfModel};
+use aras_ident::BaseParameters;
+use aras_urdf::{ModelSettings, UrdfModel};
+use common::{ALL, PANDA, panda};
 
-const PANDA: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../fixtures/urdf/panda_arm.urdf"
-);
-
-/// The Panda's base parameters (every joint column) from the regressor at
-/// 600 quasi-random states.
-fn panda() -> (UrdfModel, BaseParameters) {
-    let settings = ModelSettings {
-        columns: JointColumns {
-            viscous: true,
-            coulomb: true,
-            offset: true,
-            armature: true,
-        },
-        coulomb_width: CoulombWidth::Uniform(0.02),
-        ..ModelSettings::default()
-    };
-    let model = UrdfModel::from_file(PANDA, settings).unwrap();
-    let (n, cols, states) = (model.dof(), model.columns(), 600);
-    let mut u = 0.5f64;
-    let mut next = move || {
-        u = (u + 0.618_033_988_749_895) % 1.0;
-        2.0 * u - 1.0
-    };
-    let mut w = faer::Mat::<f64>::zeros(n * states, cols);
-    let mut y = vec![0.0; n * cols];
-    for s in 0..states {
-        let q: Vec<f64> = (0..n).map(|_| 2.5 * next()).collect();
-        let v: Vec<f64> = (0..n).map(|_| 2.0 * next()).collect();
-        let a: Vec<f64> = (0..n).map(|_| 8.0 * next()).collect();
-        model.fill(&q, &v, &a, &mut y).unwrap();
-        for j in 0..n {
-            for c in 0..cols {
-                w[(j * states + s, c)] = y[n * c + j];
-            }
-        }
-    }
-    let base = BaseParameters::from_regressor(w.as_ref(), &model.names(), 1e-8).unwrap();
+/// The Panda (every joint column) and its base parameters.
+fn panda_and_base() -> (UrdfModel, BaseParameters) {
+    let model = panda(ALL, [0.0, 0.0, -9.81]);
+    let base = model.base_parameters(600).unwrap();
     (model, base)
 }
 
@@ -55,7 +23,7 @@ fn panda() -> (UrdfModel, BaseParameters) {
 /// design's.
 #[test]
 fn the_panda_excitation_is_feasible_and_well_conditioned() {
-    let (model, base) = panda();
+    let (model, base) = panda_and_base();
     let projection = base_projection(&base);
     let limits = model.excitation_limits(0.1, 10.0).unwrap();
     let settings = DesignSettings {

@@ -5,36 +5,11 @@
 mod common;
 
 use aras_ident::{BaseParameters, LinearModel, ReducedLs};
-use aras_urdf::{CoulombWidth, JointColumns, ModelSettings, UrdfModel};
-
-const PANDA: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../fixtures/urdf/panda_arm.urdf"
-);
-
-/// A fixed additive-recurrence sequence in [−1, 1).
-fn sequence() -> impl FnMut() -> f64 {
-    let mut u = 0.5f64;
-    move || {
-        u = (u + 0.618_033_988_749_895) % 1.0;
-        2.0 * u - 1.0
-    }
-}
+use common::{ALL, panda, sequence};
 
 #[test]
 fn panda_base_parameters_are_recovered_by_ols() {
-    let settings = ModelSettings {
-        gravity: [0.4, -0.3, -9.8],
-        columns: JointColumns {
-            viscous: true,
-            coulomb: true,
-            offset: true,
-            armature: true,
-        },
-        coulomb_width: CoulombWidth::Uniform(0.02),
-        ..ModelSettings::default()
-    };
-    let model = UrdfModel::from_file(PANDA, settings).unwrap();
+    let model = panda(ALL, [0.4, -0.3, -9.8]);
     assert_eq!(model.dof(), 7);
     let (n, cols) = (model.dof(), model.columns());
     assert_eq!(cols, 7 * 14);

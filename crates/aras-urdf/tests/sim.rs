@@ -3,43 +3,14 @@
 //! simulated Panda log recover the base parameters within their σ and
 //! predict another trajectory to its noise ceiling.
 
+mod common;
+
 use aras_excite::FourierTrajectory;
-use aras_ident::{BaseParameters, ConsistentLs, LinearModel, LinkLayout, ReducedLs};
+use aras_ident::{ConsistentLs, LinearModel, LinkLayout, ReducedLs};
 use aras_urdf::sim::{ArmController, ArmSensors, ArmSimulation, simulate};
-use aras_urdf::{CoulombWidth, JointColumns, ModelSettings, UrdfModel, Workspace};
+use aras_urdf::{JointColumns, UrdfModel, Workspace};
+use common::{ALL, panda, sequence};
 use nalgebra::Dyn;
-
-const PANDA: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../../fixtures/urdf/panda_arm.urdf"
-);
-
-/// A fixed additive-recurrence sequence in [−1, 1).
-fn sequence() -> impl FnMut() -> f64 {
-    let mut u = 0.5f64;
-    move || {
-        u = (u + 0.618_033_988_749_895) % 1.0;
-        2.0 * u - 1.0
-    }
-}
-
-/// The Panda with every joint column, tilted gravity.
-fn panda(columns: JointColumns, gravity: [f64; 3]) -> UrdfModel {
-    let settings = ModelSettings {
-        gravity,
-        columns,
-        coulomb_width: CoulombWidth::Uniform(0.02),
-        ..ModelSettings::default()
-    };
-    UrdfModel::from_file(PANDA, settings).unwrap()
-}
-
-const ALL: JointColumns = JointColumns {
-    viscous: true,
-    coulomb: true,
-    offset: true,
-    armature: true,
-};
 
 /// The URDF's inertials with friction, offset and armature of their usual
 /// sizes.
@@ -244,25 +215,11 @@ fn ols_on_a_simulated_panda_log_recovers_the_base_parameters() {
     assert!(read.t == log.t && read.theta == log.q && read.tau == log.tau);
     assert!(read.theta_dot.as_ref() == Some(&log.qd));
 
-    // Base parameters from the regressor at random states, then OLS on
-    // every fifth row of the log.
+    // Base parameters at quasi-random states, then OLS on every fifth row
+    // of the log.
     let cols = model.columns();
-    let mut next = sequence();
-    let states = 600;
-    let mut w = faer::Mat::<f64>::zeros(n * states, cols);
     let mut y = vec![0.0; n * cols];
-    for s in 0..states {
-        let q: Vec<f64> = (0..n).map(|_| 2.5 * next()).collect();
-        let v: Vec<f64> = (0..n).map(|_| 2.0 * next()).collect();
-        let acc: Vec<f64> = (0..n).map(|_| 8.0 * next()).collect();
-        model.fill(&q, &v, &acc, &mut y).unwrap();
-        for j in 0..n {
-            for c in 0..cols {
-                w[(j * states + s, c)] = y[n * c + j];
-            }
-        }
-    }
-    let base = BaseParameters::from_regressor(w.as_ref(), &model.names(), 1e-8).unwrap();
+    let base = model.base_parameters(600).unwrap();
     let used: Vec<usize> = (0..rows).step_by(5).collect();
     let m = used.len();
     let mut w = faer::Mat::<f64>::zeros(n * m, cols);

@@ -3,7 +3,43 @@
 
 #![allow(dead_code)]
 
+use aras_urdf::{CoulombWidth, JointColumns, ModelSettings, UrdfModel};
 use proptest::prelude::*;
+
+/// The Panda fixture (its hand and fingers fixed to link 7).
+pub const PANDA: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../fixtures/urdf/panda_arm.urdf"
+);
+
+/// Every joint column: viscous, Coulomb, offset, armature.
+pub const ALL: JointColumns = JointColumns {
+    viscous: true,
+    coulomb: true,
+    offset: true,
+    armature: true,
+};
+
+/// The Panda with joint `columns`, gravity `gravity` and a 0.02 rad/s
+/// Coulomb width.
+pub fn panda(columns: JointColumns, gravity: [f64; 3]) -> UrdfModel {
+    let settings = ModelSettings {
+        gravity,
+        columns,
+        coulomb_width: CoulombWidth::Uniform(0.02),
+        ..ModelSettings::default()
+    };
+    UrdfModel::from_file(PANDA, settings).unwrap()
+}
+
+/// A fixed additive-recurrence sequence in [−1, 1).
+pub fn sequence() -> impl FnMut() -> f64 {
+    let mut u = 0.5f64;
+    move || {
+        u = (u + 0.618_033_988_749_895) % 1.0;
+        2.0 * u - 1.0
+    }
+}
 
 /// One link's inertial: mass, centre of mass, the inertial frame's rpy and
 /// the second moments of its mass distribution along the frame's axes
