@@ -40,15 +40,15 @@ import numpy as np
 import pinocchio as pin
 
 # Both sides evaluate the same rigid-body dynamics in double precision; the
-# torques are O(10–100) N·m, so rounding differences are near 1e-12 N·m.
-# The bound:
+# torques are O(10–100) N·m, so rounding differences are near 1e-12 N·m;
+# the acceptance bound (docs/urdf.md):
 TAU_TOL = 1e-9
 # Dynamic parameters: the same inertials merged by the same formulas.
 PARAM_TOL = 1e-12
 # Rank: singular values of the column-scaled stacked regressor below this
 # fraction of the largest count as zero (aras-ident's default 1e-8).
 RANK_TOL = 1e-8
-# MuJoCo's inverse dynamics of our MJCF: the bound (the text's
+# MuJoCo's inverse dynamics of our MJCF: the acceptance bound (the text's
 # shortest round-trip numbers carry every bit, so the agreement is near
 # rounding).
 MUJOCO_TOL = 1e-6
