@@ -17,6 +17,41 @@ const PANDA: &str = concat!(
 fn a_panda_log_is_identified_from_its_urdf() {
     let dir = aras_testkit::Scratch::new("identify-urdf");
     let model = UrdfModel::from_file(PANDA, ModelSettings::default()).unwrap();
+    // The simulated robot's Coulomb law is smooth (0.02 rad/s, the
+    // command's model); a sign law is refused by the simulator.
+    let plant = UrdfModel::from_file(
+        PANDA,
+        ModelSettings {
+            coulomb_width: aras_urdf::CoulombWidth::Uniform(0.02),
+            ..ModelSettings::default()
+        },
+    )
+    .unwrap();
+    assert!(
+        simulate(
+            &model,
+            &model.urdf_parameters(),
+            &FourierTrajectory::<Dyn>::new(
+                1.0,
+                vec![0.0; 7],
+                vec![vec![0.0]; 7],
+                vec![vec![0.0]; 7]
+            )
+            .unwrap(),
+            &ArmSimulation::new(
+                ArmController {
+                    kp: vec![0.0; 7],
+                    kd: vec![0.0; 7],
+                    velocity_cutoff_hz: 30.0,
+                    feedforward: None
+                },
+                ArmSensors::uniform(7)
+            )
+        )
+        .unwrap_err()
+        .to_string()
+        .contains("coulomb_width")
+    );
     let n = model.dof();
     // The truth: the URDF's inertials with viscous, Coulomb and armature
     // (the default joint columns, in that order per joint).
@@ -39,13 +74,13 @@ fn a_panda_log_is_identified_from_its_urdf() {
     }
     let trajectory =
         FourierTrajectory::<Dyn>::new(std::f64::consts::TAU / 10.0, offset.clone(), a, b).unwrap();
-    let mut controller = ArmController::for_model(&model, &p, &offset, 10.0).unwrap();
+    let mut controller = ArmController::for_model(&plant, &p, &offset, 10.0).unwrap();
     controller.feedforward = Some(model.urdf_parameters());
     let sim = ArmSimulation {
         duration_s: 30.0,
         ..ArmSimulation::new(controller, ArmSensors::uniform(n))
     };
-    let log = simulate(&model, &p, &trajectory, &sim).unwrap();
+    let log = simulate(&plant, &p, &trajectory, &sim).unwrap();
     std::fs::write(dir.join("panda.csv"), log.to_csv(false)).unwrap();
 
     let out = dir.join("out");

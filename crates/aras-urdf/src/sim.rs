@@ -280,7 +280,9 @@ impl ArmTrajectory for aras_excite::FourierTrajectory<nalgebra::Dyn> {
 }
 
 /// Simulates `model` with standard parameters `truth` tracking
-/// `trajectory` (see the module docs). The robot starts on the trajectory
+/// `trajectory` (see the module docs). A model whose Coulomb column is the
+/// sign of the rate (width 0) is refused: RK4 cannot integrate through its
+/// jump at a reversal. The robot starts on the trajectory
 /// `lead_in_s` before its time 0; row `k` holds `t_k = k / rate`, the
 /// quantised (and exact) positions at `t_k`, the torque commanded at `t_k` (held until
 /// `t_{k+1}`) with and without noise, and the exact `q̇`, `q̈` at `t_k`.
@@ -292,6 +294,22 @@ pub fn simulate(
 ) -> Result<ArmLog, UrdfError> {
     let n = model.dof();
     sim.validate(n)?;
+    if model.joint_columns().coulomb {
+        let widths = match &model.settings().coulomb_width {
+            crate::CoulombWidth::Uniform(w) => vec![*w; n],
+            crate::CoulombWidth::PerJoint(w) => w.clone(),
+        };
+        if widths.iter().any(|w| w.is_nan() || *w <= 0.0) {
+            return Err(UrdfError::Setting {
+                name: "coulomb_width".into(),
+                problem: "the simulated robot's Coulomb law is the sign of the rate (width 0), \
+                          which the integration cannot follow through a reversal (the joint \
+                          chatters and the tracking breaks down); simulate a model with a \
+                          smooth law, e.g. CoulombWidth::Uniform(0.02) rad/s"
+                    .into(),
+            });
+        }
+    }
     if truth.len() != model.parameter_count() {
         return Err(UrdfError::Dimension {
             what: "truth parameters",

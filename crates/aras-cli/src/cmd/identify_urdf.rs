@@ -26,6 +26,20 @@ struct UrdfParams<'a> {
     identification: &'a UrdfIdentification,
 }
 
+/// The model `identify --urdf` fits: the library's defaults (gravity
+/// −9.81 m/s² along the root's `z`; viscous, Coulomb and armature per
+/// joint) with the Coulomb law smoothed as `tanh(q̇ / 0.02 rad/s)`, the
+/// sign law's jump at a reversal being what no drive shows.
+pub fn model_settings() -> ModelSettings {
+    ModelSettings {
+        coulomb_width: aras_urdf::CoulombWidth::Uniform(COULOMB_WIDTH),
+        ..ModelSettings::default()
+    }
+}
+
+/// The Coulomb width of [`model_settings`], rad/s (m/s).
+pub const COULOMB_WIDTH: f64 = 0.02;
+
 /// Runs `identify --urdf`.
 pub fn run(args: &IdentifyArgs, urdf: &Path) -> Result<()> {
     if !args.effects.is_empty() {
@@ -37,7 +51,7 @@ pub fn run(args: &IdentifyArgs, urdf: &Path) -> Result<()> {
     let text = std::fs::read_to_string(urdf)
         .with_context(|| format!("cannot read the URDF {}", urdf.display()))?;
     let file = urdf.display().to_string();
-    let model = UrdfModel::from_urdf_str(&text, &file, ModelSettings::default())?;
+    let model = UrdfModel::from_urdf_str(&text, &file, model_settings())?;
     let inputs: Vec<PathBuf> = [args.data.clone(), urdf.to_path_buf()]
         .into_iter()
         .chain(args.common.config.iter().cloned())
