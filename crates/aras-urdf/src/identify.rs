@@ -95,7 +95,6 @@ impl UrdfModel {
     /// quasi-random states: positions inside the URDF's limits (±π where it
     /// gives none), rates within ±2 and accelerations within ±8 per second.
     pub fn base_parameters(&self, states: usize) -> Result<BaseParameters, IdentifyError> {
-        let (n, cols) = (self.dof(), self.columns());
         let mut u = 0.5f64;
         let mut next = move || {
             u = (u + 0.618_033_988_749_895) % 1.0;
@@ -112,19 +111,13 @@ impl UrdfModel {
                 None => (-std::f64::consts::PI, std::f64::consts::PI),
             })
             .collect();
-        let mut w = faer::Mat::<f64>::zeros(n * states, cols);
-        let mut y = vec![0.0; n * cols];
-        for s in 0..states {
-            let q: Vec<f64> = range.iter().map(|(a, b)| a + (b - a) * next()).collect();
-            let v: Vec<f64> = (0..n).map(|_| 4.0 * next() - 2.0).collect();
-            let acc: Vec<f64> = (0..n).map(|_| 16.0 * next() - 8.0).collect();
-            self.fill(&q, &v, &acc, &mut y)?;
-            for j in 0..n {
-                for c in 0..cols {
-                    w[(j * states + s, c)] = y[n * c + j];
-                }
+        let w = stacked(self, states, |_, q, v, a| {
+            for (x, (lo, hi)) in q.iter_mut().zip(&range) {
+                *x = lo + (hi - lo) * next();
             }
-        }
+            v.iter_mut().for_each(|x| *x = 4.0 * next() - 2.0);
+            a.iter_mut().for_each(|x| *x = 16.0 * next() - 8.0);
+        })?;
         Ok(BaseParameters::from_regressor(
             w.as_ref(),
             &self.names(),
@@ -168,24 +161,14 @@ pub fn identify(
     let s = &processed.samples;
     let base = model.base_parameters(settings.base_states)?;
     let (m, cols) = (s.len(), model.columns());
-    let mut w = faer::Mat::<f64>::zeros(n * m, cols);
-    let mut tau = vec![0.0; n * m];
-    let mut y = vec![0.0; n * cols];
-    let (mut q, mut v, mut a) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    for r in 0..m {
+    let w = stacked(model, m, |r, q, v, a| {
         for j in 0..n {
             q[j] = s.x[j][r];
             v[j] = s.x_dot[j][r];
             a[j] = s.x_ddot[j][r];
         }
-        model.fill(&q, &v, &a, &mut y)?;
-        for j in 0..n {
-            for c in 0..cols {
-                w[(j * m + r, c)] = y[n * c + j];
-            }
-            tau[j * m + r] = s.tau[j][r];
-        }
-    }
+    })?;
+    let tau = s.tau.concat();
     let wb = base.base_regressor(w.as_ref())?;
     let reduced = ReducedLs::new(wb.as_ref(), &tau, &base.base_names())?;
     let ols = reduced.ols()?;
@@ -230,4 +213,27 @@ pub fn identify(
         standard: sdp.standard,
         fitness,
     })
+}
+
+/// The regressor of `model` stacked over `rows` states, joint 1's rows
+/// first, then joint 2's, …; `state(r, q, q̇, q̈)` writes state `r`.
+fn stacked(
+    model: &UrdfModel,
+    rows: usize,
+    mut state: impl FnMut(usize, &mut [f64], &mut [f64], &mut [f64]),
+) -> Result<faer::Mat<f64>, IdentifyError> {
+    let (n, cols) = (model.dof(), model.columns());
+    let mut w = faer::Mat::<f64>::zeros(n * rows, cols);
+    let mut y = vec![0.0; n * cols];
+    let (mut q, mut v, mut a) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    for r in 0..rows {
+        state(r, &mut q, &mut v, &mut a);
+        model.fill(&q, &v, &a, &mut y)?;
+        for j in 0..n {
+            for c in 0..cols {
+                w[(j * rows + r, c)] = y[n * c + j];
+            }
+        }
+    }
+    Ok(w)
 }
