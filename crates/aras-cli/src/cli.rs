@@ -144,6 +144,11 @@ pub struct FrictionPredictArgs {
 /// `aras diagnose`.
 #[derive(Debug, Args)]
 pub struct DiagnoseArgs {
+    /// A serial or tree robot from its URDF (docs/urdf.md) in place of
+    /// ARAS-Diamond: its candidates are Stribeck friction, an
+    /// offset and a spring per joint, and a torque delay (docs/urdf.md, Diagnose).
+    #[arg(long, value_name = "R.urdf")]
+    pub urdf: Option<PathBuf>,
     /// The training log (docs/log-format.md), e.g. the designed excitation.
     #[arg(long, value_name = "TRAIN.csv")]
     pub data: PathBuf,
@@ -449,6 +454,11 @@ pub struct PipelineArgs {
 /// `aras excite`.
 #[derive(Debug, Args)]
 pub struct ExciteArgs {
+    /// A serial or tree robot from its URDF (docs/urdf.md) in place of
+    /// ARAS-Diamond: designed within its joint position and velocity
+    /// limits (10 % margin, 10 rad/s², 10 s period, 5 harmonics).
+    #[arg(long, value_name = "R.urdf")]
+    pub urdf: Option<PathBuf>,
     /// Output trajectory file.
     #[arg(long, default_value = "trajectory.json", value_name = "FILE")]
     pub out: PathBuf,
@@ -463,6 +473,19 @@ pub struct ExciteArgs {
 /// `aras simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
+    /// A serial or tree robot from its URDF (docs/urdf.md) in place of
+    /// ARAS-Diamond: its URDF inertials with typical drives
+    /// (docs/urdf.md, Simulator) tracking --trajectory under PD control at 1 kHz.
+    #[arg(long, value_name = "R.urdf")]
+    pub urdf: Option<PathBuf>,
+    /// With --urdf: recorded seconds (default 60).
+    #[arg(long, value_name = "S", value_parser = positive, allow_hyphen_values = true, requires = "urdf")]
+    pub duration: Option<f64>,
+    /// With --urdf: an effect the simulated robot has and the model lacks,
+    /// `stribeck:J:LEVEL:V_S` (N·m above Coulomb, rad/s) or
+    /// `cubic_spring:J:K3[:Q0]` on joint J (1-based); repeat for several.
+    #[arg(long, value_name = "EFFECT", requires = "urdf")]
+    pub hidden: Vec<String>,
     /// Trajectory file from `aras excite` (periodic: `simulation.periods` periods).
     #[arg(long, value_name = "FILE", conflicts_with = "frequency")]
     pub trajectory: Option<PathBuf>,
@@ -548,6 +571,15 @@ pub enum AccumulationArg {
 /// `aras validate`.
 #[derive(Debug, Args)]
 pub struct ValidateArgs {
+    /// A serial or tree robot from its URDF (docs/urdf.md) in place of
+    /// ARAS-Diamond: --params (its `identify --urdf` params.json)
+    /// predicts each --data log, scored with (78) against its raw torques on
+    /// every row.
+    #[arg(long, value_name = "R.urdf")]
+    pub urdf: Option<PathBuf>,
+    /// With --urdf: a validation log (repeat for several).
+    #[arg(long, value_name = "VAL.csv", requires = "urdf")]
+    pub data: Vec<PathBuf>,
     /// Parameter file to validate (e.g. params.json from identify).
     #[arg(long, value_name = "P.json")]
     pub params: PathBuf,
@@ -562,6 +594,11 @@ pub struct ValidateArgs {
 /// `aras predict`.
 #[derive(Debug, Args)]
 pub struct PredictArgs {
+    /// A serial or tree robot from its URDF (docs/urdf.md) in place of
+    /// ARAS-Diamond: --params is its `identify --urdf` params.json,
+    /// and PRED.csv has one torque column per joint.
+    #[arg(long, value_name = "R.urdf")]
+    pub urdf: Option<PathBuf>,
     /// Parameter file.
     #[arg(long, value_name = "P.json")]
     pub params: PathBuf,

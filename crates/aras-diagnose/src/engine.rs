@@ -61,6 +61,12 @@ pub trait Candidate: Clone + PartialEq + std::fmt::Debug + Serialize + Send + Sy
     /// The candidate with its setting replaced by `value` (unchanged if it
     /// has none).
     fn with_setting(&self, value: f64) -> Self;
+    /// The joints (0-based) whose torques the candidate acts on, whose
+    /// validation gains judge it (default `None`: every joint, e.g. an
+    /// effect with a parameter per joint, or a torque shift).
+    fn joints(&self) -> Option<Vec<usize>> {
+        None
+    }
 }
 
 /// The robot as the diagnosis sees it: the starting model's base regressor
@@ -207,7 +213,7 @@ pub struct EngineOptions {
     /// over the candidate settings of the round.
     pub alpha: f64,
     /// Smallest validation fitness gain (percentage points of (78),
-    /// averaged over the joints) a candidate must bring on **every**
+    /// averaged over the joints it acts on, [`Candidate::joints`]) a candidate must bring on **every**
     /// validation set to be added (default 0.1): a statistically real but
     /// practically invisible effect is not worth parameters, and a gain on
     /// one motion only is more likely an accident of that motion than a
@@ -557,11 +563,17 @@ fn candidate_layout<C: Candidate>(
     let specs = cands
         .iter()
         .enumerate()
-        .map(|(k, c)| match c.torque_shift() {
-            None => {
-                CandidateSpec::columns(label(k, c), c.parameter_names().len()).in_family(c.id())
+        .map(|(k, c)| {
+            let spec = match c.torque_shift() {
+                None => {
+                    CandidateSpec::columns(label(k, c), c.parameter_names().len()).in_family(c.id())
+                }
+                Some(_) => CandidateSpec::target(label(k, c)).in_family(c.id()),
+            };
+            match c.joints() {
+                Some(j) => spec.on_groups(j),
+                None => spec,
             }
-            Some(_) => CandidateSpec::target(label(k, c)).in_family(c.id()),
         })
         .collect();
     let layout = Layout::new(n_base, specs, joints)?;

@@ -4,7 +4,9 @@
 
 use aras_ident::{BaseParameters, ConsistentLs, IdentError, LinearModel, LinkLayout, ReducedLs};
 use aras_log::Log;
-use aras_signal::{Bandwidth, JointCoordinates, PeriodSource, ProcessError, ProcessOptions};
+use aras_signal::{
+    Bandwidth, JointCoordinates, OutputRows, PeriodSource, ProcessError, ProcessOptions,
+};
 use serde::Serialize;
 
 use crate::{UrdfError, UrdfModel};
@@ -21,6 +23,9 @@ pub enum IdentifyError {
     /// The least squares or the SDP.
     #[error(transparent)]
     Ident(#[from] IdentError),
+    /// The excitation design.
+    #[error(transparent)]
+    Excite(#[from] aras_excite::ExciteError),
     /// The log's joints are not the model's.
     #[error(
         "{log}: {found} joints logged, the URDF has {expected} ({names}); log every joint in the model's order"
@@ -85,8 +90,8 @@ pub struct UrdfIdentification {
     pub status: aras_ident::SolverStatus,
     /// Smallest eigenvalue of each body's pseudo-inertia, in joint order.
     pub min_eigenvalues: Vec<f64>,
-    /// Fitness (78) per joint of the consistent parameters on the processed
-    /// samples, %.
+    /// Fitness (78) per joint of the consistent parameters against the
+    /// log's raw torques on every row the processing covers, %.
     pub fitness: Vec<f64>,
 }
 
@@ -138,36 +143,11 @@ pub fn identify(
     log: &Log,
     settings: &IdentifySettings,
 ) -> Result<UrdfIdentification, IdentifyError> {
-    let n = model.dof();
-    if log.joints() != n {
-        return Err(IdentifyError::Joints {
-            log: log.name.clone(),
-            found: log.joints(),
-            expected: n,
-            names: model.joint_names().join(", "),
-        });
-    }
-    let processed = aras_signal::process_in::<nalgebra::Dyn>(
-        log,
-        &ProcessOptions {
-            filter: Bandwidth::Auto,
-            period: settings
-                .period
-                .map_or(PeriodSource::FromSidecar, PeriodSource::Seconds),
-            ..ProcessOptions::default()
-        },
-        &JointCoordinates,
-    )?;
+    let processed = process(model, log, settings.period, OutputRows::Averaged, false)?;
     let s = &processed.samples;
     let base = model.base_parameters(settings.base_states)?;
-    let (m, cols) = (s.len(), model.columns());
-    let w = stacked(model, m, |r, q, v, a| {
-        for j in 0..n {
-            q[j] = s.x[j][r];
-            v[j] = s.x_dot[j][r];
-            a[j] = s.x_ddot[j][r];
-        }
-    })?;
+    let m = s.len();
+    let w = model.regressor_on(s)?;
     let tau = s.tau.concat();
     let wb = base.base_regressor(w.as_ref())?;
     let reduced = ReducedLs::new(wb.as_ref(), &tau, &base.base_names())?;
@@ -191,15 +171,7 @@ pub fn identify(
         .collect();
     problem.nonnegative(&signed)?;
     let sdp = problem.solve(&base, &reduced)?;
-    let fitness = (0..n)
-        .map(|j| {
-            let mut pred = vec![0.0; m];
-            for (r, p) in pred.iter_mut().enumerate() {
-                *p = (0..cols).map(|c| w[(j * m + r, c)] * sdp.standard[c]).sum();
-            }
-            aras_ident::validate::fitness(&s.tau[j], &pred)
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let fitness = log_fitness(&processed, &w, &sdp.standard)?.fitness;
     Ok(UrdfIdentification {
         samples: m,
         bandwidth: processed.summary.bandwidth.reason.clone(),
@@ -215,13 +187,110 @@ pub fn identify(
     })
 }
 
+/// `log` processed in joint coordinates as every URDF recipe does: the
+/// data-chosen bandwidth, period averaging with `period` (`None`: the
+/// sidecar's, else detected), `rows` returned, the log's derivative columns
+/// used as given when `logged_derivatives` and present.
+pub(crate) fn process(
+    model: &UrdfModel,
+    log: &Log,
+    period: Option<f64>,
+    rows: OutputRows,
+    logged_derivatives: bool,
+) -> Result<aras_signal::Processed, IdentifyError> {
+    let n = model.dof();
+    if log.joints() != n {
+        return Err(IdentifyError::Joints {
+            log: log.name.clone(),
+            found: log.joints(),
+            expected: n,
+            names: model.joint_names().join(", "),
+        });
+    }
+    Ok(aras_signal::process_in::<nalgebra::Dyn>(
+        log,
+        &ProcessOptions {
+            filter: Bandwidth::Auto,
+            period: period.map_or(PeriodSource::FromSidecar, PeriodSource::Seconds),
+            use_logged_derivatives: logged_derivatives,
+            rows,
+            ..ProcessOptions::default()
+        },
+        &JointCoordinates,
+    )?)
+}
+
+/// The model torque `W π` of a processed log through the processing's
+/// band-limiting, per joint and sample, and its fitness (78) against the
+/// log's raw torques on every row that has a sample.
+pub(crate) struct LogFit {
+    /// Band-limited prediction, `[joint][sample]`.
+    pub predicted: Vec<Vec<f64>>,
+    /// Fitness per joint, %.
+    pub fitness: Vec<f64>,
+    /// Log rows scored.
+    pub rows: usize,
+}
+
+/// [`LogFit`] of `params` with the stacked regressor `w` of `processed`.
+pub(crate) fn log_fitness(
+    processed: &aras_signal::Processed,
+    w: &faer::Mat<f64>,
+    params: &[f64],
+) -> Result<LogFit, IdentifyError> {
+    let tau = aras_ident::validate::predict(w.as_ref(), params)?;
+    let m = processed.samples.len();
+    let per_joint: Vec<&[f64]> = tau.chunks(m.max(1)).collect();
+    let predicted = processed.band_limited(&per_joint)?;
+    let views: Vec<&[f64]> = predicted.iter().map(Vec::as_slice).collect();
+    let pairs = processed.paired_with_log_rows(&views)?;
+    let fitness = pairs
+        .iter()
+        .map(|(measured, model)| aras_ident::validate::fitness(measured, model))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(LogFit {
+        rows: pairs.first().map_or(0, |p| p.0.len()),
+        predicted,
+        fitness,
+    })
+}
+
+impl UrdfModel {
+    /// The regressor stacked over processed samples, joint 1's rows first
+    /// (`dof · samples × columns`), from their coordinates `x, ẋ, ẍ` (the
+    /// joint angles for [`aras_signal::JointCoordinates`]).
+    ///
+    /// # Errors
+    /// [`UrdfError`] when the samples do not have one coordinate per joint.
+    pub fn regressor_on(
+        &self,
+        samples: &aras_signal::Samples,
+    ) -> Result<faer::Mat<f64>, UrdfError> {
+        let n = self.dof();
+        if samples.x.len() != n || samples.x_dot.len() != n || samples.x_ddot.len() != n {
+            return Err(UrdfError::Dimension {
+                what: "processed samples' coordinates",
+                expected: n,
+                found: samples.x.len(),
+            });
+        }
+        stacked(self, samples.len(), |r, q, v, a| {
+            for j in 0..n {
+                q[j] = samples.x[j][r];
+                v[j] = samples.x_dot[j][r];
+                a[j] = samples.x_ddot[j][r];
+            }
+        })
+    }
+}
+
 /// The regressor of `model` stacked over `rows` states, joint 1's rows
 /// first, then joint 2's, …; `state(r, q, q̇, q̈)` writes state `r`.
 fn stacked(
     model: &UrdfModel,
     rows: usize,
     mut state: impl FnMut(usize, &mut [f64], &mut [f64], &mut [f64]),
-) -> Result<faer::Mat<f64>, IdentifyError> {
+) -> Result<faer::Mat<f64>, UrdfError> {
     let (n, cols) = (model.dof(), model.columns());
     let mut w = faer::Mat::<f64>::zeros(n * rows, cols);
     let mut y = vec![0.0; n * cols];

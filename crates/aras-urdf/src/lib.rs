@@ -46,12 +46,15 @@
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the equations
 
+pub mod diagnose;
 mod dynamics;
 mod error;
+pub mod excite;
 pub mod identify;
 mod mjcf;
 mod model;
 mod parse;
+pub mod predict;
 pub mod sim;
 mod spatial;
 mod write;

@@ -78,6 +78,60 @@ impl ArmSensors {
     }
 }
 
+/// Drive effects of a simulated robot's joints, the same on every joint,
+/// for a truth vector ([`DriveTruth::parameters`]); defaults in
+/// [`DriveTruth::default`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DriveTruth {
+    /// Viscous friction, N·m·s/rad (N·s/m).
+    pub viscous: f64,
+    /// Coulomb friction, N·m (N).
+    pub coulomb: f64,
+    /// Torque offset, N·m (N).
+    pub offset: f64,
+    /// Rotor inertia reflected to the joint (armature), kg·m² (kg).
+    pub armature: f64,
+}
+
+impl Default for DriveTruth {
+    /// A harmonic-drive arm joint: 0.3 N·m·s/rad, 0.5 N·m Coulomb, no
+    /// offset, 0.1 kg·m² armature (a 1e-5 kg·m² rotor behind 100:1).
+    fn default() -> Self {
+        Self {
+            viscous: 0.3,
+            coulomb: 0.5,
+            offset: 0.0,
+            armature: 0.1,
+        }
+    }
+}
+
+impl DriveTruth {
+    /// The standard parameters of `model` with the URDF's inertials and
+    /// these drive effects on every joint column the model has.
+    pub fn parameters(&self, model: &UrdfModel) -> Vec<f64> {
+        let mut p = model.urdf_parameters();
+        for (x, name) in p.iter_mut().zip(model.parameter_names()) {
+            let tag = name.rsplit('.').next().unwrap_or_default();
+            let joint = model
+                .joints()
+                .iter()
+                .any(|j| name == format!("{}.{tag}", j.name));
+            if joint {
+                *x = match tag {
+                    "Fv" => self.viscous,
+                    "Fc" => self.coulomb,
+                    "offset" => self.offset,
+                    "Ia" => self.armature,
+                    _ => *x,
+                };
+            }
+        }
+        p
+    }
+}
+
 /// PD control in joint space with model feedforward.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ArmController {
@@ -94,27 +148,82 @@ pub struct ArmController {
 
 impl ArmController {
     /// Gains for a closed-loop bandwidth of `bandwidth_hz` on each joint's
-    /// own inertia at `q` (the mass matrix's diagonal of `params`),
-    /// critically damped: `Kp = M_jj ω²`, `Kd = 2 M_jj ω`; a 30 Hz velocity
-    /// filter (the ARAS-Diamond simulator's) and feedforward of `params`.
+    /// inertia at `q`, critically damped: `Kp = m_j ω²`, `Kd = 2 m_j ω`
+    /// with `m_j = 1/(M⁻¹)_jj`, the inertia joint `j` shows with the other
+    /// joints free (not the mass matrix's diagonal `M_jj`, which for two
+    /// nearly parallel axes — the Panda's joints 1 and 3 near joint 2 = 0 —
+    /// is far above what their differential motion has, and whose gains
+    /// then drive that motion unstable through the velocity filter and the
+    /// sample delay); a 30 Hz velocity filter (the ARAS-Diamond
+    /// simulator's) and feedforward of `params`.
     pub fn for_model(
         model: &UrdfModel,
         params: &[f64],
         q: &[f64],
         bandwidth_hz: f64,
     ) -> Result<Self, UrdfError> {
+        let inertia = joint_inertias(model, params, std::slice::from_ref(&q.to_vec()))?;
+        Ok(Self::with_inertias(&inertia, params, bandwidth_hz))
+    }
+
+    /// [`Self::for_model`] on the smallest inertia each joint shows along
+    /// one period of `trajectory` (200 instants), so that the loop stays
+    /// at or below `bandwidth_hz` everywhere the robot goes.
+    pub fn for_trajectory(
+        model: &UrdfModel,
+        params: &[f64],
+        trajectory: &dyn ArmTrajectory,
+        period_s: f64,
+        bandwidth_hz: f64,
+    ) -> Result<Self, UrdfError> {
         let n = model.dof();
-        let mut ws = Workspace::new(model);
-        let (m, _) = model.mass_matrix_and_bias(&mut ws, params, q, &vec![0.0; n])?;
+        let (mut v, mut a) = (vec![0.0; n], vec![0.0; n]);
+        let states: Vec<Vec<f64>> = (0..200)
+            .map(|k| {
+                let mut q = vec![0.0; n];
+                trajectory.eval_into(period_s * k as f64 / 200.0, &mut q, &mut v, &mut a);
+                q
+            })
+            .collect();
+        let inertia = joint_inertias(model, params, &states)?;
+        Ok(Self::with_inertias(&inertia, params, bandwidth_hz))
+    }
+
+    fn with_inertias(inertia: &[f64], params: &[f64], bandwidth_hz: f64) -> Self {
         let w = std::f64::consts::TAU * bandwidth_hz;
-        let diag: Vec<f64> = (0..n).map(|j| m[j * n + j]).collect();
-        Ok(Self {
-            kp: diag.iter().map(|d| d * w * w).collect(),
-            kd: diag.iter().map(|d| 2.0 * d * w).collect(),
+        Self {
+            kp: inertia.iter().map(|d| d * w * w).collect(),
+            kd: inertia.iter().map(|d| 2.0 * d * w).collect(),
             velocity_cutoff_hz: 30.0,
             feedforward: Some(params.to_vec()),
-        })
+        }
     }
+}
+
+/// Per joint the smallest `1/(M⁻¹)_jj` over `states`.
+fn joint_inertias(
+    model: &UrdfModel,
+    params: &[f64],
+    states: &[Vec<f64>],
+) -> Result<Vec<f64>, UrdfError> {
+    let n = model.dof();
+    let mut ws = Workspace::new(model);
+    let mut out = vec![f64::INFINITY; n];
+    for q in states {
+        let (m, _) = model.mass_matrix_and_bias(&mut ws, params, q, &vec![0.0; n])?;
+        let m = nalgebra::DMatrix::from_row_slice(n, n, &m);
+        let inv = m.cholesky().ok_or_else(|| UrdfError::Setting {
+            name: "params".into(),
+            problem: "the mass matrix is not positive definite at the trajectory's \
+                      configurations: give physically consistent parameters"
+                .into(),
+        })?;
+        let inv = inv.inverse();
+        for j in 0..n {
+            out[j] = out[j].min(1.0 / inv[(j, j)]);
+        }
+    }
+    Ok(out)
 }
 
 /// Everything about a run except the robot and the trajectory.
@@ -136,6 +245,75 @@ pub struct ArmSimulation {
     pub sensors: ArmSensors,
     /// Seed of the noise generator.
     pub seed: u64,
+    /// Effects the simulated robot has beyond the model's columns (default
+    /// none): what a diagnosis is to find.
+    #[serde(default)]
+    pub hidden: Vec<HiddenEffect>,
+}
+
+/// A torque the simulated robot's joint feels that the model it is
+/// simulated from does not contain, evaluated here and only here, so that
+/// finding it tests the diagnosis rather than a shared formula.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum HiddenEffect {
+    /// Friction above the Coulomb level at low speed on joint `joint`
+    /// (0-based): `level · tanh(q̇/w) · exp(−(q̇/v_s)²)` N·m, `w` the
+    /// model's Coulomb width of the joint (boundary lubrication, a
+    /// breakaway hump).
+    Stribeck {
+        /// Joint index, 0-based.
+        joint: usize,
+        /// Static friction minus Coulomb friction, N·m (N), ≥ 0.
+        level: f64,
+        /// Stribeck velocity, rad/s (m/s), > 0.
+        v_s: f64,
+    },
+    /// A hardening spring `k3 (q − q0)³` on joint `joint` (0-based): a
+    /// cable or a capstan's stiffness, outside the candidate effects.
+    CubicSpring {
+        /// Joint index, 0-based.
+        joint: usize,
+        /// Stiffness, N·m/rad³ (N/m³).
+        k3: f64,
+        /// Its neutral position, rad (m).
+        q0: f64,
+    },
+}
+
+impl HiddenEffect {
+    /// The joint it acts on.
+    fn joint(&self) -> usize {
+        match *self {
+            HiddenEffect::Stribeck { joint, .. } | HiddenEffect::CubicSpring { joint, .. } => joint,
+        }
+    }
+}
+
+/// The hidden effects and the Coulomb widths their sign uses.
+struct Plant<'a> {
+    hidden: &'a [HiddenEffect],
+    widths: &'a [f64],
+}
+
+impl Plant<'_> {
+    /// The hidden effects' joint torques at `(q, q̇)` subtracted from `tau`
+    /// into `out`: what the plant's dynamics is driven by.
+    fn torque(&self, q: &[f64], v: &[f64], tau: &[f64], out: &mut [f64]) {
+        let widths = self.widths;
+        out.copy_from_slice(tau);
+        for h in self.hidden {
+            match *h {
+                HiddenEffect::Stribeck { joint, level, v_s } => {
+                    let x = v[joint];
+                    out[joint] -= level * (x / widths[joint]).tanh() * (-(x / v_s).powi(2)).exp();
+                }
+                HiddenEffect::CubicSpring { joint, k3, q0 } => {
+                    out[joint] -= k3 * (q[joint] - q0).powi(3);
+                }
+            }
+        }
+    }
 }
 
 impl ArmSimulation {
@@ -151,6 +329,7 @@ impl ArmSimulation {
             torque_limit: None,
             sensors,
             seed: 1,
+            hidden: Vec::new(),
         }
     }
 
@@ -207,6 +386,24 @@ impl ArmSimulation {
                 "counts per revolution and gear ratios must be positive".into(),
             ));
         }
+        for h in &self.hidden {
+            let ok = h.joint() < joints
+                && match *h {
+                    HiddenEffect::Stribeck { level, v_s, .. } => {
+                        level.is_finite() && level >= 0.0 && v_s.is_finite() && v_s > 0.0
+                    }
+                    HiddenEffect::CubicSpring { k3, q0, .. } => k3.is_finite() && q0.is_finite(),
+                };
+            if !ok {
+                return Err(bad(
+                    "hidden",
+                    format!(
+                        "{h:?} is not a valid effect of a robot of {joints} joints: joints are \
+                         0-based, a Stribeck level is ≥ 0 and its v_s > 0, numbers are finite"
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
 }
@@ -233,6 +430,27 @@ pub struct ArmLog {
 }
 
 impl ArmLog {
+    /// The log's channels for `aras_log::write_log` (the format's one
+    /// writer): angles and torques, and the exact `q̇`, `q̈` when
+    /// `derivatives`.
+    pub fn columns(&self, derivatives: bool) -> aras_log::Columns {
+        aras_log::Columns {
+            t: self.t.clone(),
+            theta: self.q.clone(),
+            tau: self.tau.clone(),
+            theta_dot: if derivatives {
+                self.qd.clone()
+            } else {
+                Vec::new()
+            },
+            theta_ddot: if derivatives {
+                self.qdd.clone()
+            } else {
+                Vec::new()
+            },
+        }
+    }
+
     /// The log in the toolkit's CSV format (`docs/log-format.md`):
     /// `t, theta1 … thetaN, tau1 … tauN`, with the exact `dthetaJ`,
     /// `ddthetaJ` when `derivatives`; the joint names in a comment line.
@@ -294,22 +512,23 @@ pub fn simulate(
 ) -> Result<ArmLog, UrdfError> {
     let n = model.dof();
     sim.validate(n)?;
-    if model.joint_columns().coulomb {
-        let widths = match &model.settings().coulomb_width {
-            crate::CoulombWidth::Uniform(w) => vec![*w; n],
-            crate::CoulombWidth::PerJoint(w) => w.clone(),
-        };
-        if widths.iter().any(|w| w.is_nan() || *w <= 0.0) {
-            return Err(UrdfError::Setting {
-                name: "coulomb_width".into(),
-                problem: "the simulated robot's Coulomb law is the sign of the rate (width 0), \
-                          which the integration cannot follow through a reversal (the joint \
-                          chatters and the tracking breaks down); simulate a model with a \
-                          smooth law, e.g. CoulombWidth::Uniform(0.02) rad/s"
-                    .into(),
-            });
-        }
+    let widths = match &model.settings().coulomb_width {
+        crate::CoulombWidth::Uniform(w) => vec![*w; n],
+        crate::CoulombWidth::PerJoint(w) => w.clone(),
+    };
+    if (model.joint_columns().coulomb || !sim.hidden.is_empty())
+        && widths.iter().any(|w| w.is_nan() || *w <= 0.0)
+    {
+        return Err(UrdfError::Setting {
+            name: "coulomb_width".into(),
+            problem: "the simulated robot's Coulomb law is the sign of the rate (width 0), \
+                      which the integration cannot follow through a reversal (the joint \
+                      chatters and the tracking breaks down); simulate a model with a \
+                      smooth law, e.g. CoulombWidth::Uniform(0.02) rad/s"
+                .into(),
+        });
     }
+
     if truth.len() != model.parameter_count() {
         return Err(UrdfError::Dimension {
             what: "truth parameters",
@@ -349,7 +568,11 @@ pub fn simulate(
         qd: vec![Vec::with_capacity(rows); n],
         qdd: vec![Vec::with_capacity(rows); n],
     };
-    let mut tau = vec![0.0; n];
+    let (mut tau, mut plant) = (vec![0.0; n], vec![0.0; n]);
+    let plant_of = Plant {
+        hidden: &sim.hidden,
+        widths: &widths,
+    };
     for k in -lead..rows as i64 {
         let t = k as f64 * dt;
         let q_meas = quantise(&q);
@@ -374,7 +597,8 @@ pub fn simulate(
             }
         }
         if k >= 0 {
-            let a = model.forward_dynamics(&mut ws, truth, &q, &v, &tau)?;
+            plant_of.torque(&q, &v, &tau, &mut plant);
+            let a = model.forward_dynamics(&mut ws, truth, &q, &v, &plant)?;
             log.t.push(t);
             for j in 0..n {
                 let z: f64 = StandardNormal.sample(&mut rng);
@@ -387,24 +611,31 @@ pub fn simulate(
             }
         }
         for _ in 0..sim.substeps {
-            rk4(model, &mut ws, truth, &mut q, &mut v, &tau, h)?;
+            rk4(model, &mut ws, truth, &plant_of, &mut q, &mut v, &tau, h)?;
         }
     }
     Ok(log)
 }
 
-/// One classical RK4 step of `(q, q̇)` under the held torques.
+/// One classical RK4 step of `(q, q̇)` under the held torques and the
+/// hidden effects.
+#[allow(clippy::too_many_arguments)]
 fn rk4(
     model: &UrdfModel,
     ws: &mut Workspace<f64>,
     params: &[f64],
+    plant: &Plant,
     q: &mut [f64],
     v: &mut [f64],
     tau: &[f64],
     h: f64,
 ) -> Result<(), UrdfError> {
     let n = q.len();
-    let mut f = |q: &[f64], v: &[f64]| model.forward_dynamics(ws, params, q, v, tau);
+    let mut driving = vec![0.0; n];
+    let mut f = |q: &[f64], v: &[f64]| {
+        plant.torque(q, v, tau, &mut driving);
+        model.forward_dynamics(ws, params, q, v, &driving)
+    };
     let at = |x: &[f64], d: &[f64], s: f64| -> Vec<f64> {
         x.iter().zip(d).map(|(x, d)| x + s * d).collect()
     };

@@ -9,7 +9,7 @@ use aras_excite::FourierTrajectory;
 use aras_ident::{ConsistentLs, LinearModel, LinkLayout, ReducedLs};
 use aras_urdf::sim::{ArmController, ArmSensors, ArmSimulation, simulate};
 use aras_urdf::{JointColumns, UrdfModel, Workspace};
-use common::{ALL, panda, sequence};
+use common::{ALL, excitation, panda, sequence};
 use nalgebra::Dyn;
 
 /// The URDF's inertials with friction, offset and armature of their usual
@@ -26,26 +26,6 @@ fn truth(model: &UrdfModel) -> Vec<f64> {
         ]);
     }
     p
-}
-
-/// The 10 s excitation of the tests (five harmonics per joint of random
-/// sizes about the middle of its limits; `skip` draws discarded first, for
-/// another trajectory), and the offsets.
-fn excitation(model: &UrdfModel, skip: usize) -> (Vec<f64>, FourierTrajectory<Dyn>) {
-    let mut next = sequence();
-    for _ in 0..skip {
-        next();
-    }
-    let (mut offset, mut a, mut b) = (Vec::new(), Vec::new(), Vec::new());
-    for j in model.joints() {
-        let l = j.limits.unwrap();
-        offset.push(0.5 * (l.lower.unwrap() + l.upper.unwrap()));
-        a.push((0..5).map(|_| 0.25 * next()).collect::<Vec<_>>());
-        b.push((0..5).map(|_| 0.25 * next()).collect::<Vec<_>>());
-    }
-    let omega = std::f64::consts::TAU / 10.0;
-    let trajectory = FourierTrajectory::<Dyn>::new(omega, offset.clone(), a, b).unwrap();
-    (offset, trajectory)
 }
 
 /// The Panda's 60 s run: gains on the drive's inertia as its designer

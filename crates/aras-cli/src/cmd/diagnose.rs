@@ -30,6 +30,9 @@ pub const STREAMING_BYTES: u64 = 64 << 20;
 
 /// Runs `diagnose`.
 pub fn run(args: &DiagnoseArgs) -> Result<()> {
+    if let Some(urdf) = &args.urdf {
+        return super::urdf::diagnose(args, urdf);
+    }
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config.clone();
     // The logs and their sidecars.

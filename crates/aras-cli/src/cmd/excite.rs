@@ -10,6 +10,9 @@ use crate::stages::Stages;
 
 /// Runs `excite`.
 pub fn run(args: &ExciteArgs) -> Result<()> {
+    if let Some(urdf) = &args.urdf {
+        return super::urdf::excite(args, urdf);
+    }
     let loaded = super::load_config(&args.common)?;
     let mut cfg = loaded.config.clone();
     if let Some(s) = args.seed {

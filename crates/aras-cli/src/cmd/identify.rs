@@ -92,7 +92,7 @@ fn setup(args: &IdentifyArgs, extras: &Extras) -> Result<Setup> {
 /// Runs `identify`.
 pub fn run(args: &IdentifyArgs) -> Result<()> {
     if let Some(urdf) = &args.urdf {
-        return super::identify_urdf::run(args, urdf);
+        return super::urdf::identify(args, urdf);
     }
     let extras = parse_extras(&args.effects)?;
     if streams(args)? {

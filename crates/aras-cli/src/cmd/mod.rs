@@ -8,10 +8,10 @@ pub mod fit;
 pub mod friction;
 pub mod identify;
 pub mod identify_streaming;
-pub mod identify_urdf;
 pub mod pipeline;
 pub mod predict;
 pub mod simulate;
+pub mod urdf;
 pub mod validate;
 
 use std::path::{Path, PathBuf};
@@ -70,9 +70,23 @@ pub fn print_warnings(path: &Path, warnings: &[aras_log::Warning]) {
 /// and the config's `[log]` section, then the glitch check and, if asked,
 /// resampling onto a uniform grid. Warnings are printed here.
 pub fn load_log(path: &Path, args: &crate::cli::LogArgs, cfg: &Config) -> Result<aras_log::Log> {
+    load_log_of(path, args, cfg, 2)
+}
+
+/// [`load_log`] of a robot with `joints` joints (a URDF robot's).
+pub fn load_log_of(
+    path: &Path,
+    args: &crate::cli::LogArgs,
+    cfg: &Config,
+    joints: usize,
+) -> Result<aras_log::Log> {
     use anyhow::Context;
     let settings = args.settings(&cfg.log);
-    let log = aras_log::read_log(path, &args.read_options(&cfg.log)?)
+    let options = aras_log::ReadOptions {
+        joints: Some(joints),
+        ..args.read_options(&cfg.log)?
+    };
+    let log = aras_log::read_log(path, &options)
         .with_context(|| format!("reading {}", path.display()))?;
     let (mut log, _) = aras_log::apply_glitches(log, &settings.glitch_options())
         .with_context(|| format!("reading {}", path.display()))?;

@@ -48,6 +48,9 @@ struct PredictSummary {
 /// processing loss (`crate::loss`): the same parameters predicted from the
 /// angles alone, both scored on the rows both cover.
 pub fn run(args: &PredictArgs) -> Result<()> {
+    if let Some(urdf) = &args.urdf {
+        return super::urdf::predict(args, urdf);
+    }
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config.clone();
     let sidecar = args.log.sidecar_of(&args.data);

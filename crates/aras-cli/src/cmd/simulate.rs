@@ -14,6 +14,9 @@ use crate::stages::Stages;
 
 /// Runs `simulate`.
 pub fn run(args: &SimulateArgs) -> Result<()> {
+    if let Some(urdf) = &args.urdf {
+        return super::urdf::simulate(args, urdf);
+    }
     let loaded = super::load_config(&args.common)?;
     let mut cfg = loaded.config.clone();
     if let Some(s) = args.seed {

@@ -46,6 +46,9 @@ struct XvFitness {
 
 /// Runs `validate`.
 pub fn run(args: &ValidateArgs) -> Result<()> {
+    if let Some(urdf) = &args.urdf {
+        return super::urdf::validate(args, urdf);
+    }
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config.clone();
     let out = OutDir::create(

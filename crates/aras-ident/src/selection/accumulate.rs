@@ -24,6 +24,12 @@ pub struct CandidateSpec {
     /// e.g. the target shifted in time): adding it replaces the target
     /// instead of appending columns, and counts as one added parameter.
     pub replaces_target: bool,
+    /// The output groups (e.g. joints) the candidate acts on, whose
+    /// validation gains judge it (default `None`: every group). A candidate
+    /// on one joint of seven moves that joint's fitness only; averaged over
+    /// all seven its gain would be a seventh of what it does.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub groups: Option<Vec<usize>>,
 }
 
 impl CandidateSpec {
@@ -35,6 +41,7 @@ impl CandidateSpec {
             name,
             columns,
             replaces_target: false,
+            groups: None,
         }
     }
 
@@ -46,12 +53,20 @@ impl CandidateSpec {
             name,
             columns: 1,
             replaces_target: true,
+            groups: None,
         }
     }
 
     /// The same candidate as a member of `family`.
     pub fn in_family(mut self, family: impl Into<String>) -> Self {
         self.family = family.into();
+        self
+    }
+
+    /// The same candidate judged on the output `groups` it acts on
+    /// ([`Self::groups`]).
+    pub fn on_groups(mut self, groups: Vec<usize>) -> Self {
+        self.groups = Some(groups);
         self
     }
 }

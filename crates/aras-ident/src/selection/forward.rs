@@ -19,7 +19,7 @@ pub struct SelectionOptions {
     /// many tests).
     pub alpha: f64,
     /// Smallest validation fitness gain (percentage points of (78), mean
-    /// over the groups) a candidate must bring on **every** validation set
+    /// over the groups it acts on, [`CandidateSpec::groups`]) a candidate must bring on **every** validation set
     /// (default 0.1): a real but invisible effect is not worth parameters,
     /// and a gain on one motion only is more likely an accident of that
     /// motion than a property of the system.
@@ -173,9 +173,10 @@ pub struct CandidateEvaluation {
     pub delta_bic: f64,
     /// Validation fitness gain per group (points, mean over the sets).
     pub gain: Vec<f64>,
-    /// Mean of `gain`.
+    /// Mean of `gain` over the groups the candidate acts on
+    /// ([`CandidateSpec::groups`]).
     pub mean_gain: f64,
-    /// Gain per validation set (mean over the groups, points).
+    /// Gain per validation set (mean over the groups it acts on, points).
     pub gain_per_set: Vec<f64>,
     /// The outcome.
     pub status: EvaluationStatus,
@@ -419,14 +420,22 @@ where
                 };
                 let after = f1.mean_fitness();
                 eval.gain = after.iter().zip(&before).map(|(a, b)| a - b).collect();
-                eval.mean_gain = eval.gain.iter().sum::<f64>() / eval.gain.len().max(1) as f64;
+                // Judged on the groups it acts on (every group by default).
+                let on = |g: &[f64]| -> f64 {
+                    match &spec.groups {
+                        Some(idx) => {
+                            idx.iter().filter_map(|&i| g.get(i)).sum::<f64>()
+                                / idx.len().max(1) as f64
+                        }
+                        None => g.iter().sum::<f64>() / g.len().max(1) as f64,
+                    }
+                };
+                eval.mean_gain = on(&eval.gain);
                 eval.gain_per_set = f1
                     .fitness
                     .iter()
                     .zip(&current.fitness)
-                    .map(|(a, b)| {
-                        a.iter().zip(b).map(|(x, y)| x - y).sum::<f64>() / a.len().max(1) as f64
-                    })
+                    .map(|(a, b)| on(&a.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<_>>()))
                     .collect();
                 if k_add == 0 {
                     eval.status = EvaluationStatus::NoNewParameters;

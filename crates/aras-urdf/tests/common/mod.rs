@@ -3,7 +3,9 @@
 
 #![allow(dead_code)]
 
+use aras_excite::FourierTrajectory;
 use aras_urdf::{CoulombWidth, JointColumns, ModelSettings, UrdfModel};
+use nalgebra::Dyn;
 use proptest::prelude::*;
 
 /// The Panda fixture (its hand and fingers fixed to link 7).
@@ -39,6 +41,26 @@ pub fn sequence() -> impl FnMut() -> f64 {
         u = (u + 0.618_033_988_749_895) % 1.0;
         2.0 * u - 1.0
     }
+}
+
+/// The 10 s excitation of the tests (five harmonics per joint of random
+/// sizes about the middle of its limits; `skip` draws discarded first, for
+/// another trajectory), and the offsets.
+pub fn excitation(model: &UrdfModel, skip: usize) -> (Vec<f64>, FourierTrajectory<Dyn>) {
+    let mut next = sequence();
+    for _ in 0..skip {
+        next();
+    }
+    let (mut offset, mut a, mut b) = (Vec::new(), Vec::new(), Vec::new());
+    for j in model.joints() {
+        let l = j.limits.unwrap();
+        offset.push(0.5 * (l.lower.unwrap() + l.upper.unwrap()));
+        a.push((0..5).map(|_| 0.25 * next()).collect::<Vec<_>>());
+        b.push((0..5).map(|_| 0.25 * next()).collect::<Vec<_>>());
+    }
+    let omega = std::f64::consts::TAU / 10.0;
+    let trajectory = FourierTrajectory::<Dyn>::new(omega, offset.clone(), a, b).unwrap();
+    (offset, trajectory)
 }
 
 /// One link's inertial: mass, centre of mass, the inertial frame's rpy and
