@@ -19,7 +19,7 @@ pub struct SelectionOptions {
     /// many tests).
     pub alpha: f64,
     /// Smallest validation fitness gain (percentage points of (78), mean
-    /// over the groups it acts on, [`CandidateSpec::groups`]) a candidate must bring on **every** validation set
+    /// over the groups it acts on, [`CandidateSpec::groups`](super::CandidateSpec::groups)) a candidate must bring on **every** validation set
     /// (default 0.1): a real but invisible effect is not worth parameters,
     /// and a gain on one motion only is more likely an accident of that
     /// motion than a property of the system.
@@ -174,7 +174,7 @@ pub struct CandidateEvaluation {
     /// Validation fitness gain per group (points, mean over the sets).
     pub gain: Vec<f64>,
     /// Mean of `gain` over the groups the candidate acts on
-    /// ([`CandidateSpec::groups`]).
+    /// ([`CandidateSpec::groups`](super::CandidateSpec::groups)).
     pub mean_gain: f64,
     /// Gain per validation set (mean over the groups it acts on, points).
     pub gain_per_set: Vec<f64>,
