@@ -34,6 +34,7 @@ import json
 import os
 import subprocess
 import sys
+import time
 
 import mujoco
 import numpy as np
@@ -190,6 +191,15 @@ def check(name, urdf, ours_bin, work, rng):
         reg_err = max(reg_err, np.max(np.abs(y_ours @ pi_pin[cols] - y_pin @ pi_pin[cols])))
         y_err = max(y_err, np.max(np.abs(y_ours - y_pin)))
         stacked.append(y_pin)
+    # Pinocchio's regressor time per state (its C++ call from this loop,
+    # so the Python call overhead, ~1 µs, is included): printed beside
+    # the figure of our bench (`cargo bench -p aras-urdf --bench regressor`).
+    reps = min(STATES, 500)
+    args = [to_pin(model, order, q[s], qd[s], qdd[s]) for s in range(reps)]
+    start = time.perf_counter()
+    for pq, pv, pa in args:
+        pin.computeJointTorqueRegressor(model, data, pq, pv, pa)
+    per_state_us = 1e6 * (time.perf_counter() - start) / reps
     w = np.vstack(stacked)
     norms = np.linalg.norm(w, axis=0)
     keep = norms > 1e-12 * np.max(norms)
@@ -200,7 +210,8 @@ def check(name, urdf, ours_bin, work, rng):
         f"{name}: {n} joints, {STATES} states | max |τ − rnea| {tau_err:.2e} N·m | "
         f"max |Yπ − Y_pin π| {reg_err:.2e} N·m | max |Y − Y_pin| {y_err:.2e} | "
         f"parameters {dp:.1e} | base parameters {ours['base_parameters']}, Pinocchio rank {rank} "
-        f"(σ {gap[0] / sv[0]:.1e} kept, {gap[1] / sv[0]:.1e} dropped)"
+        f"(σ {gap[0] / sv[0]:.1e} kept, {gap[1] / sv[0]:.1e} dropped) | "
+        f"Pinocchio's regressor {per_state_us:.2f} µs per state"
     )
     if tau_err > TAU_TOL:
         failures.append(f"{name}: RNEA differs from Pinocchio's by {tau_err:.3e} N·m")

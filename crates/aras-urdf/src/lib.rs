@@ -37,10 +37,16 @@
 //! `<mimic>`, closed loops, several roots, impossible inertials) is
 //! refused with a [`UrdfError`] saying where and what to do.
 //!
+//! The recipes on a log, one module each, used by the `aras` binary's
+//! `--urdf` commands: [`excite`] (an excitation within the URDF's limits),
+//! [`identify`], [`predict`] and [`diagnose`] (the toolkit's diagnosis
+//! engine with per-joint candidates).
+//!
 //! [`sim`] simulates such an arm under PD control with the ARAS-Diamond
 //! simulator's drive and sensor models, for logs of known parameters
 //! (`nalgebra` for the Cholesky solve of the mass matrix; `rand` and
-//! `rand_distr` for its seeded sensor noise).
+//! `rand_distr` for its seeded sensor noise; `aras-diagnose` for the
+//! diagnosis engine).
 //!
 //! The crate depends on neither `aras-kin` nor `aras-dyn`.
 

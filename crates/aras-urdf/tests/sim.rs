@@ -183,7 +183,7 @@ fn ols_on_a_simulated_panda_log_recovers_the_base_parameters() {
             per[j] = per[j].max((log.q_exact[j][r] - qd[j]).abs());
         }
     }
-    // 0.3–0.8 mrad measured: the friction the feedforward leaves out over
+    // 0.4–1.2 mrad measured: the friction the feedforward leaves out over
     // gains of 10 Hz bandwidth.
     let worst = per.iter().fold(0.0f64, |a, &b| a.max(b));
     assert!(worst < 2e-3, "tracking error {per:?} rad");
@@ -295,7 +295,7 @@ fn ols_on_a_simulated_panda_log_recovers_the_base_parameters() {
 /// log written in the toolkit's format and read back, processed from its
 /// quantised angles (one averaged period, the data-chosen bandwidth), OLS
 /// and the consistent estimate, which predicts another trajectory's
-/// torques within 0.1 points of the noise ceiling per joint (0.0009–0.010
+/// torques within 0.1 points of the noise ceiling per joint (0.0014–0.0085
 /// measured).
 #[test]
 fn the_recipe_identifies_the_panda_from_its_log() {
