@@ -313,4 +313,10 @@ fn the_serial_arm_tour_runs_command_by_command() {
         serde_json::from_str(&std::fs::read_to_string(d.join("diag/diagnosis.json")).unwrap())
             .unwrap();
     assert_eq!(diag["steps"].as_array().unwrap().len(), 1, "{out}");
+    // The final model re-identified physically consistently, the hump's
+    // level in it.
+    assert!(
+        out.contains("physically consistent refit of the final model (Solved): panda_joint4.Fs = "),
+        "{out}"
+    );
 }

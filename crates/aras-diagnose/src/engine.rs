@@ -427,7 +427,8 @@ pub struct ConsistentFit {
 pub struct Diagnosis<C, T> {
     /// Starting model.
     pub initial_model: T,
-    /// Final model (starting model + effects added, in order).
+    /// Final model (starting model + effects added, in order, each at its
+    /// refined setting).
     pub final_model: T,
     /// Torque-against-angle shift found (samples; 0 if none).
     pub delay_samples: f64,
@@ -442,16 +443,18 @@ pub struct Diagnosis<C, T> {
     pub fitness: Vec<FitnessRow>,
     /// Residual analysis of each validation set with the starting model.
     pub before: Vec<ResidualAnalysis>,
-    /// The same with the final model.
+    /// The same with the final model (refined settings).
     pub after: Vec<ResidualAnalysis>,
     /// True if the final residual is white with no systematic bin.
     pub noise_like: bool,
     /// The conclusion in words.
     pub conclusion: String,
-    /// Final OLS base parameters (readable definitions as names).
+    /// Final model's OLS estimate at the refined settings: base parameters
+    /// (readable definitions as names), then the added effects'.
     pub estimate: Vec<NamedValue>,
     /// Physically consistent re-identification, if the robot offered one
-    /// ([`DiagnosisModel::consistent_refit`]).
+    /// ([`DiagnosisModel::consistent_refit`]), of the final model with
+    /// every effect at its refined setting.
     pub consistent: Option<ConsistentFit>,
     /// Wall time (s).
     pub elapsed_s: f64,
@@ -1245,11 +1248,58 @@ pub fn diagnose<M: DiagnosisModel>(
         r.sort_by(|a, b| b.mean_gain.total_cmp(&a.mean_gain));
     }
     let stopped_clean = sel.status == SelectionStatus::NothingSignificant;
-    let final_fit = sel.final_fit().clone();
+    // The final model takes each effect at its refined setting: that is
+    // the model a user carries on with, and the one whose residual the
+    // verdict below is about. It costs one more pass over each set when a
+    // refinement moved a setting off its grid value.
+    let refined: Vec<M::Candidate> = steps
+        .iter()
+        .map(|s| match &s.refinement {
+            Some(r) => s.candidate.with_setting(r.value),
+            None => s.candidate.clone(),
+        })
+        .collect();
+    let moved = steps.iter().any(|s| {
+        s.refinement
+            .as_ref()
+            .is_some_and(|r| r.value != r.grid_value)
+    });
+    let final_ctx = if moved {
+        let (cands, layout) =
+            candidate_layout(model.n_base(), joints, refined.clone(), |_, c| c.label())?;
+        Some(Context {
+            model,
+            joints,
+            cands,
+            layout,
+            max_shift,
+        })
+    } else {
+        None
+    };
+    let (fctx, final_fit, final_val_accs, final_added) = match &final_ctx {
+        Some(c) => {
+            let train_acc = c.accumulate(train, &train_p)?;
+            let accs: Vec<Accumulator> = validation
+                .iter()
+                .zip(&vals_p)
+                .map(|(v, p)| c.accumulate(v, p))
+                .collect::<Result<_, _>>()?;
+            let added: Vec<usize> = (0..refined.len()).collect();
+            let fit = fit_model(&train_acc, &accs, &added, &sel_opts)?;
+            (c, fit, accs, added)
+        }
+        None => (
+            &ctx,
+            sel.final_fit().clone(),
+            val_accs.clone(),
+            sel.steps.iter().map(|st| st.candidate).collect(),
+        ),
+    };
 
     // Residual analyses before and after: the fitted rows, and apart the
     // rows left out near velocity reversals.
-    let analyse_fit = |fit: &ModelFit| {
+    let analyse_fit = |ctx: &Context<'_, M>, fit: &ModelFit| {
         validation
             .iter()
             .zip(&vals_p)
@@ -1262,21 +1312,20 @@ pub fn diagnose<M: DiagnosisModel>(
     // follows the motion, does not read as a missing term. The profiles,
     // spectra and left-out rows stay those of the TRAIN estimate: a refit on
     // one sinusoid would absorb much of a missing law.
-    let analyse = |fit: &ModelFit, added: &[usize]| -> Result<Vec<ResidualAnalysis>, IdentError> {
-        let mut out = analyse_fit(fit)?;
-        for ((a, (v, p)), acc) in out
-            .iter_mut()
-            .zip(validation.iter().zip(&vals_p))
-            .zip(&val_accs)
-        {
+    let analyse = |ctx: &Context<'_, M>,
+                   accs: &[Accumulator],
+                   fit: &ModelFit,
+                   added: &[usize]|
+     -> Result<Vec<ResidualAnalysis>, IdentError> {
+        let mut out = analyse_fit(ctx, fit)?;
+        for ((a, (v, p)), acc) in out.iter_mut().zip(validation.iter().zip(&vals_p)).zip(accs) {
             let refit = fit_model(acc, std::slice::from_ref(acc), added, &sel_opts)?;
             a.whiteness = ctx.residual_analysis(v, p, &refit)?.whiteness;
         }
         Ok(out)
     };
-    let added: Vec<usize> = sel.steps.iter().map(|st| st.candidate).collect();
-    let before = analyse(&sel.initial, &[])?;
-    let after = analyse(&final_fit, &added)?;
+    let before = analyse(&ctx, &val_accs, &sel.initial, &[])?;
+    let after = analyse(fctx, &final_val_accs, &final_fit, &final_added)?;
     let white = after
         .iter()
         .all(|a| a.whiteness.iter().all(|w| w.is_white()));
@@ -1328,21 +1377,20 @@ pub fn diagnose<M: DiagnosisModel>(
     };
     let conclusion = conclusion + &located + &left_out_sentence(&after, opts.min_speed);
 
-    let added_candidates: Vec<M::Candidate> = steps.iter().map(|s| s.candidate.clone()).collect();
-    let final_model = model.terms(&added_candidates)?;
+    let final_model = model.terms(&refined)?;
     let mut estimate: Vec<NamedValue> = Vec::new();
     for (k, col) in final_fit.columns.iter().enumerate() {
-        let name = if *col < ctx.layout.base_columns() {
+        let name = if *col < fctx.layout.base_columns() {
             model.base_name(*col)
         } else {
-            (0..ctx.cands.len())
+            (0..fctx.cands.len())
                 .find_map(|c| {
-                    let r = ctx.layout.candidate_columns(c);
+                    let r = fctx.layout.candidate_columns(c);
                     let off = col.checked_sub(r.start)?;
-                    if !r.contains(col) || ctx.cands[c].torque_shift().is_some() {
+                    if !r.contains(col) || fctx.cands[c].torque_shift().is_some() {
                         return None;
                     }
-                    ctx.cands[c].parameter_names().get(off).cloned()
+                    fctx.cands[c].parameter_names().get(off).cloned()
                 })
                 .unwrap_or_default()
         };
@@ -1352,13 +1400,16 @@ pub fn diagnose<M: DiagnosisModel>(
             std_dev: final_fit.std_dev[k],
         });
     }
-    let consistent = match model.consistent_refit(&added_candidates)? {
+    let consistent = match model.consistent_refit(&refined)? {
         Some(refit) => Some(consistent_fit(
             &ctx,
             (train, &train_p),
             (validation, &vals_p),
             &refit,
-            delay_samples,
+            refined
+                .iter()
+                .find_map(|c| c.torque_shift())
+                .unwrap_or(delay_samples),
         )?),
         None => None,
     };

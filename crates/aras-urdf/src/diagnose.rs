@@ -11,15 +11,19 @@
 //! so the velocity reversals are modelled rather than left out.
 
 use aras_diagnose::{
-    Candidate, Dataset, Diagnosis, DiagnosisModel, EngineOptions, NoRefit, SearchScale,
+    Candidate, ConsistentRefit, ConsistentSolution, Dataset, Diagnosis, DiagnosisModel,
+    EngineOptions, NamedValue, SearchScale,
 };
-use aras_ident::{BaseParameters, IdentError};
+use aras_ident::{BaseParameters, ConsistentLs, IdentError, ReducedLs};
 use aras_log::Log;
 use aras_signal::{OutputRows, Samples};
 use faer::Mat;
 use serde::Serialize;
 
-use crate::identify::{IdentifyError, process};
+use crate::identify::{
+    IdentifyError, IdentifySettings, consistent_problem, process, quasi_random_samples,
+    signed_parameters,
+};
 use crate::{CoulombWidth, UrdfModel};
 
 /// One candidate effect of a URDF robot with its setting.
@@ -154,6 +158,10 @@ pub struct DiagnoseSettings {
     pub period: Option<f64>,
     /// Quasi-random states the base parameters are computed from.
     pub base_states: usize,
+    /// Mass bounds of the final model's physically consistent
+    /// re-identification, a fraction of each body's URDF mass (as
+    /// identification's).
+    pub mass_tolerance: f64,
     /// Stribeck velocities scanned per joint, rad/s (m/s), refined
     /// between them once added.
     pub stribeck_v_s: Vec<f64>,
@@ -180,6 +188,7 @@ impl Default for DiagnoseSettings {
         Self {
             period: None,
             base_states: 600,
+            mass_tolerance: IdentifySettings::default().mass_tolerance,
             stribeck_v_s: vec![0.01, 0.02, 0.05, 0.1, 0.2],
             delays: [0.5, 1.0, 2.0, 3.0, 5.0]
                 .iter()
@@ -235,6 +244,8 @@ pub fn candidates(model: &UrdfModel, settings: &DiagnoseSettings) -> Vec<UrdfCan
 struct Engine<'a> {
     model: &'a UrdfModel,
     base: BaseParameters,
+    base_states: usize,
+    mass_tolerance: f64,
     widths: Vec<f64>,
 }
 
@@ -250,7 +261,7 @@ impl DiagnosisModel for Engine<'_> {
     type Candidate = UrdfCandidate;
     type Window = Window;
     type Terms = Vec<String>;
-    type Refit = NoRefit;
+    type Refit = Refit;
 
     fn joints(&self) -> usize {
         self.model.dof()
@@ -279,32 +290,7 @@ impl DiagnosisModel for Engine<'_> {
         self.base.base_regressor(w.w.as_ref())
     }
     fn candidate_columns(&self, c: &UrdfCandidate, w: &Window) -> Result<Mat<f64>, IdentError> {
-        let m = w.q.first().map_or(0, Vec::len);
-        let n = self.model.dof();
-        let column = |joint: usize, f: &dyn Fn(usize) -> f64| {
-            Mat::from_fn(
-                n * m,
-                1,
-                |r, _| if r / m.max(1) == joint { f(r % m) } else { 0.0 },
-            )
-        };
-        Ok(match c {
-            UrdfCandidate::StribeckFriction { joint, v_s, .. } => {
-                let (j, vs, width) = (*joint, *v_s, self.widths[*joint]);
-                column(j, &|r| {
-                    let x = w.v[j][r];
-                    let s = if width > 0.0 {
-                        (x / width).tanh()
-                    } else {
-                        x.signum()
-                    };
-                    s * (-(x / vs) * (x / vs)).exp()
-                })
-            }
-            UrdfCandidate::TorqueOffset { joint, .. } => column(*joint, &|_| 1.0),
-            UrdfCandidate::JointSpring { joint, .. } => column(*joint, &|r| w.q[*joint][r]),
-            UrdfCandidate::TimeDelay { .. } => Mat::zeros(n * m, 0),
-        })
+        Ok(candidate_columns(&self.widths, c, w))
     }
     fn term_names(&self) -> Vec<String> {
         let c = self.model.joint_columns();
@@ -326,8 +312,140 @@ impl DiagnosisModel for Engine<'_> {
         t.extend(added.iter().map(Candidate::label));
         Ok(t)
     }
-    fn consistent_refit(&self, _: &[UrdfCandidate]) -> Result<Option<NoRefit>, IdentError> {
-        Ok(None)
+    fn consistent_refit(&self, added: &[UrdfCandidate]) -> Result<Option<Refit>, IdentError> {
+        Refit::new(self, added).map(Some)
+    }
+}
+
+/// The columns of candidate `c` on window `w` (joint-major, one per
+/// parameter), with the model's Coulomb widths per joint; none for a
+/// torque shift, which the engine applies itself.
+fn candidate_columns(widths: &[f64], c: &UrdfCandidate, w: &Window) -> Mat<f64> {
+    let n = w.q.len();
+    let m = w.q.first().map_or(0, Vec::len);
+    let column = |joint: usize, f: &dyn Fn(usize) -> f64| {
+        Mat::from_fn(
+            n * m,
+            1,
+            |r, _| if r / m.max(1) == joint { f(r % m) } else { 0.0 },
+        )
+    };
+    match c {
+        UrdfCandidate::StribeckFriction { joint, v_s, .. } => {
+            let (j, vs, width) = (*joint, *v_s, widths[*joint]);
+            column(j, &|r| {
+                let x = w.v[j][r];
+                let s = if width > 0.0 {
+                    (x / width).tanh()
+                } else {
+                    x.signum()
+                };
+                s * (-(x / vs) * (x / vs)).exp()
+            })
+        }
+        UrdfCandidate::TorqueOffset { joint, .. } => column(*joint, &|_| 1.0),
+        UrdfCandidate::JointSpring { joint, .. } => column(*joint, &|r| w.q[*joint][r]),
+        UrdfCandidate::TimeDelay { .. } => Mat::zeros(n * m, 0),
+    }
+}
+
+/// The model's standard regressor on `w` with the columns of `added` after
+/// it, joint-major.
+fn extended(widths: &[f64], added: &[UrdfCandidate], w: &Window) -> Mat<f64> {
+    let extra: Vec<Mat<f64>> = added
+        .iter()
+        .map(|c| candidate_columns(widths, c, w))
+        .collect();
+    let cols = w.w.ncols() + extra.iter().map(Mat::ncols).sum::<usize>();
+    let mut out = Mat::<f64>::zeros(w.w.nrows(), cols);
+    out.as_mut()
+        .subcols_mut(0, w.w.ncols())
+        .copy_from(w.w.as_ref());
+    let mut at = w.w.ncols();
+    for e in &extra {
+        out.as_mut()
+            .subcols_mut(at, e.ncols())
+            .copy_from(e.as_ref());
+        at += e.ncols();
+    }
+    out
+}
+
+/// The physically consistent re-identification of the final model: the
+/// URDF model's standard parameters and the added effects' (a Stribeck
+/// level, an offset, a spring), its own base parameters from the
+/// quasi-random states of [`UrdfModel::base_parameters`] with the added
+/// columns on them, and identification's SDP (one pseudo-inertia per body,
+/// masses within the tolerance, friction, armature and every Stribeck
+/// level ≥ 0: friction above the Coulomb level at low speed).
+struct Refit {
+    widths: Vec<f64>,
+    added: Vec<UrdfCandidate>,
+    names: Vec<String>,
+    base: BaseParameters,
+    problem: ConsistentLs,
+}
+
+impl Refit {
+    fn new(engine: &Engine<'_>, added: &[UrdfCandidate]) -> Result<Self, IdentError> {
+        let model = engine.model;
+        let added: Vec<UrdfCandidate> = added
+            .iter()
+            .filter(|c| c.torque_shift().is_none())
+            .cloned()
+            .collect();
+        let mut names = model.parameter_names();
+        let mut reference = model.urdf_parameters();
+        let mut signed = signed_parameters(model);
+        for c in &added {
+            let p = c.parameter_names();
+            if matches!(c, UrdfCandidate::StribeckFriction { .. }) {
+                signed.extend(p.iter().cloned());
+            }
+            reference.extend(std::iter::repeat_n(0.0, p.len()));
+            names.extend(p);
+        }
+        let window = engine.window(&quasi_random_samples(model, engine.base_states), 0)?;
+        let w = extended(&engine.widths, &added, &window);
+        let base =
+            BaseParameters::from_regressor(w.as_ref(), &names, aras_ident::DEFAULT_RANK_TOLERANCE)?;
+        let problem = consistent_problem(model, &names, reference, engine.mass_tolerance, &signed)?;
+        Ok(Self {
+            widths: engine.widths.clone(),
+            added,
+            names,
+            base,
+            problem,
+        })
+    }
+}
+
+impl ConsistentRefit<Window> for Refit {
+    fn base_names(&self) -> Vec<String> {
+        self.base.base_names()
+    }
+
+    fn base_columns(&self, window: &Window) -> Result<Mat<f64>, IdentError> {
+        self.base
+            .base_regressor(extended(&self.widths, &self.added, window).as_ref())
+    }
+
+    fn solve(&self, reduced: &ReducedLs) -> Result<ConsistentSolution, IdentError> {
+        let sol = self.problem.solve(&self.base, reduced)?;
+        Ok(ConsistentSolution {
+            status: sol.status,
+            base: self.base.to_base(&sol.standard)?,
+            parameters: self
+                .names
+                .iter()
+                .zip(&sol.standard)
+                .map(|(name, value)| NamedValue {
+                    name: name.clone(),
+                    value: *value,
+                    std_dev: 0.0,
+                })
+                .collect(),
+        })
     }
 }
 
@@ -354,6 +472,8 @@ pub fn diagnose(
     let engine = Engine {
         model,
         base: model.base_parameters(settings.base_states)?,
+        base_states: settings.base_states,
+        mass_tolerance: settings.mass_tolerance,
         widths,
     };
     let set = |name: &str, log: &Log, period: Option<f64>| -> Result<Dataset, IdentifyError> {

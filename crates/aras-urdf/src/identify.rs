@@ -5,7 +5,7 @@
 use aras_ident::{BaseParameters, ConsistentLs, IdentError, LinearModel, LinkLayout, ReducedLs};
 use aras_log::Log;
 use aras_signal::{
-    Bandwidth, JointCoordinates, OutputRows, PeriodSource, ProcessError, ProcessOptions,
+    Bandwidth, JointCoordinates, OutputRows, PeriodSource, ProcessError, ProcessOptions, Samples,
 };
 use serde::Serialize;
 
@@ -100,35 +100,94 @@ impl UrdfModel {
     /// quasi-random states: positions inside the URDF's limits (±π where it
     /// gives none), rates within ±2 and accelerations within ±8 per second.
     pub fn base_parameters(&self, states: usize) -> Result<BaseParameters, IdentifyError> {
-        let mut u = 0.5f64;
-        let mut next = move || {
-            u = (u + 0.618_033_988_749_895) % 1.0;
-            u
-        };
-        let range: Vec<(f64, f64)> = self
-            .joints()
-            .iter()
-            .map(|j| match j.limits {
-                Some(l) => match (l.lower, l.upper) {
-                    (Some(a), Some(b)) if b > a => (a, b),
-                    _ => (-std::f64::consts::PI, std::f64::consts::PI),
-                },
-                None => (-std::f64::consts::PI, std::f64::consts::PI),
-            })
-            .collect();
-        let w = stacked(self, states, |_, q, v, a| {
-            for (x, (lo, hi)) in q.iter_mut().zip(&range) {
-                *x = lo + (hi - lo) * next();
-            }
-            v.iter_mut().for_each(|x| *x = 4.0 * next() - 2.0);
-            a.iter_mut().for_each(|x| *x = 16.0 * next() - 8.0);
-        })?;
+        let w = self.regressor_on(&quasi_random_samples(self, states))?;
         Ok(BaseParameters::from_regressor(
             w.as_ref(),
             &self.names(),
             aras_ident::DEFAULT_RANK_TOLERANCE,
         )?)
     }
+}
+
+/// The `states` quasi-random states of [`UrdfModel::base_parameters`]
+/// (a golden-ratio sequence: positions inside the limits, ±π where the URDF
+/// gives none, rates within ±2, accelerations within ±8 per second), as
+/// samples in joint coordinates with zero torques, so that any column
+/// defined on samples (an effect the diagnosis adds) is evaluated on the
+/// same states.
+pub(crate) fn quasi_random_samples(model: &UrdfModel, states: usize) -> Samples {
+    let n = model.dof();
+    let mut u = 0.5f64;
+    let mut next = move || {
+        u = (u + 0.618_033_988_749_895) % 1.0;
+        u
+    };
+    let range: Vec<(f64, f64)> = model
+        .joints()
+        .iter()
+        .map(|j| match j.limits {
+            Some(l) => match (l.lower, l.upper) {
+                (Some(a), Some(b)) if b > a => (a, b),
+                _ => (-std::f64::consts::PI, std::f64::consts::PI),
+            },
+            None => (-std::f64::consts::PI, std::f64::consts::PI),
+        })
+        .collect();
+    let mut s = Samples::with_joints(n);
+    for r in 0..states {
+        s.t.push(r as f64);
+        for (j, (lo, hi)) in range.iter().enumerate() {
+            s.x[j].push(lo + (hi - lo) * next());
+        }
+        for j in 0..n {
+            s.x_dot[j].push(4.0 * next() - 2.0);
+        }
+        for j in 0..n {
+            s.x_ddot[j].push(16.0 * next() - 8.0);
+        }
+        for j in 0..n {
+            s.tau[j].push(0.0);
+        }
+    }
+    s.theta.clone_from(&s.x);
+    s.theta_dot.clone_from(&s.x_dot);
+    s.theta_ddot.clone_from(&s.x_ddot);
+    s
+}
+
+/// The physically consistent problem of `model` with `names` (its standard
+/// parameters, then any added ones) and `reference` (the URDF's values,
+/// then the added ones'): one pseudo-inertia per body on its own mass
+/// parameter, masses within `tolerance` of the URDF's, and `nonnegative`
+/// (friction, armature and any added level) ≥ 0.
+pub(crate) fn consistent_problem(
+    model: &UrdfModel,
+    names: &[String],
+    reference: Vec<f64>,
+    tolerance: f64,
+    nonnegative: &[String],
+) -> Result<ConsistentLs, IdentError> {
+    let mut problem = ConsistentLs::new(names, reference.clone())?;
+    for l in model.link_columns() {
+        let mass = reference[l.mass];
+        problem.link(
+            LinkLayout::new(l.link.clone(), l.inertia, l.first_moment, mass)
+                .with_mass_column(l.mass)
+                .with_mass_bounds((1.0 - tolerance) * mass, (1.0 + tolerance) * mass),
+        )?;
+    }
+    problem.nonnegative(nonnegative)?;
+    Ok(problem)
+}
+
+/// The model's parameters that are ≥ 0 physically: viscous and Coulomb
+/// friction and armature.
+pub(crate) fn signed_parameters(model: &UrdfModel) -> Vec<String> {
+    model
+        .parameter_names()
+        .into_iter()
+        .filter(|p| p.ends_with(".Fv") || p.ends_with(".Fc") || p.ends_with(".Ia"))
+        .collect()
 }
 
 /// Identifies `model` from `log`: the log processed in joint coordinates
@@ -153,23 +212,13 @@ pub fn identify(
     let reduced = ReducedLs::new(wb.as_ref(), &tau, &base.base_names())?;
     let ols = reduced.ols()?;
     let names = model.parameter_names();
-    let reference = model.urdf_parameters();
-    let mut problem = ConsistentLs::new(&names, reference.clone())?;
-    let tol = settings.mass_tolerance;
-    for l in model.link_columns() {
-        let mass = reference[l.mass];
-        problem.link(
-            LinkLayout::new(l.link.clone(), l.inertia, l.first_moment, mass)
-                .with_mass_column(l.mass)
-                .with_mass_bounds((1.0 - tol) * mass, (1.0 + tol) * mass),
-        )?;
-    }
-    let signed: Vec<&str> = names
-        .iter()
-        .filter(|p| p.ends_with(".Fv") || p.ends_with(".Fc") || p.ends_with(".Ia"))
-        .map(String::as_str)
-        .collect();
-    problem.nonnegative(&signed)?;
+    let problem = consistent_problem(
+        model,
+        &names,
+        model.urdf_parameters(),
+        settings.mass_tolerance,
+        &signed_parameters(model),
+    )?;
     let sdp = problem.solve(&base, &reduced)?;
     let fitness = log_fitness(&processed, &w, &sdp.standard)?.fitness;
     Ok(UrdfIdentification {

@@ -507,9 +507,42 @@ pub fn diagnose(args: &DiagnoseArgs, urdf: &Path) -> Result<()> {
             .map(|p| format!("{} = {:.4} ± {:.4}", p.name, p.value, p.std_dev))
             .collect();
         let refined = s.refinement.as_ref().map_or(String::new(), |r| {
-            format!(", {} refined to {:.4} ± {:.4}", r.name, r.value, r.std_dev)
+            let there: Vec<String> = r
+                .parameters
+                .iter()
+                .map(|p| format!("{} = {:.4} ± {:.4}", p.name, p.value, p.std_dev))
+                .collect();
+            format!(
+                "; {} refined to {:.4} ± {:.4}{}",
+                r.name,
+                r.value,
+                r.std_dev,
+                if there.is_empty() {
+                    String::new()
+                } else {
+                    format!(", there {}", there.join(", "))
+                }
+            )
         });
         println!("added {}: {}{refined}", s.label, values.join(", "));
+    }
+    if let (Some(c), false) = (&d.consistent, d.steps.is_empty()) {
+        let added: Vec<String> = d
+            .steps
+            .iter()
+            .flat_map(|s| &s.parameters)
+            .filter_map(|added| c.parameters.iter().find(|p| p.name == added.name))
+            .map(|p| format!("{} = {:.4}", p.name, p.value))
+            .collect();
+        println!(
+            "physically consistent refit of the final model ({}): {}",
+            c.status,
+            if added.is_empty() {
+                "no added parameter".to_owned()
+            } else {
+                added.join(", ")
+            }
+        );
     }
     if let (Some(first), Some(last)) = (d.fitness.first(), d.fitness.last()) {
         for (k, name) in args.validate.iter().enumerate() {
