@@ -145,6 +145,44 @@ pub struct ConsistentSolution {
     pub parameters: Vec<NamedValue>,
 }
 
+impl ConsistentSolution {
+    /// The solution of a constrained problem in the standard parameters:
+    /// `standard` (named by `names`, σ unknown), its base parameters by
+    /// `base`.
+    ///
+    /// # Errors
+    /// [`IdentError::DimensionMismatch`] when `standard` is not one value
+    /// per name and per standard parameter of `base`.
+    pub fn from_standard<S: AsRef<str>>(
+        status: SolverStatus,
+        base: &aras_ident::BaseParameters,
+        names: &[S],
+        standard: &[f64],
+    ) -> Result<Self, IdentError> {
+        if names.len() != standard.len() {
+            return Err(IdentError::DimensionMismatch {
+                what: "named standard parameters",
+                expected: names.len(),
+                found: standard.len(),
+                hint: "give one value per name",
+            });
+        }
+        Ok(Self {
+            status,
+            base: base.to_base(standard)?,
+            parameters: names
+                .iter()
+                .zip(standard)
+                .map(|(name, value)| NamedValue {
+                    name: name.as_ref().to_owned(),
+                    value: *value,
+                    std_dev: 0.0,
+                })
+                .collect(),
+        })
+    }
+}
+
 /// No physically consistent re-identification (a robot without one).
 #[derive(Debug, Clone, Copy)]
 pub enum NoRefit {}

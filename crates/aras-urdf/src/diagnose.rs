@@ -12,7 +12,7 @@
 
 use aras_diagnose::{
     Candidate, ConsistentRefit, ConsistentSolution, Dataset, Diagnosis, DiagnosisModel,
-    EngineOptions, NamedValue, SearchScale,
+    EngineOptions, SearchScale,
 };
 use aras_ident::{BaseParameters, ConsistentLs, IdentError, ReducedLs};
 use aras_log::Log;
@@ -432,20 +432,7 @@ impl ConsistentRefit<Window> for Refit {
 
     fn solve(&self, reduced: &ReducedLs) -> Result<ConsistentSolution, IdentError> {
         let sol = self.problem.solve(&self.base, reduced)?;
-        Ok(ConsistentSolution {
-            status: sol.status,
-            base: self.base.to_base(&sol.standard)?,
-            parameters: self
-                .names
-                .iter()
-                .zip(&sol.standard)
-                .map(|(name, value)| NamedValue {
-                    name: name.clone(),
-                    value: *value,
-                    std_dev: 0.0,
-                })
-                .collect(),
-        })
+        ConsistentSolution::from_standard(sol.status, &self.base, &self.names, &sol.standard)
     }
 }
 

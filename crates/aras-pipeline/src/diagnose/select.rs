@@ -4,9 +4,7 @@
 //! single-effect models, and the SDP on its four links as the physically
 //! consistent refit.
 
-use aras_diagnose::{
-    ConsistentRefit, ConsistentSolution, DiagnosisModel, EngineOptions, NamedValue,
-};
+use aras_diagnose::{ConsistentRefit, ConsistentSolution, DiagnosisModel, EngineOptions};
 use aras_dyn::{Effect, Model, Params};
 use aras_ident::{BaseParameters, ConsistentLs, IdentError, ReducedLs};
 use aras_kin::{Geometry, KinematicSample, Workspace};
@@ -268,21 +266,12 @@ impl ConsistentRefit<Vec<KinematicSample>> for Refit {
 
     fn solve(&self, reduced: &ReducedLs) -> Result<ConsistentSolution, IdentError> {
         let sol = self.problem.solve(&self.base, reduced)?;
-        Ok(ConsistentSolution {
-            status: sol.status,
-            base: self.base.to_base(&sol.standard)?,
-            parameters: self
-                .model
-                .names()
-                .iter()
-                .zip(&sol.standard)
-                .map(|(n, v)| NamedValue {
-                    name: n.clone(),
-                    value: *v,
-                    std_dev: 0.0,
-                })
-                .collect(),
-        })
+        ConsistentSolution::from_standard(
+            sol.status,
+            &self.base,
+            &self.model.names(),
+            &sol.standard,
+        )
     }
 }
 
