@@ -1375,10 +1375,10 @@ pub fn diagnose<M: DiagnosisModel>(
         "No effect was added".to_owned()
     } else {
         format!(
-            "Added, in order: {}",
-            steps
+            "Added, in order (at the refined settings): {}",
+            refined
                 .iter()
-                .map(|s| s.label.as_str())
+                .map(Candidate::label)
                 .collect::<Vec<_>>()
                 .join(", ")
         )
