@@ -1,6 +1,6 @@
 //! Speed of the per-sample kinematics (target: full evaluation < 150 ns).
 
-use aras_kin::{AssemblyMode, Geometry, evaluate, forward, inverse};
+use aras_kin::{AssemblyMode, Geometry, evaluate, forward, forward_motion, inverse};
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Vector2;
 use std::hint::black_box;
@@ -13,6 +13,12 @@ fn bench(c: &mut Criterion) {
     c.bench_function("inverse", |b| b.iter(|| inverse(&g, black_box(&x))));
     c.bench_function("forward", |b| {
         b.iter(|| forward(&g, black_box(&th), AssemblyMode::Plus))
+    });
+    // What the processing maps every sample of a log with: X, Ẋ, Ẍ from
+    // the joint motion, without the link frames.
+    let joint = aras_kin::Motion::new(th, Vector2::new(0.9, -0.2), Vector2::new(-1.3, 2.1));
+    c.bench_function("forward_motion", |b| {
+        b.iter(|| forward_motion(&g, black_box(&joint), AssemblyMode::Plus))
     });
     c.bench_function("evaluate (full per-sample)", |b| {
         b.iter(|| {

@@ -2,7 +2,7 @@
 
 use nalgebra::Vector2;
 
-use crate::pose::{Pose, check_finite};
+use crate::pose::{Pose, Triangle, check_finite};
 use crate::{Geometry, KinError, Motion};
 
 /// Assembly mode of the distal links: the sign in (6).
@@ -63,19 +63,21 @@ pub fn forward_motion(
     check_finite("theta2_dot", theta_dot[1])?;
     check_finite("theta1_ddot", theta_ddot[0])?;
     check_finite("theta2_ddot", theta_ddot[1])?;
-    let (x, pose) = forward_pose(g, theta, mode)?;
-    let inv = |v: Vector2<f64>| Vector2::new(0.5 * (v[0] + v[1]), 0.5 * (v[0] - v[1]) / pose.k);
+    let (x, t) = forward_triangle(g, theta, mode)?;
+    let inv = |v: Vector2<f64>| Vector2::new(0.5 * (v[0] + v[1]), 0.5 * (v[0] - v[1]) / t.k);
     let x_dot = inv(*theta_dot);
-    let jd = pose.k_prime * x_dot[1] * x_dot[1];
+    let jd = t.k_prime * x_dot[1] * x_dot[1];
     let x_ddot = inv(theta_ddot - Vector2::new(jd, -jd));
     Ok(Motion::new(x, x_dot, x_ddot))
 }
 
-fn forward_pose(
+/// `φ`, `A` and `γ` of (6)–(7) with `sin γ`, and the checks that need no
+/// more: finite angles, an assembly that closes, `d` off the motor axis.
+fn polar_angle(
     g: &Geometry,
     theta: &Vector2<f64>,
     mode: AssemblyMode,
-) -> Result<(Vector2<f64>, Pose), KinError> {
+) -> Result<(f64, f64, f64, f64), KinError> {
     check_finite("theta1", theta[0])?;
     check_finite("theta2", theta[1])?;
     let phi = 0.5 * (theta[0] + theta[1]);
@@ -97,25 +99,133 @@ fn forward_pose(
         AssemblyMode::Minus => -disc.sqrt(),
     };
     let gamma = 2.0 * (g.sa * cos_a + root).atan2(g.ca + g.cb);
-    if gamma.sin() < g.singularity_tolerance() {
+    let sin_gamma = gamma.sin();
+    if sin_gamma < g.singularity_tolerance() {
         // The degenerate branch (e.g. γ = 0 for α = β): d on the motor axis.
         return Err(KinError::Singular {
             which: crate::Singularity::PolarAxis,
-            value: gamma.sin(),
+            value: sin_gamma,
             limit: g.singularity_tolerance(),
         });
     }
-    let x = Vector2::new(phi, gamma);
-    let pose = Pose::new(g, &x)?;
-    // With A outside (0, π) the triangle closes on the mirrored side: the
-    // angle the IK would give differs from the commanded one.
-    if (pose.a - half).abs() > 1e-9 * (1.0 + half.abs()) {
+    Ok((phi, half, gamma, sin_gamma))
+}
+
+/// With `A` outside (0, π) the triangle closes on the mirrored side: the
+/// angle `a` the IK gives (from the cosine rule) differs from the
+/// commanded `half`.
+fn check_assembly(theta: &Vector2<f64>, half: f64, a: f64) -> Result<(), KinError> {
+    if (a - half).abs() > 1e-9 * (1.0 + half.abs()) {
         return Err(KinError::NoAssembly {
             theta1: theta[0],
             theta2: theta[1],
             separation: 2.0 * half.abs(),
-            reach: 2.0 * pose.a,
+            reach: 2.0 * a,
         });
     }
+    Ok(())
+}
+
+fn forward_pose(
+    g: &Geometry,
+    theta: &Vector2<f64>,
+    mode: AssemblyMode,
+) -> Result<(Vector2<f64>, Pose), KinError> {
+    let (phi, half, gamma, _) = polar_angle(g, theta, mode)?;
+    let x = Vector2::new(phi, gamma);
+    let pose = Pose::new(g, &x)?;
+    check_assembly(theta, half, pose.a)?;
     Ok((x, pose))
+}
+
+/// [`forward_pose`] without the link frames: `X` and the triangle at its
+/// `γ`, the same checks in the same order and the same numbers, bit for
+/// bit (the motion needs only `K` and `K′`; the cosine rule's `A` is
+/// computed only where it can differ from the commanded one).
+fn forward_triangle(
+    g: &Geometry,
+    theta: &Vector2<f64>,
+    mode: AssemblyMode,
+) -> Result<(Vector2<f64>, Triangle), KinError> {
+    let (phi, half, gamma, sg) = polar_angle(g, theta, mode)?;
+    check_finite("phi", phi)?;
+    check_finite("gamma", gamma)?;
+    let (lo, hi) = g.reachable_gamma();
+    if gamma < lo || gamma > hi {
+        return Err(KinError::Unreachable {
+            gamma,
+            min: lo,
+            max: hi,
+        });
+    }
+    let t = Triangle::at(g, sg, gamma.cos());
+    t.distance(sg).check(g.singularity_tolerance())?;
+    // Inside [0, π] the cosine rule's A is `half` to rounding, far inside
+    // the check's 1e-9.
+    let a = if (0.0..=std::f64::consts::PI).contains(&half) {
+        half
+    } else {
+        t.sin_a.atan2(t.cos_a)
+    };
+    check_assembly(theta, half, a)?;
+    Ok((Vector2::new(phi, gamma), t))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The lean route gives the frames' route's `X`, `K` and `K′` bit
+        /// for bit, and the same error where there is one: across the
+        /// workspace, its edges and beyond (θ over two turns each way).
+        #[test]
+        fn the_lean_route_is_the_pose_route(
+            t1 in -4.0 * std::f64::consts::PI..4.0 * std::f64::consts::PI,
+            t2 in -4.0 * std::f64::consts::PI..4.0 * std::f64::consts::PI,
+            minus in any::<bool>(),
+        ) {
+            let g = Geometry::aras_diamond();
+            let mode = if minus { AssemblyMode::Minus } else { AssemblyMode::Plus };
+            let theta = Vector2::new(t1, t2);
+            match (forward_pose(&g, &theta, mode), forward_triangle(&g, &theta, mode)) {
+                (Ok((x, pose)), Ok((y, t))) => {
+                    prop_assert_eq!(x, y);
+                    prop_assert_eq!(pose.k.to_bits(), t.k.to_bits());
+                    prop_assert_eq!(pose.k_prime.to_bits(), t.k_prime.to_bits());
+                }
+                (Err(a), Err(b)) => prop_assert_eq!(a, b),
+                (a, b) => prop_assert!(false, "{:?} vs {:?}", a.map(|r| r.0), b.map(|r| r.0)),
+            }
+        }
+    }
+
+    /// Near the workspace the two routes agree too (θ in the working
+    /// mode's range, where most samples of a log lie).
+    #[test]
+    fn the_lean_route_is_the_pose_route_in_the_workspace() {
+        let g = Geometry::aras_diamond();
+        let mut n_ok = 0;
+        for i in 0..200 {
+            for k in 0..200 {
+                let theta = Vector2::new(-1.0 + 0.0137 * i as f64, -2.5 + 0.0131 * k as f64);
+                let (a, b) = (
+                    forward_pose(&g, &theta, AssemblyMode::Plus),
+                    forward_triangle(&g, &theta, AssemblyMode::Plus),
+                );
+                match (a, b) {
+                    (Ok((x, pose)), Ok((y, t))) => {
+                        n_ok += 1;
+                        assert_eq!(x, y);
+                        assert_eq!(pose.k.to_bits(), t.k.to_bits());
+                        assert_eq!(pose.k_prime.to_bits(), t.k_prime.to_bits());
+                    }
+                    (Err(a), Err(b)) => assert_eq!(a, b),
+                    (a, b) => panic!("{theta:?}: {:?} vs {:?}", a.map(|r| r.0), b.map(|r| r.0)),
+                }
+            }
+        }
+        assert!(n_ok > 10_000, "{n_ok} poses in the grid");
+    }
 }

@@ -79,27 +79,20 @@ impl<T: Scalar> Pose<T> {
             });
         }
         let c = T::lift;
-        let (sa, ca, sb, cb) = (c(g.sa), c(g.ca), c(g.sb), c(g.cb));
-        let (zero, one, two) = (T::zero(), T::one(), c(2.0));
+        let (sa, ca, sb) = (c(g.sa), c(g.ca), c(g.sb));
         let (sg, cg) = gamma.sin_cos();
         let (sphi, cphi) = phi.sin_cos();
-
-        // Spherical cosine rule, (1) and (4). Rounding can push the
-        // cosines a hair past ±1 at the reach limits; the sines are then 0
-        // and the singularity check rejects the pose.
-        let cos_a = ((cb - cg * ca) / (sg * sa)).clamp(-one, one);
-        let sin_a = (one - cos_a * cos_a).max(zero).sqrt();
-        let cos_b = ((cg - cb * ca) / (sb * sa)).clamp(-one, one);
-        let sin_b = (one - cos_b * cos_b).max(zero).sqrt();
+        let Triangle {
+            cos_a,
+            sin_a,
+            cos_b,
+            sin_b,
+            p,
+            dp,
+            k,
+            k_prime,
+        } = Triangle::at(g, sg, cg);
         let a = sin_a.atan2(cos_a);
-
-        // K = dA/dγ = −P/(sα s²γ sA), P = cα − cβ cγ (equal to
-        // −(cot α − cos A cot γ)/sin A).
-        let p = ca - cb * cg;
-        let dp = cb * sg;
-        let u = one / (sa * sg * sg * sin_a);
-        let k = -p * u;
-        let k_prime = u * (-dp + p * (two * cg / sg + k * cos_a / sin_a));
         // μ = (b×d)·(∂d/∂γ + K a×d)/s²β in closed form.
         let s2b = sb * sb;
         let mu = (-sa * sin_a + k * p) / s2b;
@@ -127,6 +120,67 @@ impl<T: Scalar> Pose<T> {
             c: Vector3::new(sa * ct1, sa * st1, ca),
             d: Vector3::new(sg * cphi, sg * sphi, cg),
         })
+    }
+}
+
+/// The spherical triangle (a, b or c, d) at a polar angle γ: what depends
+/// on γ alone, shared by [`Pose`] and the lean forward motion.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Triangle<T: Scalar = f64> {
+    pub cos_a: T,
+    pub sin_a: T,
+    pub cos_b: T,
+    pub sin_b: T,
+    /// P = cα − cβ cγ.
+    pub p: T,
+    /// dP/dγ = cβ sγ.
+    pub dp: T,
+    /// K = dA/dγ.
+    pub k: T,
+    /// dK/dγ.
+    pub k_prime: T,
+}
+
+impl<T: Scalar> Triangle<T> {
+    /// The triangle at `(sin γ, cos γ)`.
+    pub fn at(g: &Geometry, sg: T, cg: T) -> Self {
+        let c = T::lift;
+        let (sa, ca, sb, cb) = (c(g.sa), c(g.ca), c(g.sb), c(g.cb));
+        let (zero, one, two) = (T::zero(), T::one(), c(2.0));
+        // Spherical cosine rule, (1) and (4). Rounding can push the
+        // cosines a hair past ±1 at the reach limits; the sines are then 0
+        // and the singularity check rejects the pose.
+        let cos_a = ((cb - cg * ca) / (sg * sa)).clamp(-one, one);
+        let sin_a = (one - cos_a * cos_a).max(zero).sqrt();
+        let cos_b = ((cg - cb * ca) / (sb * sa)).clamp(-one, one);
+        let sin_b = (one - cos_b * cos_b).max(zero).sqrt();
+        // K = dA/dγ = −P/(sα s²γ sA), P = cα − cβ cγ (equal to
+        // −(cot α − cos A cot γ)/sin A).
+        let p = ca - cb * cg;
+        let dp = cb * sg;
+        let u = one / (sa * sg * sg * sin_a);
+        let k = -p * u;
+        let k_prime = u * (-dp + p * (two * cg / sg + k * cos_a / sin_a));
+        Self {
+            cos_a,
+            sin_a,
+            cos_b,
+            sin_b,
+            p,
+            dp,
+            k,
+            k_prime,
+        }
+    }
+
+    /// How far the triangle is from each singularity.
+    pub fn distance(&self, sin_gamma: T) -> SingularityDistance {
+        SingularityDistance {
+            sin_a: self.sin_a.value(),
+            sin_gamma: sin_gamma.value(),
+            sin_b: self.sin_b.value(),
+            parallel: self.k.value().abs(),
+        }
     }
 }
 

@@ -19,8 +19,9 @@ pub use aras_core::Motion;
 /// Implemented by [`JointCoordinates`] (the model is written in joint
 /// coordinates, any dimension) and by every closure
 /// `Fn(Motion<f64, D>) -> Result<Motion<f64, D>, E>`, e.g. a robot's
-/// forward kinematics with their derivatives.
-pub trait Coordinates<D: Dim = U2>
+/// forward kinematics with their derivatives. `Sync`, so that the
+/// processing maps a long log's samples on every core.
+pub trait Coordinates<D: Dim = U2>: Sync
 where
     DefaultAllocator: Allocator<D>,
 {
@@ -58,7 +59,7 @@ where
 
 impl<F, E, D: Dim> Coordinates<D> for F
 where
-    F: Fn(Motion<f64, D>) -> Result<Motion<f64, D>, E>,
+    F: Fn(Motion<f64, D>) -> Result<Motion<f64, D>, E> + Sync,
     E: std::error::Error + Send + Sync + 'static,
     DefaultAllocator: Allocator<D>,
 {

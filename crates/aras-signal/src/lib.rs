@@ -61,6 +61,10 @@
 //! * `rustfft`: O(n log n) transforms of any length for the periodic filter
 //!   and spectral derivative (an averaged period of 10 000 samples is not a
 //!   power of two; a hand-written mixed-radix FFT would be more code to trust).
+//! * `rayon`: the caller's [`Coordinates`] mapped over a long log's samples
+//!   on every core (the forward kinematics of 160 000 samples is half of a
+//!   plain log's processing); the workspace's other parallel stages use it
+//!   too, so a program has one thread pool to configure.
 //! * `aras-log`: the [`aras_log::Log`] a processing starts from.
 //! * `aras-core`: [`Motion`], the motion sample the caller's [`Coordinates`]
 //!   map, shared with the kinematics and the excitation design.

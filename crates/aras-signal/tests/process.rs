@@ -352,6 +352,37 @@ fn a_coordinate_failure_names_the_sample_and_keeps_its_cause() {
     .unwrap();
     assert_eq!(ok.samples.x, ok.samples.theta);
     assert_eq!(ok.samples.x_ddot, ok.samples.theta_ddot);
+
+    // The samples are mapped in parallel chunks (4096 samples each); the
+    // one named is the first that fails, as a sequential map would name
+    // it, though samples in later chunks fail too: 8 periods, not averaged.
+    let long = read_log_from(
+        log_text(8, false).as_bytes(),
+        "long.csv",
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    let plain = ProcessOptions {
+        period: PeriodSource::Off,
+        ..ProcessOptions::default()
+    };
+    let theta1 = process(&long, &plain, &aras_signal::JointCoordinates)
+        .unwrap()
+        .samples
+        .theta[0]
+        .clone();
+    let e = process(&long, &plain, &picky).unwrap_err();
+    let ProcessError::Coordinates { index, .. } = &e else {
+        panic!("{e}");
+    };
+    let first = theta1.iter().position(|&q| q > limit).unwrap();
+    let failing = theta1.iter().filter(|&&q| q > limit).count();
+    assert!(
+        theta1.len() > 3 * 4096 && theta1[4096..].iter().any(|&q| q > limit),
+        "{failing} of {} samples fail",
+        theta1.len()
+    );
+    assert_eq!(*index, first, "{e}");
 }
 
 /// Held torques (`aras_log::TorqueTiming::Held`): every route evaluates the
