@@ -524,7 +524,9 @@ pub struct IdentifyArgs {
     /// `diagnose` names them: torque_offset, coulomb_asymmetry,
     /// `stribeck_friction[:V_S]`, passive_joint_viscous, `cogging:CYCLES[:ORDER]`,
     /// quadratic_damping, and `time_delay:D` (the torque taken D samples after
-    /// the angles, fractions interpolated).
+    /// the angles, fractions interpolated). With `--urdf`:
+    /// `stribeck_friction:JOINT:V_S`, the Stribeck column the diagnosis
+    /// names on a joint, at its refined `v_s` (rad/s).
     #[arg(long, value_name = "ID[:ARG],…", value_delimiter = ',')]
     pub effects: Vec<String>,
     /// Output directory.

@@ -211,10 +211,14 @@ pub fn candidates(model: &UrdfModel, settings: &DiagnoseSettings) -> Vec<UrdfCan
     let mut out = Vec::new();
     for (joint, name) in names.iter().enumerate() {
         let name = name.clone();
+        // A joint whose model has a Stribeck column already is not offered
+        // another.
+        let has_stribeck = model.stribeck_columns().iter().any(|(j, _)| *j == joint);
         out.extend(
             settings
                 .stribeck_v_s
                 .iter()
+                .filter(|_| !has_stribeck)
                 .map(|&v_s| UrdfCandidate::StribeckFriction {
                     joint,
                     name: name.clone(),
@@ -304,6 +308,10 @@ impl DiagnosisModel for Engine<'_> {
             if on {
                 t.push(name.into());
             }
+        }
+        let names = self.model.joint_names();
+        for (j, v_s) in self.model.stribeck_columns() {
+            t.push(format!("stribeck:{}(v_s = {v_s:.4} rad/s)", names[*j]));
         }
         t
     }

@@ -313,6 +313,15 @@ impl UrdfModel {
                 }
             }
         }
+        let first = self.dof() * (LINK_COLUMNS + c.count());
+        for (k, &(j, v_s)) in self.stribeck.iter().enumerate() {
+            let x = qd[j] * (1.0 / v_s);
+            set(
+                first + k,
+                j,
+                coulomb(qd[j], self.widths[j]) * (-(x * x)).exp(),
+            );
+        }
     }
 
     /// Joint torques by the recursive Newton–Euler algorithm for the

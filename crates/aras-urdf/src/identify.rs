@@ -82,7 +82,8 @@ pub struct UrdfIdentification {
     /// The standard parameters' names, in order.
     pub parameter_names: Vec<String>,
     /// The physically consistent standard parameters (one positive
-    /// definite pseudo-inertia per body, friction and armature ≥ 0).
+    /// definite pseudo-inertia per body, friction, armature and Stribeck
+    /// levels ≥ 0).
     pub standard: Vec<f64>,
     /// Their base parameters.
     pub consistent_base: Vec<f64>,
@@ -181,12 +182,12 @@ pub(crate) fn consistent_problem(
 }
 
 /// The model's parameters that are ≥ 0 physically: viscous and Coulomb
-/// friction and armature.
+/// friction, armature and the Stribeck levels above the Coulomb one.
 pub(crate) fn signed_parameters(model: &UrdfModel) -> Vec<String> {
     model
         .parameter_names()
         .into_iter()
-        .filter(|p| p.ends_with(".Fv") || p.ends_with(".Fc") || p.ends_with(".Ia"))
+        .filter(|p| [".Fv", ".Fc", ".Ia", ".Fs"].iter().any(|s| p.ends_with(s)))
         .collect()
 }
 

@@ -69,6 +69,6 @@ pub use dynamics::{Pose, Workspace};
 pub use error::UrdfError;
 pub use model::{
     CoulombWidth, Joint, JointColumns, JointKind, JointLimits, LINK_COLUMNS, LINK_PARAMETERS,
-    LinkColumns, ModelSettings, UrdfModel,
+    LinkColumns, ModelSettings, StribeckColumn, UrdfModel,
 };
 pub use spatial::Scalar;

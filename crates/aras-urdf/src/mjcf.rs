@@ -15,8 +15,9 @@ impl UrdfModel {
     /// body's axes) and, where the model has the columns, `armature` (the
     /// rotor inertia `Ia`) and `damping` (the viscous `Fv`). The base sits
     /// in the world at the settings' `base_xyz`, turned by `base_rpy`;
-    /// gravity is the settings'. MuJoCo has no smooth Coulomb law nor a constant joint
-    /// torque: their values are listed in a comment, not simulated.
+    /// gravity is the settings'. MuJoCo has no smooth Coulomb law, constant
+    /// joint torque or Stribeck hump: their values are listed in a comment,
+    /// not simulated.
     /// Refused: a wrong parameter count and a body that is not physical
     /// (mass ≤ 0, a central inertia that is not positive semidefinite,
     /// negative armature or damping).
@@ -63,22 +64,26 @@ impl UrdfModel {
         let friction: Vec<String> = (0..n)
             .filter_map(|j| {
                 let name = &self.joints()[j].name;
-                let parts: Vec<String> = [("Fc", "Coulomb"), ("offset", "offset")]
-                    .iter()
-                    .filter_map(|(k, label)| {
-                        joint_value(j, k)
-                            .filter(|v| *v != 0.0)
-                            .map(|v| format!("{label} {v}"))
-                    })
-                    .collect();
+                let parts: Vec<String> = [
+                    ("Fc", "Coulomb"),
+                    ("offset", "offset"),
+                    ("Fs", "Stribeck level"),
+                ]
+                .iter()
+                .filter_map(|(k, label)| {
+                    joint_value(j, k)
+                        .filter(|v| *v != 0.0)
+                        .map(|v| format!("{label} {v}"))
+                })
+                .collect();
                 (!parts.is_empty()).then(|| format!("{name}: {}", parts.join(", ")))
             })
             .collect();
         if !friction.is_empty() {
             let _ = writeln!(
                 s,
-                "  <!-- not simulated (MuJoCo has no smooth Coulomb law nor a constant joint \
-                 torque): {} -->",
+                "  <!-- not simulated (MuJoCo has no smooth Coulomb law, constant joint \
+                 torque or Stribeck hump): {} -->",
                 friction.join("; ")
             );
         }

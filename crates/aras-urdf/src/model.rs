@@ -149,6 +149,21 @@ impl Default for CoulombWidth {
     }
 }
 
+/// Friction above the Coulomb level at low speed on one joint, as a column
+/// of the model: `Fs s(q̇) exp(−(q̇/v_s)²)` with `s` the joint's Coulomb
+/// law (`tanh(q̇/w)`, or the sign for `w = 0`) and `Fs ≥ 0` its parameter
+/// `joint.Fs`. The effect the diagnosis names as `stribeck_friction`,
+/// with the Stribeck velocity it refined, so that the model identified
+/// afterwards has it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StribeckColumn {
+    /// The URDF joint's name.
+    pub joint: String,
+    /// Stribeck velocity `v_s` (rad/s or m/s), > 0.
+    pub v_s: f64,
+}
+
 /// Settings of a model, with their defaults in one place
 /// ([`Default`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -167,6 +182,9 @@ pub struct ModelSettings {
     pub columns: JointColumns,
     /// The Coulomb columns' width.
     pub coulomb_width: CoulombWidth,
+    /// Stribeck columns, after every per-joint column, in this order
+    /// (default none; at most one per joint).
+    pub stribeck: Vec<StribeckColumn>,
 }
 
 impl Default for ModelSettings {
@@ -177,6 +195,7 @@ impl Default for ModelSettings {
             base_xyz: [0.0; 3],
             columns: JointColumns::default(),
             coulomb_width: CoulombWidth::default(),
+            stribeck: Vec::new(),
         }
     }
 }
@@ -219,6 +238,8 @@ pub struct UrdfModel {
     pub(crate) columns: JointColumns,
     /// The Coulomb width per joint.
     pub(crate) widths: Vec<f64>,
+    /// The Stribeck columns: joint index and `v_s`.
+    pub(crate) stribeck: Vec<(usize, f64)>,
     pub(crate) settings: ModelSettings,
 }
 
@@ -489,6 +510,40 @@ impl UrdfModel {
                 });
             }
         };
+        let mut stribeck: Vec<(usize, f64)> = Vec::new();
+        for c in &settings.stribeck {
+            let bad = |problem: String| UrdfError::Setting {
+                name: "stribeck".to_owned(),
+                problem,
+            };
+            let j = joints
+                .iter()
+                .position(|j| j.name == c.joint)
+                .ok_or_else(|| {
+                    bad(format!(
+                        "joint `{}` is not a movable joint of this URDF ({}); name one of them",
+                        c.joint,
+                        joints
+                            .iter()
+                            .map(|j| j.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ))
+                })?;
+            if !(c.v_s.is_finite() && c.v_s > 0.0) {
+                return Err(bad(format!(
+                    "joint `{}`: v_s = {} must be a finite velocity > 0 (rad/s or m/s)",
+                    c.joint, c.v_s
+                )));
+            }
+            if stribeck.iter().any(|(k, _)| *k == j) {
+                return Err(bad(format!(
+                    "joint `{}` has two Stribeck columns; give one per joint",
+                    c.joint
+                )));
+            }
+            stribeck.push((j, c.v_s));
+        }
         let base_rotation = rpy_matrix(settings.base_rpy);
         let g = settings.gravity;
         let gravity_root = crate::spatial::mul_t(&base_rotation, g);
@@ -501,6 +556,7 @@ impl UrdfModel {
             base_translation: settings.base_xyz,
             columns: settings.columns,
             widths,
+            stribeck,
             settings,
         })
     }
@@ -539,12 +595,13 @@ impl UrdfModel {
 
     /// Number of standard parameters (regressor columns).
     pub fn parameter_count(&self) -> usize {
-        self.dof() * (LINK_COLUMNS + self.columns.count())
+        self.dof() * (LINK_COLUMNS + self.columns.count()) + self.stribeck.len()
     }
 
     /// The standard parameters' names, in column order: `link.m`,
     /// `link.mcx`, … ([`LINK_PARAMETERS`]) per body, then `joint.Fv`,
-    /// `joint.Fc`, `joint.offset`, `joint.Ia` (the enabled ones) per joint.
+    /// `joint.Fc`, `joint.offset`, `joint.Ia` (the enabled ones) per joint,
+    /// then `joint.Fs` per Stribeck column.
     pub fn parameter_names(&self) -> Vec<String> {
         let mut names: Vec<String> = self
             .joints
@@ -568,11 +625,15 @@ impl UrdfModel {
                 }
             }
         }
+        for (j, _) in &self.stribeck {
+            names.push(format!("{}.Fs", self.joints[*j].name));
+        }
         names
     }
 
     /// The standard parameters of the URDF: every body's inertial (with
-    /// the links fixed to it), zero friction, offset and armature.
+    /// the links fixed to it), zero friction, offset, armature and
+    /// Stribeck levels.
     pub fn urdf_parameters(&self) -> Vec<f64> {
         let mut p: Vec<f64> = self.joints.iter().flat_map(|j| j.inertial).collect();
         p.resize(self.parameter_count(), 0.0);
@@ -663,6 +724,12 @@ impl UrdfModel {
     /// kinds' offsets within it.
     pub(crate) fn joint_base(&self, j: usize) -> usize {
         self.dof() * LINK_COLUMNS + j * self.columns.count()
+    }
+
+    /// The Stribeck columns (joint index, `v_s`), in column order after
+    /// every per-joint column.
+    pub fn stribeck_columns(&self) -> &[(usize, f64)] {
+        &self.stribeck
     }
 }
 

@@ -8,7 +8,7 @@ mod common;
 
 use aras_excite::{Dual, Regressor};
 use aras_ident::LinearModel;
-use aras_urdf::{CoulombWidth, JointColumns, ModelSettings, Scalar, UrdfModel};
+use aras_urdf::{CoulombWidth, JointColumns, ModelSettings, Scalar, StribeckColumn, UrdfModel};
 use common::*;
 use num_dual::{Dual64, HyperDual64};
 use proptest::prelude::*;
@@ -20,7 +20,24 @@ fn settings(gravity: [f64; 3], base_rpy: [f64; 3], columns: JointColumns) -> Mod
         base_xyz: [0.1, -0.2, 0.3],
         columns,
         coulomb_width: CoulombWidth::Uniform(0.05),
+        stribeck: Vec::new(),
     }
+}
+
+/// The model of `spec` with `settings` and a Stribeck column on its first
+/// joint (`v_s` 0.07), so that every kind of column is in the checks.
+fn with_stribeck(spec: &RobotSpec, settings: ModelSettings) -> UrdfModel {
+    let plain = UrdfModel::from_urdf_str(&spec.urdf(), "random.urdf", settings.clone()).unwrap();
+    let joint = plain.joint_names()[0].clone();
+    UrdfModel::from_urdf_str(
+        &spec.urdf(),
+        "random.urdf",
+        ModelSettings {
+            stribeck: vec![StribeckColumn { joint, v_s: 0.07 }],
+            ..settings
+        },
+    )
+    .unwrap()
 }
 
 fn all_columns() -> JointColumns {
@@ -162,7 +179,7 @@ proptest! {
     fn regressor_times_parameters_is_rnea(
         (spec, bodies, (q, qd, qdd), g, base, friction) in case(7, true, true)
     ) {
-        let model = UrdfModel::from_urdf_str(&spec.urdf(), "random.urdf", settings(g, base, all_columns())).unwrap();
+        let model = with_stribeck(&spec, settings(g, base, all_columns()));
         let p = parameters(&model, &bodies, &friction);
         let y = model.regressor(&q, &qd, &qdd).unwrap();
         let tau = model.inverse_dynamics(&p, &q, &qd, &qdd).unwrap();
@@ -253,7 +270,7 @@ proptest! {
         (spec, _b, (q, qd, qdd), g, base, _f) in case(5, true, true),
         direction in 0usize..18,
     ) {
-        let model = UrdfModel::from_urdf_str(&spec.urdf(), "random.urdf", settings(g, base, all_columns())).unwrap();
+        let model = with_stribeck(&spec, settings(g, base, all_columns()));
         let n = model.dof();
         let k = direction % (3 * n);
         prop_assume!(k < 6);

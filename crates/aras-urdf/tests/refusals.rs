@@ -154,6 +154,32 @@ fn broken_structure_and_settings_are_refused() {
         ..ModelSettings::default()
     };
     assert!(UrdfModel::from_urdf_str(&arm(ELBOW, ""), "arm.urdf", settings).is_err());
+    // A Stribeck column names a movable joint, once, with v_s > 0.
+    let joints = UrdfModel::from_urdf_str(&arm(ELBOW, ""), "arm.urdf", ModelSettings::default())
+        .unwrap()
+        .joint_names();
+    let stribeck = |cols: &[(&str, f64)]| {
+        let settings = ModelSettings {
+            stribeck: cols
+                .iter()
+                .map(|(joint, v_s)| aras_urdf::StribeckColumn {
+                    joint: (*joint).to_owned(),
+                    v_s: *v_s,
+                })
+                .collect(),
+            ..ModelSettings::default()
+        };
+        UrdfModel::from_urdf_str(&arm(ELBOW, ""), "arm.urdf", settings)
+    };
+    let j = joints[1].as_str();
+    let msg = stribeck(&[("wrist", 0.03)]).unwrap_err().to_string();
+    assert_says(&msg, &["joint `wrist`", "not a movable joint", j]);
+    let msg = stribeck(&[(j, 0.0)]).unwrap_err().to_string();
+    assert_says(&msg, &["v_s = 0", "> 0"]);
+    let msg = stribeck(&[(j, 0.03), (j, 0.05)]).unwrap_err().to_string();
+    assert_says(&msg, &["two Stribeck columns"]);
+    let m = stribeck(&[(j, 0.03)]).unwrap();
+    assert_eq!(m.parameter_names().last().unwrap(), &format!("{j}.Fs"));
     let err =
         UrdfModel::from_file("/nonexistent/robot.urdf", ModelSettings::default()).unwrap_err();
     assert_says(

@@ -185,7 +185,7 @@ fn the_mjcf_nests_the_bodies_and_carries_armature_and_damping() {
     );
     assert!(xml.contains("type=\"slide\""), "{xml}");
     assert!(xml.contains("damping=\"1.5\""), "{xml}");
-    assert!(xml.contains("torque): j2: Coulomb 0.7 -->"), "{xml}");
+    assert!(xml.contains("Stribeck hump): j2: Coulomb 0.7 -->"), "{xml}");
     assert!(xml.contains("mass=\"2\""), "{xml}");
     set(&mut p, "j1.Ia", -0.1);
     let e = model.to_mjcf(&p).unwrap_err().to_string();

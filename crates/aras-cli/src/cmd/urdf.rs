@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use aras_urdf::identify::{IdentifySettings, UrdfIdentification};
-use aras_urdf::{ModelSettings, UrdfModel};
+use aras_urdf::{ModelSettings, StribeckColumn, UrdfModel};
 use serde::Serialize;
 
 use aras_excite::FourierTrajectory;
@@ -29,6 +29,8 @@ struct UrdfParams<'a> {
     urdf: String,
     log: String,
     joints: Vec<String>,
+    /// The Stribeck columns the model was identified with.
+    stribeck: Vec<StribeckColumn>,
     #[serde(flatten)]
     identification: &'a UrdfIdentification,
 }
@@ -49,21 +51,55 @@ pub const COULOMB_WIDTH: f64 = 0.02;
 
 /// The robot of `urdf` with [`model_settings`], and the URDF's text.
 fn load_model(urdf: &Path) -> Result<(UrdfModel, String)> {
+    load_model_with(urdf, &[])
+}
+
+/// [`load_model`] with the Stribeck columns `stribeck` added.
+fn load_model_with(urdf: &Path, stribeck: &[StribeckColumn]) -> Result<(UrdfModel, String)> {
     let text = std::fs::read_to_string(urdf)
         .with_context(|| format!("cannot read the URDF {}", urdf.display()))?;
-    let model = UrdfModel::from_urdf_str(&text, &urdf.display().to_string(), model_settings())?;
+    let settings = ModelSettings {
+        stribeck: stribeck.to_vec(),
+        ..model_settings()
+    };
+    let model = UrdfModel::from_urdf_str(&text, &urdf.display().to_string(), settings)?;
     Ok((model, text))
+}
+
+/// The effects `identify --urdf --effects` adds to the model: what the
+/// diagnosis names, with the setting it refined
+/// (`stribeck_friction:JOINT:V_S`, `V_S` in rad/s).
+fn urdf_effects(effects: &[String]) -> Result<Vec<StribeckColumn>> {
+    effects
+        .iter()
+        .map(|e| {
+            let parts: Vec<&str> = e.split(':').collect();
+            match parts.as_slice() {
+                ["stribeck_friction", joint, v_s] => {
+                    let v_s: f64 = v_s.parse().map_err(|_| {
+                        anyhow::anyhow!(
+                            "--effects {e}: `{v_s}` is not a Stribeck velocity in rad/s"
+                        )
+                    })?;
+                    Ok(StribeckColumn {
+                        joint: (*joint).to_owned(),
+                        v_s,
+                    })
+                }
+                _ => bail!(
+                    "--effects {e}: a URDF robot's model takes `stribeck_friction:JOINT:V_S` \
+                     (the diagnosis's `stribeck_friction:JOINT` with its refined v_s in rad/s); \
+                     its bodies, viscous and Coulomb friction and armature are always in it"
+                ),
+            }
+        })
+        .collect()
 }
 
 /// Runs `identify --urdf`.
 pub fn identify(args: &IdentifyArgs, urdf: &Path) -> Result<()> {
-    if !args.effects.is_empty() {
-        bail!(
-            "--effects names ARAS-Diamond's extra effects; a URDF robot's model is its bodies \
-             with viscous and Coulomb friction and armature per joint (docs/urdf.md)"
-        );
-    }
-    let (model, text) = load_model(urdf)?;
+    let stribeck = urdf_effects(&args.effects)?;
+    let (model, text) = load_model_with(urdf, &stribeck)?;
     let file = urdf.display().to_string();
     let inputs: Vec<PathBuf> = [args.data.clone(), urdf.to_path_buf()]
         .into_iter()
@@ -85,6 +121,7 @@ pub fn identify(args: &IdentifyArgs, urdf: &Path) -> Result<()> {
             urdf: file.clone(),
             log: args.data.display().to_string(),
             joints: model.joint_names(),
+            stribeck,
             identification: &id,
         },
     )?;
@@ -287,14 +324,17 @@ pub fn simulate(args: &SimulateArgs, urdf: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The standard parameters of a `params.json` of `identify --urdf` (or a
-/// simulated log's sidecar `truth`), checked against the model's names.
-fn read_urdf_params(path: &Path, model: &UrdfModel) -> Result<Vec<f64>> {
+/// The model of `urdf` a parameter file of `identify --urdf` was
+/// identified with (its Stribeck columns added) and its standard
+/// parameters.
+fn read_urdf_params(path: &Path, urdf: &Path) -> Result<(UrdfModel, Vec<f64>)> {
     #[derive(serde::Deserialize)]
     struct Params {
         format: String,
         parameter_names: Vec<String>,
         standard: Vec<f64>,
+        #[serde(default)]
+        stribeck: Vec<StribeckColumn>,
     }
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("cannot read the parameter file {}", path.display()))?;
@@ -311,6 +351,8 @@ fn read_urdf_params(path: &Path, model: &UrdfModel) -> Result<Vec<f64>> {
             p.format
         );
     }
+    let (model, _) = load_model_with(urdf, &p.stribeck)
+        .with_context(|| format!("{}: its model on {}", path.display(), urdf.display()))?;
     let names = model.parameter_names();
     if p.parameter_names != names || p.standard.len() != names.len() {
         bail!(
@@ -329,13 +371,12 @@ fn read_urdf_params(path: &Path, model: &UrdfModel) -> Result<Vec<f64>> {
             names[i]
         );
     }
-    Ok(p.standard)
+    Ok((model, p.standard))
 }
 
 /// Runs `predict --urdf`: `t,tau1…tauN` on every row the processing covers
 /// and the fitness (78) of exactly that file against the raw torques.
 pub fn predict(args: &PredictArgs, urdf: &Path) -> Result<()> {
-    let (model, _) = load_model(urdf)?;
     let sidecar = args.log.sidecar_of(&args.data);
     let inputs: Vec<PathBuf> = [
         urdf.to_path_buf(),
@@ -350,7 +391,7 @@ pub fn predict(args: &PredictArgs, urdf: &Path) -> Result<()> {
     if args.summary.is_some() {
         bail!("--summary is ARAS-Diamond's; with --urdf the figures are printed");
     }
-    let params = read_urdf_params(&args.params, &model)?;
+    let (model, params) = read_urdf_params(&args.params, urdf)?;
     let cfg = super::load_config(&args.common)?.config;
     let log = super::load_log_of(&args.data, &args.log, &cfg, model.dof())?;
     let settings = PredictSettings {
@@ -401,7 +442,6 @@ pub fn validate(args: &ValidateArgs, urdf: &Path) -> Result<()> {
     if args.data.is_empty() {
         bail!("give at least one validation log with --data VAL.csv");
     }
-    let (model, _) = load_model(urdf)?;
     let inputs: Vec<PathBuf> = [urdf.to_path_buf(), args.params.clone()]
         .into_iter()
         .chain(args.data.iter().cloned())
@@ -409,16 +449,18 @@ pub fn validate(args: &ValidateArgs, urdf: &Path) -> Result<()> {
         .chain(args.common.config.iter().cloned())
         .collect();
     let out = OutDir::create(&args.out, args.common.force, &inputs)?;
-    let params = read_urdf_params(&args.params, &model)?;
+    let (model, params) = read_urdf_params(&args.params, urdf)?;
+    // A simulated log's truth is of the model without added columns.
+    let (plain, _) = load_model(urdf)?;
     let cfg = super::load_config(&args.common)?.config;
     let mut results = Vec::new();
     for path in &args.data {
         let log = super::load_log_of(path, &crate::cli::LogArgs::default(), &cfg, model.dof())?;
         let settings = PredictSettings::default();
         let p = aras_urdf::predict::predict(&model, &params, &log, &settings)?;
-        let truth = sidecar_truth(path, &model)?;
+        let truth = sidecar_truth(path, &plain)?;
         let truth_fitness = match truth {
-            Some(t) => Some(aras_urdf::predict::predict(&model, &t, &log, &settings)?.fitness),
+            Some(t) => Some(aras_urdf::predict::predict(&plain, &t, &log, &settings)?.fitness),
             None => None,
         };
         println!("{}: {} rows", path.display(), p.rows);
