@@ -1315,22 +1315,29 @@ pub fn diagnose<M: DiagnosisModel>(
     } else {
         None
     };
-    let (fctx, final_fit, final_val_accs, final_added) = match &final_ctx {
-        Some(c) => {
-            let train_acc = c.accumulate(train, &train_p)?;
-            let accs: Vec<Accumulator> = validation
+    // The refined model's sums over the validation sets, kept apart from
+    // the selection's (which `before` still needs).
+    let refined_accs: Option<Vec<Accumulator>> = match &final_ctx {
+        Some(c) => Some(
+            validation
                 .iter()
                 .zip(&vals_p)
                 .map(|(v, p)| c.accumulate(v, p))
-                .collect::<Result<_, _>>()?;
+                .collect::<Result<_, _>>()?,
+        ),
+        None => None,
+    };
+    let final_val_accs: &[Accumulator] = refined_accs.as_deref().unwrap_or(&val_accs);
+    let (fctx, final_fit, final_added) = match &final_ctx {
+        Some(c) => {
+            let train_acc = c.accumulate(train, &train_p)?;
             let added: Vec<usize> = (0..refined.len()).collect();
-            let fit = fit_model(&train_acc, &accs, &added, &sel_opts)?;
-            (c, fit, accs, added)
+            let fit = fit_model(&train_acc, final_val_accs, &added, &sel_opts)?;
+            (c, fit, added)
         }
         None => (
             &ctx,
             sel.final_fit().clone(),
-            val_accs.clone(),
             sel.steps.iter().map(|st| st.candidate).collect(),
         ),
     };
@@ -1363,7 +1370,7 @@ pub fn diagnose<M: DiagnosisModel>(
         Ok(out)
     };
     let before = analyse(&ctx, &val_accs, &sel.initial, &[])?;
-    let after = analyse(fctx, &final_val_accs, &final_fit, &final_added)?;
+    let after = analyse(fctx, final_val_accs, &final_fit, &final_added)?;
     let white = after
         .iter()
         .all(|a| a.whiteness.iter().all(|w| w.is_white()));

@@ -2,7 +2,7 @@
 
 use nalgebra::Vector2;
 
-use crate::pose::{Pose, Triangle, check_finite};
+use crate::pose::{Pose, Triangle, check_finite, check_pose};
 use crate::{Geometry, KinError, Motion};
 
 /// Assembly mode of the distal links: the sign in (6).
@@ -148,16 +148,7 @@ fn forward_triangle(
     mode: AssemblyMode,
 ) -> Result<(Vector2<f64>, Triangle), KinError> {
     let (phi, half, gamma, sg) = polar_angle(g, theta, mode)?;
-    check_finite("phi", phi)?;
-    check_finite("gamma", gamma)?;
-    let (lo, hi) = g.reachable_gamma();
-    if gamma < lo || gamma > hi {
-        return Err(KinError::Unreachable {
-            gamma,
-            min: lo,
-            max: hi,
-        });
-    }
+    check_pose(g, phi, gamma)?;
     let t = Triangle::at(g, sg, gamma.cos());
     t.distance(sg).check(g.singularity_tolerance())?;
     // Inside [0, π] the cosine rule's A is `half` to rounding, far inside

@@ -47,6 +47,22 @@ pub(crate) fn check_finite<T: Scalar>(name: &'static str, value: T) -> Result<()
     }
 }
 
+/// A pose's own checks before any evaluation: finite angles and a polar
+/// angle the arcs can reach.
+pub(crate) fn check_pose<T: Scalar>(g: &Geometry, phi: T, gamma: T) -> Result<(), KinError> {
+    check_finite("phi", phi)?;
+    check_finite("gamma", gamma)?;
+    let (lo, hi) = g.reachable_gamma();
+    if gamma.value() < lo || gamma.value() > hi {
+        return Err(KinError::Unreachable {
+            gamma: gamma.value(),
+            min: lo,
+            max: hi,
+        });
+    }
+    Ok(())
+}
+
 impl<T: Scalar> Pose<T> {
     /// Evaluates the pose and rejects unreachable or singular ones.
     pub fn new(g: &Geometry, x: &Vector2<T>) -> Result<Self, KinError> {
@@ -68,16 +84,7 @@ impl<T: Scalar> Pose<T> {
     /// At a singularity some derived scalars are infinite.
     pub fn unchecked(g: &Geometry, x: &Vector2<T>) -> Result<Self, KinError> {
         let (phi, gamma) = (x[0], x[1]);
-        check_finite("phi", phi)?;
-        check_finite("gamma", gamma)?;
-        let (lo, hi) = g.reachable_gamma();
-        if gamma.value() < lo || gamma.value() > hi {
-            return Err(KinError::Unreachable {
-                gamma: gamma.value(),
-                min: lo,
-                max: hi,
-            });
-        }
+        check_pose(g, phi, gamma)?;
         let c = T::lift;
         let (sa, ca, sb) = (c(g.sa), c(g.ca), c(g.sb));
         let (sg, cg) = gamma.sin_cos();

@@ -340,15 +340,9 @@ fn candidate_columns(widths: &[f64], c: &UrdfCandidate, w: &Window) -> Mat<f64> 
     };
     match c {
         UrdfCandidate::StribeckFriction { joint, v_s, .. } => {
-            let (j, vs, width) = (*joint, *v_s, widths[*joint]);
+            let j = *joint;
             column(j, &|r| {
-                let x = w.v[j][r];
-                let s = if width > 0.0 {
-                    (x / width).tanh()
-                } else {
-                    x.signum()
-                };
-                s * (-(x / vs) * (x / vs)).exp()
+                crate::dynamics::stribeck(w.v[j][r], widths[j], *v_s)
             })
         }
         UrdfCandidate::TorqueOffset { joint, .. } => column(*joint, &|_| 1.0),

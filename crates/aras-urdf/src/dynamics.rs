@@ -97,6 +97,15 @@ fn inertia_apply<T: Scalar>(i: &[f64], x: V3<T>) -> V3<T> {
     ]
 }
 
+/// Friction above the Coulomb level at low speed per unit level: the
+/// Coulomb law times `exp(−(q̇/v_s)²)`, the model's Stribeck column and the
+/// diagnosis's candidate alike.
+#[inline(always)]
+pub(crate) fn stribeck<T: Scalar>(qd: T, w: f64, v_s: f64) -> T {
+    let x = qd * (1.0 / v_s);
+    coulomb(qd, w) * (-(x * x)).exp()
+}
+
 /// Sign of the rate with `sign(0) = 0`, or its smooth `tanh(q̇ / w)`.
 #[inline(always)]
 fn coulomb<T: Scalar>(qd: T, w: f64) -> T {
@@ -315,12 +324,7 @@ impl UrdfModel {
         }
         let first = self.dof() * (LINK_COLUMNS + c.count());
         for (k, &(j, v_s)) in self.stribeck.iter().enumerate() {
-            let x = qd[j] * (1.0 / v_s);
-            set(
-                first + k,
-                j,
-                coulomb(qd[j], self.widths[j]) * (-(x * x)).exp(),
-            );
+            set(first + k, j, stribeck(qd[j], self.widths[j], v_s));
         }
     }
 
