@@ -10,8 +10,9 @@
 //! torques and every regressor column, so a Coulomb jump is smeared
 //! identically on both sides of `T = W β`), **reversal exclusion** (rows of
 //! a joint near its velocity reversals, where (49)'s `sign(θ̇)` is wrong,
-//! widened by the filter's reach) and **σ from the HAC covariance**
-//! (`aras_ident::covariance`: correlated residuals, data-driven bandwidth).
+//! widened by the filter's reach) and **σ from a sandwich covariance**
+//! (`aras_pipeline::identify::SigmaMethod`: harmonic by harmonic on every
+//! row of an averaged period, else the HAC with the filter model's floor).
 
 use anyhow::{Context, Result, bail};
 use aras_dyn::{Model, Params};
@@ -173,8 +174,8 @@ pub fn widths_on_log(
 /// OLS and SDP on prepared data, with `nominal` as the SDP's reference, on
 /// the rows `keep` (joint-major; [`friction_widths`]: every row, or a
 /// joint's rows away from its velocity reversals by
-/// `identification.min_speed`, widened by the filter's reach); σ is the
-/// HAC sandwich's (`aras_ident::covariance`).
+/// `identification.min_speed`, widened by the filter's reach); σ by
+/// `aras_pipeline::identify::SigmaMethod`.
 pub fn identify(
     prepared: &Prepared,
     base: &BaseParameters,

@@ -279,19 +279,8 @@ pub struct BaseFile {
     pub parameters: Vec<BaseEntry>,
 }
 
-/// How the σ of `base.json` was computed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SigmaMethod {
-    /// The larger of the HAC sandwich (`aras_ident::covariance`, which
-    /// counts the residual's correlation but runs low on filtered data) and
-    /// the filter model (`sigma_white`), per parameter (in-memory
-    /// identification).
-    LargerOfHacAndWhiteFiltered,
-    /// White noise before the filter, corrected by its noise gain (the
-    /// streaming route, which keeps no residuals): `sigma` = `sigma_white`.
-    WhiteFiltered,
-}
+/// How the σ of `base.json` was computed (the library's enum).
+pub use aras_pipeline::identify::SigmaMethod;
 
 /// Builds `base.json`'s content.
 pub fn base_file(id: &Identification, truth_base: Option<&[f64]>) -> BaseFile {
@@ -307,7 +296,7 @@ pub fn base_file(id: &Identification, truth_base: Option<&[f64]>) -> BaseFile {
             .collect(),
         residual_variance: o.residual_variance,
         condition_number: o.condition_number,
-        sigma_method: SigmaMethod::LargerOfHacAndWhiteFiltered,
+        sigma_method: id.sigma_method,
         rows_fitted: id.rows_fitted,
         parameters: (0..id.base.n_base())
             .map(|i| BaseEntry {

@@ -94,6 +94,48 @@ pub fn integrated_autocorrelation_time(x: &[f64], periodic: bool) -> f64 {
     tau.max(1.0)
 }
 
+/// Averages a square matrix with its transpose (the round-off of a
+/// sandwich product).
+pub(crate) fn symmetrise(m: &mut Mat<f64>) {
+    for j in 0..m.ncols() {
+        for i in 0..j {
+            let v = 0.5 * (m[(i, j)] + m[(j, i)]);
+            m[(i, j)] = v;
+            m[(j, i)] = v;
+        }
+    }
+}
+
+/// `(WᵀW)⁻¹` through the QR of `W` (never the normal equations); a column
+/// the rows do not excite is named in [`IdentError::NotExcited`].
+pub(crate) fn gram_inverse(w: MatRef<'_, f64>, names: &[String]) -> Result<Mat<f64>, IdentError> {
+    let (m, b) = (w.nrows(), w.ncols());
+    let r = crate::dense::compress_with(m, b, |start, mut blk| {
+        let rows = blk.nrows();
+        blk.copy_from(w.subrows(start, rows));
+    });
+    let r = Mat::from_fn(b, b, |i, j| if i <= j { r[(i, j)] } else { 0.0 });
+    let a = crate::rank::analyse(r.as_ref(), crate::base::DEFAULT_RANK_TOLERANCE);
+    if a.independent.len() < b {
+        let mut lost: Vec<usize> = a.dependent.iter().chain(&a.zero).copied().collect();
+        lost.sort_unstable();
+        return Err(IdentError::NotExcited {
+            lost_names: lost.iter().map(|&j| names[j].clone()).collect(),
+            lost,
+            rank: a.independent.len(),
+            total: b,
+            tolerance: crate::base::DEFAULT_RANK_TOLERANCE,
+        });
+    }
+    let rinv = crate::dense::inverse_upper(r.as_ref());
+    // (WᵀW)⁻¹ = R⁻¹ R⁻ᵀ.
+    Ok(Mat::from_fn(b, b, |i, j| {
+        (i.max(j)..b)
+            .map(|k| rinv[(i, k)] * rinv[(j, k)])
+            .sum::<f64>()
+    }))
+}
+
 /// The HAC sandwich covariance of the least-squares estimate of
 /// `min ‖W x − T‖` with residual `residual = T − W x̂`, the rows of each
 /// group of `groups` consecutive in time (`periodic`: one period, lags
@@ -126,31 +168,7 @@ pub fn hac_covariance(
     let names: Vec<String> = (0..b).map(|j| format!("column {j}")).collect();
     check_finite_mat("regressor", w, &names)?;
     check_finite_vec("residual", residual)?;
-    // (WᵀW)⁻¹ through the QR of W (never the normal equations).
-    let r = crate::dense::compress_with(m, b, |start, mut blk| {
-        let rows = blk.nrows();
-        blk.copy_from(w.subrows(start, rows));
-    });
-    let r = Mat::from_fn(b, b, |i, j| if i <= j { r[(i, j)] } else { 0.0 });
-    let a = crate::rank::analyse(r.as_ref(), crate::base::DEFAULT_RANK_TOLERANCE);
-    if a.independent.len() < b {
-        let mut lost: Vec<usize> = a.dependent.iter().chain(&a.zero).copied().collect();
-        lost.sort_unstable();
-        return Err(IdentError::NotExcited {
-            lost_names: lost.iter().map(|&j| names[j].clone()).collect(),
-            lost,
-            rank: a.independent.len(),
-            total: b,
-            tolerance: crate::base::DEFAULT_RANK_TOLERANCE,
-        });
-    }
-    let rinv = crate::dense::inverse_upper(r.as_ref());
-    // (WᵀW)⁻¹ = R⁻¹ R⁻ᵀ.
-    let winv = Mat::from_fn(b, b, |i, j| {
-        (i.max(j)..b)
-            .map(|k| rinv[(i, k)] * rinv[(j, k)])
-            .sum::<f64>()
-    });
+    let winv = gram_inverse(w, &names)?;
 
     // Bandwidth from the slowest group's residual correlation.
     let mut tau_int = Vec::with_capacity(groups.n_groups());
@@ -219,14 +237,7 @@ pub fn hac_covariance(
             covariance[(i, j)] *= dof;
         }
     }
-    // Symmetrise the round-off.
-    for j in 0..b {
-        for i in 0..j {
-            let v = 0.5 * (covariance[(i, j)] + covariance[(j, i)]);
-            covariance[(i, j)] = v;
-            covariance[(j, i)] = v;
-        }
-    }
+    symmetrise(&mut covariance);
     Ok(HacCovariance {
         covariance,
         bandwidth: l,
@@ -243,12 +254,23 @@ impl OlsEstimate {
     /// Supersedes [`OlsEstimate::with_filtered_noise`] (which assumes white
     /// noise before the filter); `residual_variance` stays (66).
     pub fn with_hac(
-        mut self,
+        self,
         w: MatRef<'_, f64>,
         t: &[f64],
         groups: &RowGroups,
         periodic: bool,
     ) -> Result<(Self, HacCovariance), IdentError> {
+        let e = self.residual_of(w, t)?;
+        let hac = hac_covariance(w, &e, groups, periodic)?;
+        Ok((self.with_covariance(hac.covariance.clone()), hac))
+    }
+
+    /// `t − w x̂`, checked against the estimate's columns and `t`'s rows.
+    pub(crate) fn residual_of(
+        &self,
+        w: MatRef<'_, f64>,
+        t: &[f64],
+    ) -> Result<Vec<f64>, IdentError> {
         let b = self.estimate.len();
         if w.ncols() != b {
             return Err(IdentError::DimensionMismatch {
@@ -267,19 +289,22 @@ impl OlsEstimate {
                 hint: "give the torques the estimate was fitted on",
             });
         }
-        let e: Vec<f64> = t.iter().zip(&p).map(|(a, b)| a - b).collect();
-        let hac = hac_covariance(w, &e, groups, periodic)?;
-        self.covariance = hac.covariance.clone();
-        self.std_dev = (0..b)
-            .map(|i| hac.covariance[(i, i)].max(0.0).sqrt())
-            .collect();
+        Ok(t.iter().zip(&p).map(|(a, b)| a - b).collect())
+    }
+
+    /// The estimate with `covariance` in place of its own: σ (64) and σ%
+    /// (65) follow it.
+    pub(crate) fn with_covariance(mut self, covariance: Mat<f64>) -> Self {
+        let b = self.estimate.len();
+        self.std_dev = (0..b).map(|i| covariance[(i, i)].max(0.0).sqrt()).collect();
         self.rel_std_percent = self
             .estimate
             .iter()
             .zip(&self.std_dev)
             .map(|(x, s)| 100.0 * s / x.abs())
             .collect();
-        Ok((self, hac))
+        self.covariance = covariance;
+        self
     }
 
     /// Raises every σ to at least `floor[i]` (e.g. the filtered-white-noise

@@ -13,7 +13,9 @@
 //!    number; weighted LS with per-joint noise variances. Data that do not
 //!    excite some base parameters give [`IdentError::NotExcited`] naming them.
 //!    [`covariance`]: the uncertainty for correlated residuals (HAC sandwich
-//!    with a data-driven bandwidth), which σ, σ% and the tests should use.
+//!    with a data-driven bandwidth), which σ, σ% and the tests should use;
+//!    [`spectral`]: the same sandwich harmonic by harmonic, for a fit on
+//!    whole averaged periods.
 //! 3. `ConsistentLs` (67)–(73): the physically consistent estimate as one
 //!    convex SDP over the links' pseudo-inertias (default feature `sdp`).
 //! 4. [`validate`]: fitness (78), workspace positive definiteness of the mass
@@ -48,6 +50,8 @@
 //!   crate needs no system library.
 //! * `rayon`: parallel tall-skinny QR, streaming regressor blocks and
 //!   workspace scans.
+//! * `rustfft`: the spectra of [`spectral`]'s harmonic sandwich (an FFT of
+//!   any record length, planned once per length).
 //! * `aras-core`: `Inertia`, whose pseudo-inertia the SDP constrains.
 //! * `serde`: results serialise for reports; `thiserror`: the error type.
 #![warn(missing_docs)]
@@ -67,6 +71,7 @@ mod rank;
 mod sdp;
 pub mod selection;
 pub mod simd;
+pub mod spectral;
 pub mod stats;
 pub mod streaming;
 pub mod validate;
@@ -83,3 +88,4 @@ pub use sdp::{
     ActiveConstraint, ConsistentLs, ConstraintKind, LinkLayout, LinkReport, SdpSettings,
     SdpSolution, pseudo_inertia_min_eigenvalue,
 };
+pub use spectral::{SpectralCovariance, spectral_covariance};

@@ -115,6 +115,26 @@ impl Default for IdentifySettings {
     }
 }
 
+/// How an identification's σ (64) and covariance were obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SigmaMethod {
+    /// The larger of the time-domain HAC sandwich
+    /// (`aras_ident::covariance`, which counts the residual's correlation
+    /// but runs low on filtered data) and the filter model
+    /// ([`Identification::sigma_white`]), per parameter: rows masked away
+    /// from reversals, or a record that is not one averaged period.
+    LargerOfHacAndWhiteFiltered,
+    /// The harmonic sandwich (`aras_ident::spectral`): every row of one
+    /// averaged period fitted, the residual's spectrum measured harmonic by
+    /// harmonic, so a coloured residual far from the regressor's harmonics
+    /// does not widen σ.
+    HarmonicSandwich,
+    /// White noise before the filter, corrected by its noise gain (the
+    /// streaming route, which keeps no residuals): σ = `sigma_white`.
+    WhiteFiltered,
+}
+
 /// Everything identification produced.
 #[derive(Debug, Clone)]
 pub struct Identification {
@@ -124,11 +144,12 @@ pub struct Identification {
     pub names: Vec<String>,
     /// Base parameters.
     pub base: BaseParameters,
-    /// OLS (or WLS) estimate of the base parameters; σ and covariance the
-    /// HAC sandwich (`OlsEstimate::with_hac`) with every σ raised to at least
-    /// `sigma_white` (`OlsEstimate::with_sigma_floor`).
+    /// OLS (or WLS) estimate of the base parameters; σ and covariance by
+    /// [`Self::sigma_method`].
     pub ols: OlsEstimate,
-    /// σ of the HAC sandwich alone.
+    /// How `ols`'s σ and covariance were obtained.
+    pub sigma_method: SigmaMethod,
+    /// σ of the time-domain HAC sandwich alone.
     pub sigma_hac: Vec<f64>,
     /// σ of the OLS (or WLS) estimate assuming white noise before the
     /// filter (`OlsEstimate::with_filtered_noise`), for comparison with the
@@ -326,13 +347,27 @@ pub fn identify(
     // on the rows as fitted (scaled by 1/σ_joint for WLS).
     let periodic = prepared.periodic();
     let gain = prepared.noise_gain()?;
-    let (ols, reduced, sigma_white) = match settings.weighting {
+    // On every row of one averaged period the harmonic sandwich
+    // (`aras_ident::spectral`) gives σ; otherwise the larger of the HAC and
+    // the filter model, per parameter (`OlsEstimate::with_sigma_floor`).
+    let whole_periods = periodic && keep.iter().all(|&k| k);
+    let spectral = |e: &aras_ident::OlsEstimate, w: faer::MatRef<'_, f64>, t: &[f64]| {
+        whole_periods
+            .then(|| {
+                e.clone()
+                    .with_spectral_sandwich(w, t, &fit.groups)
+                    .map(|(e, _)| e)
+            })
+            .transpose()
+    };
+    let (ols, reduced, sigma_white, harmonic) = match settings.weighting {
         Weighting::Ols => {
             let r = ReducedLs::new(w_fit.as_ref(), &fit.t, &bnames)?;
             let plain = r.ols()?;
             let white = plain.clone().with_filtered_noise(gain)?.std_dev;
+            let harmonic = spectral(&plain, w_fit.as_ref(), &fit.t)?;
             let (e, _) = plain.with_hac(w_fit.as_ref(), &fit.t, &fit.groups, periodic)?;
-            (e, r, white)
+            (e, r, white, harmonic)
         }
         Weighting::Wls => {
             let e = aras_ident::wls(
@@ -353,16 +388,21 @@ pub fn identify(
             });
             let tw: Vec<f64> = fit.t.iter().zip(&scale).map(|(t, s)| t * s).collect();
             let white = e.estimate.clone().with_filtered_noise(gain)?.std_dev;
+            let harmonic = spectral(&e.estimate, ww.as_ref(), &tw)?;
             let (est, _) = e
                 .estimate
                 .with_hac(ww.as_ref(), &tw, &fit.groups, periodic)?;
-            (est, e.reduced, white)
+            (est, e.reduced, white, harmonic)
         }
     };
-    // σ: the larger of the HAC and the filter model, per parameter
-    // (`OlsEstimate::with_sigma_floor`).
     let sigma_hac = ols.std_dev.clone();
-    let (ols, _) = ols.with_sigma_floor(&sigma_white)?;
+    let (ols, sigma_method) = match harmonic {
+        Some(e) => (e, SigmaMethod::HarmonicSandwich),
+        None => (
+            ols.with_sigma_floor(&sigma_white)?.0,
+            SigmaMethod::LargerOfHacAndWhiteFiltered,
+        ),
+    };
     let sdp = consistent_fit(&reduced, base, model, nominal, &settings.sdp)?;
     let (ols_params, sdp_params) = standard_params(nominal, model, base, &ols.estimate, &sdp)?;
     let w_b = base.base_regressor(prepared.w_ref())?;
@@ -377,6 +417,7 @@ pub fn identify(
         names,
         base: base.clone(),
         ols,
+        sigma_method,
         sigma_white,
         sigma_hac,
         sdp,

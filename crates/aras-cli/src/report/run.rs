@@ -12,7 +12,7 @@ use super::Report;
 use super::plots::{Series, bars, heatmap, lines};
 use crate::identify::Identification;
 use crate::paper;
-use crate::summary::{Fitness, PseudoInertia};
+use crate::summary::{Fitness, PseudoInertia, SigmaMethod};
 use crate::validate::{CrossValidation, ErrorSummary, PdSummary};
 
 /// Everything the report shows; absent parts are skipped.
@@ -495,12 +495,23 @@ fn base_table(r: &mut Report, d: &RunData) {
                velocity reversals for the other"
         }
     };
+    let sigma = match id.sigma_method {
+        SigmaMethod::HarmonicSandwich => {
+            "the harmonic sandwich (`aras_ident::spectral`): every row of the averaged period \
+             was fitted, so the residual's spectrum is measured harmonic by harmonic and \
+             weighed by the regressor's own harmonics"
+        }
+        SigmaMethod::LargerOfHacAndWhiteFiltered => {
+            "the larger of the HAC sandwich covariance (`aras_ident::covariance`, which counts \
+             the filtered residual's correlation with a bandwidth from its own autocorrelation \
+             time) and the white-noise model of the filter, per parameter"
+        }
+        SigmaMethod::WhiteFiltered => "the white-noise model of the filtered torques",
+    };
     r.paragraph(format!(
         "Residual standard deviation σ_ρ = {:.3e} N·m (66); condition number of the base regressor {:.1}; largest σ% {:.2}. \
          Fitted on {} (joint 1) and {} (joint 2) of {rows} rows each, {which}; \
-         σ and σ% come from the HAC sandwich covariance (`aras_ident::covariance`), which \
-         counts the filtered residual's correlation with a bandwidth from its own \
-         autocorrelation time.",
+         σ and σ% come from {sigma}.",
         id.ols.residual_variance.sqrt(),
         id.ols.condition_number,
         id.ols.rel_std_percent.iter().cloned().fold(0.0, f64::max),
