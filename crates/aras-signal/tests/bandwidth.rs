@@ -367,3 +367,88 @@ fn the_noise_free_shortfall_is_the_start_up_the_hold_and_friction_switching() {
         }
     }
 }
+
+/// Study (`--ignored`, ≈ 30 s): how far the prediction from the angles
+/// stays below the noise ceiling, and how much of it is processing loss,
+/// as a function of the encoder's resolution. Held torques declared, the
+/// simulator's lead-in, default current noise; per frequency of (79) and
+/// joint: ceiling − fitness from the angles, and the processing loss
+/// (fitness from the logged exact θ̇, θ̈ minus fitness from the angles).
+/// Prints the table of `docs/processing.md`, "What the angles cannot see".
+#[test]
+#[ignore]
+fn encoder_resolution_sets_what_the_angles_can_see() {
+    use aras_log::TorqueTiming;
+    let truth = Params::aras_diamond();
+    let read = ReadOptions {
+        torques: Some(TorqueTiming::Held),
+        ..ReadOptions::default()
+    };
+    for counts in [4096u32, 16_384, 65_536] {
+        for (k, f) in [0.5, 0.7, 1.8, 2.5, 4.0].into_iter().enumerate() {
+            let traj = Sinusoid::paper_79(f).unwrap();
+            let mut cfg = config(f, 21 + k as u64);
+            cfg.sensors.counts_per_rev = [counts; 2];
+            let noisy = simulate(&truth, &traj, &cfg).unwrap();
+            let mut csv =
+                String::from("t,theta1,theta2,dtheta1,dtheta2,ddtheta1,ddtheta2,tau1,tau2\n");
+            for i in 0..noisy.t.len() {
+                let (q, v, a, t) = (
+                    noisy.theta[i],
+                    noisy.theta_dot[i],
+                    noisy.theta_ddot[i],
+                    noisy.tau[i],
+                );
+                csv += &format!(
+                    "{},{},{},{},{},{},{},{},{}\n",
+                    noisy.t[i], q[0], q[1], v[0], v[1], a[0], a[1], t[0], t[1]
+                );
+            }
+            let log = read_log_from(csv.as_bytes(), "sim.csv", &read).unwrap();
+            // As `predict` and `validate` score it: through the band the
+            // angles passed, so the friction's step at a reversal is as
+            // smooth as the θ̈ step that balances it.
+            let pa = processed(&truth, &log, &every_row());
+            let raw = predict(&truth, &pa);
+            let from_angles = pa.band_limited(&[&raw[0], &raw[1]]).unwrap();
+            let logged = ProcessOptions {
+                use_logged_derivatives: true,
+                ..every_row()
+            };
+            let exact = predict(&truth, &processed(&truth, &log, &logged));
+            let mut row = format!("| {counts} | {f} |");
+            for j in 0..2 {
+                let clean: Vec<f64> = noisy.tau_clean.iter().map(|t| t[j]).collect();
+                let ceiling = fitness(&log.tau[j], &clean);
+                let fa = fitness(&log.tau[j], &from_angles[j]);
+                let fe = fitness(&log.tau[j], &exact[j]);
+                // Share of the angles' prediction error (against the exact
+                // one) within 5 samples of one of this joint's reversals.
+                let v: Vec<f64> = noisy.theta_dot.iter().map(|v| v[j]).collect();
+                let near: Vec<bool> = (0..v.len())
+                    .map(|i| {
+                        let (a, b) = (i.saturating_sub(5), (i + 5).min(v.len() - 1));
+                        (a..b).any(|k| v[k].signum() != v[k + 1].signum())
+                    })
+                    .collect();
+                let d2: Vec<f64> = (0..v.len())
+                    .map(|i| (exact[j][i] - from_angles[j][i]).powi(2))
+                    .collect();
+                let total: f64 = d2.iter().sum();
+                let at: f64 = d2
+                    .iter()
+                    .zip(&near)
+                    .filter(|(_, n)| **n)
+                    .map(|(d, _)| d)
+                    .sum();
+                row += &format!(
+                    " {:.2} / {:.2} ({:.0} %) |",
+                    ceiling - fa,
+                    fe - fa,
+                    100.0 * at / total
+                );
+            }
+            eprintln!("{row}");
+        }
+    }
+}
