@@ -107,73 +107,198 @@ pub fn spectral_covariance(
     check_finite_mat("regressor", w, &names)?;
     check_finite_vec("residual", residual)?;
     let winv = gram_inverse(w, &names)?;
+    let spectra = Spectra::new(w, residual, &rows);
+    let corrected = Corrected::new(&spectra, &winv)?;
+    let s = spectra.meat(&corrected, half_width);
+    let ws = crate::linalg::product(winv.as_ref(), s.as_ref());
+    let mut covariance = crate::linalg::product(ws.as_ref(), winv.as_ref());
+    crate::covariance::symmetrise(&mut covariance);
+    Ok(SpectralCovariance {
+        covariance,
+        period_samples: n,
+        max_leverage: corrected.max_leverage,
+    })
+}
 
-    // Each group's columns and residual as spectra, one FFT each.
-    let fft = FftPlanner::<f64>::new().plan_fft_forward(n);
-    let spectrum = |x: &mut dyn FnMut(usize) -> f64| {
-        let mut v: Vec<Complex<f64>> = (0..n).map(|i| Complex::new(x(i), 0.0)).collect();
-        fft.process(&mut v);
-        v
-    };
-    let half = n / 2;
-    let mut cols: Vec<Vec<Vec<Complex<f64>>>> = Vec::with_capacity(rows.len());
-    let mut res: Vec<Vec<Complex<f64>>> = Vec::with_capacity(rows.len());
-    for r in &rows {
-        cols.push((0..b).map(|j| spectrum(&mut |i| w[(r[i], j)])).collect());
-        res.push(spectrum(&mut |i| residual[r[i]]));
-    }
+/// Each group's regressor columns and residual as spectra over one period.
+struct Spectra {
+    /// Samples per period.
+    n: usize,
+    /// `cols[g][j][k]`: column `j` of group `g` at harmonic `k`.
+    cols: Vec<Vec<Vec<Complex<f64>>>>,
+    /// `res[g][k]`: the residual of group `g` at harmonic `k`.
+    res: Vec<Vec<Complex<f64>>>,
+    /// Whether any group's columns hold power at harmonic `k` (projected
+    /// data hold none past the series' last harmonic).
+    live: Vec<bool>,
+}
 
-    let ng = rows.len();
-    let top = cols
-        .iter()
-        .flat_map(|c| {
-            c.iter()
-                .flat_map(|v| v[..=half].iter().map(|x| x.norm_sqr()))
-        })
-        .fold(0.0f64, f64::max);
-    // Harmonic k as real rows: one per group for the mean and the Nyquist
-    // bin, two (cosine, sine) for the others, scaled so that the sums over
-    // them are the time domain's (Parseval): x = √(c/n)(Re W, −Im W).
-    let dims = |k: usize| if k == 0 || 2 * k == n { 1 } else { 2 };
-    let real_rows = |k: usize| -> (Mat<f64>, Vec<f64>) {
-        let d = dims(k);
-        let f = (d as f64 / n as f64).sqrt();
-        let x = Mat::from_fn(d * ng, b, |r, j| {
-            let v = cols[r % ng][j][k];
-            f * if r < ng { v.re } else { -v.im }
-        });
-        let e = (0..d * ng)
+impl Spectra {
+    /// One FFT per column and group (planned once).
+    fn new(w: MatRef<'_, f64>, residual: &[f64], rows: &[Vec<usize>]) -> Self {
+        let n = rows[0].len();
+        let fft = FftPlanner::<f64>::new().plan_fft_forward(n);
+        let spectrum = |x: &mut dyn FnMut(usize) -> f64| {
+            let mut v: Vec<Complex<f64>> = (0..n).map(|i| Complex::new(x(i), 0.0)).collect();
+            fft.process(&mut v);
+            v
+        };
+        let cols: Vec<Vec<Vec<Complex<f64>>>> = rows
+            .iter()
             .map(|r| {
-                let v = res[r % ng][k];
-                f * if r < ng { v.re } else { -v.im }
+                (0..w.ncols())
+                    .map(|j| spectrum(&mut |i| w[(r[i], j)]))
+                    .collect()
             })
             .collect();
-        (x, e)
-    };
-    // Each harmonic's residual with the fit's leverage taken out,
-    // ẽ = (I − H)^(−1/2) e with H = X (WᵀW)⁻¹ Xᵀ its block of the hat matrix
-    // (CR2: unbiased for white noise, the constraints the normal equations
-    // put on the groups' residuals at the regressor's harmonics undone).
-    let mut live = vec![false; half + 1];
-    let mut corrected: Vec<Vec<f64>> = vec![Vec::new(); half + 1];
-    let mut kept: Vec<Vec<f64>> = vec![Vec::new(); half + 1];
-    let mut max_leverage = 0.0f64;
-    for k in 0..=half {
-        live[k] = cols
+        let res = rows
             .iter()
-            .any(|c| c.iter().any(|v| v[k].norm_sqr() > LIVE * top));
-        let (x, e) = real_rows(k);
-        if !live[k] {
-            kept[k] = vec![1.0; e.len()];
-            corrected[k] = e;
-            continue;
-        }
-        let xa = crate::linalg::product(x.as_ref(), winv.as_ref());
-        let m = x.nrows();
-        let hat = Mat::from_fn(m, m, |i, j| {
-            (0..b).map(|c| xa[(i, c)] * x[(j, c)]).sum::<f64>()
+            .map(|r| spectrum(&mut |i| residual[r[i]]))
+            .collect();
+        let half = n / 2;
+        let power = |k: usize| {
+            cols.iter()
+                .flat_map(|c| c.iter().map(move |v| v[k].norm_sqr()))
+                .fold(0.0f64, f64::max)
+        };
+        let top = (0..=half).map(power).fold(0.0f64, f64::max);
+        let live = (0..=half).map(|k| power(k) > LIVE * top).collect();
+        Self { n, cols, res, live }
+    }
+
+    fn groups(&self) -> usize {
+        self.cols.len()
+    }
+
+    fn columns(&self) -> usize {
+        self.cols[0].len()
+    }
+
+    /// Real dimensions of harmonic `k`: one for the mean and the Nyquist
+    /// bin, two (cosine, sine) for the others.
+    fn dims(&self, k: usize) -> usize {
+        if k == 0 || 2 * k == self.n { 1 } else { 2 }
+    }
+
+    /// Harmonic `k` as real rows (`dims(k)` per group, group-fastest),
+    /// scaled so that sums over them are the time domain's (Parseval):
+    /// `x = √(dims/n) (Re W, −Im W)`, and the residual likewise.
+    fn real_rows(&self, k: usize) -> (Mat<f64>, Vec<f64>) {
+        let (d, ng) = (self.dims(k), self.groups());
+        let f = (d as f64 / self.n as f64).sqrt();
+        let part = |v: Complex<f64>, r: usize| f * if r < ng { v.re } else { -v.im };
+        let x = Mat::from_fn(d * ng, self.columns(), |r, j| {
+            part(self.cols[r % ng][j][k], r)
         });
-        let ih = Mat::from_fn(m, m, |i, j| if i == j { 1.0 } else { 0.0 } - hat[(i, j)]);
+        let e = (0..d * ng).map(|r| part(self.res[r % ng][k], r)).collect();
+        (x, e)
+    }
+
+    /// The sandwich's meat: the residual's co-spectrum (G × G) smoothed
+    /// over `2·half_width + 1` harmonics, weighted by the dimensions each
+    /// keeps, and each live harmonic's scores varying by it:
+    /// `S = Σ_k Σ_rows xᵀ C_k x`.
+    fn meat(&self, corrected: &Corrected, half_width: usize) -> Mat<f64> {
+        let (ng, b, half) = (self.groups(), self.columns(), self.n / 2);
+        let mut s = Mat::<f64>::zeros(b, b);
+        let mut co = vec![0.0; ng * ng];
+        for k in (0..=half).filter(|&k| self.live[k]) {
+            co.iter_mut().for_each(|v| *v = 0.0);
+            let mut count = vec![0.0; ng];
+            for j in k.saturating_sub(half_width)..=(k + half_width).min(half) {
+                let (e, w) = (&corrected.residual[j], &corrected.kept[j]);
+                for d in 0..self.dims(j) {
+                    for g in 0..ng {
+                        for h in 0..ng {
+                            co[g * ng + h] += e[d * ng + g] * e[d * ng + h];
+                        }
+                        count[g] += w[d * ng + g];
+                    }
+                }
+            }
+            for g in 0..ng {
+                for h in 0..ng {
+                    co[g * ng + h] /= (count[g] * count[h]).sqrt();
+                }
+            }
+            let (x, _) = self.real_rows(k);
+            for d in 0..self.dims(k) {
+                for g in 0..ng {
+                    for h in 0..ng {
+                        let c = co[g * ng + h];
+                        if c == 0.0 {
+                            continue;
+                        }
+                        for j in 0..b {
+                            let xj = c * x[(d * ng + h, j)];
+                            for i in j..b {
+                                s[(i, j)] += x[(d * ng + g, i)] * xj;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        for j in 0..b {
+            for i in j..b {
+                s[(j, i)] = s[(i, j)];
+            }
+        }
+        s
+    }
+}
+
+/// Each harmonic's residual with the fit's leverage taken out,
+/// `ẽ = (I − H)^(−1/2) e` with `H = X (WᵀW)⁻¹ Xᵀ` its block of the hat
+/// matrix (CR2: unbiased for white noise, and it undoes the constraints the
+/// normal equations put on the groups' residuals at the regressor's
+/// harmonics).
+struct Corrected {
+    /// `residual[k]`: harmonic `k`'s corrected residual, as its real rows.
+    residual: Vec<Vec<f64>>,
+    /// `kept[k]`: the share of each real row that carries noise to measure
+    /// (1, less where the fit pins a direction exactly).
+    kept: Vec<Vec<f64>>,
+    /// The largest leverage of a direction kept.
+    max_leverage: f64,
+}
+
+impl Corrected {
+    fn new(spectra: &Spectra, winv: &Mat<f64>) -> Result<Self, IdentError> {
+        let half = spectra.n / 2;
+        let mut out = Self {
+            residual: Vec::with_capacity(half + 1),
+            kept: Vec::with_capacity(half + 1),
+            max_leverage: 0.0,
+        };
+        for k in 0..=half {
+            let (x, e) = spectra.real_rows(k);
+            if !spectra.live[k] {
+                out.kept.push(vec![1.0; e.len()]);
+                out.residual.push(e);
+                continue;
+            }
+            let (residual, kept, leverage) = Self::harmonic(&x, &e, winv)?;
+            out.max_leverage = out.max_leverage.max(leverage);
+            out.residual.push(residual);
+            out.kept.push(kept);
+        }
+        Ok(out)
+    }
+
+    /// One harmonic: its corrected residual, the kept share of each row and
+    /// the largest leverage kept.
+    fn harmonic(
+        x: &Mat<f64>,
+        e: &[f64],
+        winv: &Mat<f64>,
+    ) -> Result<(Vec<f64>, Vec<f64>, f64), IdentError> {
+        let (m, b) = (x.nrows(), x.ncols());
+        let xa = crate::linalg::product(x.as_ref(), winv.as_ref());
+        let ih = Mat::from_fn(m, m, |i, j| {
+            let hat = (0..b).map(|c| xa[(i, c)] * x[(j, c)]).sum::<f64>();
+            if i == j { 1.0 - hat } else { -hat }
+        });
         let eig = ih.self_adjoint_eigen(faer::Side::Lower).map_err(|e| {
             IdentError::external(
                 "harmonic covariance",
@@ -190,7 +315,6 @@ pub fn spectral_covariance(
             .filter(|&i| keep[i])
             .map(|i| l[i])
             .fold(f64::INFINITY, f64::min);
-        max_leverage = max_leverage.max(1.0 - lmin);
         let ue: Vec<f64> = (0..m)
             .map(|i| {
                 if keep[i] {
@@ -200,10 +324,10 @@ pub fn spectral_covariance(
                 }
             })
             .collect();
-        corrected[k] = (0..m)
+        let residual = (0..m)
             .map(|r| (0..m).map(|i| u[(r, i)] * ue[i]).sum())
             .collect();
-        kept[k] = (0..m)
+        let kept = (0..m)
             .map(|r| {
                 (0..m)
                     .filter(|&i| keep[i])
@@ -211,62 +335,8 @@ pub fn spectral_covariance(
                     .sum()
             })
             .collect();
+        Ok((residual, kept, 1.0 - lmin))
     }
-    // The residual's co-spectrum (G × G) smoothed over 2·half_width + 1
-    // harmonics, weighted by their real dimensions; each harmonic's scores
-    // vary by it: S += Σ_rows xᵀ C x.
-    let mut s = Mat::<f64>::zeros(b, b);
-    let mut co = vec![0.0; ng * ng];
-    for k in (0..=half).filter(|&k| live[k]) {
-        co.iter_mut().for_each(|v| *v = 0.0);
-        let mut count = vec![0.0; ng];
-        for j in k.saturating_sub(half_width)..=(k + half_width).min(half) {
-            let (e, w) = (&corrected[j], &kept[j]);
-            for d in 0..dims(j) {
-                for g in 0..ng {
-                    for h in 0..ng {
-                        co[g * ng + h] += e[d * ng + g] * e[d * ng + h];
-                    }
-                    count[g] += w[d * ng + g];
-                }
-            }
-        }
-        for g in 0..ng {
-            for h in 0..ng {
-                co[g * ng + h] /= (count[g] * count[h]).sqrt();
-            }
-        }
-        let (x, _) = real_rows(k);
-        for d in 0..dims(k) {
-            for g in 0..ng {
-                for h in 0..ng {
-                    let c = co[g * ng + h];
-                    if c == 0.0 {
-                        continue;
-                    }
-                    for j in 0..b {
-                        let xj = c * x[(d * ng + h, j)];
-                        for i in j..b {
-                            s[(i, j)] += x[(d * ng + g, i)] * xj;
-                        }
-                    }
-                }
-            }
-        }
-    }
-    for j in 0..b {
-        for i in j..b {
-            s[(j, i)] = s[(i, j)];
-        }
-    }
-    let ws = crate::linalg::product(winv.as_ref(), s.as_ref());
-    let mut covariance = crate::linalg::product(ws.as_ref(), winv.as_ref());
-    crate::covariance::symmetrise(&mut covariance);
-    Ok(SpectralCovariance {
-        covariance,
-        period_samples: n,
-        max_leverage,
-    })
 }
 
 /// Each group's rows in sample order, checked to be one whole period.
