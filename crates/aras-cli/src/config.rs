@@ -363,7 +363,7 @@ impl Default for SignalConfig {
     fn default() -> Self {
         Self {
             filter_order: 4,
-            bandwidth: BandwidthMode::Fixed,
+            bandwidth: BandwidthMode::Auto,
             cutoff_hz: 10.0,
             settling_s: 0.0,
             max_period_spread: 0.1,

@@ -693,10 +693,14 @@ fn messages_point_at_the_cause() {
     );
     let r = aras(&["pipeline", "--print-config"]);
     assert!(String::from_utf8_lossy(&r.stdout).contains("cutoff_hz = 10.0"));
-    // The default filter is the settings', not the user's; the data-chosen
-    // bandwidth says from what it was chosen.
+    // A fixed filter is the settings', not the user's; the data-chosen
+    // bandwidth (the default) says from what it was chosen.
     let plain = simulated_log(&dir, "plain.csv", 3000, |v| v.truncate(5));
-    let r = aras(&strs(&predict_log(&plain, &dir)));
+    let fixed = dir.join("fixed.toml");
+    std::fs::write(&fixed, "[signal]\nbandwidth = \"fixed\"\n").unwrap();
+    let mut args = predict_log(&plain, &dir);
+    args.extend(["--config".into(), fixed.display().to_string()]);
+    let r = aras(&strs(&args));
     let said = String::from_utf8_lossy(&r.stdout).into_owned();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     assert!(
@@ -704,11 +708,7 @@ fn messages_point_at_the_cause() {
         "{said}"
     );
     assert!(!said.contains("by the user"), "{said}");
-    let auto = dir.join("auto.toml");
-    std::fs::write(&auto, "[signal]\nbandwidth = \"auto\"\n").unwrap();
-    let mut args = predict_log(&plain, &dir);
-    args.extend(["--config".into(), auto.display().to_string()]);
-    let r = aras(&strs(&args));
+    let r = aras(&strs(&predict_log(&plain, &dir)));
     let said = String::from_utf8_lossy(&r.stdout).into_owned();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     assert!(

@@ -173,15 +173,25 @@ fn diagnosis_plots_steps_as_points_and_residuals_as_binned_clouds() {
     );
 }
 
-/// The report says which rows were fitted: away from velocity reversals by
-/// default, every row with `identification.rows = "all"`.
+/// The report says which rows were fitted: every row by default, away from
+/// velocity reversals with `identification.rows = "away_from_reversals"`.
 #[test]
 fn identify_report_says_which_rows_were_fitted() {
     let dir = scratch("reports", "rows");
     let exc = default_excitation();
     let data = dir.join("run.csv");
     log(&Params::aras_diamond(), &exc, 2.0 * exc.period(), &data);
-    let away = identify(&data, &dir.join("away"));
+    let away_cfg = dir.join("away.toml");
+    std::fs::write(
+        &away_cfg,
+        "[identification]\nrows = \"away_from_reversals\"\n",
+    )
+    .unwrap();
+    let away = identify_with(
+        &data,
+        &dir.join("away"),
+        &["--config", away_cfg.to_str().unwrap()],
+    );
     assert!(
         away.contains("rows each, away from velocity reversals;"),
         "{away}"
@@ -196,13 +206,7 @@ fn identify_report_says_which_rows_were_fitted() {
     assert_eq!(p["torque_timing"], "held", "{p}");
     assert_eq!(p["motion_shift_steps"], 0.5, "{p}");
     assert!(p["reason"].as_str().unwrap().contains("midpoint"), "{p}");
-    let cfg = dir.join("all.toml");
-    std::fs::write(&cfg, "[identification]\nrows = \"all\"\n").unwrap();
-    let all = identify_with(
-        &data,
-        &dir.join("all"),
-        &["--config", cfg.to_str().unwrap()],
-    );
+    let all = identify(&data, &dir.join("all"));
     assert!(
         all.contains("rows each, every row, with the Coulomb transition widths refined;"),
         "{all}"

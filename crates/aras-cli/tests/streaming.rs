@@ -56,7 +56,16 @@ fn streaming_on_and_off_give_the_same_estimates() {
         .unwrap();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let log = sim.join("log.csv");
-    same_estimates(&dir, &cfg, &log, "", "larger_of_hac_and_white_filtered");
+    // The paper's route: the fixed low-pass, rows away from reversals.
+    let away = dir.join("away.toml");
+    std::fs::write(
+        &away,
+        format!(
+            "{SHORT}[signal]\nbandwidth = \"fixed\"\n[identification]\nrows = \"away_from_reversals\"\n"
+        ),
+    )
+    .unwrap();
+    same_estimates(&dir, &away, &log, "", "larger_of_hac_and_white_filtered");
     // Every row with the Coulomb widths refined on the averaged period, and
     // the data-chosen bandwidth (a harmonic series, projected on both
     // sides): the same widths, rows and estimates.

@@ -21,14 +21,15 @@ use crate::robot::FilterMode;
 pub enum FitRows {
     /// Every row, with the Coulomb widths refined ([`refine_widths`]); a
     /// joint whose width is not identifiable falls back to
-    /// [`FitRows::AwayFromReversals`].
+    /// [`FitRows::AwayFromReversals`]. The default: no drive reverses
+    /// instantly, and the rows near reversals are where real friction and
+    /// the paper's model disagree most (`docs/model.md`, "The Coulomb law").
+    #[default]
     All,
     /// The rows of each joint away from its velocity reversals
     /// (`identification.min_speed`, widened by the filter's reach), the sign
-    /// law (49) (`w = 0`). The default: on the simulated robot the all-row
-    /// fit's parameters predict the faster cross-validation motions worse
-    /// (`docs/model.md`, "The Coulomb transition width").
-    #[default]
+    /// law (49) (`w = 0`): the paper's choice, and the robust fallback for a
+    /// log whose low-speed regime cannot be estimated.
     AwayFromReversals,
 }
 
