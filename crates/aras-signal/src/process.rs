@@ -80,11 +80,12 @@ pub enum Bandwidth {
 }
 
 impl Default for Bandwidth {
-    /// The fixed 10 Hz Butterworth ([`FilterSpec::default`]): on closed-loop
-    /// logs of this robot it still predicts better than [`Bandwidth::Auto`]
-    /// (`docs/processing.md`).
+    /// [`Bandwidth::Auto`]: the band the data resolve, so the fast motions
+    /// keep their harmonics and the rows near velocity reversals can be
+    /// fitted (`docs/processing.md`; the fixed 10 Hz Butterworth,
+    /// [`FilterSpec::default`], is the paper's choice).
     fn default() -> Self {
-        Self::Fixed(FilterSpec::default())
+        Self::Auto
     }
 }
 
