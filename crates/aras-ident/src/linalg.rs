@@ -116,6 +116,7 @@ mod tests {
             ("model.rs", include_str!("model.rs")),
             ("rank.rs", include_str!("rank.rs")),
             ("sdp.rs", include_str!("sdp.rs")),
+            ("spectral.rs", include_str!("spectral.rs")),
             ("stats.rs", include_str!("stats.rs")),
             ("validate.rs", include_str!("validate.rs")),
             (

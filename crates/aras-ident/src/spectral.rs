@@ -299,13 +299,8 @@ impl Corrected {
             let hat = (0..b).map(|c| xa[(i, c)] * x[(j, c)]).sum::<f64>();
             if i == j { 1.0 - hat } else { -hat }
         });
-        let eig = ih.self_adjoint_eigen(faer::Side::Lower).map_err(|e| {
-            IdentError::external(
-                "harmonic covariance",
-                std::io::Error::other(format!("{e:?}")),
-            )
-        })?;
-        let (u, l) = (eig.U(), eig.S().column_vector());
+        let (u, l) = crate::linalg::symmetric_eigen(ih.as_ref())
+            .map_err(|e| IdentError::external("harmonic covariance", e))?;
         // A direction the fit pins exactly (l = 0: the groups' residuals at
         // a harmonic that one column holds alone sum to zero) carries no
         // noise to measure; it is dropped and its share counted in `kept`.
