@@ -421,6 +421,9 @@ def representable(params):
     """The parameter file without the effects MJCF cannot hold (listed in
     the XML comment), for the comparisons."""
     p = json.loads(json.dumps(params))
+    # MuJoCo's frictionloss is a hard Coulomb level: the transition widths
+    # of Fc·tanh(θ̇/w) are listed in the XML comment, not simulated.
+    p.get("friction", {}).pop("w", None)
     extra = p.get("extra", {})
     for k in NOT_REPRESENTED:
         extra.pop(k, None)
