@@ -14,12 +14,15 @@ use aras_excite::FourierTrajectory;
 use aras_log::{ReadOptions, read_log};
 use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, diagnose};
 use aras_pipeline::streaming::{StreamingOptions, spool_log};
-use aras_signal::{PeriodSource, ProcessOptions, process};
+use aras_signal::{Bandwidth, FilterSpec, PeriodSource, ProcessOptions, process};
 use criterion::{Criterion, criterion_group, criterion_main};
 
+/// The paper's processing (the fixed 10 Hz low-pass), which the library's
+/// engine diagnoses away from reversals.
 fn popts() -> ProcessOptions {
     ProcessOptions {
         period: PeriodSource::Off,
+        filter: Bandwidth::Fixed(FilterSpec::default()),
         ..ProcessOptions::default()
     }
 }
