@@ -94,6 +94,39 @@ pub fn integrated_autocorrelation_time(x: &[f64], periodic: bool) -> f64 {
     tau.max(1.0)
 }
 
+/// The checks every sandwich of the fit `w x ≈ t` with `residual` needs
+/// (one residual per row, rows labelled by `groups`, more rows than
+/// columns, finite data) and its bread `(WᵀW)⁻¹`.
+pub(crate) fn sandwich_bread(
+    w: MatRef<'_, f64>,
+    residual: &[f64],
+    groups: &RowGroups,
+    what: &'static str,
+) -> Result<Mat<f64>, IdentError> {
+    let (m, b) = (w.nrows(), w.ncols());
+    groups.check_rows(m)?;
+    if residual.len() != m {
+        return Err(IdentError::DimensionMismatch {
+            what: "residual",
+            expected: m,
+            found: residual.len(),
+            hint: "give one residual per regressor row",
+        });
+    }
+    if m <= b {
+        return Err(IdentError::TooFewRows {
+            what,
+            rows: m,
+            columns: b,
+            needed: b + 1,
+        });
+    }
+    let names: Vec<String> = (0..b).map(|j| format!("column {j}")).collect();
+    check_finite_mat("regressor", w, &names)?;
+    check_finite_vec("residual", residual)?;
+    gram_inverse(w, &names)
+}
+
 /// Averages a square matrix with its transpose (the round-off of a
 /// sandwich product).
 pub(crate) fn symmetrise(m: &mut Mat<f64>) {
@@ -148,27 +181,7 @@ pub fn hac_covariance(
     periodic: bool,
 ) -> Result<HacCovariance, IdentError> {
     let (m, b) = (w.nrows(), w.ncols());
-    groups.check_rows(m)?;
-    if residual.len() != m {
-        return Err(IdentError::DimensionMismatch {
-            what: "residual",
-            expected: m,
-            found: residual.len(),
-            hint: "give one residual per regressor row",
-        });
-    }
-    if m <= b {
-        return Err(IdentError::TooFewRows {
-            what: "HAC covariance",
-            rows: m,
-            columns: b,
-            needed: b + 1,
-        });
-    }
-    let names: Vec<String> = (0..b).map(|j| format!("column {j}")).collect();
-    check_finite_mat("regressor", w, &names)?;
-    check_finite_vec("residual", residual)?;
-    let winv = gram_inverse(w, &names)?;
+    let winv = sandwich_bread(w, residual, groups, "HAC covariance")?;
 
     // Bandwidth from the slowest group's residual correlation.
     let mut tau_int = Vec::with_capacity(groups.n_groups());

@@ -33,8 +33,8 @@
 use faer::{Mat, MatRef};
 use rustfft::{FftPlanner, num_complex::Complex};
 
-use crate::covariance::gram_inverse;
-use crate::error::{IdentError, check_finite_mat, check_finite_vec};
+use crate::covariance::sandwich_bread;
+use crate::error::IdentError;
 use crate::groups::RowGroups;
 use crate::ls::OlsEstimate;
 
@@ -75,38 +75,19 @@ pub struct SpectralCovariance {
 /// # Errors
 /// A group that is not one whole period ([`IdentError::InvalidData`]: a
 /// reversal mask dropped rows, which the time-domain
-/// [`crate::hac_covariance`] handles), columns the rows do not excite,
-/// non-finite data, and a harmonic that alone determines the fit.
+/// [`crate::hac_covariance`] handles), columns the rows do not excite and
+/// non-finite data. A direction the fit pins exactly at one harmonic (a
+/// column held by that harmonic alone) carries no noise to measure: it is
+/// left out of that harmonic's residual, and its neighbours measure it.
 pub fn spectral_covariance(
     w: MatRef<'_, f64>,
     residual: &[f64],
     groups: &RowGroups,
     half_width: usize,
 ) -> Result<SpectralCovariance, IdentError> {
-    let (m, b) = (w.nrows(), w.ncols());
-    groups.check_rows(m)?;
-    if residual.len() != m {
-        return Err(IdentError::DimensionMismatch {
-            what: "residual",
-            expected: m,
-            found: residual.len(),
-            hint: "give one residual per regressor row",
-        });
-    }
+    let winv = sandwich_bread(w, residual, groups, "harmonic covariance")?;
     let n = groups.sample_count();
     let rows = period_rows(groups, n)?;
-    if m <= b {
-        return Err(IdentError::TooFewRows {
-            what: "harmonic covariance",
-            rows: m,
-            columns: b,
-            needed: b + 1,
-        });
-    }
-    let names: Vec<String> = (0..b).map(|j| format!("column {j}")).collect();
-    check_finite_mat("regressor", w, &names)?;
-    check_finite_vec("residual", residual)?;
-    let winv = gram_inverse(w, &names)?;
     let spectra = Spectra::new(w, residual, &rows);
     let corrected = Corrected::new(&spectra, &winv)?;
     let s = spectra.meat(&corrected, half_width);
@@ -380,6 +361,7 @@ impl OlsEstimate {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::covariance::gram_inverse;
     use crate::ls::ols;
     use rand::{SeedableRng, rngs::StdRng};
     use rand_distr::{Distribution, Normal};
