@@ -127,16 +127,25 @@ pub(crate) fn sandwich_bread(
     gram_inverse(w, &names)
 }
 
-/// Averages a square matrix with its transpose (the round-off of a
-/// sandwich product).
-pub(crate) fn symmetrise(m: &mut Mat<f64>) {
-    for j in 0..m.ncols() {
+/// The sandwich `scale · bread · meat · bread`, symmetrised (the
+/// products' round-off averaged with the transpose).
+pub(crate) fn sandwich(bread: &Mat<f64>, meat: &Mat<f64>, scale: f64) -> Mat<f64> {
+    let bm = crate::linalg::product(bread.as_ref(), meat.as_ref());
+    let mut m = crate::linalg::product(bm.as_ref(), bread.as_ref());
+    let n = m.ncols();
+    for j in 0..n {
+        for i in 0..n {
+            m[(i, j)] *= scale;
+        }
+    }
+    for j in 0..n {
         for i in 0..j {
             let v = 0.5 * (m[(i, j)] + m[(j, i)]);
             m[(i, j)] = v;
             m[(j, i)] = v;
         }
     }
+    m
 }
 
 /// `(WᵀW)⁻¹` through the QR of `W` (never the normal equations); a column
@@ -243,14 +252,7 @@ pub fn hac_covariance(
         }
     }
     let dof = m as f64 / (m - b) as f64;
-    let ws = crate::linalg::product(winv.as_ref(), s.as_ref());
-    let mut covariance = crate::linalg::product(ws.as_ref(), winv.as_ref());
-    for j in 0..b {
-        for i in 0..b {
-            covariance[(i, j)] *= dof;
-        }
-    }
-    symmetrise(&mut covariance);
+    let covariance = sandwich(&winv, &s, dof);
     Ok(HacCovariance {
         covariance,
         bandwidth: l,

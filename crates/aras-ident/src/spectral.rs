@@ -33,7 +33,7 @@
 use faer::{Mat, MatRef};
 use rustfft::{FftPlanner, num_complex::Complex};
 
-use crate::covariance::sandwich_bread;
+use crate::covariance::{sandwich, sandwich_bread};
 use crate::error::IdentError;
 use crate::groups::RowGroups;
 use crate::ls::OlsEstimate;
@@ -90,12 +90,9 @@ pub fn spectral_covariance(
     let rows = period_rows(groups, n)?;
     let spectra = Spectra::new(w, residual, &rows);
     let corrected = Corrected::new(&spectra, &winv)?;
-    let s = spectra.meat(&corrected, half_width);
-    let ws = crate::linalg::product(winv.as_ref(), s.as_ref());
-    let mut covariance = crate::linalg::product(ws.as_ref(), winv.as_ref());
-    crate::covariance::symmetrise(&mut covariance);
+    let meat = spectra.meat(&corrected, half_width);
     Ok(SpectralCovariance {
-        covariance,
+        covariance: sandwich(&winv, &meat, 1.0),
         period_samples: n,
         max_leverage: corrected.max_leverage,
     })
@@ -136,14 +133,16 @@ impl Spectra {
             .iter()
             .map(|r| spectrum(&mut |i| residual[r[i]]))
             .collect();
-        let half = n / 2;
-        let power = |k: usize| {
-            cols.iter()
-                .flat_map(|c| c.iter().map(move |v| v[k].norm_sqr()))
-                .fold(0.0f64, f64::max)
-        };
-        let top = (0..=half).map(power).fold(0.0f64, f64::max);
-        let live = (0..=half).map(|k| power(k) > LIVE * top).collect();
+        // The largest column power at each harmonic, once.
+        let power: Vec<f64> = (0..=n / 2)
+            .map(|k| {
+                cols.iter()
+                    .flat_map(|c| c.iter().map(move |v| v[k].norm_sqr()))
+                    .fold(0.0f64, f64::max)
+            })
+            .collect();
+        let top = power.iter().copied().fold(0.0f64, f64::max);
+        let live = power.iter().map(|&p| p > LIVE * top).collect();
         Self { n, cols, res, live }
     }
 

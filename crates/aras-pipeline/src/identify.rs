@@ -343,13 +343,13 @@ pub fn identify(
     }
     let fit = keep_rows(&prepared.stacked, keep)?;
     let w_fit = base.base_regressor(fit.w.as_ref())?;
-    // σ, σ% and the covariance: the HAC sandwich (`aras_ident::covariance`)
-    // on the rows as fitted (scaled by 1/σ_joint for WLS).
+    // σ, σ% and the covariance, on the rows as fitted (scaled by 1/σ_joint
+    // for WLS): on every row of one averaged period the harmonic sandwich
+    // (`aras_ident::spectral`); otherwise the larger of the HAC sandwich
+    // (`aras_ident::covariance`) and the filter model, per parameter
+    // (`OlsEstimate::with_sigma_floor`). The HAC is kept as `sigma_hac`.
     let periodic = prepared.periodic();
     let gain = prepared.noise_gain()?;
-    // On every row of one averaged period the harmonic sandwich
-    // (`aras_ident::spectral`) gives σ; otherwise the larger of the HAC and
-    // the filter model, per parameter (`OlsEstimate::with_sigma_floor`).
     let whole_periods = periodic && keep.iter().all(|&k| k);
     let spectral = |e: &aras_ident::OlsEstimate, w: faer::MatRef<'_, f64>, t: &[f64]| {
         whole_periods
