@@ -15,7 +15,9 @@ use aras_ident::{
 use aras_signal::Processed;
 use serde::{Deserialize, Serialize};
 
-use crate::friction_width::{FitRows, WidthRefinement, WidthSearch, apply_widths, refine_widths};
+use crate::friction_width::{
+    FitRows, WidthRefinement, WidthSearch, apply_widths, refine_checked_widths,
+};
 use crate::prepare::Prepared;
 use crate::robot::{FilterMode, Stacked, consistent_problem, keep_rows, params_from_solution};
 use crate::streaming::StreamingResult;
@@ -270,8 +272,10 @@ pub fn consistent_fit(
 /// ([`crate::friction_width`]): with [`FitRows::All`] refined on every row
 /// and written into `prepared`'s columns, the model returned with them;
 /// with [`FitRows::AwayFromReversals`] the sign law. A refinement that
-/// fails falls back (both joints on the rows away from reversals, the
-/// reason kept in the result), it does not stop the identification.
+/// fails, and a joint whose every-row fit costs its rows away from
+/// reversals more than `settings.width.max_moving_rows_cost`
+/// ([`refine_checked_widths`]), fall back to the rows away from reversals
+/// (the reason kept in the result); neither stops the identification.
 /// Returns the model, the refinement and the rows to fit (joint-major).
 pub fn friction_widths(
     prepared: &mut Prepared,
@@ -283,10 +287,7 @@ pub fn friction_widths(
     let away = prepared.keep_mask(settings.min_speed, settings.reversal_reach)?;
     let refinement = match settings.rows {
         FitRows::AwayFromReversals => WidthRefinement::not_refined(),
-        FitRows::All => match refine_widths(prepared, model, base, mode, &settings.width) {
-            Ok(r) => r,
-            Err(e) => WidthRefinement::failed(e.to_string()),
-        },
+        FitRows::All => refine_checked_widths(prepared, model, base, mode, &settings.width, &away)?,
     };
     let refined = apply_widths(prepared, model, mode, refinement.widths())?;
     let keep = refinement.keep(&away);

@@ -367,14 +367,18 @@ pub fn identify_log_with_progress(
                     RegressorColumns::Standard,
                     false,
                 )?;
-                crate::friction_width::refine_widths(
+                // Checked against the rows `min_speed` keeps, as in memory
+                // (with the default 0 every row is kept and the check is
+                // moot).
+                let away = prepared.keep_mask(options.min_speed, options.reversal_reach)?;
+                crate::friction_width::refine_checked_widths(
                     &mut prepared,
                     model,
                     base,
                     options.filter_mode,
                     search,
-                )
-                .unwrap_or_else(|e| WidthRefinement::failed(e.to_string()))
+                    &away,
+                )?
             }
             None => WidthRefinement::not_refined(),
         };
