@@ -549,7 +549,7 @@ fn left_out_sentence(after: &[ResidualAnalysis], min_speed: f64) -> String {
              and the filter's reach), the final model misses beyond noise ({}); filtered \
              validation fitness on all rows is {all:.1} % against {fitted:.1} % on the fitted rows: \
              friction at low speed (sticking, presliding, a Stribeck velocity below \
-             {min_speed} rad/s) that the sign law (49) does not describe and that the \
+             {min_speed} rad/s) that the model's Coulomb law does not describe and that the \
              candidates, fitted on moving rows, do not see.",
             w.text
         ),
