@@ -85,9 +85,10 @@ pub fn paper_model(p: &Params) -> Result<Model> {
 }
 
 /// Parses one `--effects` entry: `ID` or `ID:ARG[:ARG]`, where
-/// `stribeck_friction:V_S` takes the Stribeck velocity (rad/s, default 0.2)
-/// and `cogging:CYCLES[:ORDER]` the cycles per joint revolution and the
-/// number of harmonics (default 2). The names are those `diagnose` reports.
+/// `stribeck_friction:V_S` takes the Stribeck velocity (rad/s, default 0.2),
+/// `presliding_friction:DELTA` the presliding displacement (rad, default
+/// 6e-4) and `cogging:CYCLES[:ORDER]` the cycles per joint revolution and
+/// the number of harmonics (default 2). The names are those `diagnose` reports.
 pub fn parse_effect(spec: &str) -> Result<Effect> {
     let mut parts = spec.trim().split(':');
     let id = parts.next().unwrap_or_default();
@@ -106,7 +107,7 @@ pub fn parse_effect(spec: &str) -> Result<Effect> {
         .ok()
         .filter(|k| EffectId::EXTRA.contains(k));
     let max_args = match kind {
-        Some(EffectId::StribeckFriction) => 1,
+        Some(EffectId::StribeckFriction | EffectId::PreslidingFriction) => 1,
         Some(EffectId::Cogging) => 2,
         _ => 0,
     };
@@ -130,6 +131,9 @@ pub fn parse_effect(spec: &str) -> Result<Effect> {
             order: num(1, "the number of harmonics")?.map_or(2, |v| v.round() as usize),
         },
         Some(EffectId::QuadraticDamping) => Effect::QuadraticDamping,
+        Some(EffectId::PreslidingFriction) => Effect::PreslidingFriction {
+            displacement: num(0, "the presliding displacement (rad)")?.unwrap_or(6e-4),
+        },
         _ => anyhow::bail!(
             "unknown effect `{id}` in `--effects`; known: {}",
             EffectId::EXTRA.map(EffectId::as_str).join(", ")
@@ -197,6 +201,7 @@ pub fn effect_spec(candidate: &Candidate, refined: Option<f64>) -> String {
         Candidate::TimeDelay { samples } => format!("{}:{samples}", c.id()),
         Candidate::Effect { effect } => match effect {
             Effect::StribeckFriction { v_s } => format!("{}:{v_s}", c.id()),
+            Effect::PreslidingFriction { displacement } => format!("{}:{displacement}", c.id()),
             Effect::Cogging {
                 cycles_per_rev,
                 order,
@@ -234,6 +239,9 @@ mod tests {
                     order: 2,
                 },
                 EffectId::QuadraticDamping => Effect::QuadraticDamping,
+                EffectId::PreslidingFriction => Effect::PreslidingFriction {
+                    displacement: 4.5e-4,
+                },
                 other => panic!("an extra effect without an --effects entry: {other}"),
             })
             .collect();

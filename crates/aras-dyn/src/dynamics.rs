@@ -34,10 +34,12 @@ impl Dynamics {
         params.validate()?;
         let geometry = params.geometry()?;
         let full = params.model()?;
+        // Per-sample extras only: an effect with a state needs the motion's
+        // history, which one sample does not have.
         let extra_effects: Vec<_> = full
             .effects()
             .iter()
-            .filter(|e| !e.is_paper())
+            .filter(|e| !e.is_paper() && !e.is_stateful())
             .copied()
             .collect();
         let extras = Model::new(extra_effects, params.gravity)?;
@@ -117,7 +119,9 @@ impl Dynamics {
     }
 
     /// Torque of the extra effects present in the parameters (N·m); zero
-    /// if there are none. No allocation.
+    /// if there are none. No allocation. An effect with a state
+    /// ([`crate::Effect::is_stateful`]) is not included: one sample has no
+    /// history ([`crate::Model::stacked`] evaluates it along a sequence).
     pub fn extra_torque(&self, s: &KinematicSample, sign: Sign) -> Vector2<f64> {
         let n = self.extras.columns();
         if n == 0 {

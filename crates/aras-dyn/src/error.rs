@@ -142,6 +142,17 @@ pub enum DynError {
         /// The repeated effect identifier.
         id: &'static str,
     },
+    /// A model with an effect that has an internal state was evaluated one
+    /// sample at a time.
+    #[error(
+        "effect `{id}` has an internal state that depends on the samples before, so one \
+         sample's regressor cannot hold it: evaluate the model along the whole sequence \
+         (`Model::stacked`), or leave the effect out of this use"
+    )]
+    StatefulEffect {
+        /// The effect identifier.
+        id: &'static str,
+    },
     /// An effect setting is out of range.
     #[error("effect `{id}`: setting `{setting}` = {value} is invalid: {reason}")]
     InvalidSetting {

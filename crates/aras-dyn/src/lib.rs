@@ -88,7 +88,9 @@ pub use effects::{Effect, EffectId, UnknownEffect, coulomb_law, coulomb_law_dw};
 pub use error::{DynError, ParamError, SimError};
 pub use lagrange::{LagrangeTerms, lagrange_terms};
 pub use model::Model;
-pub use params::{Cogging, DEFAULT_GRAVITY, Extras, Friction, MAX_COGGING_ORDER, Params, Stribeck};
+pub use params::{
+    Cogging, DEFAULT_GRAVITY, Extras, Friction, MAX_COGGING_ORDER, Params, Presliding, Stribeck,
+};
 pub use regressor::Sign;
 pub use robots::{ArcLink, PointMass, arc_robot};
 #[cfg(feature = "ident")]

@@ -61,8 +61,8 @@ use nalgebra::{Matrix3, SymmetricEigen, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::effects::{
-    COULOMB_ASYMMETRY_NAMES, PASSIVE_JOINT_VISCOUS_NAMES, QUADRATIC_DAMPING_NAMES,
-    STRIBECK_FRICTION_NAMES, TORQUE_OFFSET_NAMES, cogging_names,
+    COULOMB_ASYMMETRY_NAMES, PASSIVE_JOINT_VISCOUS_NAMES, PRESLIDING_FRICTION_NAMES,
+    QUADRATIC_DAMPING_NAMES, STRIBECK_FRICTION_NAMES, TORQUE_OFFSET_NAMES, cogging_names,
 };
 use crate::{EffectId, Inertia, ParamError, Params};
 
@@ -331,6 +331,25 @@ pub fn unrepresented(params: &Params) -> Vec<Unrepresented> {
             effect: EffectId::QuadraticDamping,
             values: named(&QUADRATIC_DAMPING_NAMES, &v),
             why: "joint damping is linear in the velocity",
+        });
+    }
+    if let Some(b) = e
+        .presliding_friction
+        .filter(|b| b.level.iter().chain(&b.damping).any(|x| *x != 0.0))
+    {
+        out.push(Unrepresented {
+            effect: EffectId::PreslidingFriction,
+            values: named(
+                &[&["displacement"][..], &PRESLIDING_FRICTION_NAMES].concat(),
+                &[
+                    b.displacement,
+                    b.level[0],
+                    b.level[1],
+                    b.damping[0],
+                    b.damping[1],
+                ],
+            ),
+            why: "frictionloss is a hard level without an internal state",
         });
     }
     out

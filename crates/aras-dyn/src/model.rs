@@ -12,7 +12,7 @@ use std::ops::Range;
 
 use nalgebra::{DVector, Vector3};
 
-use crate::params::{Cogging, Stribeck};
+use crate::params::{Cogging, Presliding, Stribeck};
 use crate::{DynError, Effect, Params};
 
 /// An ordered list of effects plus the gravity vector the rigid-link
@@ -143,6 +143,11 @@ impl Params {
         if e.quadratic_damping.is_some() {
             v.push(Effect::QuadraticDamping);
         }
+        if let Some(b) = &e.presliding_friction {
+            v.push(Effect::PreslidingFriction {
+                displacement: b.displacement,
+            });
+        }
         Model::new(v, self.gravity)
     }
 
@@ -201,6 +206,12 @@ impl Params {
                 }
                 Effect::QuadraticDamping => {
                     dst.copy_from_slice(&x.quadratic_damping.unwrap_or_default())
+                }
+                Effect::PreslidingFriction { displacement } => {
+                    if let Some(b) = &x.presliding_friction {
+                        same(e, "displacement", b.displacement, displacement)?;
+                        dst.copy_from_slice(&[b.level[0], b.level[1], b.damping[0], b.damping[1]]);
+                    }
                 }
             }
         }
@@ -275,6 +286,13 @@ impl Params {
                     x.cogging = Some(c);
                 }
                 Effect::QuadraticDamping => x.quadratic_damping = Some(two()),
+                Effect::PreslidingFriction { displacement } => {
+                    x.presliding_friction = Some(Presliding {
+                        displacement,
+                        level: two(),
+                        damping: [src[2], src[3]],
+                    })
+                }
             }
         }
         Ok(())

@@ -18,7 +18,8 @@ use serde_json::Value;
 use crate::ParamError;
 use crate::effects::{
     COULOMB_ASYMMETRY_NAMES, ELASTICITY_NAMES, FRICTION_NAMES, PASSIVE_JOINT_VISCOUS_NAMES,
-    QUADRATIC_DAMPING_NAMES, STRIBECK_FRICTION_NAMES, TORQUE_OFFSET_NAMES, cogging_names,
+    PRESLIDING_FRICTION_NAMES, QUADRATIC_DAMPING_NAMES, STRIBECK_FRICTION_NAMES,
+    TORQUE_OFFSET_NAMES, cogging_names,
 };
 use crate::json::{Obj, finite, parse};
 use crate::{Effect, EffectId, Inertia};
@@ -48,6 +49,20 @@ pub struct Stribeck {
     pub v_s: f64,
     /// Levels `[Fs1, Fs2]` (N·m).
     pub level: [f64; 2],
+}
+
+/// Presliding (LuGre bristle) friction: `τ_j = Fb_j s_j + Db_j ż_j` with the
+/// bristle state `s_j` and rate `ż_j` of
+/// [`Effect::PreslidingFriction`](crate::Effect::PreslidingFriction).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Presliding {
+    /// Presliding displacement `δ = Fc/σ0` (rad, > 0), a fixed non-linear
+    /// setting.
+    pub displacement: f64,
+    /// Levels `[Fb1, Fb2]` (N·m).
+    pub level: [f64; 2],
+    /// Bristle dampings `[Db1, Db2]` (N·m·s/rad).
+    pub damping: [f64; 2],
 }
 
 /// Cogging torque per joint: `Σ_h Cs_jh sin(h n_c θ_j) + Cc_jh cos(h n_c θ_j)`.
@@ -86,6 +101,8 @@ pub struct Extras {
     pub cogging: Option<Cogging>,
     /// Quadratic damping `[Fq1, Fq2]` (N·m·s²/rad²): `τ = Fq θ̇|θ̇|`.
     pub quadratic_damping: Option<[f64; 2]>,
+    /// Presliding (bristle) friction, a state along the motion.
+    pub presliding_friction: Option<Presliding>,
 }
 
 impl Extras {
@@ -304,6 +321,23 @@ impl Params {
         if let Some(v) = &e.passive_joint_viscous {
             check(Effect::PassiveJointViscous, v)?;
         }
+        if let Some(b) = &e.presliding_friction {
+            let key = "extra.presliding_friction.displacement";
+            finite(b.displacement, key)?;
+            check(
+                Effect::PreslidingFriction {
+                    displacement: b.displacement,
+                },
+                &[b.level[0], b.level[1], b.damping[0], b.damping[1]],
+            )?;
+            if b.displacement <= 0.0 {
+                return Err(ParamError::Invalid {
+                    key: key.into(),
+                    value: b.displacement,
+                    reason: "the presliding displacement must be positive (rad)",
+                });
+            }
+        }
         if let Some(c) = &e.cogging {
             let key = "extra.cogging.cycles_per_rev";
             finite(c.cycles_per_rev, key)?;
@@ -507,6 +541,16 @@ fn read_extras(x: &Obj) -> Result<Extras, ParamError> {
             QUADRATIC_DAMPING_NAMES,
         )?);
     }
+    if has(EffectId::PreslidingFriction.as_str()) {
+        let o = x.obj(EffectId::PreslidingFriction.as_str())?;
+        let [fb1, fb2, db1, db2] = PRESLIDING_FRICTION_NAMES;
+        o.only(&["displacement", fb1, fb2, db1, db2])?;
+        e.presliding_friction = Some(Presliding {
+            displacement: o.num("displacement")?,
+            level: [o.num(fb1)?, o.num(fb2)?],
+            damping: [o.num(db1)?, o.num(db2)?],
+        });
+    }
     Ok(e)
 }
 
@@ -613,6 +657,14 @@ impl Serialize for ExtrasSer<'_> {
                 EffectId::QuadraticDamping.as_str(),
                 &Flat(&named(QUADRATIC_DAMPING_NAMES, [a, b])),
             )?;
+        }
+        if let Some(b) = &e.presliding_friction {
+            let [fb1, fb2, db1, db2] = named(
+                PRESLIDING_FRICTION_NAMES,
+                [b.level[0], b.level[1], b.damping[0], b.damping[1]],
+            );
+            let kv = [("displacement", b.displacement), fb1, fb2, db1, db2];
+            m.serialize_entry(EffectId::PreslidingFriction.as_str(), &Flat(&kv))?;
         }
         m.end()
     }

@@ -14,7 +14,7 @@ use aras_kin::{Geometry, KinematicSample, Motion, Scalar};
 use nalgebra::{DMatrix, Matrix2xX, Vector2, Vector3};
 use rayon::prelude::*;
 
-use crate::{DynError, Model};
+use crate::{DynError, Effect, Model};
 
 /// How `sign(θ̇)` is evaluated in friction-like columns.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -57,12 +57,18 @@ impl Model {
     }
 
     /// [`Model::fill`] with a chosen [`Sign`] evaluation.
+    ///
+    /// # Errors
+    /// [`DynError::StatefulEffect`] for a model with an effect that has a
+    /// state ([`crate::Effect::is_stateful`]); [`DynError::Length`] for a
+    /// buffer of the wrong length.
     pub fn fill_with<T: Scalar>(
         &self,
         s: &KinematicSample<T>,
         sign: Sign,
         out: &mut [T],
     ) -> Result<(), DynError> {
+        self.check_per_sample()?;
         if out.len() != 2 * self.columns() {
             return Err(DynError::Length {
                 what: "regressor buffer (2 × columns)",
@@ -88,7 +94,9 @@ impl Model {
         }
     }
 
-    /// The 2×n regressor of one sample (allocates the result).
+    /// The 2×n regressor of one sample (allocates the result). The columns
+    /// of an effect with a state ([`crate::Effect::is_stateful`]) are zero
+    /// here: one sample has no history; [`Model::stacked`] computes them.
     pub fn regressor(&self, s: &KinematicSample) -> Matrix2xX<f64> {
         let mut m = Matrix2xX::zeros(self.columns());
         self.fill_unchecked(s, Sign::Exact, m.as_mut_slice());
@@ -96,7 +104,12 @@ impl Model {
     }
 
     /// `τ = Y β` for one sample.
+    ///
+    /// # Errors
+    /// [`DynError::StatefulEffect`] for a model with an effect that has a
+    /// state, [`DynError::Length`] for a `beta` of the wrong length.
     pub fn torque(&self, s: &KinematicSample, beta: &[f64]) -> Result<Vector2<f64>, DynError> {
+        self.check_per_sample()?;
         if beta.len() != self.columns() {
             return Err(DynError::Length {
                 what: "parameter vector",
@@ -129,7 +142,9 @@ impl Model {
         self.stacked_blocks(samples.len(), out, |i, buf| {
             self.fill_unchecked(&samples[i], Sign::Exact, buf);
             Ok(())
-        })
+        })?;
+        self.fill_states(samples.len(), |i| samples[i].joint, out);
+        Ok(())
     }
 
     /// Stacked joint-major regressor of the task motion samples
@@ -158,7 +173,63 @@ impl Model {
             let s = aras_kin::evaluate(geometry, &task[i])?;
             self.fill_unchecked(&s, Sign::Exact, buf);
             Ok(())
-        })
+        })?;
+        if self.has_state() {
+            // The joint motion again, only for a model with a state (the
+            // blocks above did not keep it).
+            let joints = task
+                .iter()
+                .map(|m| aras_kin::evaluate(geometry, m).map(|s| s.joint))
+                .collect::<Result<Vec<_>, _>>()?;
+            self.fill_states(task.len(), |i| joints[i], out);
+        }
+        Ok(())
+    }
+
+    /// True if an effect of the model has a state
+    /// ([`crate::Effect::is_stateful`]): its columns need the sequence.
+    pub fn has_state(&self) -> bool {
+        self.effects().iter().any(|e| e.is_stateful())
+    }
+
+    fn check_per_sample(&self) -> Result<(), DynError> {
+        match self.effects().iter().find(|e| e.is_stateful()) {
+            Some(e) => Err(DynError::StatefulEffect { id: e.id() }),
+            None => Ok(()),
+        }
+    }
+
+    /// Writes the columns of the stateful effects along the `n` samples
+    /// (joint motion of sample `i` from `joint(i)`), in record order.
+    fn fill_states(&self, n: usize, joint: impl Fn(usize) -> Motion, out: &mut DMatrix<f64>) {
+        if !self.has_state() || n == 0 {
+            return;
+        }
+        let motion: Vec<Motion> = (0..n).map(joint).collect();
+        for (e, o) in self.layout() {
+            let Effect::PreslidingFriction { displacement } = *e else {
+                continue;
+            };
+            let mut level = vec![0.0; n];
+            let mut rate = vec![0.0; n];
+            for j in 0..2 {
+                let theta: Vec<f64> = motion.iter().map(|m| m.pos[j]).collect();
+                let vel: Vec<f64> = motion.iter().map(|m| m.vel[j]).collect();
+                crate::effects::presliding_states(
+                    displacement,
+                    &theta,
+                    &vel,
+                    &mut level,
+                    &mut rate,
+                );
+                // Columns o + j (level) and o + 2 + j (damping) hold joint
+                // j's values on joint j's rows.
+                for (col, v) in [(o + j, &level), (o + 2 + j, &rate)] {
+                    let start = col * 2 * n + j * n;
+                    out.as_mut_slice()[start..start + n].copy_from_slice(v);
+                }
+            }
+        }
     }
 
     fn check_shape(&self, n: usize, out: &DMatrix<f64>) -> Result<(), DynError> {

@@ -196,7 +196,8 @@ pub struct LinkReport {
 /// The physically consistent estimate and the solver's account of it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SdpSolution {
-    /// Standard parameters `β`.
+    /// Standard parameters `β`; those constrained `≥ 0` are exactly 0 where
+    /// the solver left them negative within its feasibility tolerance.
     pub standard: Vec<f64>,
     /// Link masses, in the order the links were given.
     pub masses: Vec<f64>,
@@ -690,7 +691,16 @@ impl ConsistentLs {
             }
         }
         let x = &sol.x;
-        let standard = x[..n].to_vec();
+        let mut standard = x[..n].to_vec();
+        // An interior-point solution meets `β_j ≥ 0` only to its feasibility
+        // tolerance (−7e-12 has been seen at an active bound); a consumer
+        // that requires the sign (MuJoCo's frictionloss) would refuse it.
+        let feasible = s.tolerance * (1.0 + x.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+        for &j in &self.nonnegative {
+            if standard[j] < 0.0 && standard[j] >= -feasible {
+                standard[j] = 0.0;
+            }
+        }
         let masses = x[n..n + nl].to_vec();
         let base_values = base.to_base(&standard)?;
         let residual_norm = ls.rss(&base_values)?.sqrt();

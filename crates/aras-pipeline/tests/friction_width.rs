@@ -216,7 +216,7 @@ fn a_sticking_joint_falls_back_to_the_rows_away_from_reversals() {
         .to_base(truth.standard_vector(&model).unwrap().as_slice())
         .unwrap();
     let dir = aras_testkit::Scratch::new("width-lugre");
-    let prepared_log = |tag: &str, lugre: Option<LuGre>| {
+    let prepared_log = |tag: &str, lugre: Option<LuGre>, model: &aras_dyn::Model| {
         let cfg = SimConfig {
             duration_s: 2.0 * traj.period(),
             substeps: 4,
@@ -229,7 +229,7 @@ fn a_sticking_joint_falls_back_to_the_rows_away_from_reversals() {
         prepare(
             &log,
             &ProcessOptions::default(),
-            &model,
+            model,
             &geometry,
             FilterMode::Parallel,
             RegressorColumns::Standard,
@@ -253,7 +253,7 @@ fn a_sticking_joint_falls_back_to_the_rows_away_from_reversals() {
         (refinement, e / norm)
     };
     let settings = IdentifySettings::default();
-    let mut control = prepared_log("control", None);
+    let mut control = prepared_log("control", None, &model);
     let (r, _) = error(&settings, &mut control);
     for (j, x) in r.joints.iter().enumerate() {
         eprintln!("control joint {}: {x:?}", j + 1);
@@ -266,7 +266,7 @@ fn a_sticking_joint_falls_back_to_the_rows_away_from_reversals() {
         stiffness: [fc[0] / 5e-4, fc[1] / 5e-4],
         damping: [0.2, 0.4],
     };
-    let mut sticking = prepared_log("lugre", Some(lugre));
+    let mut sticking = prepared_log("lugre", Some(lugre), &model);
     let (r, checked) = error(&settings, &mut sticking.clone());
     let mut every = settings.clone();
     every.width.max_moving_rows_cost = 1e9;
@@ -289,4 +289,21 @@ fn a_sticking_joint_falls_back_to_the_rows_away_from_reversals() {
         checked < 0.1 && checked < unchecked / 10.0,
         "relative base-parameter error {checked} (fallback) vs {unchecked} (every row)"
     );
+    // With the bristle in the model (`presliding_friction` at the
+    // simulated displacement) the reversals are described: every row is
+    // fitted again.
+    let bristle = model
+        .with_effect(aras_dyn::Effect::PreslidingFriction { displacement: 5e-4 })
+        .unwrap();
+    let base_b = base_parameters(&bristle, &geometry, &Workspace::paper(), 400).unwrap();
+    let mut p = prepared_log("lugre-bristle", Some(lugre), &bristle);
+    let (_, r, _) = friction_widths(&mut p, &base_b, &bristle, &settings).unwrap();
+    eprintln!("LuGre, bristle in the model: {r:?}");
+    for (j, x) in r.joints.iter().enumerate() {
+        assert!(
+            x.all_rows && x.moving_rows_cost < 1.0,
+            "joint {}: {x:?}",
+            j + 1
+        );
+    }
 }

@@ -9,7 +9,7 @@ use aras_dyn::Model;
 use aras_pipeline::diagnose::Candidate;
 use aras_pipeline::diagnose::residual::{ResidualAnalysis, RowSample, SampledRow};
 use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, RefinementStatus, diagnose};
-use aras_pipeline::friction_width::{FitRows, WidthRefinement, with_widths};
+use aras_pipeline::friction_width::{FitRows, WidthRefinement, WidthStatus, with_widths};
 
 use crate::cli::{DiagnoseArgs, LogArgs};
 use crate::identify::process_options;
@@ -213,30 +213,78 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     // candidate. So the diagnosis runs again with the widths refined with
     // its named effects until it names the effects it was refined with (at
     // most `WIDTH_PASSES` times; the last pass is kept).
+    //
+    // A joint whose Coulomb law does not describe its reversals (status
+    // `reversals_not_described`: identify fits it away from them) is
+    // diagnosed on every row, since the reversals are where the missing
+    // effect lies; its start there is poor, so only the first effect named
+    // (the clearest) refines the next pass's widths. If nothing is named, or
+    // the named effects do not make the reversals described, the diagnosis
+    // is run on the rows identify fits, from identify's widths. A pass whose
+    // widths describe every reversal is kept when the effects it named would
+    // make a joint fall back again.
     let mut extras = Extras::default();
     let mut pass = 0;
+    let mut consistent = None;
+    let mut identify_widths = None;
     let (d, widths) = loop {
         pass += 1;
         let (start, widths) = stages
             .run(&format!("Coulomb widths on TRAIN (pass {pass})"), |_| {
                 widths_with(&extras)
             })?;
-        let opts = DiagnoseOptions {
-            all_rows: widths.joints.map(|j| j.all_rows),
-            ..opts.clone()
-        };
-        let d = stages.run(
-            &format!("diagnose (candidates × rounds, pass {pass})"),
-            |_| diagnose(&start, &geometry, &train, &vals, &opts),
-        )?;
-        let named = named_extras(&d);
-        if cfg.identification.rows == FitRows::AwayFromReversals
-            || named == extras
-            || pass >= WIDTH_PASSES
-        {
-            break (d, widths);
+        let not_described = widths
+            .joints
+            .map(|j| j.status == WidthStatus::ReversalsNotDescribed);
+        if pass == 1 {
+            identify_widths = Some((start.clone(), widths.clone()));
         }
-        extras = named;
+        let mut run = |all_rows: [bool; 2], what: &str| {
+            let opts = DiagnoseOptions {
+                all_rows,
+                ..opts.clone()
+            };
+            stages.run(
+                &format!("diagnose (candidates × rounds, pass {pass}{what})"),
+                |_| diagnose(&start, &geometry, &train, &vals, &opts),
+            )
+        };
+        let fitted = widths.joints.map(|j| j.all_rows);
+        if !not_described.contains(&true) {
+            let d = run(fitted, "")?;
+            let named = named_extras(&d.steps);
+            if cfg.identification.rows == FitRows::AwayFromReversals
+                || named == extras
+                || pass >= WIDTH_PASSES
+            {
+                break (d, widths);
+            }
+            consistent = Some((d, widths));
+            extras = named;
+            continue;
+        }
+        if let Some(kept) = consistent.take() {
+            break kept;
+        }
+        let every = [0, 1].map(|j| fitted[j] || not_described[j]);
+        let d = (pass < WIDTH_PASSES)
+            .then(|| run(every, ", every row"))
+            .transpose()?;
+        match d {
+            Some(d) if !d.steps.is_empty() => extras = named_extras(&d.steps[..1]),
+            _ => {
+                let (start, widths) = identify_widths.take().unwrap_or((start, widths));
+                let opts = DiagnoseOptions {
+                    all_rows: widths.joints.map(|j| j.all_rows),
+                    ..opts.clone()
+                };
+                let d = stages.run(
+                    &format!("diagnose (candidates × rounds, pass {pass}, rows identify fits)"),
+                    |_| diagnose(&start, &geometry, &train, &vals, &opts),
+                )?;
+                break (d, widths);
+            }
+        }
     };
     let train_name = train.name.clone();
     // The scratch file of a streamed TRAIN goes before the outputs are
@@ -314,9 +362,9 @@ const WIDTH_PASSES: usize = 3;
 
 /// The effects (with refined settings) and torque delay `d` added, as
 /// `identify --effects` takes them.
-fn named_extras(d: &Diagnosis) -> Extras {
+fn named_extras(steps: &[aras_pipeline::diagnose::Step]) -> Extras {
     let mut out = Extras::default();
-    for s in &d.steps {
+    for s in steps {
         let c = s
             .refinement
             .as_ref()

@@ -9,6 +9,7 @@ mod coulomb_asymmetry;
 mod elasticity;
 mod friction;
 mod passive_joint_viscous;
+mod presliding_friction;
 mod quadratic_damping;
 mod rigid_links;
 mod stribeck_friction;
@@ -22,6 +23,8 @@ pub(crate) use elasticity::NAMES as ELASTICITY_NAMES;
 pub(crate) use friction::NAMES as FRICTION_NAMES;
 pub use friction::{coulomb_law, coulomb_law_dw};
 pub(crate) use passive_joint_viscous::NAMES as PASSIVE_JOINT_VISCOUS_NAMES;
+pub(crate) use presliding_friction::NAMES as PRESLIDING_FRICTION_NAMES;
+pub(crate) use presliding_friction::states as presliding_states;
 pub(crate) use quadratic_damping::NAMES as QUADRATIC_DAMPING_NAMES;
 pub(crate) use stribeck_friction::NAMES as STRIBECK_FRICTION_NAMES;
 pub(crate) use torque_offset::NAMES as TORQUE_OFFSET_NAMES;
@@ -81,6 +84,14 @@ pub enum Effect {
     },
     /// Quadratic damping, columns `θ̇_j |θ̇_j|`: `Fq1, Fq2`.
     QuadraticDamping,
+    /// Presliding (LuGre bristle) friction: `Fb1, Fb2, Db1, Db2`, columns
+    /// the normalised bristle deflection of each joint and its rate, a state
+    /// integrated along the stacked samples (never per sample; see
+    /// [`Effect::is_stateful`]).
+    PreslidingFriction {
+        /// Presliding displacement `δ = Fc/σ0` (rad, > 0).
+        displacement: f64,
+    },
 }
 
 /// Which effect, without its settings: the one spelling of the effect
@@ -109,11 +120,13 @@ pub enum EffectId {
     Cogging,
     /// [`Effect::QuadraticDamping`].
     QuadraticDamping,
+    /// [`Effect::PreslidingFriction`].
+    PreslidingFriction,
 }
 
 impl EffectId {
     /// Every effect, in the order of [`Effect`].
-    pub const ALL: [EffectId; 9] = [
+    pub const ALL: [EffectId; 10] = [
         EffectId::RigidLinks,
         EffectId::Friction,
         EffectId::Elasticity,
@@ -123,6 +136,7 @@ impl EffectId {
         EffectId::PassiveJointViscous,
         EffectId::Cogging,
         EffectId::QuadraticDamping,
+        EffectId::PreslidingFriction,
     ];
 
     /// How many of [`ALL`](Self::ALL) make the paper's model (rigid links,
@@ -154,6 +168,7 @@ impl EffectId {
             EffectId::PassiveJointViscous => "passive_joint_viscous",
             EffectId::Cogging => "cogging",
             EffectId::QuadraticDamping => "quadratic_damping",
+            EffectId::PreslidingFriction => "presliding_friction",
         }
     }
 }
@@ -171,6 +186,7 @@ impl EffectId {
             EffectId::PassiveJointViscous => passive_joint_viscous::EXPLANATION,
             EffectId::Cogging => cogging::EXPLANATION,
             EffectId::QuadraticDamping => quadratic_damping::EXPLANATION,
+            EffectId::PreslidingFriction => presliding_friction::EXPLANATION,
         }
     }
 }
@@ -221,6 +237,7 @@ impl Effect {
             Effect::PassiveJointViscous => EffectId::PassiveJointViscous,
             Effect::Cogging { .. } => EffectId::Cogging,
             Effect::QuadraticDamping => EffectId::QuadraticDamping,
+            Effect::PreslidingFriction { .. } => EffectId::PreslidingFriction,
         }
     }
 
@@ -237,6 +254,7 @@ impl Effect {
             Effect::Friction { .. } => friction::NAMES.len(),
             Effect::PassiveJointViscous => passive_joint_viscous::NAMES.len(),
             Effect::Cogging { order, .. } => cogging::columns(order),
+            Effect::PreslidingFriction { .. } => presliding_friction::NAMES.len(),
             _ => 2,
         }
     }
@@ -254,6 +272,7 @@ impl Effect {
             Effect::PassiveJointViscous => s(&passive_joint_viscous::NAMES),
             Effect::Cogging { order, .. } => cogging::names(order),
             Effect::QuadraticDamping => s(&quadratic_damping::NAMES),
+            Effect::PreslidingFriction { .. } => s(&presliding_friction::NAMES),
         }
     }
 
@@ -266,6 +285,9 @@ impl Effect {
                 cycles_per_rev,
                 order,
             } => cogging::validate(cycles_per_rev, order),
+            Effect::PreslidingFriction { displacement } => {
+                presliding_friction::validate(displacement)
+            }
             _ => Ok(()),
         }
     }
@@ -288,6 +310,7 @@ impl Effect {
             Effect::StribeckFriction { .. } => stribeck_friction::NONNEGATIVE,
             Effect::PassiveJointViscous => passive_joint_viscous::NONNEGATIVE,
             Effect::QuadraticDamping => quadratic_damping::NONNEGATIVE,
+            Effect::PreslidingFriction { .. } => presliding_friction::NONNEGATIVE,
             Effect::RigidLinks
             | Effect::TorqueOffset
             | Effect::CoulombAsymmetry
@@ -298,6 +321,14 @@ impl Effect {
     /// True for the three effects of the paper's model.
     pub fn is_paper(&self) -> bool {
         !EffectId::EXTRA.contains(&self.kind())
+    }
+
+    /// True for an effect with an internal state ([`Effect::PreslidingFriction`]):
+    /// its columns depend on the samples before, so they are computed along
+    /// a stacked sequence ([`crate::Model::stacked`]) and one sample's
+    /// regressor cannot hold them.
+    pub fn is_stateful(&self) -> bool {
+        matches!(self, Effect::PreslidingFriction { .. })
     }
 }
 
@@ -325,6 +356,8 @@ impl Effect {
                 order,
             } => cogging::fill(s, cycles_per_rev, order, out),
             Effect::QuadraticDamping => quadratic_damping::fill(s, out),
+            // A state: filled along the stacked sequence, zero here.
+            Effect::PreslidingFriction { .. } => out.fill(T::zero()),
         }
     }
 }
@@ -361,14 +394,31 @@ mod tests {
                 order: 3,
             },
             Effect::QuadraticDamping,
+            Effect::PreslidingFriction { displacement: 5e-4 },
         ];
         assert_eq!(all.map(|e| e.kind()), EffectId::ALL);
         // The paper's model is rigid links, friction and elasticity (42);
         // every other effect is an extra, in `ALL`'s order.
         assert_eq!(
             all.map(|e| e.is_paper()),
-            [true, true, true, false, false, false, false, false, false]
+            [
+                true, true, true, false, false, false, false, false, false, false
+            ]
         );
+        // Only the bristle has a state.
+        assert_eq!(
+            all.map(|e| e.is_stateful()),
+            [
+                false, false, false, false, false, false, false, false, false, true
+            ]
+        );
+        for bad in [0.0, -1e-3, f64::NAN] {
+            assert!(
+                Effect::PreslidingFriction { displacement: bad }
+                    .validate()
+                    .is_err()
+            );
+        }
         assert_eq!(EffectId::EXTRA[..], EffectId::ALL[3..]);
         for e in all {
             let names = e.names();

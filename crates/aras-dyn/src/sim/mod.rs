@@ -382,6 +382,15 @@ pub fn simulate(
     cfg: &SimConfig,
 ) -> Result<SimLog, SimError> {
     cfg.validate()?;
+    if let Some(b) = &truth.extra.presliding_friction {
+        return Err(SimError::Config {
+            key: "truth extra.presliding_friction",
+            value: b.displacement,
+            reason: "the simulator's bristle friction is its `lugre` setting (a LuGre state \
+                     integrated with the motion); remove presliding_friction from the truth \
+                     parameters and set lugre instead",
+        });
+    }
     let at0 = |source| SimError::Dynamics { t: 0.0, source };
     let dy = Dynamics::new(truth).map_err(at0)?;
     let ff = match &cfg.controller.feedforward {

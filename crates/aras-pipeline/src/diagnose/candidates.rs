@@ -68,6 +68,9 @@ impl Candidate {
                         order,
                     },
             } => format!("cogging({cycles_per_rev} cycles/rev, order {order})"),
+            Candidate::Effect {
+                effect: Effect::PreslidingFriction { displacement },
+            } => format!("presliding_friction(δ = {displacement:e} rad)"),
             Candidate::Effect { effect } => effect.id().to_owned(),
             Candidate::TimeDelay { samples } => format!("time_delay({samples:+} samples)"),
         }
@@ -81,7 +84,8 @@ impl Candidate {
     /// The continuous non-linear setting the diagnosis refines between the
     /// grid points once the candidate is added, `(name, value)`: `v_s`
     /// (rad/s) of Stribeck friction, `cycles_per_rev` of cogging,
-    /// `delay_samples` of the time delay. `None` for the linear candidates.
+    /// `displacement` (rad) of presliding friction, `delay_samples` of the
+    /// time delay. `None` for the linear candidates.
     pub fn setting(&self) -> Option<(&'static str, f64)> {
         match self {
             Candidate::TimeDelay { samples } => Some(("delay_samples", *samples)),
@@ -91,6 +95,9 @@ impl Candidate {
             Candidate::Effect {
                 effect: Effect::Cogging { cycles_per_rev, .. },
             } => Some(("cycles_per_rev", *cycles_per_rev)),
+            Candidate::Effect {
+                effect: Effect::PreslidingFriction { displacement },
+            } => Some(("displacement", *displacement)),
             _ => None,
         }
     }
@@ -100,6 +107,8 @@ impl Candidate {
     /// profile is smooth over decades); for cogging cycles a factor 1.25
     /// (its grid steps by 1.2–2 and its profile has side lobes one
     /// `2π / (range of θ)` apart, so a wider interval could hold another
+    /// minimum); for the presliding displacement a factor 3 on a log scale
+    /// (its grid steps by about 2.5 and its profile is smooth, with one
     /// minimum); for a delay of `d` samples `max(1, |d|/2)` either side on
     /// a linear scale, which reaches past the midpoint to each neighbour of
     /// the default grid (±1, 2, 3, 5, 8, 12, 20). `None` where
@@ -107,7 +116,7 @@ impl Candidate {
     pub fn search_scale(&self) -> Option<SearchScale> {
         match self {
             Candidate::Effect {
-                effect: Effect::StribeckFriction { .. },
+                effect: Effect::StribeckFriction { .. } | Effect::PreslidingFriction { .. },
             } => Some(SearchScale::Log { factor: 3.0 }),
             Candidate::Effect {
                 effect: Effect::Cogging { .. },
@@ -161,6 +170,13 @@ impl Candidate {
                 effect: Effect::Cogging {
                     cycles_per_rev: value,
                     order,
+                },
+            },
+            Candidate::Effect {
+                effect: Effect::PreslidingFriction { .. },
+            } => Candidate::Effect {
+                effect: Effect::PreslidingFriction {
+                    displacement: value,
                 },
             },
             Candidate::TimeDelay { .. } => Candidate::TimeDelay { samples: value },
@@ -233,6 +249,12 @@ pub struct CandidateGrid {
     /// 0.2–2 rad/s (motor cogging of 6 per motor revolution through the
     /// 10:1 capstan is 60 per joint revolution).
     pub cogging_cycles: Vec<f64>,
+    /// Presliding displacements `δ = Fc/σ0` (rad). Default 1e-4–5e-3 rad:
+    /// the bristle of a geared or cable joint deforms over 1e-5–1e-3 m at
+    /// the contact, i.e. about 1e-4 to a few 1e-3 rad at the joint; below
+    /// ≈ 1e-4 rad the transition is shorter than the path of a sample at
+    /// the reversals of a 1 kHz log and the state is the sign law (49).
+    pub presliding_displacements: Vec<f64>,
     /// Cogging harmonics (1–16, default 2). Each cycle count is tried with
     /// its fundamental alone and with this many harmonics.
     pub cogging_order: usize,
@@ -255,6 +277,7 @@ impl Default for CandidateGrid {
             cogging_cycles: vec![
                 1.0, 2.0, 3.0, 4.0, 6.0, 8.0, 10.0, 12.0, 16.0, 20.0, 24.0, 30.0, 36.0, 48.0, 60.0,
             ],
+            presliding_displacements: vec![1e-4, 2.5e-4, 6e-4, 1.5e-3, 4e-3],
             cogging_order: 2,
             delays: d.iter().flat_map(|&k| [k, -k]).collect(),
         }
@@ -301,6 +324,11 @@ impl CandidateGrid {
                     }
                 }
                 Ok(EffectId::QuadraticDamping) => out.push(eff(Effect::QuadraticDamping)),
+                Ok(EffectId::PreslidingFriction) => out.extend(
+                    self.presliding_displacements
+                        .iter()
+                        .map(|&displacement| eff(Effect::PreslidingFriction { displacement })),
+                ),
                 Ok(EffectId::RigidLinks | EffectId::Friction | EffectId::Elasticity) => {}
                 Err(_) => out.extend(
                     self.delays

@@ -278,7 +278,12 @@ impl ConsistentRefit<Vec<KinematicSample>> for Refit {
 /// Runs the diagnosis: `start` (usually the paper's model) identified on
 /// `train`, scored on `validation` (at least one set), candidates from
 /// `opts.grid` (those of the effects `start` lacks), until no candidate is
-/// significant ([`aras_diagnose::diagnose`]).
+/// significant ([`aras_diagnose::diagnose`]). Where a joint is fitted away
+/// from its reversals (`opts.all_rows`), the candidates those rows cannot
+/// see are not offered: an effect with a state (`presliding_friction`),
+/// whose columns are the Coulomb law's there, and Stribeck friction with
+/// `v_s < min_speed / 2` (below `exp(−4)` of its level there); a fit on
+/// those rows would extrapolate wildly to the reversals.
 pub fn diagnose(
     start: &Model,
     geometry: &Geometry,
@@ -292,7 +297,14 @@ pub fn diagnose(
         .expand()
         .into_iter()
         .filter(|c| match c {
-            Candidate::Effect { effect } => !start.effects().iter().any(|e| e.id() == effect.id()),
+            Candidate::Effect { effect } => {
+                let every_row = opts.all_rows.iter().all(|&a| a);
+                let seen_away = match effect {
+                    Effect::StribeckFriction { v_s } => *v_s >= 0.5 * opts.min_speed,
+                    e => !e.is_stateful(),
+                };
+                !start.effects().iter().any(|e| e.id() == effect.id()) && (every_row || seen_away)
+            }
             Candidate::TimeDelay { .. } => true,
         })
         .collect();
