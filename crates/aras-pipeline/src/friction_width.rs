@@ -104,7 +104,9 @@ pub enum WidthStatus {
     /// joint is fitted on every row.
     Refined,
     /// The sign law (`w = 0`) fits every row at least as well as any width
-    /// in the interval; the joint is fitted on every row with `w = 0`.
+    /// in the interval, or the model holds a bristle (a friction state,
+    /// `presliding_friction`) that describes the reversals and leaves the
+    /// width unidentifiable; the joint is fitted on every row with `w = 0`.
     SignLaw,
     /// The minimum lies at an end of the interval, or the profile has no
     /// curvature there: the width is not identifiable from this log, so the
@@ -417,7 +419,13 @@ pub fn refine_widths(
         let at_w = rss_at(prepared, cols[j], j, wj)?;
         let at_zero = rss_at(prepared, cols[j], j, 0.0)?;
         let sigma = min.std_dev(n_eff);
-        joints[j] = if at_zero <= at_w {
+        // With a bristle (a friction state) in the model the Coulomb column
+        // is redundant with it while sliding, and its width need not be
+        // identifiable: the bristle describes the reversals, so the joint
+        // keeps every row with the sign law (the moving-rows check below
+        // still guards it).
+        let bristle = model.has_state();
+        joints[j] = if at_zero <= at_w || (sigma.is_none() && bristle) {
             JointWidth {
                 w: 0.0,
                 std_dev: 0.0,
