@@ -763,45 +763,14 @@ fn diagnose_names_presliding_friction_on_a_sticking_joint() {
     let dir = scratch("diagnose", "lugre");
     let truth = Params::aras_diamond();
     let fc = truth.friction.coulomb;
-    let exc = default_excitation();
     let lugre = LuGre {
         static_level: [1.3 * fc[0], 1.3 * fc[1]],
         stribeck_velocity: [0.03; 2],
         stiffness: [fc[0] / 5e-4, fc[1] / 5e-4],
         damping: [0.2, 0.4],
     };
-    let diagnosis = |tag: &str, lugre: Option<LuGre>| {
-        let cfg = SimConfig {
-            substeps: 4,
-            lugre,
-            ..SimConfig::default()
-        };
-        let (train, val) = (
-            dir.join(format!("{tag}_train.csv")),
-            dir.join(format!("{tag}_val.csv")),
-        );
-        let sim = |traj: &dyn Trajectory, secs: f64, path: &Path| {
-            let c = SimConfig {
-                duration_s: secs,
-                ..cfg.clone()
-            };
-            write_log(path, &simulate(&truth, traj, &c).unwrap(), true).unwrap();
-        };
-        sim(&exc, 4.0 * exc.period(), &train);
-        sim(&Sinusoid::paper_79(0.7).unwrap(), 10.0, &val);
-        let out = dir.join(format!("{tag}_out"));
-        let r = Command::new(env!("CARGO_BIN_EXE_aras"))
-            .args(["diagnose", "--quiet", "--data"])
-            .arg(&train)
-            .arg("--validate")
-            .arg(&val)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
-        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-        json(&out.join("diagnosis.json"))
-    };
+    let seeds = [SimConfig::default().seed; 2];
+    let diagnosis = |tag: &str, lugre: Option<LuGre>| sticking_diagnosis(&dir, tag, lugre, seeds);
     let fitness = |j: &serde_json::Value, k: usize| -> [f64; 2] {
         let f = &j["fitness"][k]["fitness"][0];
         [0, 1].map(|jn| f[jn].as_f64().unwrap())
@@ -876,7 +845,6 @@ fn presliding_study_on_five_seeds() {
     let dir = scratch("diagnose", "presliding-study");
     let truth = Params::aras_diamond();
     let fc = truth.friction.coulomb;
-    let exc = default_excitation();
     let lugre = |r: f64, delta: f64, damping: f64| LuGre {
         static_level: [r * fc[0], r * fc[1]],
         stribeck_velocity: [0.03; 2],
@@ -890,39 +858,8 @@ fn presliding_study_on_five_seeds() {
     ];
     for seed in 1..=5u64 {
         for (tag, l, delta_true) in &cases {
-            let cfg = SimConfig {
-                substeps: 4,
-                lugre: *l,
-                seed,
-                ..SimConfig::default()
-            };
             let name = format!("{tag}{seed}");
-            let (train, val) = (
-                dir.join(format!("{name}_train.csv")),
-                dir.join(format!("{name}_val.csv")),
-            );
-            let sim = |traj: &dyn Trajectory, secs: f64, path: &Path, s: u64| {
-                let c = SimConfig {
-                    duration_s: secs,
-                    seed: s,
-                    ..cfg.clone()
-                };
-                write_log(path, &simulate(&truth, traj, &c).unwrap(), true).unwrap();
-            };
-            sim(&exc, 4.0 * exc.period(), &train, seed);
-            sim(&Sinusoid::paper_79(0.7).unwrap(), 10.0, &val, seed + 100);
-            let out = dir.join(format!("{name}_out"));
-            let r = Command::new(env!("CARGO_BIN_EXE_aras"))
-                .args(["diagnose", "--quiet", "--data"])
-                .arg(&train)
-                .arg("--validate")
-                .arg(&val)
-                .arg("--out")
-                .arg(&out)
-                .output()
-                .unwrap();
-            assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-            let j = json(&out.join("diagnosis.json"));
+            let j = sticking_diagnosis(&dir, &name, *l, [seed, seed + 100]);
             let steps = j["steps"].as_array().unwrap();
             let labels: Vec<String> = steps
                 .iter()
@@ -957,4 +894,47 @@ fn presliding_study_on_five_seeds() {
             }
         }
     }
+}
+
+/// `aras diagnose` on the default route of a simulated robot with `lugre`
+/// friction (`None`: the simulator's own `tanh` law): TRAIN 4 periods of
+/// the default excitation, validation 10 s of (79) at 0.7 Hz, with the
+/// noise seeds `seeds` (TRAIN, validation); logs `DIR/TAG_{train,val}.csv`.
+/// Returns `diagnosis.json`.
+fn sticking_diagnosis(
+    dir: &Path,
+    tag: &str,
+    lugre: Option<aras_dyn::sim::LuGre>,
+    seeds: [u64; 2],
+) -> serde_json::Value {
+    let truth = Params::aras_diamond();
+    let exc = default_excitation();
+    let (train, val) = (
+        dir.join(format!("{tag}_train.csv")),
+        dir.join(format!("{tag}_val.csv")),
+    );
+    let sim = |traj: &dyn Trajectory, secs: f64, path: &Path, seed: u64| {
+        let c = SimConfig {
+            duration_s: secs,
+            substeps: 4,
+            lugre,
+            seed,
+            ..SimConfig::default()
+        };
+        write_log(path, &simulate(&truth, traj, &c).unwrap(), true).unwrap();
+    };
+    sim(&exc, 4.0 * exc.period(), &train, seeds[0]);
+    sim(&Sinusoid::paper_79(0.7).unwrap(), 10.0, &val, seeds[1]);
+    let out = dir.join(format!("{tag}_out"));
+    let r = Command::new(env!("CARGO_BIN_EXE_aras"))
+        .args(["diagnose", "--quiet", "--data"])
+        .arg(&train)
+        .arg("--validate")
+        .arg(&val)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    json(&out.join("diagnosis.json"))
 }
