@@ -335,19 +335,13 @@ pub fn unrepresented(params: &Params) -> Vec<Unrepresented> {
     }
     if let Some(b) = e
         .presliding_friction
-        .filter(|b| b.level.iter().chain(&b.damping).any(|x| *x != 0.0))
+        .filter(|b| b.coefficients().iter().any(|x| *x != 0.0))
     {
         out.push(Unrepresented {
             effect: EffectId::PreslidingFriction,
             values: named(
                 &[&["displacement"][..], &PRESLIDING_FRICTION_NAMES].concat(),
-                &[
-                    b.displacement,
-                    b.level[0],
-                    b.level[1],
-                    b.damping[0],
-                    b.damping[1],
-                ],
+                &[&[b.displacement][..], &b.coefficients()].concat(),
             ),
             why: "frictionloss is a hard level without an internal state",
         });

@@ -210,7 +210,7 @@ impl Params {
                 Effect::PreslidingFriction { displacement } => {
                     if let Some(b) = &x.presliding_friction {
                         same(e, "displacement", b.displacement, displacement)?;
-                        dst.copy_from_slice(&[b.level[0], b.level[1], b.damping[0], b.damping[1]]);
+                        dst.copy_from_slice(&b.coefficients());
                     }
                 }
             }

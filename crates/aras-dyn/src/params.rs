@@ -65,6 +65,18 @@ pub struct Presliding {
     pub damping: [f64; 2],
 }
 
+impl Presliding {
+    /// The coefficients in the effect's column order, `[Fb1, Fb2, Db1, Db2]`.
+    pub fn coefficients(&self) -> [f64; 4] {
+        [
+            self.level[0],
+            self.level[1],
+            self.damping[0],
+            self.damping[1],
+        ]
+    }
+}
+
 /// Cogging torque per joint: `Σ_h Cs_jh sin(h n_c θ_j) + Cc_jh cos(h n_c θ_j)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Cogging {
@@ -328,7 +340,7 @@ impl Params {
                 Effect::PreslidingFriction {
                     displacement: b.displacement,
                 },
-                &[b.level[0], b.level[1], b.damping[0], b.damping[1]],
+                &b.coefficients(),
             )?;
             if b.displacement <= 0.0 {
                 return Err(ParamError::Invalid {
@@ -659,10 +671,7 @@ impl Serialize for ExtrasSer<'_> {
             )?;
         }
         if let Some(b) = &e.presliding_friction {
-            let [fb1, fb2, db1, db2] = named(
-                PRESLIDING_FRICTION_NAMES,
-                [b.level[0], b.level[1], b.damping[0], b.damping[1]],
-            );
+            let [fb1, fb2, db1, db2] = named(PRESLIDING_FRICTION_NAMES, b.coefficients());
             let kv = [("displacement", b.displacement), fb1, fb2, db1, db2];
             m.serialize_entry(EffectId::PreslidingFriction.as_str(), &Flat(&kv))?;
         }

@@ -413,18 +413,17 @@ pub fn refine_widths(
         moving_rows_cost: 0.0,
     }; 2];
     let mut fallback = Vec::new();
+    // With a bristle (a friction state) in the model the Coulomb column is
+    // redundant with it while sliding, and its width need not be
+    // identifiable: the bristle describes the reversals, so the joint keeps
+    // every row with the sign law (the moving-rows check still guards it).
+    let bristle = model.has_state();
     for j in 0..2 {
         let Some(min) = &out[j] else { continue };
         let wj = min.u.exp();
         let at_w = rss_at(prepared, cols[j], j, wj)?;
         let at_zero = rss_at(prepared, cols[j], j, 0.0)?;
         let sigma = min.std_dev(n_eff);
-        // With a bristle (a friction state) in the model the Coulomb column
-        // is redundant with it while sliding, and its width need not be
-        // identifiable: the bristle describes the reversals, so the joint
-        // keeps every row with the sign law (the moving-rows check below
-        // still guards it).
-        let bristle = model.has_state();
         joints[j] = if at_zero <= at_w || (sigma.is_none() && bristle) {
             JointWidth {
                 w: 0.0,

@@ -239,19 +239,19 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         if pass == 1 {
             identify_widths = Some((start.clone(), widths.clone()));
         }
-        let mut run = |all_rows: [bool; 2], what: &str| {
+        let mut run = |start: &Model, all_rows: [bool; 2], what: &str| {
             let opts = DiagnoseOptions {
                 all_rows,
                 ..opts.clone()
             };
             stages.run(
                 &format!("diagnose (candidates × rounds, pass {pass}{what})"),
-                |_| diagnose(&start, &geometry, &train, &vals, &opts),
+                |_| diagnose(start, &geometry, &train, &vals, &opts),
             )
         };
         let fitted = widths.joints.map(|j| j.all_rows);
         if !not_described.contains(&true) {
-            let d = run(fitted, "")?;
+            let d = run(&start, fitted, "")?;
             let named = named_extras(&d.steps);
             if cfg.identification.rows == FitRows::AwayFromReversals
                 || named == extras
@@ -268,21 +268,14 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         }
         let every = [0, 1].map(|j| fitted[j] || not_described[j]);
         let d = (pass < WIDTH_PASSES)
-            .then(|| run(every, ", every row"))
+            .then(|| run(&start, every, ", every row"))
             .transpose()?;
         match d {
             Some(d) if !d.steps.is_empty() => extras = named_extras(&d.steps[..1]),
             _ => {
                 let (start, widths) = identify_widths.take().unwrap_or((start, widths));
-                let opts = DiagnoseOptions {
-                    all_rows: widths.joints.map(|j| j.all_rows),
-                    ..opts.clone()
-                };
-                let d = stages.run(
-                    &format!("diagnose (candidates × rounds, pass {pass}, rows identify fits)"),
-                    |_| diagnose(&start, &geometry, &train, &vals, &opts),
-                )?;
-                break (d, widths);
+                let fitted = widths.joints.map(|j| j.all_rows);
+                break (run(&start, fitted, ", rows identify fits")?, widths);
             }
         }
     };

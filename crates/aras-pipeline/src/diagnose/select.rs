@@ -292,13 +292,13 @@ pub fn diagnose(
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, IdentError> {
     let engine = opts.engine();
+    let every_row = opts.all_rows.iter().all(|&a| a);
     let cands: Vec<Candidate> = opts
         .grid
         .expand()
         .into_iter()
         .filter(|c| match c {
             Candidate::Effect { effect } => {
-                let every_row = opts.all_rows.iter().all(|&a| a);
                 let seen_away = match effect {
                     Effect::StribeckFriction { v_s } => *v_s >= 0.5 * opts.min_speed,
                     e => !e.is_stateful(),
