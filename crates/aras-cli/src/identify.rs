@@ -19,7 +19,7 @@ use aras_dyn::{Model, Params};
 use aras_ident::BaseParameters;
 use aras_kin::{Geometry, Workspace};
 use aras_log::Log;
-use aras_pipeline::friction_width::{FitRows, WidthRefinement};
+use aras_pipeline::friction_width::WidthRefinement;
 use aras_pipeline::prepare::RegressorColumns;
 use aras_pipeline::robot;
 use aras_signal::{
@@ -149,26 +149,6 @@ pub fn friction_widths(
         model,
         &cfg.identification,
     )?)
-}
-
-/// [`friction_widths`] on one log processed and stacked as `identify`
-/// processes it (`period` as `--period`): what the refinement found. For
-/// commands that start from identify's model on a log they read themselves
-/// (`diagnose`).
-pub fn widths_on_log(
-    log: &Log,
-    period: Option<f64>,
-    model: &Model,
-    geometry: &Geometry,
-    cfg: &Config,
-) -> Result<WidthRefinement> {
-    if cfg.identification.rows == FitRows::AwayFromReversals {
-        return Ok(WidthRefinement::not_refined());
-    }
-    let opts = process_options(cfg, period, false);
-    let mut prepared = prepare(log, &opts, cfg.identification.filtering, model, geometry)?;
-    let base = base_parameters(model, geometry, cfg)?;
-    Ok(friction_widths(&mut prepared, &base, model, cfg)?.1)
 }
 
 /// OLS and SDP on prepared data, with `nominal` as the SDP's reference, on

@@ -4,6 +4,7 @@
 //! `aras_dyn::Trajectory`, and `aras_pipeline::robot` stacks, filters and
 //! builds the physically consistent problem.
 
+use aras_pipeline::diagnose::Additions;
 use std::path::Path;
 
 use anyhow::{Context, Result};
@@ -141,34 +142,21 @@ pub fn parse_effect(spec: &str) -> Result<Effect> {
     })
 }
 
-/// What `--effects` asks for: effects added to the model, and a torque
-/// delay removed from the log before processing.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Extras {
-    /// Effects whose columns are appended to the paper's model.
-    pub effects: Vec<Effect>,
-    /// `time_delay:D`: the torque is taken `D` samples after the angles
-    /// (`aras_signal::delay_torque`; fractions interpolated), as `diagnose`
-    /// reports a delay.
-    pub torque_delay: Option<f64>,
+/// The report's words for the torque delay, or nothing without one.
+pub fn delay_clause(extras: &Additions) -> String {
+    extras.torque_delay.map_or(String::new(), |d| {
+        format!(
+            "; the torque is taken {d} samples after the angles (`--effects time_delay:{d}`), \
+             the rows without such a torque left out"
+        )
+    })
 }
 
-impl Extras {
-    /// The report's words for the torque delay, or nothing without one.
-    pub fn delay_clause(&self) -> String {
-        self.torque_delay.map_or(String::new(), |d| {
-            format!(
-                "; the torque is taken {d} samples after the angles (`--effects time_delay:{d}`), \
-                 the rows without such a torque left out"
-            )
-        })
-    }
-}
-
-/// Parses every `--effects` entry: [`parse_effect`], except `time_delay:D`
+/// Parses every `--effects` entry (effects added to the model, and a
+/// torque delay removed from the log before processing): [`parse_effect`], except `time_delay:D`
 /// (a signed number of samples, at most once).
-pub fn parse_extras(specs: &[String]) -> Result<Extras> {
-    let mut out = Extras::default();
+pub fn parse_extras(specs: &[String]) -> Result<Additions> {
+    let mut out = Additions::default();
     for spec in specs {
         let mut parts = spec.trim().split(':');
         if parts.next() != Some(aras_pipeline::diagnose::TIME_DELAY) {

@@ -19,6 +19,8 @@ pub struct Stages {
     quiet: bool,
     animate: bool,
     timings: Vec<(String, f64)>,
+    /// The stage [`Stages::begin`] started, its start and spinner.
+    running: Option<(String, Instant, ProgressBar)>,
 }
 
 impl Stages {
@@ -28,6 +30,7 @@ impl Stages {
             quiet,
             animate: !quiet && std::io::stderr().is_terminal(),
             timings: Vec::new(),
+            running: None,
         }
     }
 
@@ -38,6 +41,17 @@ impl Stages {
 
     /// Runs one stage with a spinner, records its time.
     pub fn run<T>(&mut self, name: &str, f: impl FnOnce(&ProgressBar) -> T) -> T {
+        self.begin(name);
+        let bar = self.running.as_ref().map(|r| r.2.clone());
+        let out = f(bar.as_ref().unwrap_or(&ProgressBar::hidden()));
+        self.end();
+        out
+    }
+
+    /// Starts a stage (a spinner), ending the one running: for a library
+    /// recipe that reports its stages as they start through a callback.
+    pub fn begin(&mut self, name: &str) {
+        self.end();
         let bar = if self.animate {
             let b = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
             b.set_style(
@@ -50,15 +64,21 @@ impl Stages {
         } else {
             ProgressBar::hidden()
         };
-        let start = Instant::now();
-        let out = f(&bar);
+        self.running = Some((name.to_string(), Instant::now(), bar));
+    }
+
+    /// Ends the stage [`Stages::begin`] started (if any): its line and
+    /// time.
+    pub fn end(&mut self) {
+        let Some((name, start, bar)) = self.running.take() else {
+            return;
+        };
         let secs = start.elapsed().as_secs_f64();
         bar.finish_and_clear();
         if !self.quiet {
             eprintln!("✓ {name:<28} {secs:>7.2} s");
         }
-        self.timings.push((name.to_string(), secs));
-        out
+        self.timings.push((name, secs));
     }
 
     /// A determinate bar for `len` steps inside a stage (hidden when not animating).

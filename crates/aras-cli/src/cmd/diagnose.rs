@@ -5,18 +5,19 @@
 //! `diagnosis.json`, `diagnosis.md`, `diagnosis.html` and the plots.
 
 use anyhow::{Context, Result};
-use aras_dyn::Model;
-use aras_pipeline::diagnose::Candidate;
 use aras_pipeline::diagnose::residual::{ResidualAnalysis, RowSample, SampledRow};
-use aras_pipeline::diagnose::{Dataset, DiagnoseOptions, Diagnosis, RefinementStatus, diagnose};
-use aras_pipeline::friction_width::{FitRows, WidthRefinement, WidthStatus, with_widths};
+use aras_pipeline::diagnose::{
+    Dataset, DiagnoseOptions, Diagnosis, DiagnosisWithWidths, PassRows, PassStage,
+    RefinementStatus, WidthSource, diagnose_with_widths,
+};
+use aras_pipeline::friction_width::{FitRows, WidthRefinement};
 
 use crate::cli::{DiagnoseArgs, LogArgs};
 use crate::identify::process_options;
 use crate::output::OutDir;
 use crate::report::Report;
 use crate::report::plots::{Binned, Series, StepPanel, binned_means, lines, scatter_binned, steps};
-use crate::robot::{Extras, effect_spec, model_with_effects, nominal, paper_model};
+use crate::robot::{effect_spec, nominal, paper_model};
 use crate::stages::Stages;
 use aras_pipeline::streaming::{StreamingOptions, spool_log};
 use indicatif::ProgressBar;
@@ -114,42 +115,6 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
             super::load_log(&args.data, &args.log, &cfg)
         })?)
     };
-    let widths_with = |extras: &Extras| -> Result<(Model, WidthRefinement)> {
-        if cfg.identification.rows == FitRows::AwayFromReversals {
-            return Ok((model.clone(), WidthRefinement::not_refined()));
-        }
-        let with = model_with_effects(&nominal, &extras.effects)?;
-        let w = match &train_log {
-            Some(log) => {
-                let delayed;
-                let log = match extras.torque_delay {
-                    Some(d) => {
-                        delayed = aras_signal::delay_torque(log, d).with_context(|| {
-                            format!("delaying the torques of TRAIN by {d} samples")
-                        })?;
-                        &delayed
-                    }
-                    None => log,
-                };
-                crate::identify::widths_on_log(log, args.log.period, &with, &geometry, &cfg)?
-            }
-            // Streamed: a bounded-memory pass of the streaming
-            // identification, which refines them on the averaged period.
-            None => {
-                let opts = StreamingOptions {
-                    torque_delay: extras.torque_delay,
-                    ..super::identify_streaming::log_options(&args.log, &cfg, geometry)?
-                };
-                let base = crate::identify::base_parameters(&with, &geometry, &cfg)?;
-                aras_pipeline::streaming::identify_log(&args.data, &with, &base, &opts)
-                    .with_context(|| {
-                        format!("streaming {} for the Coulomb widths", args.data.display())
-                    })?
-                    .widths
-            }
-        };
-        Ok((with_widths(&model, w.widths())?, w))
-    };
     let train = stages.run(
         &format!("read + process TRAIN{}", label(train_streams)),
         |bar| {
@@ -207,78 +172,41 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
         validation_reach_tol: cfg.validation.reversal_reach,
         ..DiagnoseOptions::default()
     };
-    // The widths are a setting of the starting model's friction, refined
-    // with the effects the diagnosis names: a width refined without a
-    // missing effect absorbs part of it and leaves the rest to a wrong
-    // candidate. So the diagnosis runs again with the widths refined with
-    // its named effects until it names the effects it was refined with (at
-    // most `WIDTH_PASSES` times; the last pass is kept).
-    //
-    // A joint whose Coulomb law does not describe its reversals (status
-    // `reversals_not_described`: identify fits it away from them) is
-    // diagnosed on every row, since the reversals are where the missing
-    // effect lies; its start there is poor, so only the first effect named
-    // (the clearest) refines the next pass's widths. If nothing is named, or
-    // the named effects do not make the reversals described, the diagnosis
-    // is run on the rows identify fits, from identify's widths. A pass whose
-    // widths describe every reversal is kept when the effects it named would
-    // make a joint fall back again.
-    let mut extras = Extras::default();
-    let mut pass = 0;
-    let mut consistent = None;
-    let mut identify_widths = None;
-    let (d, widths) = loop {
-        pass += 1;
-        let (start, widths) = stages
-            .run(&format!("Coulomb widths on TRAIN (pass {pass})"), |_| {
-                widths_with(&extras)
-            })?;
-        let not_described = widths
-            .joints
-            .map(|j| j.status == WidthStatus::ReversalsNotDescribed);
-        if pass == 1 {
-            identify_widths = Some((start.clone(), widths.clone()));
-        }
-        let mut run = |start: &Model, all_rows: [bool; 2], what: &str| {
-            let opts = DiagnoseOptions {
-                all_rows,
-                ..opts.clone()
-            };
-            stages.run(
-                &format!("diagnose (candidates × rounds, pass {pass}{what})"),
-                |_| diagnose(start, &geometry, &train, &vals, &opts),
-            )
-        };
-        let fitted = widths.joints.map(|j| j.all_rows);
-        if !not_described.contains(&true) {
-            let d = run(&start, fitted, "")?;
-            let named = named_extras(&d.steps);
-            if cfg.identification.rows == FitRows::AwayFromReversals
-                || named == extras
-                || pass >= WIDTH_PASSES
-            {
-                break (d, widths);
-            }
-            consistent = Some((d, widths));
-            extras = named;
-            continue;
-        }
-        if let Some(kept) = consistent.take() {
-            break kept;
-        }
-        let every = [0, 1].map(|j| fitted[j] || not_described[j]);
-        let d = (pass < WIDTH_PASSES)
-            .then(|| run(&start, every, ", every row"))
-            .transpose()?;
-        match d {
-            Some(d) if !d.steps.is_empty() => extras = named_extras(&d.steps[..1]),
-            _ => {
-                let (start, widths) = identify_widths.take().unwrap_or((start, widths));
-                let fitted = widths.joints.map(|j| j.all_rows);
-                break (run(&start, fitted, ", rows identify fits")?, widths);
+    // The starting model's Coulomb widths refined on TRAIN together with
+    // the effects the diagnosis names (`aras_pipeline::diagnose::
+    // diagnose_with_widths`): TRAIN in memory, streamed, or the sign law.
+    let process = process_options(&cfg, args.log.period, false);
+    let streamed_opts;
+    let source = match &train_log {
+        _ if cfg.identification.rows == FitRows::AwayFromReversals => WidthSource::SignLaw,
+        Some(log) => WidthSource::Log {
+            log,
+            process: &process,
+        },
+        None => {
+            streamed_opts = super::identify_streaming::log_options(&args.log, &cfg, geometry)?;
+            WidthSource::Streamed {
+                path: &args.data,
+                options: &streamed_opts,
             }
         }
     };
+    let DiagnosisWithWidths {
+        diagnosis: d,
+        widths,
+        ..
+    } = diagnose_with_widths(
+        &model,
+        &geometry,
+        &train,
+        &vals,
+        &opts,
+        &source,
+        &cfg.identification,
+        &mut |s| stages.begin(&stage_name(s)),
+    )
+    .context("diagnosing TRAIN")?;
+    stages.end();
     let train_name = train.name.clone();
     // The scratch file of a streamed TRAIN goes before the outputs are
     // committed.
@@ -350,24 +278,19 @@ pub fn run(args: &DiagnoseArgs) -> Result<()> {
     Ok(())
 }
 
-/// Most diagnosis passes with re-refined Coulomb widths.
-const WIDTH_PASSES: usize = 3;
-
-/// The effects (with refined settings) and torque delay `d` added, as
-/// `identify --effects` takes them.
-fn named_extras(steps: &[aras_pipeline::diagnose::Step]) -> Extras {
-    let mut out = Extras::default();
-    for s in steps {
-        let c = s
-            .refinement
-            .as_ref()
-            .map_or(s.candidate, |f| s.candidate.with_setting(f.value));
-        match c {
-            Candidate::Effect { effect } => out.effects.push(effect),
-            Candidate::TimeDelay { samples } => out.torque_delay = Some(samples),
+/// A stage of the diagnosis recipe in the progress lines.
+fn stage_name(s: PassStage) -> String {
+    match s {
+        PassStage::Widths { pass } => format!("Coulomb widths on TRAIN (pass {pass})"),
+        PassStage::Diagnose { pass, rows } => {
+            let what = match rows {
+                PassRows::Fitted => "",
+                PassRows::EveryRow => ", every row",
+                PassRows::IdentifyRows => ", rows identify fits",
+            };
+            format!("diagnose (candidates × rounds, pass {pass}{what})")
         }
     }
-    out
 }
 
 fn pct(x: f64) -> String {

@@ -9,8 +9,9 @@ use crate::cmd::fit::{self, FitInput};
 use crate::config::Config;
 use crate::identify::base_parameters;
 use crate::output::OutDir;
-use crate::robot::{Extras, model_with_effects, nominal, parse_extras};
+use crate::robot::{model_with_effects, nominal, parse_extras};
 use crate::stages::Stages;
+use aras_pipeline::diagnose::Additions;
 
 /// The truth stored by the simulator in a sidecar (`truth.params`), if any.
 pub fn sidecar_truth(sidecar: &aras_log::Sidecar) -> Option<aras_dyn::Params> {
@@ -66,7 +67,7 @@ struct Setup {
 
 /// Config, output directory, nominal robot and the model with the
 /// requested extra effects.
-fn setup(args: &IdentifyArgs, extras: &Extras) -> Result<Setup> {
+fn setup(args: &IdentifyArgs, extras: &Additions) -> Result<Setup> {
     let loaded = super::load_config(&args.common)?;
     let cfg = loaded.config.clone();
     let sidecar = args.log.sidecar_of(&args.data);
@@ -122,7 +123,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         log.summary.rows,
         log.summary.duration_s,
         log.summary.sample_rate_hz,
-        extras.delay_clause(),
+        crate::robot::delay_clause(&extras),
         truth_clause(truth.is_some())
     );
     let summary = fit::run(
@@ -153,7 +154,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
 }
 
 /// `identify` in bounded memory (`--streaming on`, or `auto` on a large log).
-fn run_streaming(args: &IdentifyArgs, extras: &Extras) -> Result<()> {
+fn run_streaming(args: &IdentifyArgs, extras: &Additions) -> Result<()> {
     use super::identify_streaming::{fit_and_write, options, stream};
     let Setup {
         cfg,
@@ -189,7 +190,7 @@ fn run_streaming(args: &IdentifyArgs, extras: &Extras) -> Result<()> {
         "Identification of `{}` ({} rows, streamed){}{}. {}",
         args.data.display(),
         r.samples_read,
-        extras.delay_clause(),
+        crate::robot::delay_clause(extras),
         truth_clause(truth.is_some()),
         r.widths.sentence()
     );

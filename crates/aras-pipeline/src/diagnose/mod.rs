@@ -16,6 +16,9 @@
 //!   columns from its single-effect [`aras_dyn::Model`], and the final
 //!   model's physically consistent re-identification (SDP on the links,
 //!   friction-like levels `≥ 0`) when a reference is given.
+//! * **Its Coulomb widths** ([`diagnose_with_widths`]): the starting
+//!   model's `Fc tanh(θ̇/w)` widths refined on TRAIN together with the
+//!   effects the diagnosis names, the recipe `aras diagnose` runs.
 //! * **Long logs**: a data set's samples may be in a scratch file
 //!   ([`crate::spool::SpooledSamples`], an [`aras_diagnose::SampleSource`]),
 //!   written while a long training log is processed in overlapping blocks
@@ -23,6 +26,7 @@
 
 mod candidates;
 mod select;
+mod widths;
 
 pub use aras_diagnose::residual;
 pub use aras_diagnose::{
@@ -33,6 +37,10 @@ pub use aras_diagnose::{
 pub use aras_diagnose::{chi2_sf, f_sf, integrated_time, ljung_box};
 pub use candidates::{CANDIDATE_IDS, Candidate, CandidateGrid, TIME_DELAY, explanation};
 pub use select::{CandidateScore, DiagnoseOptions, Diagnosis, Step, diagnose};
+pub use widths::{
+    Additions, DiagnosisWithWidths, PassRows, PassStage, WIDTH_PASSES, WidthSource,
+    diagnose_with_widths, widths_with,
+};
 
 impl aras_diagnose::SampleSource for crate::spool::SpooledSamples {
     fn len(&self) -> usize {
