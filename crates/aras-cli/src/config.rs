@@ -414,7 +414,7 @@ impl Default for ValidationConfig {
             pd_random: 100_000,
             pd_seed: 0,
             heatmap: [56, 41],
-            reversal_reach: 0.5,
+            reversal_reach: aras_pipeline::robot::DEFAULT_VALIDATION_REACH,
         }
     }
 }

@@ -11,7 +11,9 @@ use serde::Serialize;
 
 use crate::chunks::{Plan, WINDOW_TOL, in_lanes, in_order};
 use crate::data::{Dataset, check_rows};
-use crate::filtering::filter_many_columns;
+use crate::filtering::{
+    DEFAULT_MIN_SPEED, DEFAULT_REVERSAL_REACH, DEFAULT_VALIDATION_REACH, filter_many_columns,
+};
 use crate::refine::minimise_profile;
 use crate::residual::{ResidualAnalysis, ResidualSummary, Row};
 use aras_ident::selection::{
@@ -279,14 +281,17 @@ pub struct EngineOptions {
 }
 
 impl Default for EngineOptions {
+    /// The selection's defaults (`aras_ident::selection::SelectionOptions`)
+    /// and the reversal exclusion's ([`crate::filtering`]).
     fn default() -> Self {
+        let s = SelectionOptions::default();
         Self {
-            alpha: 0.01,
-            min_gain: 0.1,
-            max_steps: 7,
-            min_speed: 0.2,
-            reach_tol: 1e-3,
-            validation_reach_tol: 0.5,
+            alpha: s.alpha,
+            min_gain: s.min_gain,
+            max_steps: s.max_steps,
+            min_speed: DEFAULT_MIN_SPEED,
+            reach_tol: DEFAULT_REVERSAL_REACH,
+            validation_reach_tol: DEFAULT_VALIDATION_REACH,
             all_rows: Vec::new(),
         }
     }

@@ -138,6 +138,25 @@ pub fn keep_every_row(keep: &mut [bool], all_rows: impl AsRef<[bool]>) {
     }
 }
 
+/// The default reversal threshold (rad/s) of [`reversal_mask`] for
+/// identification and diagnosis alike: a joint's rows with `|θ̇_j|` below it
+/// are left out where its Coulomb law is the sign law (49). At 0.2 rad/s a
+/// Stribeck hump of `v_s ≲ 0.1` rad/s and a presliding regime lie inside
+/// the band, and the robot's designed excitation keeps ≈ 90 % of its rows.
+pub const DEFAULT_MIN_SPEED: f64 = 0.2;
+
+/// The default reach of the exclusion on a log the parameters are fitted
+/// on: widened by the zero-phase filter's impulse response down to this
+/// fraction of its peak ([`filter_reach`]; 253 samples at 10 Hz and
+/// 1 kHz), so that the misfit a reversal spreads through the filter is
+/// left out too.
+pub const DEFAULT_REVERSAL_REACH: f64 = 1e-3;
+
+/// The default reach on validation logs: the filter's main lobe only, so
+/// that fast validation motions (at 2.5 Hz the joints reverse every 0.2 s)
+/// keep rows.
+pub const DEFAULT_VALIDATION_REACH: f64 = 0.5;
+
 /// Rows to keep away from velocity reversals: joint `j`'s row of sample `i`
 /// is dropped if `|θ̇_j| < v_min` at any sample within `guard` samples of
 /// `i` (circularly when `periodic`). Joint-major mask (one block of `n`

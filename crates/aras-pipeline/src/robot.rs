@@ -217,7 +217,8 @@ pub fn filter(
 }
 
 pub use aras_diagnose::filtering::{
-    filter_columns, filter_many_columns, filter_reach, keep_every_row, noise_gain, reversal_mask,
+    DEFAULT_MIN_SPEED, DEFAULT_REVERSAL_REACH, DEFAULT_VALIDATION_REACH, filter_columns,
+    filter_many_columns, filter_reach, keep_every_row, noise_gain, reversal_mask,
 };
 
 fn run_filter(sos: &Sos, x: &[f64], periodic: bool) -> Result<Vec<f64>, IdentError> {

@@ -479,6 +479,7 @@ fn identify_log_matches_the_in_memory_identification_on_every_route() {
         let base_opts = StreamingOptions {
             chunk_samples: 4096,
             min_speed,
+            widths: None,
             ..Default::default()
         };
         for (o, route) in route_options(&base_opts) {
@@ -512,6 +513,7 @@ fn identify_log_averages_a_period_of_a_fractional_number_of_samples() {
     let o = StreamingOptions {
         chunk_samples: 4096,
         min_speed: 0.2,
+        widths: None,
         ..Default::default()
     };
     let [_, _, (periodic, route)] = route_options(&o);
@@ -533,6 +535,7 @@ fn blocks_are_at_least_five_overlaps_long() {
     let mut o = StreamingOptions {
         chunk_samples: 1024,
         min_speed: 0.2,
+        widths: None,
         ..Default::default()
     };
     o.process.period = PeriodSource::Off;
@@ -568,6 +571,7 @@ fn a_torque_delay_is_removed_on_every_route_as_in_memory() {
             chunk_samples: 4096,
             min_speed: 0.2,
             torque_delay: Some(delay),
+            widths: None,
             ..Default::default()
         };
         for (o, route) in route_options(&base_opts) {

@@ -17,7 +17,6 @@ use aras_dyn::{Model, Params};
 use aras_ident::BaseParameters;
 use aras_ident::streaming::Accumulation;
 use aras_kin::Geometry;
-use aras_pipeline::friction_width::FitRows;
 use aras_pipeline::identify::{StreamedIdentification, identify_streamed};
 use aras_pipeline::streaming::{StreamingOptions, StreamingResult, identify_log_with_progress};
 use indicatif::ProgressBar;
@@ -50,17 +49,13 @@ pub fn options(args: &IdentifyArgs, cfg: &Config, nominal: &Params) -> Result<St
 /// filtering mode, reversal exclusion and Coulomb widths
 /// (`identification.rows`).
 pub fn log_options(log: &LogArgs, cfg: &Config, geometry: Geometry) -> Result<StreamingOptions> {
-    let ic = &cfg.identification;
     Ok(StreamingOptions {
         read: super::streaming_read_options(log, cfg)?,
         process: process_options(cfg, log.period, false),
-        filter_mode: ic.filtering,
         geometry,
-        min_speed: ic.min_speed,
-        reversal_reach: ic.reversal_reach,
-        widths: (ic.rows == FitRows::All).then_some(ic.width),
         ..StreamingOptions::default()
-    })
+    }
+    .with_identification(&cfg.identification))
 }
 
 /// Streams the log; reruns with the QR accumulation if the normal

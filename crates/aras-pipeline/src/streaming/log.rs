@@ -16,7 +16,8 @@ use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 use super::delayed::TorqueShift;
 use crate::TaskRegressor;
 use crate::diagnose::Dataset;
-use crate::friction_width::{WidthRefinement, WidthSearch};
+use crate::friction_width::{FitRows, WidthRefinement, WidthSearch};
+use crate::identify::IdentifySettings;
 use crate::prepare::{RegressorColumns, prepare_block_rows, processing_filter};
 use crate::robot::{FilterMode, filter_reach, keep_every_row, reversal_mask};
 use crate::spool::SpoolWriter;
@@ -49,11 +50,12 @@ pub struct StreamingOptions {
     pub accumulation: Accumulation,
     /// Reversal exclusion: joint `j`'s rows with `|θ̇_j|` below this speed
     /// (rad/s) are left out, widened by the filter's reach, exactly as
-    /// [`crate::robot::reversal_mask`] in memory (default 0: every row is
-    /// kept; the CLI uses `identification.min_speed`, 0.2 rad/s).
+    /// [`crate::robot::reversal_mask`] in memory (default
+    /// [`IdentifySettings`]' `min_speed`; 0 keeps every row).
     pub min_speed: f64,
     /// Where the filter's impulse response counts as ended for the
-    /// widening ([`crate::robot::filter_reach`]; default 1e-3).
+    /// widening ([`crate::robot::filter_reach`]; default
+    /// [`IdentifySettings`]' `reversal_reach`).
     pub reversal_reach: f64,
     /// A torque delay to remove, in samples (default `None`): each torque
     /// is taken this many samples after its angles while the log streams,
@@ -62,8 +64,9 @@ pub struct StreamingOptions {
     pub torque_delay: Option<f64>,
     /// Refine the friction's Coulomb widths with this search and fit every
     /// row of a joint whose width is refined ([`crate::friction_width`], as
-    /// identification's `rows = "all"` in memory; default `None`: the sign
-    /// law (49) on the rows `min_speed` keeps). Done on the period route,
+    /// identification's `rows = "all"` in memory; `None`: the sign law (49)
+    /// on the rows `min_speed` keeps; default [`IdentifySettings`]': the
+    /// default width search). Done on the period route,
     /// whose averaged period is one record in memory; the other routes fall
     /// back to `min_speed`'s rows with the sign law, said in
     /// [`StreamingResult::widths`].
@@ -71,6 +74,8 @@ pub struct StreamingOptions {
 }
 
 impl Default for StreamingOptions {
+    /// The in-memory identification's rows, filtering and width search
+    /// ([`IdentifySettings::default`], [`Self::with_identification`]).
     fn default() -> Self {
         Self {
             read: ReadOptions::default(),
@@ -81,9 +86,26 @@ impl Default for StreamingOptions {
             overlap_tolerance: 1e-12,
             accumulation: Accumulation::Gram,
             min_speed: 0.0,
-            reversal_reach: 1e-3,
+            reversal_reach: 0.0,
             torque_delay: None,
             widths: None,
+        }
+        .with_identification(&IdentifySettings::default())
+    }
+}
+
+impl StreamingOptions {
+    /// These options with the rows, filtering and width search of the
+    /// in-memory identification's `settings` (`filtering`, `min_speed`,
+    /// `reversal_reach`, and `width` when `rows` is [`FitRows::All`]), so
+    /// that both routes fit the same rows the same way.
+    pub fn with_identification(self, settings: &IdentifySettings) -> Self {
+        Self {
+            filter_mode: settings.filtering,
+            min_speed: settings.min_speed,
+            reversal_reach: settings.reversal_reach,
+            widths: (settings.rows == FitRows::All).then_some(settings.width),
+            ..self
         }
     }
 }
