@@ -294,26 +294,46 @@ pub fn friction_widths(
     Ok((refined, refinement, keep))
 }
 
-/// OLS and SDP on prepared data, with `nominal` as the SDP's reference, on
-/// the rows `keep` (joint-major; [`friction_widths`]: every row, or a
-/// joint's rows away from its velocity reversals by `settings.min_speed`,
-/// widened by the filter's reach); σ is the HAC sandwich's
-/// (`aras_ident::covariance`), floored by the white-noise model of the
-/// filtered torques.
+/// The least-squares stage of [`identify`]: OLS (or WLS) on the rows
+/// `keep` of prepared data, with its σ by [`SigmaMethod`].
+#[derive(Debug, Clone)]
+pub struct Estimate {
+    /// Rows used in the fit per joint.
+    pub rows_fitted: [usize; 2],
+    /// The rows fitted (joint-major, filtered as prepared).
+    pub fitted: Stacked,
+    /// The estimate of the base parameters; σ and covariance by
+    /// [`Self::sigma_method`].
+    pub ols: OlsEstimate,
+    /// The reduced problem on the fitted rows (scaled by `1/σ_joint` for
+    /// WLS), which the SDP solves again under its constraints.
+    pub reduced: ReducedLs,
+    /// How `ols`'s σ and covariance were obtained.
+    pub sigma_method: SigmaMethod,
+    /// σ of the time-domain HAC sandwich alone.
+    pub sigma_hac: Vec<f64>,
+    /// σ assuming white noise before the filter.
+    pub sigma_white: Vec<f64>,
+}
+
+/// OLS (or WLS, `settings.weighting`) of the base parameters on the rows
+/// `keep` of prepared data (joint-major; [`friction_widths`]: every row, or
+/// a joint's rows away from its velocity reversals by `settings.min_speed`,
+/// widened by the filter's reach), with σ by [`SigmaMethod`]: on every row
+/// of one averaged period the harmonic sandwich (`aras_ident::spectral`);
+/// otherwise the larger of the HAC sandwich (`aras_ident::covariance`) and
+/// the white-noise model of the filtered torques, per parameter.
 ///
 /// # Errors
 /// A joint with fewer kept rows than base parameters
 /// ([`IdentError::InvalidData`], naming the settings to lower), and every
 /// failure of the estimation.
-pub fn identify(
+pub fn estimate(
     prepared: &Prepared,
     base: &BaseParameters,
-    model: &Model,
-    nominal: &Params,
     settings: &IdentifySettings,
     keep: &[bool],
-) -> Result<Identification, IdentError> {
-    let names = model.names();
+) -> Result<Estimate, IdentError> {
     let bnames = base.base_names();
     // Counted on the mask, before the rows are taken, so a log whose joints
     // never move gets this message rather than one about empty row groups.
@@ -404,6 +424,41 @@ pub fn identify(
             SigmaMethod::LargerOfHacAndWhiteFiltered,
         ),
     };
+    Ok(Estimate {
+        rows_fitted: [n1, n2],
+        fitted: fit,
+        ols,
+        reduced,
+        sigma_method,
+        sigma_hac,
+        sigma_white,
+    })
+}
+
+/// Identification on prepared data: [`estimate`] on the rows `keep`, the
+/// physically consistent SDP with `nominal` as its reference
+/// ([`consistent_fit`]), both completed to standard parameters, and their
+/// fitness (78) against the raw torques and on the fitted rows.
+///
+/// # Errors
+/// Those of [`estimate`], and every failure of the SDP.
+pub fn identify(
+    prepared: &Prepared,
+    base: &BaseParameters,
+    model: &Model,
+    nominal: &Params,
+    settings: &IdentifySettings,
+    keep: &[bool],
+) -> Result<Identification, IdentError> {
+    let Estimate {
+        rows_fitted,
+        fitted,
+        ols,
+        reduced,
+        sigma_method,
+        sigma_hac,
+        sigma_white,
+    } = estimate(prepared, base, settings, keep)?;
     let sdp = consistent_fit(&reduced, base, model, nominal, &settings.sdp)?;
     let (ols_params, sdp_params) = standard_params(nominal, model, base, &ols.estimate, &sdp)?;
     let w_b = base.base_regressor(prepared.w_ref())?;
@@ -411,11 +466,11 @@ pub fn identify(
     let predicted_sdp = predict(w_b.as_ref(), &sdp.base)?;
     let fitness_ols = fitness_on_log_rows(prepared, base, &ols.estimate)?;
     let fitness_sdp = fitness_on_log_rows(prepared, base, &sdp.base)?;
-    let fitness_ols_kept = fitness_of(&fit, base, &ols.estimate)?;
-    let fitness_sdp_kept = fitness_of(&fit, base, &sdp.base)?;
+    let fitness_ols_kept = fitness_of(&fitted, base, &ols.estimate)?;
+    let fitness_sdp_kept = fitness_of(&fitted, base, &sdp.base)?;
     Ok(Identification {
-        rows_fitted: [n1, n2],
-        names,
+        rows_fitted,
+        names: model.names(),
         base: base.clone(),
         ols,
         sigma_method,

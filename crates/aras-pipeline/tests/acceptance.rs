@@ -22,13 +22,14 @@ use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 use aras_kin::{Geometry, Workspace};
 use aras_log::{ReadOptions, read_log};
+use aras_pipeline::friction_width::FitRows;
+use aras_pipeline::identify::{Estimate, IdentifySettings, SigmaMethod, estimate};
+use aras_pipeline::prepare::{Prepared, RegressorColumns, prepare};
 use aras_pipeline::robot::{
-    FilterMode, Stacked, base_parameters, consistent_problem, filter, filter_reach, keep_rows,
-    noise_gain, params_from_solution, reversal_mask, stack,
+    FilterMode, Stacked, base_parameters, consistent_problem, keep_rows, params_from_solution,
+    reversal_mask, stack,
 };
-use aras_signal::{
-    Bandwidth, Butterworth, FilterSpec, PeriodSource, ProcessOptions, Processed, process,
-};
+use aras_signal::{Bandwidth, FilterSpec, PeriodSource, ProcessOptions, process};
 use nalgebra::Vector2;
 
 struct Setup {
@@ -124,14 +125,23 @@ const REACH_TOL: f64 = 1e-3;
 /// 0.2–0.28 s, and the 1e-3 reach (±0.25 s) would leave no rows.
 const CV_REACH_TOL: f64 = 0.5;
 
-/// `process` (period averaging if `period`, 10 Hz filter), the stacked
-/// regressor with parallel filtering, the reversal exclusion (if `exclude`)
-/// and the filter's noise gain.
-fn pipeline(
-    log: &aras_log::Log,
-    period: Option<f64>,
-    exclude: Option<f64>,
-) -> (Processed, Stacked, f64) {
+/// The identification's settings on the paper's route: rows away from
+/// reversals (`|θ̇_j| < V_MIN`, widened by the filter's reach to
+/// `REACH_TOL`), parallel filtering, OLS.
+fn paper_route() -> IdentifySettings {
+    IdentifySettings {
+        rows: FitRows::AwayFromReversals,
+        min_speed: V_MIN,
+        reversal_reach: REACH_TOL,
+        ..IdentifySettings::default()
+    }
+}
+
+/// The library's preparation (`aras_pipeline::prepare`: `process` with
+/// period averaging if `period` and the 10 Hz filter, the stacked regressor
+/// with parallel filtering) and the rows away from reversals with the
+/// reach `exclude` (every row without).
+fn pipeline(log: &aras_log::Log, period: Option<f64>, exclude: Option<f64>) -> (Prepared, Stacked) {
     let s = setup();
     let opts = ProcessOptions {
         filter: Bandwidth::Fixed(FilterSpec {
@@ -141,19 +151,31 @@ fn pipeline(
         period: period.map_or(PeriodSource::Off, PeriodSource::Seconds),
         ..ProcessOptions::default()
     };
-    let periodic = period.is_some();
-    let p = process(log, &opts, &aras_kin::task_motion(&s.geometry)).unwrap();
-    let sos = Butterworth::lowpass(4, CUTOFF, p.summary.sample_rate_hz).unwrap();
-    let mut st = stack(&s.model, &s.geometry, &p.samples).unwrap();
-    filter(&mut st, &sos, FilterMode::Parallel, periodic).unwrap();
-    let n = p.samples.len();
-    let g = noise_gain(&sos, n, periodic).unwrap();
-    if let Some(tol) = exclude {
-        let guard = filter_reach(&sos, n, periodic, tol).unwrap();
-        let keep = reversal_mask(&p.samples.theta_dot, V_MIN, guard, periodic).unwrap();
-        st = keep_rows(&st, &keep).unwrap();
-    }
-    (p, st, g)
+    let p = prepare(
+        log,
+        &opts,
+        &s.model,
+        &s.geometry,
+        FilterMode::Parallel,
+        RegressorColumns::Standard,
+        false,
+    )
+    .unwrap();
+    let st = match exclude {
+        Some(tol) => keep_rows(&p.stacked, &p.keep_mask(V_MIN, tol).unwrap()).unwrap(),
+        None => p.stacked.clone(),
+    };
+    (p, st)
+}
+
+/// The identification's estimate on the paper's route
+/// (`aras_pipeline::identify::estimate`): OLS on the rows away from
+/// reversals, σ the HAC sandwich raised to at least the filter model's.
+fn identified(p: &Prepared) -> Estimate {
+    let keep = p.keep_mask(V_MIN, REACH_TOL).unwrap();
+    let e = estimate(p, &setup().base, &paper_route(), &keep).unwrap();
+    assert_eq!(e.sigma_method, SigmaMethod::LargerOfHacAndWhiteFiltered);
+    e
 }
 
 #[test]
@@ -189,14 +211,14 @@ fn noise_free_ols_recovers_the_truth() {
 
     // (b) From the angles alone: 2 periods averaged, 10 Hz zero-phase filter,
     // differentiated θ.
-    let (_, st, _) = pipeline(&log, Some(s.excitation.period()), Some(REACH_TOL));
+    let (_, st) = pipeline(&log, Some(s.excitation.period()), Some(REACH_TOL));
     let (_, fit) = ols_of(&st);
     eprintln!("angles only: fitness {fit:?}");
     assert!(fit.iter().all(|f| *f >= 99.9), "{fit:?}");
 }
 
-/// The default-noise run along the excitation, processed, and its OLS
-/// estimate with the σ identification reports ([`honest_sigma`]).
+/// The default-noise run along the excitation, processed, and the
+/// identification's estimate with its σ ([`identified`]).
 struct Noisy {
     stacked: Stacked,
     ols: OlsEstimate,
@@ -204,31 +226,16 @@ struct Noisy {
     naive_max_z: f64,
 }
 
-/// The σ of identification: the HAC sandwich with every σ raised to at
-/// least the filter model's (`OlsEstimate::with_sigma_floor`). Returns the
-/// estimate and the HAC σ alone.
-fn honest_sigma(naive: OlsEstimate, st: &Stacked, noise_gain: f64) -> (OlsEstimate, Vec<f64>) {
-    let s = setup();
-    let wb = s.base.base_regressor(st.w.as_ref()).unwrap();
-    let white = naive
-        .clone()
-        .with_filtered_noise(noise_gain)
-        .unwrap()
-        .std_dev;
-    let (hac, _) = naive
-        .with_hac(wb.as_ref(), &st.t, &st.groups, true)
-        .unwrap();
-    let sigma_hac = hac.std_dev.clone();
-    (hac.with_sigma_floor(&white).unwrap().0, sigma_hac)
-}
-
 fn noisy() -> &'static Noisy {
     static N: OnceLock<Noisy> = OnceLock::new();
     N.get_or_init(|| {
         let s = setup();
         let log = run("noisy", &s.excitation, &SimConfig::default());
-        let (_, stacked, g) = pipeline(&log, Some(s.excitation.period()), Some(REACH_TOL));
-        let (naive, fit) = ols_of(&stacked);
+        let (prepared, _) = pipeline(&log, Some(s.excitation.period()), None);
+        let e = identified(&prepared);
+        // The σ of white noise, uncorrected for the filter and the
+        // residual's correlation: what the correction is measured against.
+        let (naive, fit) = ols_of(&e.fitted);
         let naive_max_z = naive
             .estimate
             .iter()
@@ -236,10 +243,9 @@ fn noisy() -> &'static Noisy {
             .zip(&s.truth_b)
             .map(|((e, sd), t)| ((e - t) / sd).abs())
             .fold(0.0, f64::max);
-        let (ols, _) = honest_sigma(naive, &stacked, g);
         Noisy {
-            stacked,
-            ols,
+            stacked: e.fitted,
+            ols: e.ols,
             fit,
             naive_max_z,
         }
@@ -284,9 +290,9 @@ fn cross_validation_on_the_paper_trajectories() {
             ..SimConfig::default()
         };
         let log = run(&format!("cv-{f}"), &traj, &cfg);
-        let (_, st, _) = pipeline(&log, Some(block), Some(CV_REACH_TOL));
+        let (_, st) = pipeline(&log, Some(block), Some(CV_REACH_TOL));
         let fit = fitness_of(&st, &n.ols.estimate);
-        let (_, st_all, _) = pipeline(&log, Some(block), None);
+        let (_, st_all) = pipeline(&log, Some(block), None);
         let fit_all = fitness_of(&st_all, &n.ols.estimate);
         let fit_truth = fitness_of(&st_all, &s.truth_b);
         eprintln!(
@@ -354,7 +360,7 @@ fn only_phi_moving_names_the_unidentifiable_parameters() {
         ..ideal()
     };
     let log = run("phi-only", &traj, &cfg);
-    let (_, st, _) = pipeline(&log, Some(4.0), Some(REACH_TOL));
+    let (_, st) = pipeline(&log, Some(4.0), Some(REACH_TOL));
     let wb = s.base.base_regressor(st.w.as_ref()).unwrap();
     let err = ReducedLs::new(wb.as_ref(), &st.t, &s.base.base_names())
         .unwrap()
@@ -469,7 +475,7 @@ fn fixture_is_what_the_design_produces() {
 /// Honest σ: over 100 noise seeds of the default sensors (4 periods of the
 /// excitation each, processed like every other test here), the error of
 /// each base parameter divided by the σ identification reports
-/// ([`honest_sigma`]: the HAC σ raised to at least the filter model's) has
+/// ([`identified`]: the HAC σ raised to at least the filter model's) has
 /// an RMS in [0.8, 1.25], for every base parameter whose torque
 /// contribution `‖W_b,i β_i‖` exceeds 1 % of `‖T‖`. For 100 independent
 /// standard normals the RMS lies in [0.84, 1.17] with 99 % probability
@@ -500,16 +506,13 @@ fn hac_alone_is_low_and_the_floored_sigma_is_honest_over_100_noise_seeds() {
                 ..SimConfig::default()
             };
             let log = run(&format!("mc-{seed}"), &s.excitation, &cfg);
-            let (_, st, g) = pipeline(&log, Some(period), Some(REACH_TOL));
+            let (prepared, _) = pipeline(&log, Some(period), None);
+            let e = identified(&prepared);
+            let (st, est) = (&e.fitted, &e.ols);
             let wb = s.base.base_regressor(st.w.as_ref()).unwrap();
-            let naive = ReducedLs::new(wb.as_ref(), &st.t, &names)
-                .unwrap()
-                .ols()
-                .unwrap();
-            let (est, sigma_hac) = honest_sigma(naive, &st, g);
             let err = |i: usize| est.estimate[i] - s.truth_b[i];
             let z = (0..names.len()).map(|i| err(i) / est.std_dev[i]).collect();
-            let z_hac = (0..names.len()).map(|i| err(i) / sigma_hac[i]).collect();
+            let z_hac = (0..names.len()).map(|i| err(i) / e.sigma_hac[i]).collect();
             // Contribution of each base parameter to the torques, relative.
             let tn = st.t.iter().map(|v| v * v).sum::<f64>().sqrt();
             let share: Vec<f64> = (0..names.len())
