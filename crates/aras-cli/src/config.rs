@@ -383,41 +383,9 @@ pub use aras_pipeline::identify::{
 /// Which signals the low-pass is applied to before the fit.
 pub use aras_pipeline::robot::FilterMode as FilteringMode;
 
-/// `[validation]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ValidationConfig {
-    /// Frequencies of the cross-validation trajectories (79) (Hz).
-    pub frequencies_hz: Vec<f64>,
-    /// Periods simulated per cross-validation trajectory.
-    pub periods: usize,
-    /// Grid points per axis of the workspace PD check.
-    pub pd_grid: usize,
-    /// Additional random points of the PD check.
-    pub pd_random: usize,
-    /// Seed of the PD check's random points.
-    pub pd_seed: u64,
-    /// Heat-map resolution `[φ, γ]` (cells).
-    pub heatmap: [usize; 2],
-    /// Reach of the reversal exclusion for the "kept rows" fitness of the
-    /// cross-validation (fraction of the filter's peak; only its main lobe
-    /// by default, since at 2.5 Hz the joints reverse every 0.2 s).
-    pub reversal_reach: f64,
-}
-
-impl Default for ValidationConfig {
-    fn default() -> Self {
-        Self {
-            frequencies_hz: vec![0.5, 0.7, 1.8, 2.5],
-            periods: 16,
-            pd_grid: 101,
-            pd_random: 100_000,
-            pd_seed: 0,
-            heatmap: [56, 41],
-            reversal_reach: aras_pipeline::robot::DEFAULT_VALIDATION_REACH,
-        }
-    }
-}
+/// `[validation]` is the library's validation settings
+/// (`aras_pipeline::validate`), defaults included.
+pub use aras_pipeline::validate::ValidationSettings as ValidationConfig;
 
 /// A configuration error: file, dotted key, line, what and how to fix.
 #[derive(Debug, Clone, PartialEq)]

@@ -24,14 +24,12 @@
 
 #![warn(missing_docs)]
 
-pub mod ceiling;
 pub mod cli;
 pub mod cmd;
 pub mod config;
 pub mod excite;
 pub mod friction;
 pub mod identify;
-pub mod loss;
 pub mod output;
 pub mod paper;
 pub mod plausibility;

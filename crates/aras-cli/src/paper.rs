@@ -1,7 +1,7 @@
 //! The paper's published results (§4 Table 1, §7 Table 2), measured on the
 //! **real** ARAS-Diamond. Reports show them labelled as the real robot's,
 //! for orientation: a simulated run is scored against its noise ceiling
-//! (`crate::ceiling`), not against another experiment.
+//! (`aras_pipeline::validate::ceiling`), not against another experiment.
 
 /// Table 2: cross-validation fitness (%) on (79), per frequency (Hz):
 /// `(f, [torque 1, torque 2])`.

@@ -10,7 +10,7 @@
 use serde::Serialize;
 
 use crate::summary::Fitness;
-use crate::validate::PdSummary;
+use aras_pipeline::validate::PdSummary;
 
 /// An SDP estimate more than this many fitness points (78) below OLS on
 /// the identification log is implausible: on data its model explains the

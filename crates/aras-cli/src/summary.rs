@@ -35,7 +35,7 @@ impl ProcessingRecord {
         }
     }
 }
-use crate::validate::{CrossValidation, ErrorSummary, PdSummary};
+use aras_pipeline::validate::{CrossValidation, ErrorSummary, PdSummary};
 
 /// Format tag of `summary.json`.
 pub const SUMMARY_FORMAT: &str = "aras-summary/1";
@@ -62,7 +62,8 @@ pub struct Fitness {
     /// Where `ols`/`sdp` were scored: the simulated robot or a measured log.
     pub data: DataKind,
     /// Noise ceiling (%): the fitness of the true robot's noise-free torques
-    /// against the same log (`crate::ceiling`); known for simulated data only.
+    /// against the same log (`aras_pipeline::validate::ceiling`); known for
+    /// simulated data only.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub noise_ceiling: Option<[f64; 2]>,
     /// The noise ceiling on the rows away from velocity reversals (compare
@@ -196,7 +197,7 @@ pub fn fitness_list(
     id: &Identification,
     xv: &[CrossValidation],
     excitation_paper: bool,
-    excitation_ceiling: Option<crate::ceiling::Ceiling>,
+    excitation_ceiling: Option<aras_pipeline::validate::ceiling::Ceiling>,
 ) -> Vec<Fitness> {
     let mut v = vec![Fitness {
         dataset: "excitation".into(),
@@ -223,8 +224,8 @@ pub fn fitness_list(
             ols_kept: x.fitness_kept[0],
             sdp_kept: x.fitness_kept[1],
             data: DataKind::Simulated,
-            noise_ceiling: Some(x.ceiling.all),
-            noise_ceiling_kept: Some(x.ceiling.kept),
+            noise_ceiling: x.ceiling.map(|c| c.all),
+            noise_ceiling_kept: x.ceiling.map(|c| c.kept),
             paper_real_robot: crate::paper::table2(x.frequency_hz),
         });
     }

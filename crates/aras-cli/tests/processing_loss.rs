@@ -8,7 +8,7 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use aras_cli::identify::process_options;
-use aras_cli::loss::{loss_between, predict_route};
+use aras_pipeline::validate::loss::{loss_between, predict_route};
 use common::{aras, columns, fitness, fixture, scratch, short_validate_config};
 
 /// A simulated log with exact derivative columns (3 periods at 1 Hz).

@@ -25,12 +25,17 @@
 //!    model and measurement disagree, which missing effect explains it, and
 //!    how much the gap shrinks once it is added; [`spool`] holds a long log's processed samples in a scratch file that
 //!    its passes read window by window ([`streaming::spool_log`]).
+//! 6. [`validate`]: validation of identified parameters
+//!    (`docs/validation.md`): cross-validation on simulated logs of (79)
+//!    with each log's noise ceiling and processing loss, the mass matrix's
+//!    positive definiteness (80) over the workspace, the links'
+//!    pseudo-inertia eigenvalues and parameter errors against a known truth.
 //!
 //! ## Dependencies, and why
-//! * `aras-kin`, `aras-dyn`, `aras-signal`, `aras-ident`, `aras-diagnose`:
-//!   the robot's kinematics and model, the log reader and signal
-//!   processing, the estimation and the diagnosis engine this crate wires
-//!   together.
+//! * `aras-kin`, `aras-dyn`, `aras-log`, `aras-signal`, `aras-ident`,
+//!   `aras-diagnose`: the robot's kinematics, model and simulator (the
+//!   cross-validation logs), the log reader and signal processing, the
+//!   estimation and the diagnosis engine this crate wires together.
 //! * `faer`: the stacked regressors handed to `aras-ident`; `nalgebra`: the
 //!   robot crates' small vectors; `rayon`: parallel filtering and
 //!   candidate fits; `serde`: results serialise for reports.
@@ -51,6 +56,7 @@ pub mod prepare;
 pub mod robot;
 pub mod spool;
 pub mod streaming;
+pub mod validate;
 
 pub use aras_diagnose::refine;
 pub use aras_dyn::{RegressorError, TaskRegressor};

@@ -19,8 +19,9 @@ use crate::plausibility;
 use crate::report::run::{RunData, build};
 use crate::stages::Stages;
 use crate::summary::{PseudoInertia, SdpReport, Summary, base_file, fitness_list};
-use crate::validate::{
-    ScoredModel, cross_validate, min_eigen_grid, parameter_errors, pd_check, pseudo_inertia_min,
+use crate::validate::{cross_validate, pd_region, workspace_box};
+use aras_pipeline::validate::{
+    ScoredModel, min_eigen_grid, parameter_errors, pd_check, pseudo_inertia_min,
 };
 
 /// What the fit needs.
@@ -32,7 +33,8 @@ pub struct FitInput<'a> {
     /// The truth, when known (simulated logs).
     pub truth: Option<&'a Params>,
     /// The log's noise-free torques, one per row, when this run simulated
-    /// it: the noise ceiling (`crate::ceiling`) is reported only then.
+    /// it: the noise ceiling (`aras_pipeline::validate::ceiling`) is
+    /// reported only then.
     pub clean_torque: Option<&'a [[f64; 2]]>,
     /// Simulate and score the cross-validation trajectories (79) with the truth.
     pub cross_validate: bool,
@@ -122,11 +124,14 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
     };
 
     let (pd, heat, nominal_pd) = stages.run("workspace PD check (80)", |_| -> Result<_> {
+        let region = pd_region(cfg);
         let mut pd = BTreeMap::new();
-        pd.insert("ols".to_string(), pd_check(&id.ols_params, cfg)?);
-        pd.insert("sdp".to_string(), pd_check(&id.sdp_params, cfg)?);
-        let nominal_pd = pd_check(input.nominal, cfg)?;
-        Ok((pd, min_eigen_grid(&id.sdp_params, cfg)?, nominal_pd))
+        pd.insert("ols".to_string(), pd_check(&id.ols_params, &region)?);
+        pd.insert("sdp".to_string(), pd_check(&id.sdp_params, &region)?);
+        let nominal_pd = pd_check(input.nominal, &region)?;
+        let (lower, upper) = workspace_box(cfg);
+        let heat = min_eigen_grid(&id.sdp_params, lower, upper, cfg.validation.heatmap)?;
+        Ok((pd, heat, nominal_pd))
     })?;
     let pseudo = PseudoInertia {
         ols: pseudo_inertia_min(&id.ols_params),
@@ -158,7 +163,7 @@ pub fn run(input: FitInput, out: &OutDir, stages: &mut Stages) -> Result<Summary
         None => None,
     };
     let ceiling = match input.clean_torque {
-        Some(clean) => Some(crate::ceiling::noise_ceiling(
+        Some(clean) => Some(aras_pipeline::validate::ceiling::noise_ceiling(
             input.log, clean, &prepared, &options, &geometry, &keep,
         )?),
         None => None,

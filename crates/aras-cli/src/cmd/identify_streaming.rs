@@ -30,7 +30,8 @@ use crate::summary::{
     BASE_FORMAT, BaseEntry, BaseFile, DataKind, Fitness, PseudoInertia, SdpReport, SigmaMethod,
     Summary,
 };
-use crate::validate::{parameter_errors, pd_check, pseudo_inertia_min};
+use crate::validate::pd_region;
+use aras_pipeline::validate::{parameter_errors, pd_check, pseudo_inertia_min};
 
 /// The streaming options `identify` uses: [`log_options`] with the
 /// command line's accumulation.
@@ -167,9 +168,10 @@ pub fn fit_and_write(
         noise_ceiling_kept: None,
         paper_real_robot: None,
     }];
+    let region = pd_region(cfg);
     let mut pd = BTreeMap::new();
-    pd.insert("ols".to_string(), pd_check(&ols_params, cfg)?);
-    pd.insert("sdp".to_string(), pd_check(&sdp_params, cfg)?);
+    pd.insert("ols".to_string(), pd_check(&ols_params, &region)?);
+    pd.insert("sdp".to_string(), pd_check(&sdp_params, &region)?);
     // The streamed log keeps no samples: the RMS of the fitted torques is a
     // lower bound of their peak, enough to see a unit 1000× off.
     let torque_rms = [0, 1].map(|j| {
@@ -181,7 +183,7 @@ pub fn fit_and_write(
         status: sdp.status,
         sdp: &sdp_params,
         nominal,
-        pd: (&pd["sdp"], &pd_check(nominal, cfg)?),
+        pd: (&pd["sdp"], &pd_check(nominal, &region)?),
         torque_limit: cfg.simulation.torque_limit,
         torque_peak: torque_rms,
     });

@@ -7,9 +7,11 @@ use serde::Serialize;
 
 use crate::cli::PredictArgs;
 use crate::identify::process_options;
-use crate::loss::{ProcessingLoss, has_derivatives, predict_route, processing_loss};
 use crate::output::{FileKind, NewFile};
 use crate::robot::{ParamsUse, read_params};
+use aras_pipeline::validate::loss::{
+    ProcessingLoss, has_derivatives, predict_route, processing_loss,
+};
 
 /// Which θ̇, θ̈ a prediction was made from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -34,8 +36,9 @@ struct PredictSummary {
     /// Fitness (78) per joint of PRED.csv against the log's raw torques on
     /// its rows (%).
     fitness: [f64; 2],
-    /// Logged-derivative route minus angles-only route (`crate::loss`);
-    /// `null` for a log without derivative columns.
+    /// Logged-derivative route minus angles-only route
+    /// (`aras_pipeline::validate::loss`); `null` for a log without
+    /// derivative columns.
     processing_loss: Option<ProcessingLoss>,
 }
 
@@ -45,8 +48,8 @@ struct PredictSummary {
 /// prediction then band-limited as the angles were), and prints
 /// the per-joint fitness (78) of exactly that file against the log's raw
 /// torques on the same rows. A log with derivative columns also gets its
-/// processing loss (`crate::loss`): the same parameters predicted from the
-/// angles alone, both scored on the rows both cover.
+/// processing loss (`aras_pipeline::validate::loss`): the same parameters
+/// predicted from the angles alone, both scored on the rows both cover.
 pub fn run(args: &PredictArgs) -> Result<()> {
     if let Some(urdf) = &args.urdf {
         return super::urdf::predict(args, urdf);
@@ -102,7 +105,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         Some((&processed, &tau)),
     )
     .unwrap_or_else(|e| {
-        loss_unavailable = Some(format!("{e:#}"));
+        loss_unavailable = Some(format!("{:#}", anyhow::Error::from(e)));
         None
     });
     let mut csv = String::with_capacity(n * 48);

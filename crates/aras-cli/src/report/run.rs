@@ -13,7 +13,7 @@ use super::plots::{Series, bars, heatmap, lines};
 use crate::identify::Identification;
 use crate::paper;
 use crate::summary::{Fitness, PseudoInertia, SigmaMethod};
-use crate::validate::{CrossValidation, ErrorSummary, PdSummary};
+use aras_pipeline::validate::{CrossValidation, ErrorSummary, PdSummary};
 
 /// Everything the report shows; absent parts are skipped.
 pub struct RunData<'a> {
@@ -40,7 +40,7 @@ pub struct RunData<'a> {
     /// PD checks per estimate.
     pub pd: &'a BTreeMap<String, PdSummary>,
     /// Heat map of the SDP mass matrix's smallest eigenvalue.
-    pub heat: Option<&'a crate::validate::EigenGrid>,
+    pub heat: Option<&'a aras_pipeline::validate::EigenGrid>,
     /// Pseudo-inertia eigenvalues.
     pub pseudo: &'a PseudoInertia,
     /// Parameter errors, when the truth is known.
@@ -533,10 +533,10 @@ fn cross_validation(r: &mut Report, d: &RunData) -> Result<()> {
             format!("{} Hz", x.frequency_hz),
             f(x.fitness[0][0], 2),
             f(x.fitness[1][0], 2),
-            f(x.ceiling.all[0], 2),
+            x.ceiling.map_or("–".to_string(), |c| f(c.all[0], 2)),
             f(x.fitness[0][1], 2),
             f(x.fitness[1][1], 2),
-            f(x.ceiling.all[1], 2),
+            x.ceiling.map_or("–".to_string(), |c| f(c.all[1], 2)),
             ps(0),
             ps(1),
         ]);
@@ -563,16 +563,20 @@ fn cross_validation(r: &mut Report, d: &RunData) -> Result<()> {
         d.xv.iter()
             .map(|x| format!("{} Hz", x.frequency_hz))
             .collect();
+    // The ceiling's bars when every log has one (the simulated logs of (79)).
+    let ceilings: Option<Vec<[f64; 2]>> = d.xv.iter().map(|x| x.ceiling.map(|c| c.all)).collect();
     let mut series = Vec::new();
     for j in 0..2 {
         series.push((
             format!("SDP τ{} (simulated)", j + 1),
             d.xv.iter().map(|x| x.fitness[1][j]).collect(),
         ));
-        series.push((
-            format!("ceiling τ{} (simulated)", j + 1),
-            d.xv.iter().map(|x| x.ceiling.all[j]).collect(),
-        ));
+        if let Some(c) = &ceilings {
+            series.push((
+                format!("ceiling τ{} (simulated)", j + 1),
+                c.iter().map(|c| c[j]).collect(),
+            ));
+        }
     }
     let svg = bars("Cross-validation fitness", "fitness (%)", &cats, &series)?;
     r.figure(

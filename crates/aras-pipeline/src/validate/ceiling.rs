@@ -12,19 +12,21 @@
 //!   the rows the fitness (78) of a prediction uses.
 //! * **Kept rows**: the noise-free torque is put through exactly the
 //!   processing of the measured one (period averaging, and the zero-phase
-//!   filter or harmonic projection that both filtering modes apply to the torques) and compared with the processed measured
-//!   torque on the rows away from velocity reversals, as the in-sample
-//!   fitness is. What keeps both below 100 % is the sensor noise alone.
+//!   filter or harmonic projection that both filtering modes apply to the
+//!   torques) and compared with the processed measured torque on the rows
+//!   away from velocity reversals, as the in-sample fitness is. What keeps
+//!   both below 100 % is the sensor noise alone.
 
-use anyhow::{Context, Result, bail};
+use aras_ident::IdentError;
 use aras_kin::Geometry;
 use aras_log::Log;
 use aras_signal::ProcessOptions;
+use serde::Serialize;
 
-use crate::identify::Prepared;
+use crate::prepare::Prepared;
 
 /// The noise ceiling of one log, per joint (%).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Ceiling {
     /// On every row, against the log's raw torques (compare with the
     /// fitness on every row).
@@ -44,14 +46,17 @@ pub fn noise_ceiling(
     opts: &ProcessOptions,
     geometry: &Geometry,
     keep: &[bool],
-) -> Result<Ceiling> {
+) -> Result<Ceiling, IdentError> {
     if clean.len() != log.len() {
-        bail!(
-            "the noise-free torques have {} rows but {} has {}",
-            clean.len(),
-            log.name,
-            log.len()
-        );
+        return Err(IdentError::InvalidData {
+            context: format!("the noise ceiling of {}", log.name),
+            reason: format!(
+                "the noise-free torques have {} rows but {} has {}",
+                clean.len(),
+                log.name,
+                log.len()
+            ),
+        });
     }
     let processed = &prep.processed;
     let mut all = [0.0; 2];
@@ -60,8 +65,12 @@ pub fn noise_ceiling(
             .filter(|&r| processed.sample_of_row(r).is_some())
             .map(|r| (log.tau[j][r], clean[r][j]))
             .unzip();
-        *a = aras_ident::validate::fitness(&m, &p)
-            .with_context(|| format!("the noise ceiling of joint {} on every row", j + 1))?;
+        *a = aras_ident::validate::fitness(&m, &p).map_err(|e| {
+            IdentError::external(
+                format!("the noise ceiling of joint {} on every row", j + 1),
+                e,
+            )
+        })?;
     }
 
     // The noise-free torques through the same processing: the angles are
@@ -70,27 +79,40 @@ pub fn noise_ceiling(
     for j in 0..2 {
         quiet.tau[j] = clean.iter().map(|c| c[j]).collect();
     }
-    let twin = aras_signal::process(&quiet, opts, &aras_kin::task_motion(geometry))
-        .context("processing the noise-free torques for the noise ceiling")?;
+    let twin =
+        aras_signal::process(&quiet, opts, &aras_kin::task_motion(geometry)).map_err(|e| {
+            IdentError::external("processing the noise-free torques for the noise ceiling", e)
+        })?;
     let n = prep.n();
     if twin.samples.len() != n {
-        bail!(
-            "the noise-free twin of {} was processed into {} samples, the log into {n}",
-            log.name,
-            twin.samples.len()
-        );
+        return Err(IdentError::InvalidData {
+            context: format!("the noise ceiling of {}", log.name),
+            reason: format!(
+                "the noise-free twin of {} was processed into {} samples, the log into {n}",
+                log.name,
+                twin.samples.len()
+            ),
+        });
     }
     let mut kept = [0.0; 2];
     for (j, k) in kept.iter_mut().enumerate() {
         let mut tau = twin.samples.tau[j].clone();
-        prep.limit_torque(&mut tau)
-            .context("band-limiting the noise-free torques as the measured ones")?;
+        prep.limit_torque(&mut tau).map_err(|e| {
+            IdentError::external(
+                "band-limiting the noise-free torques as the measured ones",
+                e,
+            )
+        })?;
         let (m, p): (Vec<f64>, Vec<f64>) = (0..n)
             .filter(|&i| keep.get(j * n + i).copied().unwrap_or(false))
             .map(|i| (prep.t()[j * n + i], tau[i]))
             .unzip();
-        *k = aras_ident::validate::fitness(&m, &p)
-            .with_context(|| format!("the noise ceiling of joint {} on the kept rows", j + 1))?;
+        *k = aras_ident::validate::fitness(&m, &p).map_err(|e| {
+            IdentError::external(
+                format!("the noise ceiling of joint {} on the kept rows", j + 1),
+                e,
+            )
+        })?;
     }
     Ok(Ceiling { all, kept })
 }

@@ -9,8 +9,8 @@
 //! cover; the loss per joint is the first fitness minus the second, in
 //! percentage points. Positive: differentiating the angles costs that much.
 
-use anyhow::{Context, Result, bail};
 use aras_dyn::Model;
+use aras_ident::IdentError;
 use aras_kin::Geometry;
 use aras_log::Log;
 use aras_signal::{OutputRows, ProcessOptions, Processed};
@@ -40,15 +40,17 @@ pub fn predict_route(
     model: &Model,
     geometry: &Geometry,
     beta: &[f64],
-) -> Result<(Processed, Vec<f64>)> {
+) -> Result<(Processed, Vec<f64>), IdentError> {
     let mut opts = opts.clone();
     opts.rows = OutputRows::EveryRow;
     let processed = aras_signal::process(log, &opts, &aras_kin::task_motion(geometry))
-        .with_context(|| format!("processing {}", log.name))?;
-    let w = aras_pipeline::robot::stack(model, geometry, &processed.samples)?;
+        .map_err(|e| IdentError::external(format!("processing {}", log.name), e))?;
+    let w = crate::robot::stack(model, geometry, &processed.samples)?;
     let tau = aras_ident::validate::predict(w.w.as_ref(), beta)?;
     let n = processed.samples.len();
-    let limited = processed.band_limited(&[&tau[..n], &tau[n..]])?;
+    let limited = processed
+        .band_limited(&[&tau[..n], &tau[n..]])
+        .map_err(|e| IdentError::external("band-limiting the prediction", e))?;
     Ok((processed, limited.concat()))
 }
 
@@ -62,21 +64,27 @@ pub fn loss_between(
     pl: &[f64],
     angles: &Processed,
     pa: &[f64],
-) -> Result<ProcessingLoss> {
+) -> Result<ProcessingLoss, IdentError> {
     let rows = logged.log_tau[0].len();
     if angles.log_tau[0].len() != rows {
-        bail!(
-            "the two routes of the processing loss come from different logs ({rows} and {} rows)",
-            angles.log_tau[0].len()
-        );
+        return Err(IdentError::InvalidData {
+            context: "the processing loss".into(),
+            reason: format!(
+                "the two routes come from different logs ({rows} and {} rows)",
+                angles.log_tau[0].len()
+            ),
+        });
     }
     let (nl, na) = (logged.samples.len(), angles.samples.len());
     if pl.len() != 2 * nl || pa.len() != 2 * na {
-        bail!(
-            "internal: predictions of {} and {} values for {nl} and {na} samples",
-            pl.len(),
-            pa.len()
-        );
+        return Err(IdentError::InvalidData {
+            context: "the processing loss".into(),
+            reason: format!(
+                "predictions of {} and {} values for {nl} and {na} samples",
+                pl.len(),
+                pa.len()
+            ),
+        });
     }
     let both: Vec<(usize, usize, usize)> = (0..rows)
         .filter_map(|r| Some((r, logged.sample_of_row(r)?, angles.sample_of_row(r)?)))
@@ -87,10 +95,18 @@ pub fn loss_between(
         let m: Vec<f64> = both.iter().map(|&(r, _, _)| logged.log_tau[j][r]).collect();
         let l: Vec<f64> = both.iter().map(|&(_, i, _)| pl[j * nl + i]).collect();
         let a: Vec<f64> = both.iter().map(|&(_, _, i)| pa[j * na + i]).collect();
-        fitness_logged[j] = aras_ident::validate::fitness(&m, &l)
-            .with_context(|| format!("fitness of joint {} with the logged derivatives", j + 1))?;
-        fitness_angles[j] = aras_ident::validate::fitness(&m, &a)
-            .with_context(|| format!("fitness of joint {} from the angles alone", j + 1))?;
+        fitness_logged[j] = aras_ident::validate::fitness(&m, &l).map_err(|e| {
+            IdentError::external(
+                format!("fitness of joint {} with the logged derivatives", j + 1),
+                e,
+            )
+        })?;
+        fitness_angles[j] = aras_ident::validate::fitness(&m, &a).map_err(|e| {
+            IdentError::external(
+                format!("fitness of joint {} from the angles alone", j + 1),
+                e,
+            )
+        })?;
     }
     Ok(ProcessingLoss {
         fitness_logged,
@@ -116,21 +132,22 @@ pub fn processing_loss(
     geometry: &Geometry,
     beta: &[f64],
     logged: Option<(&Processed, &[f64])>,
-) -> Result<Option<ProcessingLoss>> {
+) -> Result<Option<ProcessingLoss>, IdentError> {
     if !has_derivatives(log) {
         return Ok(None);
     }
     let mut o = opts.clone();
     o.use_logged_derivatives = false;
     let (angles, pa) = predict_route(log, &o, model, geometry, beta)
-        .context("the angles-only route of the processing loss")?;
+        .map_err(|e| IdentError::external("the angles-only route of the processing loss", e))?;
     let own;
     let (pl_proc, pl) = match logged {
         Some(l) => l,
         None => {
             o.use_logged_derivatives = true;
-            own = predict_route(log, &o, model, geometry, beta)
-                .context("the logged-derivative route of the processing loss")?;
+            own = predict_route(log, &o, model, geometry, beta).map_err(|e| {
+                IdentError::external("the logged-derivative route of the processing loss", e)
+            })?;
             (&own.0, &own.1[..])
         }
     };
