@@ -6,6 +6,7 @@
 //! is a candidate too. Where a width is not identifiable, that joint falls
 //! back to the rows away from its velocity reversals with the sign law.
 
+use crate::PipelineError;
 use aras_dyn::{Effect, Model};
 use aras_ident::{BaseParameters, IdentError, ReducedLs};
 use faer::Mat;
@@ -69,24 +70,24 @@ impl Default for WidthSearch {
 
 impl WidthSearch {
     /// Errors unless `0 < min < max` (finite) and `rounds ≥ 1`.
-    pub fn validate(&self) -> Result<(), IdentError> {
+    pub fn validate(&self) -> Result<(), PipelineError> {
         if !(self.min.is_finite() && self.max.is_finite() && self.min > 0.0 && self.max > self.min)
         {
-            return Err(IdentError::InvalidSetting {
+            return Err(PipelineError::InvalidSetting {
                 name: "Coulomb width search interval",
                 value: self.min,
                 reason: "give 0 < min < max in rad/s (e.g. 1e-4 … 1)",
             });
         }
         if !(self.max_moving_rows_cost.is_finite() && self.max_moving_rows_cost >= 0.0) {
-            return Err(IdentError::InvalidSetting {
+            return Err(PipelineError::InvalidSetting {
                 name: "most that every row may cost the moving rows",
                 value: self.max_moving_rows_cost,
                 reason: "give a finite number of fitness points ≥ 0 (e.g. 0.5)",
             });
         }
         if self.rounds == 0 {
-            return Err(IdentError::InvalidSetting {
+            return Err(PipelineError::InvalidSetting {
                 name: "Coulomb width search rounds",
                 value: 0.0,
                 reason: "give at least 1 round",
@@ -257,7 +258,7 @@ impl WidthRefinement {
 }
 
 /// The friction effect of `model` with the widths `w`, in place of its own.
-pub fn with_widths(model: &Model, w: [f64; 2]) -> Result<Model, IdentError> {
+pub fn with_widths(model: &Model, w: [f64; 2]) -> Result<Model, PipelineError> {
     let effects: Vec<Effect> = model
         .effects()
         .iter()
@@ -268,17 +269,17 @@ pub fn with_widths(model: &Model, w: [f64; 2]) -> Result<Model, IdentError> {
         .collect();
     Model::new(effects, model.gravity())
         .map_err(|e| IdentError::external("the model with the Coulomb widths", e))
+        .map_err(PipelineError::from)
 }
 
 /// Column of `Fc_j` in `model`, or an error naming the missing effect.
-fn coulomb_column(model: &Model, j: usize) -> Result<usize, IdentError> {
+fn coulomb_column(model: &Model, j: usize) -> Result<usize, PipelineError> {
     model
         .column_range("friction")
         .map(|r| r.start + 1 + 2 * j)
-        .ok_or(IdentError::InvalidSetting {
-            name: "friction effect",
-            value: 0.0,
-            reason: "the model has no friction effect, so it has no Coulomb width to refine",
+        .ok_or(PipelineError::MissingEffect {
+            effect: "friction",
+            needed_by: "refining the Coulomb transition widths",
         })
 }
 
@@ -289,7 +290,7 @@ fn coulomb_values(
     mode: FilterMode,
     j: usize,
     w: f64,
-) -> Result<Mat<f64>, IdentError> {
+) -> Result<Mat<f64>, PipelineError> {
     let v = &prepared.processed.samples.theta_dot[j];
     let n = v.len();
     let mut c = Mat::zeros(2 * n, 1);
@@ -308,7 +309,7 @@ fn write_column(
     col: usize,
     j: usize,
     w: f64,
-) -> Result<(), IdentError> {
+) -> Result<(), PipelineError> {
     let filtered = coulomb_values(prepared, mode, j, w)?;
     let n = prepared.n();
     for i in 0..2 * n {
@@ -334,7 +335,7 @@ pub fn apply_widths(
     model: &Model,
     mode: FilterMode,
     w: [f64; 2],
-) -> Result<Model, IdentError> {
+) -> Result<Model, PipelineError> {
     for (j, wj) in w.iter().enumerate() {
         write_column(prepared, mode, coulomb_column(model, j)?, j, *wj)?;
     }
@@ -356,7 +357,7 @@ pub fn refine_widths(
     base: &BaseParameters,
     mode: FilterMode,
     search: &WidthSearch,
-) -> Result<WidthRefinement, IdentError> {
+) -> Result<WidthRefinement, PipelineError> {
     search.validate()?;
     let n = prepared.n();
     let cols = [coulomb_column(model, 0)?, coulomb_column(model, 1)?];
@@ -381,7 +382,7 @@ pub fn refine_widths(
         .collect();
     let weights: Vec<f64> = (0..2 * n).map(|i| 1.0 / sd[i / n]).collect();
     let rss_at = |p: &Prepared, col: usize, j: usize, wj: f64| -> Result<f64, IdentError> {
-        let c = coulomb_values(p, mode, j, wj)?;
+        let c = coulomb_values(p, mode, j, wj).map_err(PipelineError::into_ident)?;
         let mut wm = p.stacked.w.clone();
         for i in 0..2 * n {
             wm[(i, col)] = c[(i, 0)];
@@ -490,10 +491,11 @@ pub fn moving_rows_cost(
     base: &BaseParameters,
     away: &[bool],
     keep: &[bool],
-) -> Result<[f64; 2], IdentError> {
+) -> Result<[f64; 2], PipelineError> {
     let names = base.base_names();
     let fit_on = |rows: &[bool]| -> Result<Vec<f64>, IdentError> {
-        let st = crate::robot::keep_rows(&prepared.stacked, rows)?;
+        let st =
+            crate::robot::keep_rows(&prepared.stacked, rows).map_err(PipelineError::into_ident)?;
         let wb = base.base_regressor(st.w.as_ref())?;
         Ok(ReducedLs::new(wb.as_ref(), &st.t, &names)?.ols()?.estimate)
     };
@@ -517,7 +519,7 @@ pub fn refine_checked_widths(
     mode: FilterMode,
     search: &WidthSearch,
     away: &[bool],
-) -> Result<WidthRefinement, IdentError> {
+) -> Result<WidthRefinement, PipelineError> {
     let mut r = match refine_widths(prepared, model, base, mode, search) {
         Ok(r) => r,
         Err(e) => return Ok(WidthRefinement::failed(e.to_string())),

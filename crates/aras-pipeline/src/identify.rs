@@ -7,6 +7,7 @@
 //! ([`IdentifySettings`]), which the `aras` configuration's
 //! `[identification]` section is.
 
+use crate::PipelineError;
 use aras_dyn::{Model, Params};
 use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{
@@ -180,7 +181,7 @@ pub struct Identification {
 }
 
 /// Fitness (78) per joint of stacked torques (joint 1 first, equal halves).
-pub fn fitness_per_joint(measured: &[f64], predicted: &[f64]) -> Result<[f64; 2], IdentError> {
+pub fn fitness_per_joint(measured: &[f64], predicted: &[f64]) -> Result<[f64; 2], PipelineError> {
     let n = measured.len() / 2;
     Ok([
         aras_ident::validate::fitness(&measured[..n], &predicted[..n])?,
@@ -191,7 +192,7 @@ pub fn fitness_per_joint(measured: &[f64], predicted: &[f64]) -> Result<[f64; 2]
 /// Fitness (78) per joint of a stacked per-sample prediction against the
 /// log's raw torques on every row that has a sample, the prediction
 /// band-limited as the angles were.
-pub fn raw_fitness(processed: &Processed, predicted: &[f64]) -> Result<[f64; 2], IdentError> {
+pub fn raw_fitness(processed: &Processed, predicted: &[f64]) -> Result<[f64; 2], PipelineError> {
     let n = processed.samples.len();
     let pairs = processed
         .on_log_rows(&[&predicted[..n], &predicted[n..]])
@@ -209,7 +210,7 @@ pub fn fitness_on_log_rows(
     prepared: &Prepared,
     base: &BaseParameters,
     beta_b: &[f64],
-) -> Result<[f64; 2], IdentError> {
+) -> Result<[f64; 2], PipelineError> {
     let st = prepared.unfiltered.as_ref().unwrap_or(&prepared.stacked);
     let w_b = base.base_regressor(st.w.as_ref())?;
     let p = predict(w_b.as_ref(), beta_b)?;
@@ -221,7 +222,7 @@ pub fn fitness_of(
     st: &Stacked,
     base: &BaseParameters,
     beta_b: &[f64],
-) -> Result<[f64; 2], IdentError> {
+) -> Result<[f64; 2], PipelineError> {
     let w_b = base.base_regressor(st.w.as_ref())?;
     let p = predict(w_b.as_ref(), beta_b)?;
     let f = fitness_per_group(&st.t, &p, &st.groups)?;
@@ -230,7 +231,7 @@ pub fn fitness_of(
 
 /// Parameters `p` with the standard vector `beta` of `model` (its extra
 /// effects cleared: `beta` holds them).
-pub fn with_standard(p: &Params, model: &Model, beta: &[f64]) -> Result<Params, IdentError> {
+pub fn with_standard(p: &Params, model: &Model, beta: &[f64]) -> Result<Params, PipelineError> {
     let mut q = p.clone();
     q.extra = Default::default();
     q.set_standard_vector(model, beta)
@@ -247,7 +248,7 @@ pub fn consistent_fit(
     model: &Model,
     nominal: &Params,
     sdp: &SdpOptions,
-) -> Result<SdpSolution, IdentError> {
+) -> Result<SdpSolution, PipelineError> {
     let mut problem = consistent_problem(model, nominal)?;
     problem.mass_tolerance(sdp.mass_tolerance)?;
     if let Some([lo, hi]) = sdp.box_bounds {
@@ -265,7 +266,7 @@ pub fn consistent_fit(
         max_iter: sdp.max_iter,
         ..SdpSettings::default()
     });
-    problem.solve(base, reduced)
+    problem.solve(base, reduced).map_err(PipelineError::from)
 }
 
 /// The friction's Coulomb widths for `settings.rows`
@@ -282,7 +283,7 @@ pub fn friction_widths(
     base: &BaseParameters,
     model: &Model,
     settings: &IdentifySettings,
-) -> Result<(Model, WidthRefinement, Vec<bool>), IdentError> {
+) -> Result<(Model, WidthRefinement, Vec<bool>), PipelineError> {
     let mode = settings.filtering;
     let away = prepared.keep_mask(settings.min_speed, settings.reversal_reach)?;
     let refinement = match settings.rows {
@@ -333,7 +334,7 @@ pub fn estimate(
     base: &BaseParameters,
     settings: &IdentifySettings,
     keep: &[bool],
-) -> Result<Estimate, IdentError> {
+) -> Result<Estimate, PipelineError> {
     let bnames = base.base_names();
     // Counted on the mask, before the rows are taken, so a log whose joints
     // never move gets this message rather than one about empty row groups.
@@ -360,7 +361,8 @@ pub fn estimate(
                 top.first().copied().unwrap_or(0.0),
                 top.get(1).copied().unwrap_or(0.0)
             ),
-        });
+        }
+        .into());
     }
     let fit = keep_rows(&prepared.stacked, keep)?;
     let w_fit = base.base_regressor(fit.w.as_ref())?;
@@ -449,7 +451,7 @@ pub fn identify(
     nominal: &Params,
     settings: &IdentifySettings,
     keep: &[bool],
-) -> Result<Identification, IdentError> {
+) -> Result<Identification, PipelineError> {
     let Estimate {
         rows_fitted,
         fitted,
@@ -520,7 +522,7 @@ pub fn identify_streamed(
     model: &Model,
     nominal: &Params,
     settings: &IdentifySettings,
-) -> Result<StreamedIdentification, IdentError> {
+) -> Result<StreamedIdentification, PipelineError> {
     let (ols, reduced) = match settings.weighting {
         Weighting::Ols => (result.ols.clone(), result.reduced.clone()),
         Weighting::Wls => {
@@ -552,7 +554,7 @@ fn standard_params(
     base: &BaseParameters,
     ols: &[f64],
     sdp: &SdpSolution,
-) -> Result<(Params, Params), IdentError> {
+) -> Result<(Params, Params), PipelineError> {
     let reference: Vec<f64> = nominal
         .standard_vector(model)
         .map_err(|e| IdentError::external("the nominal robot's standard parameters", e))?

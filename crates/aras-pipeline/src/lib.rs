@@ -31,11 +31,18 @@
 //!    positive definiteness (80) over the workspace, the links'
 //!    pseudo-inertia eigenvalues and parameter errors against a known truth.
 //!
+//! ## Errors
+//! [`PipelineError`]: `aras-ident`'s errors (estimation, data, its
+//! settings, the robot crates' errors with their context) pass through;
+//! this crate's settings, a model without the effect an operation needs,
+//! and broken invariants are its own variants.
+//!
 //! ## Dependencies, and why
 //! * `aras-kin`, `aras-dyn`, `aras-log`, `aras-signal`, `aras-ident`,
 //!   `aras-diagnose`: the robot's kinematics, model and simulator (the
 //!   cross-validation logs), the log reader and signal processing, the
 //!   estimation and the diagnosis engine this crate wires together.
+//! * `thiserror`: the error enum.
 //! * `faer`: the stacked regressors handed to `aras-ident`; `nalgebra`: the
 //!   robot crates' small vectors; `rayon`: parallel filtering and
 //!   candidate fits; `serde`: results serialise for reports.
@@ -50,6 +57,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod diagnose;
+mod error;
 pub mod friction_width;
 pub mod identify;
 pub mod prepare;
@@ -60,3 +68,4 @@ pub mod validate;
 
 pub use aras_diagnose::refine;
 pub use aras_dyn::{RegressorError, TaskRegressor};
+pub use error::PipelineError;

@@ -5,6 +5,7 @@
 //! diagnosis's data sets start here; the diagnosis's bounded-memory pass
 //! runs the regressor step alone ([`columns_on`]) window by window.
 
+use crate::PipelineError;
 use aras_dyn::Model;
 use aras_ident::{BaseParameters, IdentError};
 use aras_kin::{Geometry, KinematicSample};
@@ -31,10 +32,10 @@ pub enum RegressorColumns<'a> {
 impl RegressorColumns<'_> {
     /// These columns of a stacked standard regressor `w`: `w` itself, or
     /// the base columns `W E`.
-    fn select(self, w: MatRef<'_, f64>) -> Result<Mat<f64>, IdentError> {
+    fn select(self, w: MatRef<'_, f64>) -> Result<Mat<f64>, PipelineError> {
         match self {
             Self::Standard => Ok(w.to_owned()),
-            Self::Base(base) => base.base_regressor(w),
+            Self::Base(base) => base.base_regressor(w).map_err(PipelineError::from),
         }
     }
 }
@@ -50,7 +51,7 @@ pub fn columns_on(
     columns: RegressorColumns<'_>,
     kinematics: &[KinematicSample],
     low_pass: Option<(&Sos, bool)>,
-) -> Result<Mat<f64>, IdentError> {
+) -> Result<Mat<f64>, PipelineError> {
     let n = kinematics.len();
     let w = model
         .stacked(kinematics)
@@ -98,7 +99,7 @@ pub fn prepare(
     mode: FilterMode,
     columns: RegressorColumns<'_>,
     keep_unfiltered: bool,
-) -> Result<Prepared, IdentError> {
+) -> Result<Prepared, PipelineError> {
     let (processed, mut stacked) = process_and_stack(log, opts, model, geometry, columns, None)?;
     let filter_sos = processing_filter(&processed.summary)?;
     let projected = matches!(processed.band_limit(), BandLimit::Harmonics(_));
@@ -129,7 +130,7 @@ fn limit_stacked(
     band: &BandLimit,
     mode: FilterMode,
     periodic: bool,
-) -> Result<(), IdentError> {
+) -> Result<(), PipelineError> {
     match (filter_sos, band) {
         (Some(sos), _) => filter(stacked, sos, mode, periodic),
         (None, BandLimit::Harmonics(_)) => band_limit_stacked(stacked, band, mode),
@@ -147,9 +148,11 @@ fn operator_noise_gain(
     band: &BandLimit,
     n: usize,
     periodic: bool,
-) -> Result<Option<f64>, IdentError> {
+) -> Result<Option<f64>, PipelineError> {
     match (filter_sos, band) {
-        (Some(sos), _) => noise_gain(sos, n, periodic).map(Some),
+        (Some(sos), _) => noise_gain(sos, n, periodic)
+            .map(Some)
+            .map_err(PipelineError::from),
         (None, BandLimit::Harmonics(h)) if h.rows.is_none() => Ok(Some(h.noise_gain())),
         _ => Ok(None),
     }
@@ -165,7 +168,7 @@ fn band_limit_stacked(
     stacked: &mut Stacked,
     band: &BandLimit,
     mode: FilterMode,
-) -> Result<(), IdentError> {
+) -> Result<(), PipelineError> {
     let n = stacked.groups.counts()[0];
     let err = |e| IdentError::external("band-limiting the stacked data", e);
     for g in 0..2 {
@@ -180,7 +183,7 @@ fn band_limit_stacked(
 
 /// Applies `band` to each joint's block (`n` rows) of every column of the
 /// joint-major `w` that is not zero there, columns in parallel.
-fn band_limit_columns(w: &mut Mat<f64>, n: usize, band: &BandLimit) -> Result<(), IdentError> {
+fn band_limit_columns(w: &mut Mat<f64>, n: usize, band: &BandLimit) -> Result<(), PipelineError> {
     use rayon::prelude::*;
     let nc = w.ncols();
     let cols: Vec<Vec<f64>> = (0..nc)
@@ -236,7 +239,7 @@ pub(crate) fn prepare_block_rows(
     columns: RegressorColumns<'_>,
     (min_speed, reach_tol): (f64, f64),
     recycled: Option<Mat<f64>>,
-) -> Result<BlockRows, IdentError> {
+) -> Result<BlockRows, PipelineError> {
     let (processed, mut stacked) =
         process_and_stack(log, opts, model, geometry, columns, recycled)?;
     let filter_sos = processing_filter(&processed.summary)?;
@@ -270,7 +273,7 @@ fn process_and_stack(
     geometry: &Geometry,
     columns: RegressorColumns<'_>,
     recycled: Option<Mat<f64>>,
-) -> Result<(Processed, Stacked), IdentError> {
+) -> Result<(Processed, Stacked), PipelineError> {
     let processed = aras_signal::process(log, opts, &aras_kin::task_motion(geometry))
         .map_err(|e| IdentError::external(format!("processing {}", log.name), e))?;
     let stacked = match columns {
@@ -281,7 +284,8 @@ fn process_and_stack(
                 expected: base.n_standard(),
                 found: model.columns(),
                 hint: "the base parameters must come from the same model's analysis",
-            });
+            }
+            .into());
         }
         RegressorColumns::Base(base) => stack_selected(
             model,
@@ -320,7 +324,7 @@ impl Prepared {
     /// projected on its harmonics, the projection's
     /// (`aras_signal::HarmonicBand::noise_gain`). What
     /// `aras_ident::OlsEstimate::with_filtered_noise` corrects σ by.
-    pub fn noise_gain(&self) -> Result<f64, IdentError> {
+    pub fn noise_gain(&self) -> Result<f64, PipelineError> {
         operator_noise_gain(
             self.filter.as_ref(),
             self.processed.band_limit(),
@@ -335,13 +339,13 @@ impl Prepared {
     /// with `mode`: the low-pass, the harmonic projection of an averaged
     /// block, or nothing (torque-only filtering, no band-limiting), so a
     /// column swapped into the fit is treated like its neighbours.
-    pub fn limit_columns(&self, w: &mut Mat<f64>, mode: FilterMode) -> Result<(), IdentError> {
+    pub fn limit_columns(&self, w: &mut Mat<f64>, mode: FilterMode) -> Result<(), PipelineError> {
         if mode == FilterMode::TorqueOnly {
             return Ok(());
         }
         let n = self.n();
         if let Some(sos) = &self.filter {
-            return filter_columns(w, n, sos, self.periodic());
+            return filter_columns(w, n, sos, self.periodic()).map_err(PipelineError::from);
         }
         match self.processed.band_limit() {
             band @ BandLimit::Harmonics(_) => band_limit_columns(w, n, band),
@@ -352,7 +356,7 @@ impl Prepared {
     /// Puts one joint's per-sample torque series through the operator
     /// [`Self::stacked`]'s torques passed (the low-pass or the harmonic
     /// projection; either filtering mode applies it to the torques).
-    pub fn limit_torque(&self, tau: &mut [f64]) -> Result<(), IdentError> {
+    pub fn limit_torque(&self, tau: &mut [f64]) -> Result<(), PipelineError> {
         if let Some(sos) = &self.filter {
             let y = sos
                 .filtfilt_record(tau, self.periodic())
@@ -363,14 +367,15 @@ impl Prepared {
         match self.processed.band_limit() {
             band @ BandLimit::Harmonics(_) => band
                 .apply(tau)
-                .map_err(|e| IdentError::external("band-limiting a torque series", e)),
+                .map_err(|e| IdentError::external("band-limiting a torque series", e))
+                .map_err(PipelineError::from),
             _ => Ok(()),
         }
     }
 
     /// Rows kept away from velocity reversals ([`record_keep_mask`]).
     /// Joint-major, like [`Self::stacked`].
-    pub fn keep_mask(&self, min_speed: f64, reach_tol: f64) -> Result<Vec<bool>, IdentError> {
+    pub fn keep_mask(&self, min_speed: f64, reach_tol: f64) -> Result<Vec<bool>, PipelineError> {
         record_keep_mask(
             &self.processed.samples.theta_dot,
             self.filter.as_ref(),
@@ -392,11 +397,11 @@ pub fn record_keep_mask(
     periodic: bool,
     min_speed: f64,
     reach_tol: f64,
-) -> Result<Vec<bool>, IdentError> {
+) -> Result<Vec<bool>, PipelineError> {
     let n = theta_dot[0].len();
     let reach = match filter {
         Some(sos) => filter_reach(sos, n, periodic, reach_tol)?,
         None => 0,
     };
-    reversal_mask(theta_dot, min_speed, reach, periodic)
+    reversal_mask(theta_dot, min_speed, reach, periodic).map_err(PipelineError::from)
 }

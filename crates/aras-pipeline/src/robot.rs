@@ -3,6 +3,7 @@
 //! SDP layout of the four links, and the way back into `aras-dyn`'s
 //! parameter type.
 
+use crate::PipelineError;
 use aras_dyn::{Effect, Model, Params};
 use aras_kin::{Geometry, Motion, Workspace};
 use aras_signal::{Samples, Sos};
@@ -41,7 +42,11 @@ fn invalid(context: &str, reason: impl Into<String>) -> IdentError {
 /// Stacks `model`'s regressor over processed `samples` (their `X, Ẋ, Ẍ`
 /// through the kinematics; `θ, θ̇` are recomputed from `X`, which is how the
 /// samples were derived) and their torques.
-pub fn stack(model: &Model, geometry: &Geometry, samples: &Samples) -> Result<Stacked, IdentError> {
+pub fn stack(
+    model: &Model,
+    geometry: &Geometry,
+    samples: &Samples,
+) -> Result<Stacked, PipelineError> {
     let all: Vec<usize> = (0..model.columns()).collect();
     stack_selected(model, geometry, samples, (&all, model.names()), None)
 }
@@ -62,7 +67,7 @@ pub(crate) fn stack_selected(
     samples: &Samples,
     (columns, names): (&[usize], Vec<String>),
     recycled: Option<Mat<f64>>,
-) -> Result<Stacked, IdentError> {
+) -> Result<Stacked, PipelineError> {
     let n = samples.len();
     for (what, a) in [
         ("x", &samples.x),
@@ -78,14 +83,16 @@ pub(crate) fn stack_selected(
                     a[0].len(),
                     a[1].len()
                 ),
-            ));
+            )
+            .into());
         }
     }
     if let Some(&c) = columns.iter().find(|&&c| c >= model.columns()) {
         return Err(invalid(
             "selected regressor columns",
             format!("column {c} of a model with {} columns", model.columns()),
-        ));
+        )
+        .into());
     }
     let mut w = match recycled {
         Some(m) if m.nrows() == 2 * n && m.ncols() == columns.len() => m,
@@ -151,7 +158,7 @@ pub fn base_parameters(
     geometry: &Geometry,
     workspace: &Workspace,
     samples: usize,
-) -> Result<BaseParameters, IdentError> {
+) -> Result<BaseParameters, PipelineError> {
     const PRIMES: [u64; 6] = [2, 3, 5, 7, 11, 13];
     const ACCEL: f64 = 20.0;
     let (lo, hi, rate) = (workspace.min(), workspace.max(), workspace.max_rate());
@@ -173,6 +180,7 @@ pub fn base_parameters(
         .map_err(|e| dyn_err("stacking the regressor for the base analysis", e))?;
     let w = faer::MatRef::from_column_major_slice(w.as_slice(), 2 * samples, model.columns());
     BaseParameters::from_regressor(w, &model.names(), DEFAULT_RANK_TOLERANCE)
+        .map_err(PipelineError::from)
 }
 
 /// What the zero-phase filter is applied to (`"parallel"`, `"torque_only"`
@@ -196,7 +204,7 @@ pub fn filter(
     sos: &Sos,
     mode: FilterMode,
     periodic: bool,
-) -> Result<(), IdentError> {
+) -> Result<(), PipelineError> {
     let n = stacked.groups.counts()[0];
     if mode == FilterMode::Parallel {
         filter_columns(&mut stacked.w, n, sos, periodic)?;
@@ -221,15 +229,16 @@ pub use aras_diagnose::filtering::{
     filter_many_columns, filter_reach, keep_every_row, noise_gain, reversal_mask,
 };
 
-fn run_filter(sos: &Sos, x: &[f64], periodic: bool) -> Result<Vec<f64>, IdentError> {
+fn run_filter(sos: &Sos, x: &[f64], periodic: bool) -> Result<Vec<f64>, PipelineError> {
     sos.filtfilt_record(x, periodic)
         .map_err(|e| dyn_err("filtering", e))
+        .map_err(PipelineError::from)
 }
 
 /// The rows of `stacked` where `keep` is true (joint-major mask of length
 /// `2N`, e.g. from [`reversal_mask`]); the row groups shrink accordingly.
 /// Apply after [`filter`], which needs the complete, evenly sampled record.
-pub fn keep_rows(stacked: &Stacked, keep: &[bool]) -> Result<Stacked, IdentError> {
+pub fn keep_rows(stacked: &Stacked, keep: &[bool]) -> Result<Stacked, PipelineError> {
     let m = stacked.w.nrows();
     if keep.len() != m {
         return Err(IdentError::DimensionMismatch {
@@ -237,7 +246,8 @@ pub fn keep_rows(stacked: &Stacked, keep: &[bool]) -> Result<Stacked, IdentError
             expected: m,
             found: keep.len(),
             hint: "give one flag per stacked row (joint-major, 2N)",
-        });
+        }
+        .into());
     }
     let rows: Vec<usize> = (0..m).filter(|&i| keep[i]).collect();
     let n = stacked.groups.counts()[0];
@@ -260,7 +270,10 @@ pub fn keep_rows(stacked: &Stacked, keep: &[bool]) -> Result<Stacked, IdentError
 /// target and mass reference (bounds ±20 %), and the sign constraints (70)
 /// of the effects the model has ([`Effect::nonnegative`]: `Fv, Fc ≥ 0`,
 /// `Ke ≥ 0`).
-pub fn consistent_problem(model: &Model, reference: &Params) -> Result<ConsistentLs, IdentError> {
+pub fn consistent_problem(
+    model: &Model,
+    reference: &Params,
+) -> Result<ConsistentLs, PipelineError> {
     let names = model.names();
     let beta = reference
         .standard_vector(model)
@@ -270,7 +283,8 @@ pub fn consistent_problem(model: &Model, reference: &Params) -> Result<Consisten
         return Err(invalid(
             "consistent problem",
             "the model has no rigid links, so there is nothing to keep physical",
-        ));
+        )
+        .into());
     }
     for (k, link) in reference.links.iter().enumerate() {
         let l = format!("L{}", k + 1);
@@ -300,7 +314,7 @@ pub fn params_from_solution(
     reference: &Params,
     model: &Model,
     sol: &SdpSolution,
-) -> Result<Params, IdentError> {
+) -> Result<Params, PipelineError> {
     let mut p = reference.clone();
     p.set_standard_vector(model, &sol.standard)
         .map_err(|e| dyn_err("writing the SDP result", e))?;
@@ -310,7 +324,8 @@ pub fn params_from_solution(
             expected: p.links.len(),
             found: sol.masses.len(),
             hint: "solve the problem built by `consistent_problem`",
-        });
+        }
+        .into());
     }
     for (l, m) in p.links.iter_mut().zip(&sol.masses) {
         l.mass = *m;

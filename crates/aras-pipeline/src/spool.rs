@@ -9,6 +9,7 @@
 //! is dropped. Records are sample by sample, [`CHANNELS`] little-endian
 //! `f64` each, in the order of [`aras_signal::Samples`]' fields.
 
+use crate::PipelineError;
 use std::fs::File;
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 use std::ops::Range;
@@ -98,7 +99,7 @@ impl SpoolWriter {
     /// A new, empty scratch file in `dir` (which must exist), named
     /// `.aras-samples.PID-N.tmp` for the first `N` no file has
     /// ([`aras_log::new_temp_file`]).
-    pub fn create_in(dir: &Path) -> Result<Self, IdentError> {
+    pub fn create_in(dir: &Path) -> Result<Self, PipelineError> {
         let (path, file) = aras_log::new_temp_file(&dir.join("aras-samples")).map_err(|e| {
             io(
                 format!(
@@ -128,7 +129,7 @@ impl SpoolWriter {
     }
 
     /// Appends samples `rows` of `s` (every channel must hold them).
-    pub fn append(&mut self, s: &Samples, rows: Range<usize>) -> Result<(), IdentError> {
+    pub fn append(&mut self, s: &Samples, rows: Range<usize>) -> Result<(), PipelineError> {
         let ch = channels(s);
         if let Some(c) = ch.iter().position(|c| c.len() < rows.end) {
             return Err(IdentError::DimensionMismatch {
@@ -136,13 +137,12 @@ impl SpoolWriter {
                 expected: rows.end,
                 found: ch[c].len(),
                 hint: "give processed samples with every channel filled",
-            });
+            }
+            .into());
         }
-        let file = self.file.as_mut().ok_or(IdentError::InvalidSetting {
-            name: "scratch file",
-            value: 0.0,
-            reason: "internal: appending after an earlier write error",
-        })?;
+        let file = self.file.as_mut().ok_or(PipelineError::Internal(
+            "a scratch file appended to after an earlier write error",
+        ))?;
         self.record.clear();
         self.record.reserve(rows.len() * RECORD);
         for i in rows.clone() {
@@ -157,12 +157,10 @@ impl SpoolWriter {
     }
 
     /// The written samples, readable by windows.
-    pub fn finish(mut self) -> Result<SpooledSamples, IdentError> {
-        let writer = self.file.take().ok_or(IdentError::InvalidSetting {
-            name: "scratch file",
-            value: 0.0,
-            reason: "internal: finishing after an earlier write error",
-        })?;
+    pub fn finish(mut self) -> Result<SpooledSamples, PipelineError> {
+        let writer = self.file.take().ok_or(PipelineError::Internal(
+            "a scratch file finished after an earlier write error",
+        ))?;
         let path = std::mem::take(&mut self.path);
         let file = writer
             .into_inner()
@@ -171,7 +169,7 @@ impl SpoolWriter {
             Ok(f) => f,
             Err(e) => {
                 let _ = std::fs::remove_file(&path);
-                return Err(e);
+                return Err(e.into());
             }
         };
         Ok(SpooledSamples {
@@ -217,14 +215,15 @@ impl SpooledSamples {
     }
 
     /// Samples `rows` into `out` (its channels replaced).
-    pub fn read(&self, rows: Range<usize>, out: &mut Samples) -> Result<(), IdentError> {
+    pub fn read(&self, rows: Range<usize>, out: &mut Samples) -> Result<(), PipelineError> {
         if rows.start > rows.end || rows.end > self.len {
             return Err(IdentError::DimensionMismatch {
                 what: "end of a window of spooled samples",
                 expected: self.len,
                 found: rows.end,
                 hint: "read windows inside the record",
-            });
+            }
+            .into());
         }
         let n = rows.len();
         let mut bytes = vec![0u8; n * RECORD];

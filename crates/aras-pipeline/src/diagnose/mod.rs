@@ -53,5 +53,6 @@ impl aras_diagnose::SampleSource for crate::spool::SpooledSamples {
         out: &mut aras_signal::Samples,
     ) -> Result<(), aras_ident::IdentError> {
         crate::spool::SpooledSamples::read(self, rows, out)
+            .map_err(crate::PipelineError::into_ident)
     }
 }

@@ -4,6 +4,7 @@
 //! single-effect models, and the SDP on its four links as the physically
 //! consistent refit.
 
+use crate::PipelineError;
 use aras_diagnose::{ConsistentRefit, ConsistentSolution, DiagnosisModel, EngineOptions};
 use aras_dyn::{Effect, Model, Params};
 use aras_ident::{BaseParameters, ConsistentLs, IdentError, ReducedLs};
@@ -167,6 +168,7 @@ impl DiagnosisModel for Aras<'_> {
 
     fn base_columns(&self, window: &Self::Window) -> Result<Mat<f64>, IdentError> {
         columns_on(self.start, RegressorColumns::Base(&self.base), window, None)
+            .map_err(PipelineError::into_ident)
     }
 
     fn candidate_columns(
@@ -180,12 +182,12 @@ impl DiagnosisModel for Aras<'_> {
                 RegressorColumns::Standard,
                 window,
                 None,
-            ),
-            Candidate::TimeDelay { .. } => Err(IdentError::InvalidSetting {
-                name: "candidate columns",
-                value: 0.0,
-                reason: "internal: a time delay shifts the torques and has no columns",
-            }),
+            )
+            .map_err(PipelineError::into_ident),
+            Candidate::TimeDelay { .. } => Err(PipelineError::Internal(
+                "columns asked of the time-delay candidate, which shifts the torques instead",
+            )
+            .into_ident()),
         }
     }
 
@@ -214,9 +216,10 @@ impl DiagnosisModel for Aras<'_> {
             self.geometry,
             self.workspace,
             self.base_samples.max(50),
-        )?;
+        )
+        .map_err(PipelineError::into_ident)?;
         // The effects' own sign constraints (70) come with the problem.
-        let problem = consistent_problem(&model, reference)?;
+        let problem = consistent_problem(&model, reference).map_err(PipelineError::into_ident)?;
         Ok(Some(Refit {
             model,
             base,
@@ -262,6 +265,7 @@ impl ConsistentRefit<Vec<KinematicSample>> for Refit {
             window,
             None,
         )
+        .map_err(PipelineError::into_ident)
     }
 
     fn solve(&self, reduced: &ReducedLs) -> Result<ConsistentSolution, IdentError> {
@@ -290,7 +294,7 @@ pub fn diagnose(
     train: &Dataset,
     validation: &[Dataset],
     opts: &DiagnoseOptions,
-) -> Result<Diagnosis, IdentError> {
+) -> Result<Diagnosis, PipelineError> {
     let engine = opts.engine();
     let every_row = opts.all_rows.iter().all(|&a| a);
     let cands: Vec<Candidate> = opts
@@ -323,5 +327,7 @@ pub fn diagnose(
         workspace: &opts.workspace,
         base_samples: opts.base_samples,
     };
-    aras_diagnose::diagnose(&robot, cands, train, validation, &engine)
+    Ok(aras_diagnose::diagnose(
+        &robot, cands, train, validation, &engine,
+    )?)
 }

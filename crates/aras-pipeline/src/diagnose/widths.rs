@@ -10,6 +10,7 @@
 //! until it names the effects it was refined with (at most
 //! [`WIDTH_PASSES`] passes).
 
+use crate::PipelineError;
 use std::path::Path;
 
 use aras_dyn::{Effect, Model};
@@ -63,11 +64,15 @@ impl Additions {
     /// # Errors
     /// An effect the model already has, or one it cannot take
     /// ([`IdentError::External`], naming the effect).
-    pub fn model(&self, start: &Model) -> Result<Model, IdentError> {
-        self.effects.iter().try_fold(start.clone(), |m, e| {
-            m.with_effect(*e)
-                .map_err(|err| IdentError::external(format!("adding the effect `{}`", e.id()), err))
-        })
+    pub fn model(&self, start: &Model) -> Result<Model, PipelineError> {
+        self.effects
+            .iter()
+            .try_fold(start.clone(), |m, e| {
+                m.with_effect(*e).map_err(|err| {
+                    IdentError::external(format!("adding the effect `{}`", e.id()), err)
+                })
+            })
+            .map_err(PipelineError::from)
     }
 }
 
@@ -156,7 +161,7 @@ pub fn widths_with(
     identification: &IdentifySettings,
     opts: &DiagnoseOptions,
     additions: &Additions,
-) -> Result<(Model, WidthRefinement), IdentError> {
+) -> Result<(Model, WidthRefinement), PipelineError> {
     if !refines(source, identification) {
         return Ok((start.clone(), WidthRefinement::not_refined()));
     }
@@ -238,7 +243,7 @@ pub fn diagnose_with_widths(
     source: &WidthSource,
     identification: &IdentifySettings,
     stage: &mut dyn FnMut(PassStage),
-) -> Result<DiagnosisWithWidths, IdentError> {
+) -> Result<DiagnosisWithWidths, PipelineError> {
     let refined = refines(source, identification);
     let mut additions = Additions::default();
     let mut consistent = None;

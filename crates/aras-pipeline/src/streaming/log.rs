@@ -1,5 +1,6 @@
 //! End-to-end streaming identification from a CSV log in bounded memory.
 
+use crate::PipelineError;
 use std::ops::Range;
 use std::path::Path;
 
@@ -114,7 +115,7 @@ impl StreamingResult {
     /// Fitness (78) per joint of the base parameters `beta_b` on the fitted
     /// rows, `100 (1 − ‖τ − W_b β_b‖ / ‖τ − mean τ‖)`, from the accumulated
     /// factors and [`Self::torque_sums`] (no second pass over the log).
-    pub fn fitness(&self, beta_b: &[f64]) -> Result<[f64; 2], IdentError> {
+    pub fn fitness(&self, beta_b: &[f64]) -> Result<[f64; 2], PipelineError> {
         let rss = self.accumulator.group_rss(beta_b)?;
         let mut f = [0.0; 2];
         for j in 0..2 {
@@ -125,7 +126,8 @@ impl StreamingResult {
                 return Err(IdentError::ConstantSignal {
                     group: j,
                     len: self.rows_fitted[j],
-                });
+                }
+                .into());
             }
             f[j] = 100.0 * (1.0 - rss[j].max(0.0).sqrt() / den);
         }
@@ -196,9 +198,9 @@ pub struct StreamingResult {
 
 /// Opens an ARAS-Diamond log: two joints (columns of further joints are
 /// ignored with a note, a log with fewer is refused).
-fn open_log(path: &Path, read: &ReadOptions) -> Result<LogReader<std::fs::File>, IdentError> {
+fn open_log(path: &Path, read: &ReadOptions) -> Result<LogReader<std::fs::File>, PipelineError> {
     if let Some(n) = read.joints.filter(|&n| n != 2) {
-        return Err(IdentError::InvalidSetting {
+        return Err(PipelineError::InvalidSetting {
             name: "read.joints",
             value: n as f64,
             reason: "ARAS-Diamond has two joints: leave ReadOptions::joints unset or give 2",
@@ -208,7 +210,9 @@ fn open_log(path: &Path, read: &ReadOptions) -> Result<LogReader<std::fs::File>,
         joints: Some(2),
         ..read.clone()
     };
-    LogReader::open(path, &read).map_err(|e| sig(&format!("opening the log {}", path.display()), e))
+    LogReader::open(path, &read)
+        .map_err(|e| sig(&format!("opening the log {}", path.display()), e))
+        .map_err(PipelineError::from)
 }
 
 fn sig(context: &str, e: impl std::error::Error + Send + Sync + 'static) -> IdentError {
@@ -258,7 +262,7 @@ pub fn identify_log(
     model: &Model,
     base: &BaseParameters,
     options: &StreamingOptions,
-) -> Result<StreamingResult, IdentError> {
+) -> Result<StreamingResult, PipelineError> {
     identify_log_with_progress(path, model, base, options, &mut |_| {})
 }
 
@@ -271,16 +275,16 @@ pub fn identify_log_with_progress(
     base: &BaseParameters,
     options: &StreamingOptions,
     progress: &mut dyn FnMut(u64),
-) -> Result<StreamingResult, IdentError> {
+) -> Result<StreamingResult, PipelineError> {
     if options.chunk_samples < 1024 {
-        return Err(IdentError::InvalidSetting {
+        return Err(PipelineError::InvalidSetting {
             name: "chunk_samples",
             value: options.chunk_samples as f64,
             reason: "read at least 1024 samples per chunk (65 536 is a good size)",
         });
     }
     if !(options.overlap_tolerance > 0.0 && options.overlap_tolerance < 1.0) {
-        return Err(IdentError::InvalidSetting {
+        return Err(PipelineError::InvalidSetting {
             name: "overlap_tolerance",
             value: options.overlap_tolerance,
             reason: "give a relative tolerance in (0, 1), e.g. 1e-12",
@@ -289,14 +293,14 @@ pub fn identify_log_with_progress(
     let name = path.display().to_string();
     let mut reader = open_log(path, &options.read)?;
     if !(options.min_speed.is_finite() && options.min_speed >= 0.0) {
-        return Err(IdentError::InvalidSetting {
+        return Err(PipelineError::InvalidSetting {
             name: "min_speed",
             value: options.min_speed,
             reason: "give a finite speed ≥ 0 in rad/s (0 keeps every row)",
         });
     }
     if !(options.reversal_reach > 0.0 && options.reversal_reach < 1.0) {
-        return Err(IdentError::InvalidSetting {
+        return Err(PipelineError::InvalidSetting {
             name: "reversal_reach",
             value: options.reversal_reach,
             reason: "give a fraction of the impulse response's peak in (0, 1), e.g. 1e-3",
@@ -475,7 +479,8 @@ pub fn identify_log_with_progress(
                  lower them or excite the joints more",
                 options.min_speed, options.reversal_reach
             ),
-        });
+        }
+        .into());
     }
     let reduced = acc.reduced()?;
     let ols = reduced
@@ -503,7 +508,7 @@ pub fn identify_log_with_progress(
 /// The logged derivatives of a chunk checked against its angles, as the
 /// in-memory processing checks them
 /// ([`aras_log::units::check_derivative_column`]).
-fn check_chunk_derivatives(name: &str, chunk: &Columns) -> Result<(), IdentError> {
+fn check_chunk_derivatives(name: &str, chunk: &Columns) -> Result<(), PipelineError> {
     use aras_log::units::check_derivative_column;
     for j in 0..2 {
         let [theta, dtheta, ddtheta] =
@@ -547,8 +552,8 @@ fn period_and_derivatives(
 
 /// Appends up to `n` rows of the log to a buffer: `read(reader, into, n)`
 /// (fewer only at the end of the log), returns how many.
-type ReadRows<'a> =
-    dyn FnMut(&mut LogReader<std::fs::File>, &mut Columns, usize) -> Result<usize, IdentError> + 'a;
+type ReadRows<'a> = dyn FnMut(&mut LogReader<std::fs::File>, &mut Columns, usize) -> Result<usize, PipelineError>
+    + 'a;
 
 /// The rows of a log, `n` at a time: `read(reader, into, n)` appends up to
 /// `n` rows to `into` (fewer only at the end of the log), each torque taken
@@ -561,11 +566,11 @@ fn rows_reader<'a>(
     torque_delay: Option<f64>,
     progress: &'a mut dyn FnMut(u64),
 ) -> Result<
-    impl FnMut(&mut LogReader<std::fs::File>, &mut Columns, usize) -> Result<usize, IdentError> + 'a,
-    IdentError,
+    impl FnMut(&mut LogReader<std::fs::File>, &mut Columns, usize) -> Result<usize, PipelineError> + 'a,
+    PipelineError,
 > {
     if let Some(d) = torque_delay.filter(|d| !d.is_finite()) {
-        return Err(IdentError::InvalidSetting {
+        return Err(PipelineError::InvalidSetting {
             name: "torque_delay",
             value: d,
             reason: "give a finite number of samples, e.g. 2.5",
@@ -627,7 +632,7 @@ fn period_average(
     period_s: f64,
     options: &StreamingOptions,
     logged: bool,
-) -> Result<PeriodAverage, IdentError> {
+) -> Result<PeriodAverage, PipelineError> {
     let mut avg: Option<PeriodSums> = None;
     let mut chunk = Columns::default();
     let mut dt = options.read.nominal_step.unwrap_or(0.0);
@@ -683,7 +688,7 @@ pub fn spool_log(
     options: &StreamingOptions,
     dir: &Path,
     progress: &mut dyn FnMut(u64),
-) -> Result<Dataset, IdentError> {
+) -> Result<Dataset, PipelineError> {
     let name = path.file_name().map_or_else(
         || path.display().to_string(),
         |f| f.to_string_lossy().into(),
@@ -790,9 +795,9 @@ fn overlapping_blocks(
     read: &mut ReadRows<'_>,
     popts: &mut ProcessOptions,
     sizes: BlockSizes,
-    margin_of: impl Fn(&ProcessOptions, f64) -> Result<usize, IdentError>,
-    mut flush: impl FnMut(&mut Vec<Block>, &ProcessOptions) -> Result<(), IdentError> + Send,
-) -> Result<(usize, usize), IdentError> {
+    margin_of: impl Fn(&ProcessOptions, f64) -> Result<usize, PipelineError>,
+    mut flush: impl FnMut(&mut Vec<Block>, &ProcessOptions) -> Result<(), PipelineError> + Send,
+) -> Result<(usize, usize), PipelineError> {
     // The blocks are processed on a worker while the next ones are read:
     // reading is serial and a quarter of the time at 10 kHz. The rendezvous
     // channel holds nothing, so at most one batch waits while one is
@@ -801,7 +806,7 @@ fn overlapping_blocks(
         let (tx, rx) = std::sync::mpsc::sync_channel::<(Vec<Block>, ProcessOptions)>(0);
         let worker = scope.spawn(move || -> Result<(), IdentError> {
             for (mut batch, p) in rx {
-                flush(&mut batch, &p)?;
+                flush(&mut batch, &p).map_err(PipelineError::into_ident)?;
             }
             Ok(())
         });
@@ -827,9 +832,9 @@ fn read_blocks(
     read: &mut ReadRows<'_>,
     popts: &mut ProcessOptions,
     sizes: BlockSizes,
-    margin_of: impl Fn(&ProcessOptions, f64) -> Result<usize, IdentError>,
+    margin_of: impl Fn(&ProcessOptions, f64) -> Result<usize, PipelineError>,
     mut send: impl FnMut(Vec<Block>, &ProcessOptions) -> bool,
-) -> Result<(usize, usize), IdentError> {
+) -> Result<(usize, usize), PipelineError> {
     popts.period = PeriodSource::Off;
     let mut rows = 0usize;
     let mut chunk = Columns::default();
@@ -854,7 +859,7 @@ fn read_blocks(
         rows += n;
         if first {
             if buf.is_empty() {
-                return Err(invalid(name, "the log has no data rows"));
+                return Err(invalid(name, "the log has no data rows").into());
             }
             dt = nominal_step(&buf, dt)?;
             if popts.filter == Bandwidth::Auto && !sizes.logged {
@@ -928,7 +933,7 @@ fn process_blocks(
     acc: &mut QrAccumulator,
     out: &mut Progress,
     spares: &mut [Option<Mat<f64>>; BLOCKS_IN_FLIGHT],
-) -> Result<(), IdentError> {
+) -> Result<(), PipelineError> {
     use rayon::prelude::*;
     let parts = pending
         .par_iter()
@@ -951,7 +956,8 @@ fn process_blocks(
                     &mut p,
                     spare,
                     [false; 2],
-                )?;
+                )
+                .map_err(PipelineError::into_ident)?;
                 Ok((a, p, used))
             },
         )
@@ -986,7 +992,7 @@ struct Progress {
 
 /// The reader's nominal step: `ReadOptions::nominal_step` if given (> 0),
 /// else the median of the first 4096 steps, as the reader defines it.
-fn nominal_step(c: &Columns, given: f64) -> Result<f64, IdentError> {
+fn nominal_step(c: &Columns, given: f64) -> Result<f64, PipelineError> {
     if given > 0.0 {
         return Ok(given);
     }
@@ -995,7 +1001,8 @@ fn nominal_step(c: &Columns, given: f64) -> Result<f64, IdentError> {
         return Err(invalid(
             "estimating the sample step",
             "the log has fewer than 2 rows; record at least 16 samples",
-        ));
+        )
+        .into());
     }
     let mut steps: Vec<f64> = (0..k).map(|i| c.t[i + 1] - c.t[i]).collect();
     steps.sort_by(f64::total_cmp);
@@ -1009,7 +1016,7 @@ fn nominal_step(c: &Columns, given: f64) -> Result<f64, IdentError> {
 /// Samples of overlap each side of a block: the filters' transients (two
 /// zero-phase filters in series: the signal's and the regressor's) decay to
 /// `tol` and the derivative stencil (at most 64 samples) fits.
-fn overlap(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> {
+fn overlap(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, PipelineError> {
     const STENCIL: usize = 64;
     let Bandwidth::Fixed(spec) = p.filter else {
         return Ok(STENCIL);
@@ -1018,7 +1025,7 @@ fn overlap(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> {
     let slowest = (std::f64::consts::PI / (2.0 * spec.order as f64)).sin();
     let tau = fs / (std::f64::consts::TAU * spec.cutoff_hz * slowest);
     if !(tau.is_finite() && tau > 0.0) {
-        return Err(IdentError::InvalidSetting {
+        return Err(PipelineError::InvalidSetting {
             name: "filter cut-off",
             value: spec.cutoff_hz,
             reason: "the cut-off must be positive and below the Nyquist frequency",
@@ -1122,7 +1129,7 @@ fn accumulate_processed(
     out: &mut Progress,
     spare: &mut Option<Mat<f64>>,
     all_rows: [bool; 2],
-) -> Result<usize, IdentError> {
+) -> Result<usize, PipelineError> {
     let mut block = prepare_block_rows(
         log,
         popts,
@@ -1178,7 +1185,7 @@ fn accumulate_processed(
 /// Samples the reversal exclusion widens by ([`filter_reach`] of the
 /// filter at `dt`; 0 unfiltered): added to the overlap of blocks so that
 /// every kept sample's mask sees all the rates it depends on.
-fn reach_of(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> {
+fn reach_of(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, PipelineError> {
     let Bandwidth::Fixed(spec) = p.filter else {
         return Ok(0);
     };
@@ -1186,7 +1193,7 @@ fn reach_of(p: &ProcessOptions, dt: f64, tol: f64) -> Result<usize, IdentError> 
         .map_err(|e| sig("designing the regressor filter", e))?;
     // A record long enough for the impulse response to end inside it.
     let n = 2 * overlap(p, dt, 1e-12)? + 1;
-    filter_reach(&sos, n, false, tol)
+    filter_reach(&sos, n, false, tol).map_err(PipelineError::from)
 }
 
 /// The period averaging of a log being read: [`aras_signal::PeriodSums`]
@@ -1202,7 +1209,12 @@ struct PeriodSums {
 }
 
 impl PeriodSums {
-    fn new(period_s: f64, dt: f64, p: &ProcessOptions, logged: bool) -> Result<Self, IdentError> {
+    fn new(
+        period_s: f64,
+        dt: f64,
+        p: &ProcessOptions,
+        logged: bool,
+    ) -> Result<Self, PipelineError> {
         let channels = if logged { 8 } else { 4 };
         let sums = aras_signal::PeriodSums::new(channels, dt, period_s, p.settling_s, None)
             .map_err(|source| IdentError::External {
@@ -1242,7 +1254,12 @@ impl PeriodSums {
 
     /// The averaged block as a log of one block (an incomplete last block
     /// is dropped, as in memory), and the periods averaged.
-    fn finish(self, name: &str, rows: usize, sidecar: Sidecar) -> Result<(Log, usize), IdentError> {
+    fn finish(
+        self,
+        name: &str,
+        rows: usize,
+        sidecar: Sidecar,
+    ) -> Result<(Log, usize), PipelineError> {
         let mean = self.sums.finish().map_err(|source| IdentError::External {
             context: format!(
                 "period averaging of {name} ({rows} rows, period {} s)",

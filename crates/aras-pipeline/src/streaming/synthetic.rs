@@ -4,6 +4,7 @@
 //! deterministic pseudo-random noise. Much faster than the simulator, so
 //! hour-long logs can be generated at test time.
 
+use crate::PipelineError;
 use std::io::Write;
 use std::path::Path;
 
@@ -72,7 +73,7 @@ pub fn states(
     n: usize,
     fs: f64,
     noise_std: f64,
-) -> Result<StateArrays, IdentError> {
+) -> Result<StateArrays, PipelineError> {
     let rows: Vec<[f64; 8]> = (0..n)
         .into_par_iter()
         .map(|i| row(model, geometry, beta, i, fs, noise_std))
@@ -96,7 +97,7 @@ fn row(
     i: usize,
     fs: f64,
     noise_std: f64,
-) -> Result<[f64; 8], IdentError> {
+) -> Result<[f64; 8], PipelineError> {
     let (s, tau) = sample(model, geometry, beta, i, fs, noise_std)?;
     Ok([
         s.task.pos[0],
@@ -117,7 +118,7 @@ fn sample(
     i: usize,
     fs: f64,
     noise_std: f64,
-) -> Result<(aras_kin::KinematicSample, [f64; 2]), IdentError> {
+) -> Result<(aras_kin::KinematicSample, [f64; 2]), PipelineError> {
     let s = aras_kin::evaluate(geometry, &state(i as f64 / fs))
         .map_err(|e| IdentError::external("synthetic trajectory", e))?;
     let tau = model
@@ -144,7 +145,7 @@ pub fn write_log(
     n: usize,
     fs: f64,
     noise_std: f64,
-) -> Result<(), IdentError> {
+) -> Result<(), PipelineError> {
     let io = |e: std::io::Error| IdentError::external(format!("writing {}", path.display()), e);
     let mut f = std::io::BufWriter::new(std::fs::File::create(path).map_err(io)?);
     writeln!(
@@ -160,7 +161,8 @@ pub fn write_log(
             .map(|&s0| -> Result<String, IdentError> {
                 let mut out = String::with_capacity(BLOCK * 160);
                 for i in s0..(s0 + BLOCK).min(n) {
-                    let (s, tau) = sample(model, geometry, beta, i, fs, noise_std)?;
+                    let (s, tau) = sample(model, geometry, beta, i, fs, noise_std)
+                        .map_err(PipelineError::into_ident)?;
                     use std::fmt::Write as _;
                     let _ = writeln!(
                         out,
@@ -183,5 +185,5 @@ pub fn write_log(
             f.write_all(t.as_bytes()).map_err(io)?;
         }
     }
-    f.flush().map_err(io)
+    f.flush().map_err(io).map_err(PipelineError::from)
 }

@@ -17,6 +17,7 @@
 //!   away from velocity reversals, as the in-sample fitness is. What keeps
 //!   both below 100 % is the sensor noise alone.
 
+use crate::PipelineError;
 use aras_ident::IdentError;
 use aras_kin::Geometry;
 use aras_log::Log;
@@ -46,7 +47,7 @@ pub fn noise_ceiling(
     opts: &ProcessOptions,
     geometry: &Geometry,
     keep: &[bool],
-) -> Result<Ceiling, IdentError> {
+) -> Result<Ceiling, PipelineError> {
     if clean.len() != log.len() {
         return Err(IdentError::InvalidData {
             context: format!("the noise ceiling of {}", log.name),
@@ -56,7 +57,8 @@ pub fn noise_ceiling(
                 log.name,
                 log.len()
             ),
-        });
+        }
+        .into());
     }
     let processed = &prep.processed;
     let mut all = [0.0; 2];
@@ -92,7 +94,8 @@ pub fn noise_ceiling(
                 log.name,
                 twin.samples.len()
             ),
-        });
+        }
+        .into());
     }
     let mut kept = [0.0; 2];
     for (j, k) in kept.iter_mut().enumerate() {

@@ -9,6 +9,7 @@
 //! cover; the loss per joint is the first fitness minus the second, in
 //! percentage points. Positive: differentiating the angles costs that much.
 
+use crate::PipelineError;
 use aras_dyn::Model;
 use aras_ident::IdentError;
 use aras_kin::Geometry;
@@ -40,7 +41,7 @@ pub fn predict_route(
     model: &Model,
     geometry: &Geometry,
     beta: &[f64],
-) -> Result<(Processed, Vec<f64>), IdentError> {
+) -> Result<(Processed, Vec<f64>), PipelineError> {
     let mut opts = opts.clone();
     opts.rows = OutputRows::EveryRow;
     let processed = aras_signal::process(log, &opts, &aras_kin::task_motion(geometry))
@@ -64,7 +65,7 @@ pub fn loss_between(
     pl: &[f64],
     angles: &Processed,
     pa: &[f64],
-) -> Result<ProcessingLoss, IdentError> {
+) -> Result<ProcessingLoss, PipelineError> {
     let rows = logged.log_tau[0].len();
     if angles.log_tau[0].len() != rows {
         return Err(IdentError::InvalidData {
@@ -73,7 +74,8 @@ pub fn loss_between(
                 "the two routes come from different logs ({rows} and {} rows)",
                 angles.log_tau[0].len()
             ),
-        });
+        }
+        .into());
     }
     let (nl, na) = (logged.samples.len(), angles.samples.len());
     if pl.len() != 2 * nl || pa.len() != 2 * na {
@@ -84,7 +86,8 @@ pub fn loss_between(
                 pl.len(),
                 pa.len()
             ),
-        });
+        }
+        .into());
     }
     let both: Vec<(usize, usize, usize)> = (0..rows)
         .filter_map(|r| Some((r, logged.sample_of_row(r)?, angles.sample_of_row(r)?)))
@@ -132,7 +135,7 @@ pub fn processing_loss(
     geometry: &Geometry,
     beta: &[f64],
     logged: Option<(&Processed, &[f64])>,
-) -> Result<Option<ProcessingLoss>, IdentError> {
+) -> Result<Option<ProcessingLoss>, PipelineError> {
     if !has_derivatives(log) {
         return Ok(None);
     }

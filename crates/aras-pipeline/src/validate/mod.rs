@@ -9,6 +9,7 @@
 pub mod ceiling;
 pub mod loss;
 
+use crate::PipelineError;
 use std::path::Path;
 
 use aras_dyn::sim::SimConfig;
@@ -99,12 +100,12 @@ pub struct Traces {
 }
 
 /// `W β` for a standard parameter vector.
-pub fn predict_standard(prep: &Prepared, beta: &[f64]) -> Result<Vec<f64>, IdentError> {
-    aras_ident::validate::predict(prep.w_ref(), beta)
+pub fn predict_standard(prep: &Prepared, beta: &[f64]) -> Result<Vec<f64>, PipelineError> {
+    aras_ident::validate::predict(prep.w_ref(), beta).map_err(PipelineError::from)
 }
 
 /// Fitness (78) per joint of a standard parameter vector on the rows of `st`.
-fn fitness_standard(st: &Stacked, beta: &[f64]) -> Result<[f64; 2], IdentError> {
+fn fitness_standard(st: &Stacked, beta: &[f64]) -> Result<[f64; 2], PipelineError> {
     let p = aras_ident::validate::predict(st.w.as_ref(), beta)?;
     let f = aras_ident::validate::fitness_per_group(&st.t, &p, &st.groups)?;
     Ok([f[0], f[1]])
@@ -140,7 +141,7 @@ pub fn score_log(
     candidates: &[Vec<f64>],
     min_speed: f64,
     frequency_hz: f64,
-) -> Result<CrossValidation, IdentError> {
+) -> Result<CrossValidation, PipelineError> {
     let ScoredModel { geometry, model } = scored;
     let f = frequency_hz;
     let task = aras_kin::task_motion(geometry);
@@ -243,7 +244,7 @@ pub fn cross_validate(
     min_speed: f64,
     dir: &Path,
     progress: &mut dyn FnMut(usize),
-) -> Result<Vec<CrossValidation>, IdentError> {
+) -> Result<Vec<CrossValidation>, PipelineError> {
     let mut out = Vec::new();
     for (i, &f) in settings.frequencies_hz.iter().enumerate() {
         let traj = Sinusoid::paper_79(f).map_err(|e| {
@@ -298,8 +299,10 @@ pub struct PdSummary {
 }
 
 /// The dynamics of `params`, for the mass-matrix checks.
-fn dynamics(params: &Params) -> Result<Dynamics, IdentError> {
-    Dynamics::new(params).map_err(|e| IdentError::external("the parameters' dynamics", e))
+fn dynamics(params: &Params) -> Result<Dynamics, PipelineError> {
+    Dynamics::new(params)
+        .map_err(|e| IdentError::external("the parameters' dynamics", e))
+        .map_err(PipelineError::from)
 }
 
 /// Motor-space mass matrix `J⁻ᵀ M J⁻¹` (80) at pose `x`.
@@ -315,7 +318,7 @@ fn mass_motor(dy: &Dynamics, x: &[f64; 2]) -> Result<[[f64; 2]; 2], aras_dyn::Dy
 
 /// Mass-matrix (80) eigenvalues over `region`, a box in `[φ, γ]` (rad, e.g.
 /// the workspace (77)): its grid plus random points, in parallel.
-pub fn pd_check(params: &Params, region: &PdRegion<2>) -> Result<PdSummary, IdentError> {
+pub fn pd_check(params: &Params, region: &PdRegion<2>) -> Result<PdSummary, PipelineError> {
     let dy = dynamics(params)?;
     let r = check_positive_definite(|x| mass_motor(&dy, x), region);
     let deg = |a: [f64; 2]| [a[0].to_degrees(), a[1].to_degrees()];
@@ -342,7 +345,7 @@ pub fn min_eigen_grid(
     lower: [f64; 2],
     upper: [f64; 2],
     cells: [usize; 2],
-) -> Result<EigenGrid, IdentError> {
+) -> Result<EigenGrid, PipelineError> {
     let dy = dynamics(params)?;
     let (lo, hi) = (lower, upper);
     let [nx, ny] = cells;
@@ -403,7 +406,7 @@ pub fn parameter_errors(
     estimate: &[f64],
     sigma: &[f64],
     truth_std: &[f64],
-) -> Result<ErrorSummary, IdentError> {
+) -> Result<ErrorSummary, PipelineError> {
     let truth = base.to_base(truth_std)?;
     let names: Vec<String> = (0..base.n_base()).map(|i| base.expression(i)).collect();
     let entries = aras_ident::validate::parameter_errors(&names, estimate, sigma, &truth)?;
