@@ -21,6 +21,7 @@ use aras_ident::selection::{
     SelectionOptions, SelectionStatus, fit_model, select,
 };
 use aras_ident::streaming::QrAccumulator;
+use aras_ident::validate::FitnessSums;
 use aras_ident::{IdentError, ReducedLs, SolverStatus};
 
 /// One candidate effect with one value of its non-linear setting: what the
@@ -1684,42 +1685,27 @@ fn consistent_fit<M: DiagnosisModel>(
         .iter()
         .zip(vals_p)
         .map(|(v, p)| -> Result<Vec<f64>, IdentError> {
-            // Per joint: Σ y, Σ y², Σ (y − ŷ)², n.
+            // Per joint: the sums of (78), merged over the lanes.
             let lanes = ctx.model_pass(
                 (v, p),
                 refit,
                 delay,
-                || vec![[0.0f64; 4]; joints],
+                || vec![FitnessSums::default(); joints],
                 |s, g, w, t| {
                     for (r, y) in t.iter().enumerate() {
                         let pred: f64 = (0..w.ncols()).map(|j| w[(r, j)] * beta_b[j]).sum();
-                        s[g][0] += y;
-                        s[g][1] += y * y;
-                        s[g][2] += (y - pred) * (y - pred);
-                        s[g][3] += 1.0;
+                        s[g].push(*y, pred);
                     }
                     Ok(())
                 },
             )?;
-            let mut tot = vec![[0.0f64; 4]; joints];
-            for l in lanes {
-                for g in 0..joints {
-                    for k in 0..4 {
-                        tot[g][k] += l[g][k];
-                    }
+            let mut tot = vec![FitnessSums::default(); joints];
+            for l in &lanes {
+                for (t, s) in tot.iter_mut().zip(l) {
+                    t.merge(s);
                 }
             }
-            let f = |s: [f64; 4], g: usize| -> Result<f64, IdentError> {
-                let den = s[1] - s[0] * s[0] / s[3].max(1.0);
-                if den <= 0.0 {
-                    return Err(IdentError::ConstantSignal {
-                        group: g,
-                        len: s[3] as usize,
-                    });
-                }
-                Ok(100.0 * (1.0 - (s[2] / den).sqrt()))
-            };
-            tot.iter().enumerate().map(|(g, s)| f(*s, g)).collect()
+            tot.iter().enumerate().map(|(g, s)| s.fitness(g)).collect()
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(ConsistentFit {

@@ -91,6 +91,27 @@ impl FitnessSums {
         self.n == 0
     }
 
+    /// Adds the samples of `other` (sums of another piece of the same
+    /// record, e.g. from another thread): the result is that of pushing
+    /// them here, up to rounding. `other`'s first non-finite sample counts
+    /// only when this one has none (its row index is then `other`'s own).
+    pub fn merge(&mut self, other: &FitnessSums) {
+        let Some(theirs) = other.shift else {
+            return;
+        };
+        if self.non_finite.is_none() {
+            self.non_finite = other.non_finite;
+        }
+        let ours = *self.shift.get_or_insert(theirs);
+        // `other`'s values are `y − theirs`; here they are `y − ours`.
+        let d = theirs - ours;
+        let n = other.n as f64;
+        self.sum_sq += other.sum_sq + 2.0 * d * other.sum + n * d * d;
+        self.sum += other.sum + n * d;
+        self.error_sq += other.error_sq;
+        self.n += other.n;
+    }
+
     /// Fitness (78) in percent of the samples added; `group` names the row
     /// group (joint) in the error for a constant signal.
     pub fn fitness(&self, group: usize) -> Result<f64, IdentError> {
@@ -107,15 +128,28 @@ impl FitnessSums {
                 value,
             });
         }
-        let n = self.n as f64;
-        let den = (self.sum_sq - self.sum * self.sum / n.max(1.0))
-            .max(0.0)
-            .sqrt();
-        if self.n == 0 || den == 0.0 {
-            return Err(IdentError::ConstantSignal { group, len: self.n });
-        }
-        Ok(100.0 * (1.0 - self.error_sq.sqrt() / den))
+        fitness_from_sums(self.error_sq, self.sum, self.sum_sq, self.n, group)
     }
+}
+
+/// Fitness (78) in percent from the residual sum of squares `rss` and the
+/// measured signal's `n` values through their sum and sum of squares
+/// (about any constant: the spread does not depend on it), for routes that
+/// hold sums rather than samples (an accumulated Gram matrix or QR
+/// factor): `100 (1 − √rss / √(Σy² − (Σy)²/n))`. `group` names the row
+/// group (joint) in the error for a constant signal.
+pub fn fitness_from_sums(
+    rss: f64,
+    sum: f64,
+    sum_sq: f64,
+    n: usize,
+    group: usize,
+) -> Result<f64, IdentError> {
+    let den = (sum_sq - sum * sum / (n as f64).max(1.0)).max(0.0).sqrt();
+    if n == 0 || den == 0.0 {
+        return Err(IdentError::ConstantSignal { group, len: n });
+    }
+    Ok(100.0 * (1.0 - rss.max(0.0).sqrt() / den))
 }
 
 /// Fitness (78) for each row group (joint) of stacked torques.

@@ -136,6 +136,42 @@ proptest! {
         prop_assert_eq!(fitness(&m, &e).unwrap(), got);
     }
 
+    /// Sums of the pieces of a record, merged in any split, give the sums
+    /// of the whole record (the pieces' first samples differ, so their
+    /// shifts do): the same fitness to rounding, the same count, and an
+    /// empty piece changes nothing.
+    #[test]
+    fn merged_fitness_sums_equal_one_pass(
+        v in proptest::collection::vec((-1.0f64..1.0, -0.3f64..0.3), 3..600),
+        offset in -1000.0f64..1000.0,
+        cuts in proptest::collection::vec(0.0f64..1.0, 0..4),
+    ) {
+        let m: Vec<f64> = v.iter().map(|(a, _)| offset + a).collect();
+        let e: Vec<f64> = v.iter().map(|(a, d)| offset + a + d).collect();
+        let mut whole = FitnessSums::default();
+        for (a, b) in m.iter().zip(&e) {
+            whole.push(*a, *b);
+        }
+        let Ok(want) = whole.fitness(0) else {
+            return Ok(());
+        };
+        let mut at: Vec<usize> = cuts.iter().map(|c| (c * m.len() as f64) as usize).collect();
+        at.push(0);
+        at.push(m.len());
+        at.sort_unstable();
+        let mut merged = FitnessSums::default();
+        for w in at.windows(2) {
+            let mut piece = FitnessSums::default();
+            for i in w[0]..w[1] {
+                piece.push(m[i], e[i]);
+            }
+            merged.merge(&piece);
+        }
+        prop_assert_eq!(merged.len(), m.len());
+        let got = merged.fitness(0).unwrap();
+        prop_assert!((got - want).abs() < 1e-9, "{} vs {}", got, want);
+    }
+
     /// Jacobi eigenvalues of a symmetric 4×4: trace and determinant-free
     /// invariants (sum = trace, sum of squares = Frobenius²) to 1e-12 relative.
     #[test]

@@ -199,17 +199,13 @@ pub(crate) fn fit(
         .map(|s| {
             (0..groups)
                 .map(|grp| {
-                    let q = rss_of(s, grp);
-                    let nn = s.rows[grp] as f64;
-                    let mean = s.sums[grp][target] / nn.max(1.0);
-                    let den = s.grams[grp][(target, target)] - nn * mean * mean;
-                    if s.rows[grp] == 0 || den <= 0.0 {
-                        return Err(IdentError::ConstantSignal {
-                            group: grp,
-                            len: s.rows[grp],
-                        });
-                    }
-                    Ok(100.0 * (1.0 - (q / den).sqrt()))
+                    crate::validate::fitness_from_sums(
+                        rss_of(s, grp),
+                        s.sums[grp][target],
+                        s.grams[grp][(target, target)],
+                        s.rows[grp],
+                        grp,
+                    )
                 })
                 .collect::<Result<Vec<_>, _>>()
         })

@@ -12,6 +12,7 @@ use nalgebra::Vector2;
 use serde::Serialize;
 
 use aras_ident::streaming::{Accumulation, GramCheck, QrAccumulator, RegressorStage, States};
+use aras_ident::validate::fitness_from_sums;
 use aras_ident::{BaseParameters, IdentError, OlsEstimate, ReducedLs};
 
 use super::delayed::TorqueShift;
@@ -119,17 +120,8 @@ impl StreamingResult {
         let rss = self.accumulator.group_rss(beta_b)?;
         let mut f = [0.0; 2];
         for j in 0..2 {
-            let n = self.rows_fitted[j] as f64;
             let [s1, s2] = self.torque_sums[j];
-            let den = (s2 - s1 * s1 / n).max(0.0).sqrt();
-            if !(n > 0.0 && den > 0.0) {
-                return Err(IdentError::ConstantSignal {
-                    group: j,
-                    len: self.rows_fitted[j],
-                }
-                .into());
-            }
-            f[j] = 100.0 * (1.0 - rss[j].max(0.0).sqrt() / den);
+            f[j] = fitness_from_sums(rss[j], s1, s2, self.rows_fitted[j], j)?;
         }
         Ok(f)
     }
