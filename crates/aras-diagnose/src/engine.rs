@@ -18,7 +18,7 @@ use crate::refine::minimise_profile;
 use crate::residual::{ResidualAnalysis, ResidualSummary, Row};
 use aras_ident::selection::{
     Accumulator, CandidateEvaluation, CandidateSpec, EvaluationStatus, Layout, ModelFit,
-    SelectionOptions, SelectionStatus, fit_model, select,
+    SelectionOptions, SelectionStatus, SelectionStep, fit_model, select,
 };
 use aras_ident::streaming::QrAccumulator;
 use aras_ident::validate::FitnessSums;
@@ -1078,17 +1078,15 @@ fn describe<M: DiagnosisModel>(model: &M, steps: &[Step<M::Candidate>]) -> Strin
     s.join(" + ")
 }
 
-/// Runs the diagnosis: `model`'s starting model identified on `train`,
-/// scored on `validation` (at least one set), `candidates` tried (each
-/// label unique) until none is significant.
-pub fn diagnose<M: DiagnosisModel>(
+/// The diagnosis's inputs checked: at least one validation set, the
+/// settings in range, every data set of the model's joint count. Returns
+/// the joint count.
+fn check_inputs<M: DiagnosisModel>(
     model: &M,
-    candidates: Vec<M::Candidate>,
     train: &Dataset,
     validation: &[Dataset],
     opts: &EngineOptions,
-) -> Result<Diagnosis<M::Candidate, M::Terms>, IdentError> {
-    let clock = Instant::now();
+) -> Result<usize, IdentError> {
     if validation.is_empty() {
         return Err(IdentError::InvalidSetting {
             name: "validation data sets",
@@ -1134,29 +1132,197 @@ pub fn diagnose<M: DiagnosisModel>(
             });
         }
     }
-    let (cands, layout) = candidate_layout(model.n_base(), joints, candidates, |_, c| c.label())?;
-    let max_shift = cands
-        .iter()
-        .map(|c| match c.torque_shift() {
-            // The refinement's search interval around the grid value, and
-            // one more sample for the interpolation of a fraction.
-            Some(samples) => {
-                let (lo, hi) = c
-                    .search_scale()
-                    .map_or((samples, samples), |s| s.interval(samples));
-                lo.abs().max(hi.abs()).ceil() as usize + 1
-            }
-            None => 0,
-        })
-        .max()
-        .unwrap_or(0);
-    let ctx = Context {
-        model,
-        joints,
-        cands,
-        layout,
-        max_shift,
+    Ok(joints)
+}
+
+/// What the residual after the last step says, for the conclusion.
+#[derive(Debug, Clone, Copy)]
+struct Verdict {
+    /// The selection stopped because no candidate was significant (not at
+    /// the step limit).
+    stopped_clean: bool,
+    /// Every validation residual is white by Ljung–Box.
+    white: bool,
+    /// A residual bin lies beyond the systematic threshold.
+    systematic: bool,
+}
+
+/// The diagnosis's conclusion in words: what was added (at the refined
+/// settings), why the selection stopped, whether the residual is
+/// noise-like, and where a misfit lies when it is not.
+fn conclusion<C: Candidate>(
+    refined: &[C],
+    verdict: Verdict,
+    after: &[ResidualAnalysis],
+    opts: &EngineOptions,
+) -> String {
+    let added = if refined.is_empty() {
+        "No effect was added".to_owned()
+    } else {
+        format!(
+            "Added, in order (at the refined settings): {}",
+            refined
+                .iter()
+                .map(Candidate::label)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
     };
+    let Verdict {
+        stopped_clean,
+        white,
+        systematic,
+    } = verdict;
+    let noise_like = stopped_clean && white && !systematic;
+    let conclusion = if !stopped_clean {
+        format!(
+            "{added}; stopped at the step limit ({}) or with every candidate used.",
+            opts.max_steps
+        )
+    } else if noise_like {
+        format!(
+            "{added}. No remaining candidate is significant and the validation residual is \
+             noise-like (white by Ljung–Box at 1 %, no bin beyond {:.0} standard errors).",
+            crate::residual::Z_SYSTEMATIC
+        )
+    } else {
+        format!(
+            "{added}. No remaining candidate is significant, but the validation residual is \
+             not noise-like ({}{}): the rest is an effect outside the candidate library or a \
+             processing artefact.",
+            if white { "white" } else { "not white" },
+            if systematic {
+                ", systematic bins remain"
+            } else {
+                ""
+            }
+        )
+    };
+
+    let located = if noise_like {
+        String::new()
+    } else {
+        locate(after)
+    };
+    conclusion + &located + &left_out_sentence(after, opts.min_speed)
+}
+
+impl<'a, M: DiagnosisModel> Context<'a, M> {
+    /// The candidates laid out after the model's base columns, and the
+    /// largest torque shift among them (with its refinement interval).
+    fn new(model: &'a M, joints: usize, candidates: Vec<M::Candidate>) -> Result<Self, IdentError> {
+        let (cands, layout) =
+            candidate_layout(model.n_base(), joints, candidates, |_, c| c.label())?;
+        let max_shift = cands
+            .iter()
+            .map(|c| match c.torque_shift() {
+                // The refinement's search interval around the grid value, and
+                // one more sample for the interpolation of a fraction.
+                Some(samples) => {
+                    let (lo, hi) = c
+                        .search_scale()
+                        .map_or((samples, samples), |s| s.interval(samples));
+                    lo.abs().max(hi.abs()).ceil() as usize + 1
+                }
+                None => 0,
+            })
+            .max()
+            .unwrap_or(0);
+        Ok(Self {
+            model,
+            joints,
+            cands,
+            layout,
+            max_shift,
+        })
+    }
+
+    /// The report of one selection step: its candidate, evidence and fitted
+    /// parameters, and the torque delay it names, if it is one.
+    fn step_of(&self, st: &SelectionStep) -> (Step<M::Candidate>, Option<f64>) {
+        let mut delay = None;
+        let c = &self.cands[st.candidate];
+        let parameters = match c.torque_shift() {
+            None => {
+                let names = c.parameter_names();
+                self.layout
+                    .candidate_columns(st.candidate)
+                    .zip(&names)
+                    .filter_map(|(col, name)| {
+                        let k = st.fit.columns.iter().position(|c| *c == col)?;
+                        Some(NamedValue {
+                            name: name.clone(),
+                            value: st.fit.estimate[k],
+                            std_dev: st.fit.std_dev[k],
+                        })
+                    })
+                    .collect()
+            }
+            Some(samples) => {
+                delay = Some(samples);
+                vec![NamedValue {
+                    name: "delay_samples".into(),
+                    value: samples,
+                    std_dev: 0.0,
+                }]
+            }
+        };
+        let step = Step {
+            id: c.id(),
+            label: c.label(),
+            candidate: c.clone(),
+            explanation: c.explanation(),
+            aliases: st.aliases.clone(),
+            parameters,
+            evidence: score_of(c, &st.evaluation),
+            refinement: None,
+        };
+        (step, delay)
+    }
+
+    /// The names of a fit's columns (the model's base parameters, then each
+    /// added candidate's parameters) with their values and σ.
+    fn named_estimate(&self, final_fit: &ModelFit) -> Vec<NamedValue> {
+        let mut estimate: Vec<NamedValue> = Vec::new();
+        for (k, col) in final_fit.columns.iter().enumerate() {
+            let name = if *col < self.layout.base_columns() {
+                self.model.base_name(*col)
+            } else {
+                (0..self.cands.len())
+                    .find_map(|c| {
+                        let r = self.layout.candidate_columns(c);
+                        let off = col.checked_sub(r.start)?;
+                        if !r.contains(col) || self.cands[c].torque_shift().is_some() {
+                            return None;
+                        }
+                        self.cands[c].parameter_names().get(off).cloned()
+                    })
+                    .unwrap_or_default()
+            };
+            estimate.push(NamedValue {
+                name,
+                value: final_fit.estimate[k],
+                std_dev: final_fit.std_dev[k],
+            });
+        }
+        estimate
+    }
+}
+
+/// Runs the diagnosis: `model`'s starting model identified on `train`,
+/// scored on `validation` (at least one set), `candidates` tried (each
+/// label unique) until none is significant.
+pub fn diagnose<M: DiagnosisModel>(
+    model: &M,
+    candidates: Vec<M::Candidate>,
+    train: &Dataset,
+    validation: &[Dataset],
+    opts: &EngineOptions,
+) -> Result<Diagnosis<M::Candidate, M::Terms>, IdentError> {
+    let clock = Instant::now();
+    let joints = check_inputs(model, train, validation, opts)?;
+    let ctx = Context::new(model, joints, candidates)?;
+    let max_shift = ctx.max_shift;
     let train_p = Plan::new(train, opts.min_speed, opts.reach_tol, max_shift)?
         .with_all_rows(opts.all_rows.clone());
     let vals_p: Vec<Plan> = validation
@@ -1213,42 +1379,9 @@ pub fn diagnose<M: DiagnosisModel>(
     let mut steps: Vec<Step<M::Candidate>> = Vec::new();
     let mut delay_samples = 0.0;
     for st in &sel.steps {
-        let c = &ctx.cands[st.candidate];
-        let parameters = match c.torque_shift() {
-            None => {
-                let names = c.parameter_names();
-                ctx.layout
-                    .candidate_columns(st.candidate)
-                    .zip(&names)
-                    .filter_map(|(col, name)| {
-                        let k = st.fit.columns.iter().position(|c| *c == col)?;
-                        Some(NamedValue {
-                            name: name.clone(),
-                            value: st.fit.estimate[k],
-                            std_dev: st.fit.std_dev[k],
-                        })
-                    })
-                    .collect()
-            }
-            Some(samples) => {
-                delay_samples = samples;
-                vec![NamedValue {
-                    name: "delay_samples".into(),
-                    value: samples,
-                    std_dev: 0.0,
-                }]
-            }
-        };
-        steps.push(Step {
-            id: c.id(),
-            label: c.label(),
-            candidate: c.clone(),
-            explanation: c.explanation(),
-            aliases: st.aliases.clone(),
-            parameters,
-            evidence: score_of(c, &st.evaluation),
-            refinement: None,
-        });
+        let (step, delay) = ctx.step_of(st);
+        delay_samples = delay.unwrap_or(delay_samples);
+        steps.push(step);
         let (fitness, predicted) = raw_rows(&st.fit)?;
         fitness_rows.push(FitnessRow {
             step: steps.len(),
@@ -1384,73 +1517,19 @@ pub fn diagnose<M: DiagnosisModel>(
         .iter()
         .any(|a| a.findings.iter().any(|f| f.systematic));
     let noise_like = stopped_clean && white && !systematic;
-    let added = if steps.is_empty() {
-        "No effect was added".to_owned()
-    } else {
-        format!(
-            "Added, in order (at the refined settings): {}",
-            refined
-                .iter()
-                .map(Candidate::label)
-                .collect::<Vec<_>>()
-                .join(", ")
-        )
-    };
-    let conclusion = if !stopped_clean {
-        format!(
-            "{added}; stopped at the step limit ({}) or with every candidate used.",
-            opts.max_steps
-        )
-    } else if noise_like {
-        format!(
-            "{added}. No remaining candidate is significant and the validation residual is \
-             noise-like (white by Ljung–Box at 1 %, no bin beyond {:.0} standard errors).",
-            crate::residual::Z_SYSTEMATIC
-        )
-    } else {
-        format!(
-            "{added}. No remaining candidate is significant, but the validation residual is \
-             not noise-like ({}{}): the rest is an effect outside the candidate library or a \
-             processing artefact.",
-            if white { "white" } else { "not white" },
-            if systematic {
-                ", systematic bins remain"
-            } else {
-                ""
-            }
-        )
-    };
-
-    let located = if noise_like {
-        String::new()
-    } else {
-        locate(&after)
-    };
-    let conclusion = conclusion + &located + &left_out_sentence(&after, opts.min_speed);
+    let conclusion = conclusion(
+        &refined,
+        Verdict {
+            stopped_clean,
+            white,
+            systematic,
+        },
+        &after,
+        opts,
+    );
 
     let final_model = model.terms(&refined)?;
-    let mut estimate: Vec<NamedValue> = Vec::new();
-    for (k, col) in final_fit.columns.iter().enumerate() {
-        let name = if *col < fctx.layout.base_columns() {
-            model.base_name(*col)
-        } else {
-            (0..fctx.cands.len())
-                .find_map(|c| {
-                    let r = fctx.layout.candidate_columns(c);
-                    let off = col.checked_sub(r.start)?;
-                    if !r.contains(col) || fctx.cands[c].torque_shift().is_some() {
-                        return None;
-                    }
-                    fctx.cands[c].parameter_names().get(off).cloned()
-                })
-                .unwrap_or_default()
-        };
-        estimate.push(NamedValue {
-            name,
-            value: final_fit.estimate[k],
-            std_dev: final_fit.std_dev[k],
-        });
-    }
+    let estimate = fctx.named_estimate(&final_fit);
     let consistent = match model.consistent_refit(&refined)? {
         Some(refit) => Some(consistent_fit(
             &ctx,
