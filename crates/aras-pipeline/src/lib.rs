@@ -25,7 +25,9 @@
 //!    model and measurement disagree, which missing effect explains it, and
 //!    how much the gap shrinks once it is added; [`spool`] holds a long log's processed samples in a scratch file that
 //!    its passes read window by window ([`streaming::spool_log`]).
-//! 6. [`validate`]: validation of identified parameters
+//! 6. [`predict`]: the torques a parameter file predicts on a log, scored
+//!    against its raw torques, with the processing loss.
+//! 7. [`validate`]: validation of identified parameters
 //!    (`docs/validation.md`): cross-validation on simulated logs of (79)
 //!    with each log's noise ceiling and processing loss, the mass matrix's
 //!    positive definiteness (80) over the workspace, the links'
@@ -60,6 +62,7 @@ pub mod diagnose;
 mod error;
 pub mod friction_width;
 pub mod identify;
+pub mod predict;
 pub mod prepare;
 pub mod robot;
 pub mod spool;

@@ -1,11 +1,13 @@
 //! Validation (`aras_pipeline::validate`): the cross-validation of the true
 //! parameters on a simulated log of (79) against its noise ceiling and
 //! processing loss, scoring a log without its noise-free torques, the
-//! workspace checks, and the `[validation]` settings' defaults.
+//! workspace checks, and the `[validation]` settings' defaults; the
+//! prediction of the same log (`aras_pipeline::predict`).
 
 use aras_dyn::Params;
 use aras_dyn::sim::SimConfig;
 use aras_ident::validate::PdRegion;
+use aras_pipeline::predict::{Route, predict_log};
 use aras_pipeline::robot::DEFAULT_MIN_SPEED;
 use aras_pipeline::validate::{
     ScoredModel, ValidationSettings, cross_validate, min_eigen_grid, parameter_errors, pd_check,
@@ -120,6 +122,43 @@ fn truth_scores_at_its_noise_ceiling_less_the_processing_loss() {
     assert_eq!(again.fitness, x.fitness);
     assert_eq!(again.fitness_kept, x.fitness_kept);
     assert_eq!(again.processing_loss, x.processing_loss);
+
+    // `predict` on the same log: the logged derivatives (the simulator
+    // writes them), every row scored at the noise ceiling, and the same
+    // processing loss; without the derivative columns, the angles' route
+    // with the cross-validation's fitness and no loss.
+    let p = predict_log(&read, &perfect, &process).unwrap();
+    assert_eq!(p.route, Route::LoggedDerivatives);
+    assert_eq!(p.processed.samples.len(), read.len());
+    let l = p
+        .processing_loss
+        .expect("a log with derivatives has a loss");
+    assert!(p.loss_unavailable.is_none());
+    for j in 0..2 {
+        assert!(
+            (p.fitness[j] - ceiling.all[j]).abs() <= 0.01,
+            "τ{}: {} against the ceiling {}",
+            j + 1,
+            p.fitness[j],
+            ceiling.all[j]
+        );
+        assert!((l.loss[j] - loss.loss[j]).abs() < 1e-9, "{l:?} vs {loss:?}");
+    }
+    let mut plain = read.clone();
+    plain.theta_dot = None;
+    plain.theta_ddot = None;
+    let p = predict_log(&plain, &perfect, &process).unwrap();
+    assert_eq!(p.route, Route::Angles);
+    assert!(p.processing_loss.is_none() && p.loss_unavailable.is_none());
+    for j in 0..2 {
+        assert!(
+            (p.fitness[j] - x.fitness[0][j]).abs() < 1e-9,
+            "τ{}: {} vs {}",
+            j + 1,
+            p.fitness[j],
+            x.fitness[0][j]
+        );
+    }
 }
 
 /// The nominal robot's mass matrix is positive definite over the paper's

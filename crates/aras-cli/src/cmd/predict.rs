@@ -9,19 +9,8 @@ use crate::cli::PredictArgs;
 use crate::identify::process_options;
 use crate::output::{FileKind, NewFile};
 use crate::robot::{ParamsUse, read_params};
-use aras_pipeline::validate::loss::{
-    ProcessingLoss, has_derivatives, predict_route, processing_loss,
-};
-
-/// Which θ̇, θ̈ a prediction was made from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Route {
-    /// The log's `dtheta*`, `ddtheta*` columns as given.
-    LoggedDerivatives,
-    /// Differentiated from the angles with the configured bandwidth.
-    Angles,
-}
+use aras_pipeline::predict::{Prediction, Route, predict_log};
+use aras_pipeline::validate::loss::ProcessingLoss;
 
 /// `--summary` of `predict` (`"format": "aras-predict/1"`).
 #[derive(Debug, Serialize)]
@@ -73,41 +62,23 @@ pub fn run(args: &PredictArgs) -> Result<()> {
         None => None,
     };
     let params = read_params(&args.params, ParamsUse::Estimate)?;
-    // The parameter file's own model: extra effects in it are predicted too.
-    let model = params.model()?;
-    let beta = params.standard_vector(&model)?.as_slice().to_vec();
-    let geometry = params.geometry()?;
     let log = super::load_log(&args.data, &args.log, &cfg)?;
-    let logged = has_derivatives(&log);
-    let opts = process_options(&cfg, args.log.period, logged);
-    let (processed, tau) = predict_route(&log, &opts, &model, &geometry, &beta)?;
+    // The parameter file's own model: extra effects in it are predicted too.
+    let Prediction {
+        processed,
+        tau,
+        route,
+        fitness: fit,
+        processing_loss: loss,
+        loss_unavailable,
+    } = predict_log(
+        &log,
+        &params,
+        &process_options(&cfg, args.log.period, false),
+    )?;
     let samples = &processed.samples;
     let n = samples.len();
-    // The log's raw torques on the rows written (the processed samples'
-    // torques are band-limited with the motion: not what the file is
-    // compared with); the prediction is already band-limited.
-    let pairs = processed.paired_with_log_rows(&[&tau[..n], &tau[n..]])?;
-    let fit = [
-        aras_ident::validate::fitness(&pairs[0].0, &pairs[0].1)?,
-        aras_ident::validate::fitness(&pairs[1].0, &pairs[1].1)?,
-    ];
-    // The loss is a second opinion on the file written: a log that the
-    // angles alone cannot process (e.g. a sidecar period that is no whole
-    // number of samples, which the logged route never needs) gets the
-    // prediction and a note on why it has no loss, not an error.
-    let mut loss_unavailable = None;
-    let loss = processing_loss(
-        &log,
-        &opts,
-        &model,
-        &geometry,
-        &beta,
-        Some((&processed, &tau)),
-    )
-    .unwrap_or_else(|e| {
-        loss_unavailable = Some(format!("{:#}", anyhow::Error::from(e)));
-        None
-    });
+    let loss_unavailable = loss_unavailable.map(|e| format!("{:#}", anyhow::Error::from(e)));
     let mut csv = String::with_capacity(n * 48);
     csv.push_str("t,tau1,tau2\n");
     for i in 0..n {
@@ -119,11 +90,7 @@ pub fn run(args: &PredictArgs) -> Result<()> {
             format: "aras-predict/1",
             params: args.params.display().to_string(),
             data: args.data.display().to_string(),
-            route: if logged {
-                Route::LoggedDerivatives
-            } else {
-                Route::Angles
-            },
+            route,
             rows: [n, log.len()],
             fitness: fit,
             processing_loss: loss,
