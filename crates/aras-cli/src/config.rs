@@ -537,33 +537,26 @@ impl Config {
 
     /// Checks every value; the error names the dotted key and the rule.
     pub fn validate(&self) -> Result<(), (String, String)> {
-        let bad = |k: &str, m: String| Err((k.to_string(), m));
-        let pos = |k: &str, v: f64| -> Result<(), (String, String)> {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                bad(k, format!("must be a positive finite number, found {v}"))
-            }
-        };
-        let nonneg = |k: &str, v: f64| -> Result<(), (String, String)> {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                bad(k, format!("must be a finite number ≥ 0, found {v}"))
-            }
-        };
-        let fraction = |k: &str, v: f64| -> Result<(), (String, String)> {
-            if v.is_finite() && v > 0.0 && v < 1.0 {
-                Ok(())
-            } else {
-                bad(
-                    k,
-                    format!(
-                        "must be a fraction in (0, 1) of the filter's peak response, found {v}"
-                    ),
-                )
-            }
-        };
+        self.check_robot()?;
+        self.check_trajectory()?;
+        self.check_simulation()?;
+        self.check_log()?;
+        self.check_signal()?;
+        self.check_identification()?;
+        self.check_diagnose()?;
+        self.check_validation()
+    }
+
+    /// The fixed low-pass cut-off (Hz), 0 with the data-chosen bandwidth.
+    fn fixed_cutoff_hz(&self) -> f64 {
+        match self.signal.bandwidth {
+            BandwidthMode::Fixed => self.signal.cutoff_hz,
+            BandwidthMode::Auto => 0.0,
+        }
+    }
+
+    /// `[robot]` checked.
+    fn check_robot(&self) -> Result<(), (String, String)> {
         let r = &self.robot;
         if r.params.trim().is_empty() {
             return bad(
@@ -589,6 +582,11 @@ impl Config {
                 "must be three finite numbers (m/s²)".into(),
             );
         }
+        Ok(())
+    }
+
+    /// `[trajectory]` checked.
+    fn check_trajectory(&self) -> Result<(), (String, String)> {
         let t = &self.trajectory;
         if !(1..=20).contains(&t.harmonics) {
             return bad(
@@ -626,6 +624,11 @@ impl Config {
             pos("trajectory.max_rate_deg_s", t.max_rate_deg_s[i])?;
             pos("trajectory.max_accel_deg_s2", t.max_accel_deg_s2[i])?;
         }
+        Ok(())
+    }
+
+    /// `[simulation]` checked.
+    fn check_simulation(&self) -> Result<(), (String, String)> {
         let s = &self.simulation;
         if s.periods == 0 {
             return bad("simulation.periods", "simulate at least one period".into());
@@ -646,6 +649,11 @@ impl Config {
             pos("simulation.gear_ratios", s.gear_ratios[j])?;
             pos("simulation.counts_per_rev", s.counts_per_rev[j] as f64)?;
         }
+        Ok(())
+    }
+
+    /// `[log]` checked.
+    fn check_log(&self) -> Result<(), (String, String)> {
         let l = &self.log;
         pos("log.glitch_threshold", l.glitch_threshold)?;
         if !(l.torque_limit_factor.is_finite() && l.torque_limit_factor >= 1.0) {
@@ -660,6 +668,12 @@ impl Config {
             }
         }
         pos("log.max_gap_s", l.max_gap_s)?;
+        Ok(())
+    }
+
+    /// `[signal]` checked.
+    fn check_signal(&self) -> Result<(), (String, String)> {
+        let s = &self.simulation;
         let g = &self.signal;
         if !(1..=aras_signal::MAX_ORDER).contains(&g.filter_order) {
             return bad(
@@ -671,10 +685,7 @@ impl Config {
                 ),
             );
         }
-        let cutoff = match g.bandwidth {
-            BandwidthMode::Fixed => g.cutoff_hz,
-            BandwidthMode::Auto => 0.0,
-        };
+        let cutoff = self.fixed_cutoff_hz();
         nonneg("signal.cutoff_hz", g.cutoff_hz)?;
         if cutoff > 0.0 && cutoff >= 0.5 * s.rate_hz {
             return bad(
@@ -698,6 +709,11 @@ impl Config {
                     .into(),
             );
         }
+        Ok(())
+    }
+
+    /// `[identification]` checked.
+    fn check_identification(&self) -> Result<(), (String, String)> {
         let i = &self.identification;
         if i.base_samples < 100 {
             return bad(
@@ -739,6 +755,11 @@ impl Config {
         if d.max_iter == 0 {
             return bad("identification.sdp.max_iter", "at least 1".into());
         }
+        Ok(())
+    }
+
+    /// `[diagnose]` checked.
+    fn check_diagnose(&self) -> Result<(), (String, String)> {
         let d = &self.diagnose;
         if !(d.alpha.is_finite() && d.alpha > 0.0 && d.alpha < 1.0) {
             return bad(
@@ -759,6 +780,12 @@ impl Config {
         if let Err(e) = self.friction.validate() {
             return bad(&format!("friction.{}", e.key), e.reason);
         }
+        Ok(())
+    }
+
+    /// `[validation]` checked.
+    fn check_validation(&self) -> Result<(), (String, String)> {
+        let cutoff = self.fixed_cutoff_hz();
         let v = &self.validation;
         for &f in &v.frequencies_hz {
             if !(f.is_finite() && f > 0.0) {
@@ -793,6 +820,41 @@ impl Config {
             );
         }
         Ok(())
+    }
+}
+
+/// A refusal of the key `k`, with the reason `m`.
+fn bad(k: &str, m: String) -> Result<(), (String, String)> {
+    Err((k.to_string(), m))
+}
+
+/// `v` must be positive and finite.
+fn pos(k: &str, v: f64) -> Result<(), (String, String)> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        bad(k, format!("must be a positive finite number, found {v}"))
+    }
+}
+
+/// `v` must be finite and ≥ 0.
+fn nonneg(k: &str, v: f64) -> Result<(), (String, String)> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        bad(k, format!("must be a finite number ≥ 0, found {v}"))
+    }
+}
+
+/// `v` must be a fraction in (0, 1) of a filter's peak response.
+fn fraction(k: &str, v: f64) -> Result<(), (String, String)> {
+    if v.is_finite() && v > 0.0 && v < 1.0 {
+        Ok(())
+    } else {
+        bad(
+            k,
+            format!("must be a fraction in (0, 1) of the filter's peak response, found {v}"),
+        )
     }
 }
 
