@@ -327,6 +327,18 @@ fn build(
     ));
     r.heading(2, "Conclusion").paragraph(d.conclusion.clone());
 
+    effects_added(&mut r, d, train)?;
+    fitness_per_step(&mut r, d, &names)?;
+    residual_before_after(&mut r, d)?;
+    residual_against_time(&mut r, d)?;
+    residual_spectra(&mut r, d)?;
+    candidate_scores(&mut r, d)?;
+    r.paragraph(format!("Diagnosis time: {:.2} s.", d.elapsed_s));
+    Ok(r)
+}
+
+/// The effects added, each with its evidence, parameters and refinement.
+fn effects_added(r: &mut Report, d: &Diagnosis, train: &str) -> Result<()> {
     r.heading(2, "Effects added");
     if d.steps.is_empty() {
         r.paragraph("None.");
@@ -405,10 +417,14 @@ fn build(
             );
         }
     }
+    Ok(())
+}
 
+/// The validation fitness (78) after each step: table and plot.
+fn fitness_per_step(r: &mut Report, d: &Diagnosis, names: &[&str]) -> Result<()> {
     r.heading(2, "Validation fitness per step (78), %");
     let mut header = vec!["step".to_string(), "model".to_string()];
-    for n in &names {
+    for n in names {
         header.push(format!("{n} τ1"));
         header.push(format!("{n} τ2"));
         header.push(format!("{n} τ1 filtered"));
@@ -445,7 +461,7 @@ fn build(
             c.status,
             c.fitness_filtered
                 .iter()
-                .zip(&names)
+                .zip(names)
                 .map(|(f, n)| format!("{n} {:.2} / {:.2} %", f[0], f[1]))
                 .collect::<Vec<_>>()
                 .join(", ")
@@ -455,9 +471,13 @@ fn build(
         "fitness_steps.svg",
         "Validation fitness (78) against the raw torques on every row, per joint after each step (start = starting model; one panel per \
          validation set and joint, each axis zoomed to its values).",
-        fitness_steps(d, &names)?,
+        fitness_steps(d, names)?,
     );
+    Ok(())
+}
 
+/// The residual findings and profiles before and after the effects.
+fn residual_before_after(r: &mut Report, d: &Diagnosis) -> Result<()> {
     r.heading(2, "Residual before and after");
     for (b, a) in d.before.iter().zip(&d.after) {
         r.heading(3, format!("`{}`", b.dataset));
@@ -583,7 +603,11 @@ fn build(
             }
         }
     }
+    Ok(())
+}
 
+/// The residual against time, per validation set and joint.
+fn residual_against_time(r: &mut Report, d: &Diagnosis) -> Result<()> {
     r.heading(2, "Residual against time");
     r.paragraph(
         "The residual (every row) against time, decimated to at most a thousand points: each \
@@ -632,7 +656,11 @@ fn build(
             );
         }
     }
+    Ok(())
+}
 
+/// The residual spectra, per validation set and joint.
+fn residual_spectra(r: &mut Report, d: &Diagnosis) -> Result<()> {
     r.heading(2, "Residual spectra");
     r.paragraph(
         "Power density of the residual (every row) before and after, next to the measured \
@@ -681,7 +709,11 @@ fn build(
             );
         }
     }
+    Ok(())
+}
 
+/// The scores of every candidate in every round.
+fn candidate_scores(r: &mut Report, d: &Diagnosis) -> Result<()> {
     r.heading(2, "Candidate scores per round");
     for (k, round) in d.rounds.iter().enumerate() {
         r.heading(3, format!("Round {}", k + 1));
@@ -716,8 +748,7 @@ fn build(
                 .collect(),
         );
     }
-    r.paragraph(format!("Diagnosis time: {:.2} s.", d.elapsed_s));
-    Ok(r)
+    Ok(())
 }
 
 /// The step plot: one panel per validation set and joint, one point per
