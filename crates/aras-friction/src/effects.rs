@@ -30,6 +30,7 @@
 //! chooses on held-out error. Degree 0 is left out: it is the model's own
 //! offset, Coulomb and viscous terms.
 
+use aras_ident::stats::equal_count_bins;
 use serde::{Deserialize, Serialize};
 
 use crate::{
@@ -613,33 +614,33 @@ pub fn residual_profiles(log: &JointMotion, residual: &[f64], bins: usize) -> Ve
 
 fn profile(axis: Axis, x: &[f64], r: &[f64], bins: usize) -> Profile {
     let n = x.len().min(r.len());
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
-    let mut out = Vec::new();
-    let total_mean = r[..n].iter().sum::<f64>() / n.max(1) as f64;
-    let total_var: f64 = r[..n].iter().map(|v| (v - total_mean).powi(2)).sum();
-    let mut between = 0.0;
-    if axis == Axis::Direction {
-        for s in [-1.0, 0.0, 1.0] {
-            let idx: Vec<usize> = (0..n).filter(|&i| x[i] == s).collect();
-            if let Some(b) = bin(&idx, s, s, r) {
-                between += b.count as f64 * (b.mean - total_mean).powi(2);
-                out.push(b);
-            }
-        }
+    let (x, r) = (&x[..n], &r[..n]);
+    let total_mean = r.iter().sum::<f64>() / n.max(1) as f64;
+    let total_var: f64 = r.iter().map(|v| (v - total_mean).powi(2)).sum();
+    let out: Vec<Bin> = if axis == Axis::Direction {
+        [-1.0, 0.0, 1.0]
+            .into_iter()
+            .filter_map(|s| {
+                let idx: Vec<usize> = (0..n).filter(|&i| x[i] == s).collect();
+                bin(&idx, s, s, r)
+            })
+            .collect()
     } else {
-        let bins = bins.max(1);
-        for k in 0..bins {
-            let idx = &order[k * n / bins..(k + 1) * n / bins];
-            if idx.is_empty() {
-                continue;
-            }
-            if let Some(b) = bin(idx, x[idx[0]], x[idx[idx.len() - 1]], r) {
-                between += b.count as f64 * (b.mean - total_mean).powi(2);
-                out.push(b);
-            }
-        }
-    }
+        equal_count_bins(x, r, bins)
+            .into_iter()
+            .map(|b| Bin {
+                lo: b.lo,
+                hi: b.hi,
+                count: b.count,
+                mean: b.mean,
+                rms: b.rms,
+            })
+            .collect()
+    };
+    let between: f64 = out
+        .iter()
+        .map(|b| b.count as f64 * (b.mean - total_mean).powi(2))
+        .sum();
     Profile {
         axis,
         bins: out,

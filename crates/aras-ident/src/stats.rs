@@ -1,6 +1,7 @@
 //! Small statistics toolbox for selection and diagnosis: F and χ² tail probabilities,
-//! autocorrelation, the integrated autocorrelation time and the Ljung–Box
-//! whiteness test. Written here (≈ 150 lines) rather than pulling in a
+//! autocorrelation, the integrated autocorrelation time, the Ljung–Box
+//! whiteness test, and a residual binned against an axis in bins of equal
+//! count. Written here (≈ 150 lines) rather than pulling in a
 //! statistics crate for four functions.
 
 /// `ln Γ(x)` for `x > 0` (Lanczos approximation, g = 7, 9 terms; relative
@@ -218,6 +219,65 @@ pub fn ljung_box_of(rho: &[f64], n: usize) -> (f64, f64) {
         * n
         * (n + 2.0);
     (q, chi2_sf(q, rho.len() as f64))
+}
+
+/// One bin of [`equal_count_bins`]: the pairs `(x, y)` whose `x` lies in
+/// `[lo, hi]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CountBin {
+    /// Smallest `x` in the bin.
+    pub lo: f64,
+    /// Largest `x` in the bin.
+    pub hi: f64,
+    /// Pairs in the bin.
+    pub count: usize,
+    /// Mean of `x`.
+    pub x_mean: f64,
+    /// Mean of `y`.
+    pub mean: f64,
+    /// Root mean square of `y`.
+    pub rms: f64,
+    /// Sample standard deviation of `y` (`n − 1`; 0 for one pair).
+    pub std_dev: f64,
+}
+
+/// `y` against `x` in `bins` bins of equal count (±1): the finite pairs
+/// sorted by `x` (ties kept in their order) and cut into consecutive runs,
+/// so that each bin's mean is as well determined as the next and an axis
+/// crowded at one end (velocities near zero) is resolved there. Empty bins
+/// (fewer pairs than bins) are left out; `bins = 0` counts as 1.
+pub fn equal_count_bins(x: &[f64], y: &[f64], bins: usize) -> Vec<CountBin> {
+    let mut p: Vec<(f64, f64)> = x
+        .iter()
+        .zip(y)
+        .map(|(a, b)| (*a, *b))
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+        .collect();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let bins = bins.max(1);
+    let n = p.len();
+    (0..bins)
+        .filter_map(|k| {
+            let bin = &p[k * n / bins..(k + 1) * n / bins];
+            let (first, last) = (bin.first()?, bin.last()?);
+            let m = bin.len() as f64;
+            let mean = bin.iter().map(|q| q.1).sum::<f64>() / m;
+            let ss = bin.iter().map(|q| (q.1 - mean).powi(2)).sum::<f64>();
+            Some(CountBin {
+                lo: first.0,
+                hi: last.0,
+                count: bin.len(),
+                x_mean: bin.iter().map(|q| q.0).sum::<f64>() / m,
+                mean,
+                rms: (bin.iter().map(|q| q.1 * q.1).sum::<f64>() / m).sqrt(),
+                std_dev: if bin.len() > 1 {
+                    (ss / (m - 1.0)).sqrt()
+                } else {
+                    0.0
+                },
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]

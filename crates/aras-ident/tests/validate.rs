@@ -1,6 +1,7 @@
 //! Validation helpers: fitness (78), workspace PD scan, parameter errors.
 #![allow(clippy::needless_range_loop)]
 
+use aras_ident::stats::equal_count_bins;
 use aras_ident::validate::{
     FitnessSums, PdRegion, check_positive_definite, fitness, fitness_per_group, parameter_errors,
     predict,
@@ -170,6 +171,52 @@ proptest! {
         prop_assert_eq!(merged.len(), m.len());
         let got = merged.fitness(0).unwrap();
         prop_assert!((got - want).abs() < 1e-9, "{} vs {}", got, want);
+    }
+
+    /// Equal-count bins hold every finite pair once, in order of `x`, with
+    /// counts that differ by at most one, and each bin's edges, means and
+    /// RMS are those of its run of the sorted pairs.
+    #[test]
+    fn equal_count_bins_partition_the_pairs(
+        v in proptest::collection::vec((-5.0f64..5.0, -2.0f64..2.0), 0..300),
+        bins in 0usize..12,
+        holes in proptest::collection::vec(0usize..300, 0..5),
+    ) {
+        let (mut x, y): (Vec<f64>, Vec<f64>) = v.iter().copied().unzip();
+        for &h in &holes {
+            if h < x.len() {
+                x[h] = f64::NAN;
+            }
+        }
+        let finite: Vec<(f64, f64)> = x
+            .iter()
+            .zip(&y)
+            .filter(|(a, _)| a.is_finite())
+            .map(|(a, b)| (*a, *b))
+            .collect();
+        let out = equal_count_bins(&x, &y, bins);
+        prop_assert_eq!(out.iter().map(|b| b.count).sum::<usize>(), finite.len());
+        prop_assert!(out.len() <= bins.max(1));
+        let (lo, hi) = out.iter().fold((usize::MAX, 0), |(l, h), b| (l.min(b.count), h.max(b.count)));
+        prop_assert!(out.is_empty() || hi - lo <= 1, "counts {}..{}", lo, hi);
+        for w in out.windows(2) {
+            prop_assert!(w[0].hi <= w[1].lo);
+        }
+        // The bins are consecutive runs of the pairs sorted by x.
+        let mut sorted = finite.clone();
+        sorted.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut at = 0;
+        for b in &out {
+            let run = &sorted[at..at + b.count];
+            at += b.count;
+            let m = run.len() as f64;
+            let mean = run.iter().map(|p| p.1).sum::<f64>() / m;
+            let rms = (run.iter().map(|p| p.1 * p.1).sum::<f64>() / m).sqrt();
+            let xm = run.iter().map(|p| p.0).sum::<f64>() / m;
+            prop_assert_eq!((b.lo, b.hi), (run[0].0, run[run.len() - 1].0));
+            prop_assert!((b.mean - mean).abs() < 1e-12 && (b.rms - rms).abs() < 1e-12);
+            prop_assert!((b.x_mean - xm).abs() < 1e-12 && b.std_dev >= 0.0);
+        }
     }
 
     /// Jacobi eigenvalues of a symmetric 4×4: trace and determinant-free

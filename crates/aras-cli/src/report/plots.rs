@@ -474,28 +474,15 @@ pub struct Binned {
 }
 
 /// Mean and standard deviation of `y` in `n` bins of equal count over `x`
-/// (`(centre, mean, std)`, the centre the mean `x` of the bin); bins of
-/// fewer than 3 points are left out.
+/// (`aras_ident::stats::equal_count_bins`) as `(centre, mean, std)`, the
+/// centre the mean `x` of the bin; bins of fewer than 3 points are left
+/// out.
 pub fn binned_means(points: &[(f64, f64)], n: usize) -> Vec<(f64, f64, f64)> {
-    let mut p: Vec<(f64, f64)> = points
-        .iter()
-        .copied()
-        .filter(|(x, y)| x.is_finite() && y.is_finite())
-        .collect();
-    p.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let n = n.max(1);
-    (0..n)
-        .filter_map(|k| {
-            let bin = &p[k * p.len() / n..(k + 1) * p.len() / n];
-            if bin.len() < 3 {
-                return None;
-            }
-            let m = bin.len() as f64;
-            let cx = bin.iter().map(|q| q.0).sum::<f64>() / m;
-            let my = bin.iter().map(|q| q.1).sum::<f64>() / m;
-            let var = bin.iter().map(|q| (q.1 - my).powi(2)).sum::<f64>() / (m - 1.0);
-            Some((cx, my, var.sqrt()))
-        })
+    let (x, y): (Vec<f64>, Vec<f64>) = points.iter().copied().unzip();
+    aras_ident::stats::equal_count_bins(&x, &y, n)
+        .into_iter()
+        .filter(|b| b.count >= 3)
+        .map(|b| (b.x_mean, b.mean, b.std_dev))
         .collect()
 }
 
