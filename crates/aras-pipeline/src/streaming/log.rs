@@ -97,6 +97,47 @@ impl Default for StreamingOptions {
 }
 
 impl StreamingOptions {
+    /// Errors unless the block size, the overlap tolerance, the reversal
+    /// threshold and its reach are in range.
+    fn check(&self) -> Result<(), PipelineError> {
+        let bad = |name, value, reason| {
+            Err(PipelineError::InvalidSetting {
+                name,
+                value,
+                reason,
+            })
+        };
+        if self.chunk_samples < 1024 {
+            return bad(
+                "chunk_samples",
+                self.chunk_samples as f64,
+                "read at least 1024 samples per chunk (65 536 is a good size)",
+            );
+        }
+        if !(self.overlap_tolerance > 0.0 && self.overlap_tolerance < 1.0) {
+            return bad(
+                "overlap_tolerance",
+                self.overlap_tolerance,
+                "give a relative tolerance in (0, 1), e.g. 1e-12",
+            );
+        }
+        if !(self.min_speed.is_finite() && self.min_speed >= 0.0) {
+            return bad(
+                "min_speed",
+                self.min_speed,
+                "give a finite speed ≥ 0 in rad/s (0 keeps every row)",
+            );
+        }
+        if !(self.reversal_reach > 0.0 && self.reversal_reach < 1.0) {
+            return bad(
+                "reversal_reach",
+                self.reversal_reach,
+                "give a fraction of the impulse response's peak in (0, 1), e.g. 1e-3",
+            );
+        }
+        Ok(())
+    }
+
     /// These options with the rows, filtering and width search of the
     /// in-memory identification's `settings` (`filtering`, `min_speed`,
     /// `reversal_reach`, and `width` when `rows` is [`FitRows::All`]), so
@@ -268,36 +309,14 @@ pub fn identify_log_with_progress(
     options: &StreamingOptions,
     progress: &mut dyn FnMut(u64),
 ) -> Result<StreamingResult, PipelineError> {
-    if options.chunk_samples < 1024 {
-        return Err(PipelineError::InvalidSetting {
-            name: "chunk_samples",
-            value: options.chunk_samples as f64,
-            reason: "read at least 1024 samples per chunk (65 536 is a good size)",
-        });
-    }
-    if !(options.overlap_tolerance > 0.0 && options.overlap_tolerance < 1.0) {
-        return Err(PipelineError::InvalidSetting {
-            name: "overlap_tolerance",
-            value: options.overlap_tolerance,
-            reason: "give a relative tolerance in (0, 1), e.g. 1e-12",
-        });
-    }
+    options.check()?;
     let name = path.display().to_string();
-    let mut reader = open_log(path, &options.read)?;
-    if !(options.min_speed.is_finite() && options.min_speed >= 0.0) {
-        return Err(PipelineError::InvalidSetting {
-            name: "min_speed",
-            value: options.min_speed,
-            reason: "give a finite speed ≥ 0 in rad/s (0 keeps every row)",
-        });
-    }
-    if !(options.reversal_reach > 0.0 && options.reversal_reach < 1.0) {
-        return Err(PipelineError::InvalidSetting {
-            name: "reversal_reach",
-            value: options.reversal_reach,
-            reason: "give a fraction of the impulse response's peak in (0, 1), e.g. 1e-3",
-        });
-    }
+    let reader = open_log(path, &options.read)?;
+    let job = Job {
+        model,
+        base,
+        options,
+    };
     let mut stage = RegressorStage::with_accumulation(
         TaskRegressor::new(model.clone(), options.geometry),
         base,
@@ -305,149 +324,24 @@ pub fn identify_log_with_progress(
     )?;
     let mut acc = QrAccumulator::new(stage.names(), 2)?;
     let (period, logged) = period_and_derivatives(&reader, options);
-    let mut chunk = Columns::default();
-    let mut read = rows_reader(&name, options.torque_delay, progress)?;
+    let mut src = Source {
+        name: &name,
+        reader,
+        read: rows_reader(&name, options.torque_delay, progress)?,
+    };
     let mut out = Progress::default();
-    let route;
     let mut widths = WidthRefinement::not_refined();
-    if period.is_none() && logged {
-        route = StreamingRoute::LoggedDerivatives;
-        let mut x = [vec![], vec![]];
-        let mut xd = [vec![], vec![]];
-        let mut xdd = [vec![], vec![]];
-        loop {
-            chunk.clear();
-            let n = read(&mut reader, &mut chunk, options.chunk_samples)?;
-            if n == 0 {
-                break;
-            }
-            check_chunk_derivatives(&name, &chunk)?;
-            for v in x.iter_mut().chain(&mut xd).chain(&mut xdd) {
-                v.resize(n, 0.0);
-            }
-            for i in 0..n {
-                let th = |a: &[Vec<f64>]| Vector2::new(a[0][i], a[1][i]);
-                let joint = Motion::new(
-                    th(&chunk.theta),
-                    th(&chunk.theta_dot),
-                    th(&chunk.theta_ddot),
-                );
-                let task = aras_kin::forward_motion(&options.geometry, &joint, AssemblyMode::Plus)
-                    .map_err(|e| {
-                        sig(
-                            &format!("{name}: forward kinematics of sample {}", out.read + i),
-                            e,
-                        )
-                    })?;
-                for c in 0..2 {
-                    x[c][i] = task.pos[c];
-                    xd[c][i] = task.vel[c];
-                    xdd[c][i] = task.acc[c];
-                }
-            }
-            let states = States {
-                x: &[&x[0], &x[1]],
-                x_dot: &[&xd[0], &xd[1]],
-                x_ddot: &[&xdd[0], &xdd[1]],
-                tau: &[&chunk.tau[0], &chunk.tau[1]],
-            };
-            let keep = reversal_mask(&chunk.theta_dot, options.min_speed, 0, false)?;
-            let (k1, k2) = keep.split_at(n);
-            for (j, k) in [k1, k2].into_iter().enumerate() {
-                for (&t, _) in chunk.tau[j].iter().zip(k).filter(|(_, k)| **k) {
-                    out.tau[j][0] += t;
-                    out.tau[j][1] += t * t;
-                }
-            }
-            stage.push_selected(&states, Some(&[k1, k2]))?;
-            out.read += n;
-            out.used += n;
-            out.blocks += 1;
-        }
-    } else if let Some(p) = period {
-        route = StreamingRoute::PeriodAverage;
-        let averaged = period_average(&name, &mut reader, &mut read, p, options, logged)?;
-        let (log, periods) = (averaged.log, averaged.periods);
-        out.periods = periods;
-        out.read = averaged.rows;
-        out.blocks = averaged.chunks;
-        let popts = averaged.process;
-        // The averaged period is one record in memory: the widths are
-        // refined on it exactly as in memory.
-        let refinement = match &options.widths {
-            Some(search) => {
-                let mut prepared = crate::prepare::prepare(
-                    &log,
-                    &popts,
-                    model,
-                    &options.geometry,
-                    options.filter_mode,
-                    RegressorColumns::Standard,
-                    false,
-                )?;
-                // Checked against the rows `min_speed` keeps, as in memory
-                // (with the default 0 every row is kept and the check is
-                // moot).
-                let away = prepared.keep_mask(options.min_speed, options.reversal_reach)?;
-                crate::friction_width::refine_checked_widths(
-                    &mut prepared,
-                    model,
-                    base,
-                    options.filter_mode,
-                    search,
-                    &away,
-                )?
-            }
-            None => WidthRefinement::not_refined(),
-        };
-        let refined = crate::friction_width::with_widths(model, refinement.widths())?;
-        let used = accumulate_processed(
-            &log,
-            &popts,
-            options,
-            &refined,
-            base,
-            &mut acc,
-            None,
-            &mut out,
-            &mut None,
-            refinement.joints.map(|j| j.all_rows),
-        )?;
-        out.used = used;
-        widths = refinement;
-    } else {
-        route = StreamingRoute::OverlappingBlocks;
-        let mut popts = options.process.clone();
-        let mut spares: [Option<Mat<f64>>; BLOCKS_IN_FLIGHT] = Default::default();
-        let (margin, rows) = overlapping_blocks(
-            &name,
-            &mut reader,
-            &mut read,
-            &mut popts,
-            BlockSizes::new(options, logged),
-            |p, dt| {
-                Ok(overlap(p, dt, options.overlap_tolerance)?
-                    + reach_of(p, dt, options.reversal_reach)?)
-            },
-            |pending, popts| {
-                process_blocks(
-                    pending,
-                    popts,
-                    options,
-                    model,
-                    base,
-                    &mut acc,
-                    &mut out,
-                    &mut spares,
-                )
-            },
-        )?;
-        out.overlap = margin;
-        out.read = rows;
-    }
-    if route == StreamingRoute::LoggedDerivatives {
+    let route = if period.is_none() && logged {
+        stream_logged_derivatives(&mut src, job, &mut stage, &mut out)?;
         acc = stage.accumulator();
-    }
+        StreamingRoute::LoggedDerivatives
+    } else if let Some(p) = period {
+        widths = stream_period(&mut src, job, (p, logged), &mut acc, &mut out)?;
+        StreamingRoute::PeriodAverage
+    } else {
+        stream_blocks(&mut src, job, logged, &mut acc, &mut out)?;
+        StreamingRoute::OverlappingBlocks
+    };
     if options.widths.is_some() && route != StreamingRoute::PeriodAverage {
         widths = WidthRefinement::failed(format!(
             "the log has no period, and the {} route does not refine the widths",
@@ -457,7 +351,8 @@ pub fn identify_log_with_progress(
             }
         ));
     }
-    let report = reader
+    let report = src
+        .reader
         .finish()
         .map_err(|e| sig(&format!("checking the log {name}"), e))?;
     let [n1, n2] = [acc.group_rows()[0], acc.group_rows()[1]];
@@ -495,6 +390,206 @@ pub fn identify_log_with_progress(
         widths,
         log: report,
     })
+}
+
+/// What a streamed identification fits: the model, its base parameters and
+/// the options.
+#[derive(Clone, Copy)]
+struct Job<'a> {
+    model: &'a Model,
+    base: &'a BaseParameters,
+    options: &'a StreamingOptions,
+}
+
+/// A log being read: its name, its reader and the row source
+/// ([`rows_reader`]).
+struct Source<'a, R> {
+    name: &'a str,
+    reader: LogReader<std::fs::File>,
+    read: R,
+}
+
+/// The logged-derivative route: each chunk's logged θ̇, θ̈ checked against
+/// its angles, mapped to the task space and pushed into `stage` on the rows
+/// away from reversals.
+fn stream_logged_derivatives<R>(
+    src: &mut Source<'_, R>,
+    job: Job<'_>,
+    stage: &mut RegressorStage<TaskRegressor>,
+    out: &mut Progress,
+) -> Result<(), PipelineError>
+where
+    R: FnMut(&mut LogReader<std::fs::File>, &mut Columns, usize) -> Result<usize, PipelineError>,
+{
+    let mut chunk = Columns::default();
+    let mut x = [vec![], vec![]];
+    let mut xd = [vec![], vec![]];
+    let mut xdd = [vec![], vec![]];
+    loop {
+        chunk.clear();
+        let n = (src.read)(&mut src.reader, &mut chunk, job.options.chunk_samples)?;
+        if n == 0 {
+            break;
+        }
+        check_chunk_derivatives(src.name, &chunk)?;
+        for v in x.iter_mut().chain(&mut xd).chain(&mut xdd) {
+            v.resize(n, 0.0);
+        }
+        for i in 0..n {
+            let th = |a: &[Vec<f64>]| Vector2::new(a[0][i], a[1][i]);
+            let joint = Motion::new(
+                th(&chunk.theta),
+                th(&chunk.theta_dot),
+                th(&chunk.theta_ddot),
+            );
+            let task = aras_kin::forward_motion(&job.options.geometry, &joint, AssemblyMode::Plus)
+                .map_err(|e| {
+                    sig(
+                        &format!(
+                            "{}: forward kinematics of sample {}",
+                            src.name,
+                            out.read + i
+                        ),
+                        e,
+                    )
+                })?;
+            for c in 0..2 {
+                x[c][i] = task.pos[c];
+                xd[c][i] = task.vel[c];
+                xdd[c][i] = task.acc[c];
+            }
+        }
+        let states = States {
+            x: &[&x[0], &x[1]],
+            x_dot: &[&xd[0], &xd[1]],
+            x_ddot: &[&xdd[0], &xdd[1]],
+            tau: &[&chunk.tau[0], &chunk.tau[1]],
+        };
+        let keep = reversal_mask(&chunk.theta_dot, job.options.min_speed, 0, false)?;
+        let (k1, k2) = keep.split_at(n);
+        for (j, k) in [k1, k2].into_iter().enumerate() {
+            for (&t, _) in chunk.tau[j].iter().zip(k).filter(|(_, k)| **k) {
+                out.tau[j][0] += t;
+                out.tau[j][1] += t * t;
+            }
+        }
+        stage.push_selected(&states, Some(&[k1, k2]))?;
+        out.read += n;
+        out.used += n;
+        out.blocks += 1;
+    }
+    Ok(())
+}
+
+/// The period route: the log averaged over its periods while read, the
+/// Coulomb widths refined on the averaged period (`job.options.widths`),
+/// and the period accumulated into `acc`. Returns the width refinement.
+fn stream_period<R>(
+    src: &mut Source<'_, R>,
+    job: Job<'_>,
+    (p, logged): (f64, bool),
+    acc: &mut QrAccumulator,
+    out: &mut Progress,
+) -> Result<WidthRefinement, PipelineError>
+where
+    R: FnMut(&mut LogReader<std::fs::File>, &mut Columns, usize) -> Result<usize, PipelineError>,
+{
+    let averaged = period_average(
+        src.name,
+        &mut src.reader,
+        &mut src.read,
+        p,
+        job.options,
+        logged,
+    )?;
+    let (log, periods) = (averaged.log, averaged.periods);
+    out.periods = periods;
+    out.read = averaged.rows;
+    out.blocks = averaged.chunks;
+    let popts = averaged.process;
+    // The averaged period is one record in memory: the widths are
+    // refined on it exactly as in memory.
+    let refinement = match &job.options.widths {
+        Some(search) => {
+            let mut prepared = crate::prepare::prepare(
+                &log,
+                &popts,
+                job.model,
+                &job.options.geometry,
+                job.options.filter_mode,
+                RegressorColumns::Standard,
+                false,
+            )?;
+            // Checked against the rows `min_speed` keeps, as in memory.
+            let away = prepared.keep_mask(job.options.min_speed, job.options.reversal_reach)?;
+            crate::friction_width::refine_checked_widths(
+                &mut prepared,
+                job.model,
+                job.base,
+                job.options.filter_mode,
+                search,
+                &away,
+            )?
+        }
+        None => WidthRefinement::not_refined(),
+    };
+    let refined = crate::friction_width::with_widths(job.model, refinement.widths())?;
+    out.used = accumulate_processed(
+        &log,
+        &popts,
+        job.options,
+        &refined,
+        job.base,
+        acc,
+        None,
+        out,
+        &mut None,
+        refinement.joints.map(|j| j.all_rows),
+    )?;
+    Ok(refinement)
+}
+
+/// The overlapping-block route: blocks read, filtered with an overlap that
+/// covers the filter's transient and the reversal exclusion's reach, and
+/// accumulated into `acc` while the next ones are read.
+fn stream_blocks<R>(
+    src: &mut Source<'_, R>,
+    job: Job<'_>,
+    logged: bool,
+    acc: &mut QrAccumulator,
+    out: &mut Progress,
+) -> Result<(), PipelineError>
+where
+    R: FnMut(&mut LogReader<std::fs::File>, &mut Columns, usize) -> Result<usize, PipelineError>,
+{
+    let mut popts = job.options.process.clone();
+    let mut spares: [Option<Mat<f64>>; BLOCKS_IN_FLIGHT] = Default::default();
+    let (margin, rows) = overlapping_blocks(
+        src.name,
+        &mut src.reader,
+        &mut src.read,
+        &mut popts,
+        BlockSizes::new(job.options, logged),
+        |p, dt| {
+            Ok(overlap(p, dt, job.options.overlap_tolerance)?
+                + reach_of(p, dt, job.options.reversal_reach)?)
+        },
+        |pending, popts| {
+            process_blocks(
+                pending,
+                popts,
+                job.options,
+                job.model,
+                job.base,
+                acc,
+                out,
+                &mut spares,
+            )
+        },
+    )?;
+    out.overlap = margin;
+    out.read = rows;
+    Ok(())
 }
 
 /// The logged derivatives of a chunk checked against its angles, as the
