@@ -471,6 +471,20 @@ impl ConsistentLs {
     pub fn solve(&self, base: &BaseParameters, ls: &ReducedLs) -> Result<SdpSolution, IdentError> {
         let start = Instant::now();
         self.check_settings()?;
+        self.check_dimensions(base, ls)?;
+        let scales = self.scales(base, ls);
+        let mut c = Conic::default();
+        self.objective_cone(&mut c, &scales, ls);
+        self.mass_ties(&mut c);
+        let linear = self.linear_inequalities(&mut c);
+        let margins = self.psd_cones(&mut c, &scales.lens);
+        let solver = self.run(c)?;
+        self.report(base, ls, &solver, (&linear, &margins, &scales.lens), start)
+    }
+
+    /// The base map and the reduced problem must be over this problem's
+    /// standard parameters.
+    fn check_dimensions(&self, base: &BaseParameters, ls: &ReducedLs) -> Result<(), IdentError> {
         let n = self.names.len();
         if base.n_standard() != n {
             return Err(IdentError::DimensionMismatch {
@@ -480,20 +494,23 @@ impl ConsistentLs {
                 hint: "build the base map and the SDP over the same standard parameters",
             });
         }
-        let b = base.n_base();
-        if ls.names().len() != b {
+        if ls.names().len() != base.n_base() {
             return Err(IdentError::DimensionMismatch {
                 what: "columns of the reduced least-squares problem",
-                expected: b,
+                expected: base.n_base(),
                 found: ls.names().len(),
                 hint: "reduce the base regressor W_b = W E of the same base map",
             });
         }
-        let s = self.settings;
-        let nl = self.links.len();
-        let nx = n + nl + 1;
-        let it = n + nl; // index of the epigraph variable t
-        // A = R K (b × n): the objective's matrix in standard-parameter space.
+        Ok(())
+    }
+
+    /// The objective's matrix `A = R K` in standard-parameter space and the
+    /// regulariser's scales: each parameter's column norm of `A` (the
+    /// smallest positive one where a column is zero), each link's mass
+    /// scale from its first moments, and the links' length scales.
+    fn scales(&self, base: &BaseParameters, ls: &ReducedLs) -> Scales {
+        let (n, b) = (self.names.len(), base.n_base());
         let k = base.k();
         let r = ls.r();
         let a = faer::Mat::from_fn(b, n, |i, j| {
@@ -523,113 +540,118 @@ impl ConsistentLs {
                 *v = dmin;
             }
         });
-        let sl = s.regularisation.sqrt();
+        Scales { a, d, dm, lens }
+    }
 
-        let (mut ri, mut ci, mut vv, mut rhs) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        let mut row = 0;
-        let mut push = |r: usize, c: usize, v: f64| {
-            if v != 0.0 {
-                ri.push(r);
-                ci.push(c);
-                vv.push(v);
-            }
-        };
-        let mut cones = Vec::new();
-        // 1. Second-order cone: t ≥ ‖[A β − z; √λ D(β − β_ref); √λ d_m (m − m_ref)]‖.
-        push(row, it, -1.0);
-        rhs.push(0.0);
-        row += 1;
+    /// The first constraint block, the objective's second-order cone:
+    /// `t ≥ ‖[A β − z; √λ D(β − β_ref); √λ d_m (m − m_ref)]‖`.
+    fn objective_cone(&self, c: &mut Conic, scales: &Scales, ls: &ReducedLs) {
+        let (n, nl, b) = (self.names.len(), self.links.len(), ls.names().len());
+        let sl = self.settings.regularisation.sqrt();
+        let Scales { a, d, dm, .. } = scales;
+        c.entry(n + nl, -1.0);
+        c.close(0.0);
         for i in 0..b {
             for j in 0..n {
-                push(row, j, -a[(i, j)]);
+                c.entry(j, -a[(i, j)]);
             }
-            rhs.push(-ls.z()[i]);
-            row += 1;
+            c.close(-ls.z()[i]);
         }
         for j in 0..n {
-            push(row, j, -sl * d[j]);
-            rhs.push(-sl * d[j] * self.reference[j]);
-            row += 1;
+            c.entry(j, -sl * d[j]);
+            c.close(-sl * d[j] * self.reference[j]);
         }
         for (kk, l) in self.links.iter().enumerate() {
-            push(row, n + kk, -sl * dm[kk]);
-            rhs.push(-sl * dm[kk] * l.mass_reference);
-            row += 1;
+            c.entry(n + kk, -sl * dm[kk]);
+            c.close(-sl * dm[kk] * l.mass_reference);
         }
-        cones.push(SupportedConeT::SecondOrderConeT(1 + b + n + nl));
-        // 2. A link's mass variable is its standard parameter where the
-        // dynamics holds it: β_j − m_k = 0.
-        let tied = row;
+        c.cones
+            .push(SupportedConeT::SecondOrderConeT(1 + b + n + nl));
+    }
+
+    /// The second block: a link's mass variable is its standard parameter
+    /// where the dynamics holds it, `β_j − m_k = 0`.
+    fn mass_ties(&self, c: &mut Conic) {
+        let n = self.names.len();
+        let tied = c.row;
         for (kk, l) in self.links.iter().enumerate() {
             if let Some(j) = l.mass_column {
-                push(row, j, 1.0);
-                push(row, n + kk, -1.0);
-                rhs.push(0.0);
-                row += 1;
+                c.entry(j, 1.0);
+                c.entry(n + kk, -1.0);
+                c.close(0.0);
             }
         }
-        if row > tied {
-            cones.push(SupportedConeT::ZeroConeT(row - tied));
+        if c.row > tied {
+            c.cones.push(SupportedConeT::ZeroConeT(c.row - tied));
         }
-        // 3. Linear inequalities s = rhs − A x ≥ 0.
-        let lin_start = row;
-        let mut lin: Vec<(ConstraintKind, String, usize, f64)> = Vec::new(); // kind, name, var, scale
+    }
+
+    /// The third block, linear inequalities `s = rhs − A x ≥ 0`: mass
+    /// ranges, box bounds (73) and sign constraints (70). Returns their
+    /// first row and, per row, its kind, name, variable and scale (for the
+    /// active-constraint report).
+    fn linear_inequalities(&self, c: &mut Conic) -> Linear {
+        let n = self.names.len();
+        let start = c.row;
+        let mut rows = Vec::new();
         for (kk, l) in self.links.iter().enumerate() {
-            push(row, n + kk, -1.0);
-            rhs.push(-l.mass_bounds.0);
-            lin.push((
+            c.entry(n + kk, -1.0);
+            c.close(-l.mass_bounds.0);
+            rows.push((
                 ConstraintKind::MassLower,
                 l.name.clone(),
                 n + kk,
                 l.mass_reference,
             ));
-            row += 1;
-            push(row, n + kk, 1.0);
-            rhs.push(l.mass_bounds.1);
-            lin.push((
+            c.entry(n + kk, 1.0);
+            c.close(l.mass_bounds.1);
+            rows.push((
                 ConstraintKind::MassUpper,
                 l.name.clone(),
                 n + kk,
                 l.mass_reference,
             ));
-            row += 1;
         }
         for &(j, lo, hi) in &self.boxes {
             let scale = (hi - lo)
                 .abs()
                 .max(self.reference[j].abs())
                 .max(f64::MIN_POSITIVE);
-            push(row, j, -1.0);
-            rhs.push(-lo);
-            lin.push((ConstraintKind::BoxLower, self.names[j].clone(), j, scale));
-            row += 1;
-            push(row, j, 1.0);
-            rhs.push(hi);
-            lin.push((ConstraintKind::BoxUpper, self.names[j].clone(), j, scale));
-            row += 1;
+            c.entry(j, -1.0);
+            c.close(-lo);
+            rows.push((ConstraintKind::BoxLower, self.names[j].clone(), j, scale));
+            c.entry(j, 1.0);
+            c.close(hi);
+            rows.push((ConstraintKind::BoxUpper, self.names[j].clone(), j, scale));
         }
         for &j in &self.nonnegative {
-            push(row, j, -1.0);
-            rhs.push(0.0);
-            lin.push((
+            c.entry(j, -1.0);
+            c.close(0.0);
+            rows.push((
                 ConstraintKind::NonNegative,
                 self.names[j].clone(),
                 j,
                 self.reference[j].abs(),
             ));
-            row += 1;
         }
-        if row > lin_start {
-            cones.push(SupportedConeT::NonnegativeConeT(row - lin_start));
+        if c.row > start {
+            c.cones
+                .push(SupportedConeT::NonnegativeConeT(c.row - start));
         }
-        // 4. PSD: svec(T𝒥T − εI) ∈ S⁴₊ per link (upper triangle by columns,
-        // off-diagonals × √2, as clarabel packs them).
+        Linear { start, rows }
+    }
+
+    /// The fourth block, `svec(T𝒥T − εI) ∈ S⁴₊` per link (upper triangle by columns,
+    /// off-diagonals × √2, as clarabel packs them). Returns each link's
+    /// margin `ε`.
+    fn psd_cones(&self, c: &mut Conic, lens: &[f64]) -> Vec<f64> {
+        let n = self.names.len();
         let r2 = std::f64::consts::SQRT_2;
         let basis = pseudo_inertia_basis();
-        let mut margins = Vec::with_capacity(nl);
+        let mut margins = Vec::with_capacity(self.links.len());
         for (kk, l) in self.links.iter().enumerate() {
             let len = lens[kk];
-            let eps = s.psd_margin * l.mass_reference * len * len;
+            let eps = self.settings.psd_margin * l.mass_reference * len * len;
             margins.push(eps);
             // The variable multiplying input `p` of `𝒥` (nine standard
             // parameters, then the mass).
@@ -638,24 +660,31 @@ impl ConsistentLs {
                 6..9 => l.first_moment[p - 6],
                 _ => n + kk,
             };
-            for (r, c) in SVEC4 {
-                let scale = if r == 3 { len } else { 1.0 } * if c == 3 { len } else { 1.0 };
-                let packing = if r == c { 1.0 } else { r2 };
+            for (r, col) in SVEC4 {
+                let scale = if r == 3 { len } else { 1.0 } * if col == 3 { len } else { 1.0 };
+                let packing = if r == col { 1.0 } else { r2 };
                 for (p, unit) in basis.iter().enumerate() {
-                    let coefficient = unit[c][r] * scale;
+                    let coefficient = unit[col][r] * scale;
                     if coefficient != 0.0 {
-                        push(row, var(p), -(coefficient * packing));
+                        c.entry(var(p), -(coefficient * packing));
                     }
                 }
-                rhs.push(if r == c { -eps } else { 0.0 });
-                row += 1;
+                c.close(if r == col { -eps } else { 0.0 });
             }
-            cones.push(SupportedConeT::PSDTriangleConeT(4));
+            c.cones.push(SupportedConeT::PSDTriangleConeT(4));
         }
-        let amat = CscMatrix::new_from_triplets(row, nx, ri, ci, vv);
+        margins
+    }
+
+    /// Clarabel on the cones built, minimising the epigraph variable `t`;
+    /// an infeasible or failed solve is an error.
+    fn run(&self, c: Conic) -> Result<DefaultSolver<f64>, IdentError> {
+        let s = self.settings;
+        let nx = self.names.len() + self.links.len() + 1;
+        let amat = CscMatrix::new_from_triplets(c.row, nx, c.ri, c.ci, c.vv);
         let p = CscMatrix::zeros((nx, nx));
         let mut q = vec![0.0; nx];
-        q[it] = 1.0;
+        q[nx - 1] = 1.0;
         let settings = DefaultSettingsBuilder::default()
             .verbose(false)
             .max_iter(s.max_iter)
@@ -669,7 +698,7 @@ impl ConsistentLs {
                 source: Box::new(e),
             })?;
         let mut solver =
-            DefaultSolver::new(&p, &q, &amat, &rhs, &cones, settings).map_err(|e| {
+            DefaultSolver::new(&p, &q, &amat, &c.rhs, &c.cones, settings).map_err(|e| {
                 IdentError::SolverSetup {
                     stage: "problem data",
                     source: Box::new(e),
@@ -679,17 +708,33 @@ impl ConsistentLs {
         let sol = &solver.solution;
         let status = solver_status(sol.status);
         match sol.status {
-            SolverStatus::Solved | SolverStatus::AlmostSolved => {}
+            SolverStatus::Solved | SolverStatus::AlmostSolved => Ok(solver),
             SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
-                return Err(IdentError::Infeasible { status });
+                Err(IdentError::Infeasible { status })
             }
-            _ => {
-                return Err(IdentError::SolverFailed {
-                    status,
-                    iterations: sol.iterations,
-                });
-            }
+            _ => Err(IdentError::SolverFailed {
+                status,
+                iterations: sol.iterations,
+            }),
         }
+    }
+
+    /// The solution: standard parameters (sign-constrained ones within the
+    /// feasibility tolerance set to exactly 0), masses, base parameters,
+    /// the residual, each link's pseudo-inertia eigenvalues, and the active
+    /// constraints.
+    fn report(
+        &self,
+        base: &BaseParameters,
+        ls: &ReducedLs,
+        solver: &DefaultSolver<f64>,
+        (linear, margins, lens): (&Linear, &[f64], &[f64]),
+        start: Instant,
+    ) -> Result<SdpSolution, IdentError> {
+        let s = self.settings;
+        let (n, nl) = (self.names.len(), self.links.len());
+        let sol = &solver.solution;
+        let status = solver_status(sol.status);
         let x = &sol.x;
         let mut standard = x[..n].to_vec();
         // An interior-point solution meets `β_j ≥ 0` only to its feasibility
@@ -706,8 +751,8 @@ impl ConsistentLs {
         let residual_norm = ls.rss(&base_values)?.sqrt();
         let tol = s.active_tolerance;
         let mut active = Vec::new();
-        for (kk, (kind, name, var, scale)) in lin.iter().enumerate() {
-            let slack = sol.s[lin_start + kk];
+        for (kk, (kind, name, var, scale)) in linear.rows.iter().enumerate() {
+            let slack = sol.s[linear.start + kk];
             let scale = scale.max(x[*var].abs());
             if slack <= tol * scale || (scale == 0.0 && slack <= 0.0) {
                 active.push(ActiveConstraint {
@@ -758,7 +803,55 @@ impl ConsistentLs {
     }
 }
 
-/// clarabel's status as this crate's (which exists without the `sdp` feature).
+/// The objective's matrix and the regulariser's scales ([`ConsistentLs::scales`]).
+struct Scales {
+    /// `A = R K` (b × n).
+    a: faer::Mat<f64>,
+    /// Each standard parameter's scale.
+    d: Vec<f64>,
+    /// Each link's mass scale.
+    dm: Vec<f64>,
+    /// Each link's length scale.
+    lens: Vec<f64>,
+}
+
+/// The linear inequalities' first row and, per row, its kind, name,
+/// variable and scale.
+struct Linear {
+    start: usize,
+    rows: Vec<(ConstraintKind, String, usize, f64)>,
+}
+
+/// The conic constraints `A x + s = rhs`, `s` in `cones`, built row by row
+/// as clarabel takes them (triplets of `A`).
+#[derive(Default)]
+struct Conic {
+    ri: Vec<usize>,
+    ci: Vec<usize>,
+    vv: Vec<f64>,
+    rhs: Vec<f64>,
+    row: usize,
+    cones: Vec<SupportedConeT<f64>>,
+}
+
+impl Conic {
+    /// Coefficient `v` of variable `col` in the current row (zeros are
+    /// not stored).
+    fn entry(&mut self, col: usize, v: f64) {
+        if v != 0.0 {
+            self.ri.push(self.row);
+            self.ci.push(col);
+            self.vv.push(v);
+        }
+    }
+
+    /// Ends the current row with its right-hand side.
+    fn close(&mut self, rhs: f64) {
+        self.rhs.push(rhs);
+        self.row += 1;
+    }
+}
+
 fn solver_status(s: SolverStatus) -> crate::SolverStatus {
     use crate::SolverStatus as S;
     match s {
