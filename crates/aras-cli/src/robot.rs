@@ -199,14 +199,6 @@ pub fn effect_spec(candidate: &Candidate, refined: Option<f64>) -> String {
     }
 }
 
-/// The paper's model with extra effects appended (their columns come last).
-pub fn model_with_effects(p: &Params, effects: &[Effect]) -> Result<Model> {
-    effects.iter().try_fold(paper_model(p)?, |m, e| {
-        m.with_effect(*e)
-            .with_context(|| format!("adding the effect `{}` to the model", e.id()))
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -9,7 +9,7 @@ use crate::cmd::fit::{self, FitInput};
 use crate::config::Config;
 use crate::identify::base_parameters;
 use crate::output::OutDir;
-use crate::robot::{model_with_effects, nominal, parse_extras};
+use crate::robot::{nominal, paper_model, parse_extras};
 use crate::stages::Stages;
 use aras_pipeline::diagnose::Additions;
 
@@ -78,7 +78,8 @@ fn setup(args: &IdentifyArgs, extras: &Additions) -> Result<Setup> {
     )?;
     let stages = Stages::new(args.common.quiet);
     let nominal = nominal(&cfg.robot, &loaded.dir)?;
-    let model = model_with_effects(&nominal, &extras.effects)?;
+    // The paper's model with the extra effects appended (their columns last).
+    let model = extras.model(&paper_model(&nominal)?)?;
     let geometry = nominal.geometry()?;
     Ok(Setup {
         cfg,

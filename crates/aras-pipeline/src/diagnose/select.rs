@@ -232,15 +232,19 @@ impl Aras<'_> {
     /// The starting model with the added effects (a time delay is not an
     /// effect of the model).
     fn extended(&self, added: &[Candidate]) -> Result<Model, IdentError> {
-        let mut model = self.start.clone();
-        for c in added {
-            if let Candidate::Effect { effect } = c {
-                model = model
-                    .with_effect(*effect)
-                    .map_err(|e| IdentError::external("extending the model", e))?;
-            }
+        let effects = added
+            .iter()
+            .filter_map(|c| match c {
+                Candidate::Effect { effect } => Some(*effect),
+                Candidate::TimeDelay { .. } => None,
+            })
+            .collect();
+        super::Additions {
+            effects,
+            torque_delay: None,
         }
-        Ok(model)
+        .model(self.start)
+        .map_err(PipelineError::into_ident)
     }
 }
 

@@ -65,14 +65,13 @@ impl Additions {
     /// An effect the model already has, or one it cannot take
     /// ([`IdentError::External`], naming the effect).
     pub fn model(&self, start: &Model) -> Result<Model, PipelineError> {
-        self.effects
-            .iter()
-            .try_fold(start.clone(), |m, e| {
-                m.with_effect(*e).map_err(|err| {
-                    IdentError::external(format!("adding the effect `{}`", e.id()), err)
-                })
-            })
-            .map_err(PipelineError::from)
+        let mut model = start.clone();
+        for e in &self.effects {
+            model = model.with_effect(*e).map_err(|err| {
+                IdentError::external(format!("adding the effect `{}` to the model", e.id()), err)
+            })?;
+        }
+        Ok(model)
     }
 }
 

@@ -43,9 +43,11 @@ pub struct ValidationSettings {
     pub pd_seed: u64,
     /// Heat-map resolution `[φ, γ]` (cells).
     pub heatmap: [usize; 2],
-    /// Reach of the reversal exclusion for the "kept rows" fitness of the
-    /// cross-validation (fraction of the filter's peak; only its main lobe
-    /// by default, since at 2.5 Hz the joints reverse every 0.2 s).
+    /// Reach of the reversal exclusion on the validation logs of
+    /// `aras diagnose` (fraction of the filter's peak; only its main lobe
+    /// by default, since at 2.5 Hz the joints reverse every 0.2 s). The
+    /// cross-validation here stacks its logs unfiltered, so its kept rows
+    /// are not widened.
     pub reversal_reach: f64,
 }
 
