@@ -13,7 +13,7 @@ use aras_ident::validate::{fitness_per_group, predict};
 use aras_ident::{
     BaseParameters, IdentError, NoiseVariances, OlsEstimate, ReducedLs, SdpSettings, SdpSolution,
 };
-use aras_signal::Processed;
+use aras_signal::{Paired, Processed};
 use serde::{Deserialize, Serialize};
 
 use crate::friction_width::{
@@ -197,6 +197,13 @@ pub fn raw_fitness(processed: &Processed, predicted: &[f64]) -> Result<[f64; 2],
     let pairs = processed
         .on_log_rows(&[&predicted[..n], &predicted[n..]])
         .map_err(|e| IdentError::external("pairing the prediction with the log's rows", e))?;
+    paired_fitness(&pairs)
+}
+
+/// Fitness (78) per joint of a prediction paired with the log's raw
+/// torques (`aras_signal::Processed::paired_with_log_rows`, or
+/// `on_log_rows`, which band-limits it first).
+pub fn paired_fitness(pairs: &Paired) -> Result<[f64; 2], PipelineError> {
     Ok([
         aras_ident::validate::fitness(&pairs[0].0, &pairs[0].1)?,
         aras_ident::validate::fitness(&pairs[1].0, &pairs[1].1)?,

@@ -10,6 +10,7 @@ use aras_signal::{ProcessOptions, Processed};
 use serde::Serialize;
 
 use crate::PipelineError;
+use crate::identify::paired_fitness;
 use crate::validate::loss::{ProcessingLoss, has_derivatives, predict_route, processing_loss};
 
 /// Which θ̇, θ̈ a prediction was made from.
@@ -84,10 +85,7 @@ pub fn predict_log(
     let pairs = processed
         .paired_with_log_rows(&[&tau[..n], &tau[n..]])
         .map_err(|e| IdentError::external("pairing the prediction with the log's rows", e))?;
-    let fitness = [
-        aras_ident::validate::fitness(&pairs[0].0, &pairs[0].1)?,
-        aras_ident::validate::fitness(&pairs[1].0, &pairs[1].1)?,
-    ];
+    let fitness = paired_fitness(&pairs)?;
     let (processing_loss, loss_unavailable) = match processing_loss(
         log,
         &opts,
