@@ -9,8 +9,10 @@
 //! are ignored; [`ColumnMap`] maps a lab's own names
 //! (`t=time,q=q2,dq=dq2,tau=tau_f`). Lines starting with `#` and blank
 //! lines are skipped. Time must increase strictly; the steps may be irregular
-//! (jitter, gaps). Every defect is a [`LogError`] naming the file, line,
-//! column and value.
+//! (jitter, gaps). The CSV is read by [`aras_log::CsvTable`], so its rules and
+//! messages are the robot log's (comma separators, one field per header
+//! column, finite numbers); a column serves one role. Every defect is a
+//! [`LogError`] naming the file, line, column and value.
 //!
 //! Units are checked as the robot log reader checks them
 //! ([`aras_log::units`]): a position whose range looks like degrees is
@@ -21,7 +23,14 @@
 //! not a measurement: it is dropped and derived instead, with a note in
 //! [`JointMotion::notes`].
 
-use std::{fmt, io::BufRead, path::Path, str::FromStr};
+use std::{
+    fmt,
+    io::{BufRead, Read},
+    path::Path,
+    str::FromStr,
+};
+
+use aras_log::{CsvTable, RowColumns};
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -32,7 +41,14 @@ use crate::{FrictionError, Track};
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum LogError {
-    /// The file could not be opened or read.
+    /// A defect of the file as a numeric CSV (unreadable once open, no header, a row
+    /// of the wrong length, a value that is not a finite number, time that
+    /// does not increase, too few rows) or of its units (degrees, a logged
+    /// derivative that is not the derivative of its column), as the robot
+    /// log reader reports it: file, line, column, value and the fix.
+    #[error(transparent)]
+    Csv(#[from] aras_log::LogError),
+    /// The file could not be opened.
     #[error("{file}: cannot read the log")]
     Io {
         /// File name.
@@ -40,14 +56,6 @@ pub enum LogError {
         /// The operating system's error.
         #[source]
         source: std::io::Error,
-    },
-    /// No header line.
-    #[error(
-        "{file}: no header line; the first non-comment line must name the columns (t,q,dq,tau)"
-    )]
-    NoHeader {
-        /// File name.
-        file: String,
     },
     /// A required column is not in the header.
     #[error(
@@ -66,79 +74,6 @@ pub enum LogError {
         /// The header's columns.
         header: String,
     },
-    /// A row with fewer fields than the columns used need.
-    #[error("{file}:{line}: the row has {found} fields but the header has {expected}")]
-    RowLength {
-        /// File name.
-        file: String,
-        /// Line.
-        line: u64,
-        /// Fields in the header.
-        expected: usize,
-        /// Fields in this row.
-        found: usize,
-    },
-    /// A field that is not a number.
-    #[error("{file}:{line}:{column}: `{name}` value {text:?} is not a number")]
-    NotANumber {
-        /// File name.
-        file: String,
-        /// Line.
-        line: u64,
-        /// Column.
-        column: usize,
-        /// Column name.
-        name: String,
-        /// The field's text.
-        text: String,
-    },
-    /// A NaN or infinite value.
-    #[error(
-        "{file}:{line}:{column}: `{name}` value {text:?} is not finite; drop or repair the row"
-    )]
-    NonFinite {
-        /// File name.
-        file: String,
-        /// Line.
-        line: u64,
-        /// Column.
-        column: usize,
-        /// Column name.
-        name: String,
-        /// The field's text.
-        text: String,
-    },
-    /// Time that does not increase.
-    #[error(
-        "{file}:{line}:{column}: time does not increase: t = {value} s follows t = {previous} s; \
-         sort the rows by time and drop duplicates"
-    )]
-    TimeNotIncreasing {
-        /// File name.
-        file: String,
-        /// Line.
-        line: u64,
-        /// Column of `t`.
-        column: usize,
-        /// Previous time, s.
-        previous: f64,
-        /// This time, s.
-        value: f64,
-    },
-    /// Too few rows for fitting.
-    #[error("{file}: {found} data rows; at least {needed} are needed")]
-    TooFewRows {
-        /// File name.
-        file: String,
-        /// Rows read.
-        found: usize,
-        /// Minimum.
-        needed: usize,
-    },
-    /// A column's units are wrong: degrees, or a logged derivative that is
-    /// not the derivative of its column.
-    #[error(transparent)]
-    Units(#[from] aras_log::LogError),
     /// A malformed `--columns` mapping.
     #[error("--columns {text:?}: {reason}; write e.g. t=time,q=q2,dq=dq2,tau=tau_f")]
     BadMapping {
@@ -390,15 +325,74 @@ pub fn read_joint_motion_from(
 /// reader of it.
 fn open(path: &Path) -> Result<(String, String, std::io::BufReader<std::fs::File>), LogError> {
     let file = path.display().to_string();
-    let f = std::fs::File::open(path).map_err(|e| LogError::Io {
+    let f = std::fs::File::open(path).map_err(|source| LogError::Io {
         file: file.clone(),
-        source: e,
+        source,
     })?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "log".into());
     Ok((file, name, std::io::BufReader::new(f)))
+}
+
+/// The columns of a joint log, by role, as found in a table's header.
+struct Roles {
+    /// `(role, column)` of every column read, time first.
+    read: Vec<(&'static str, usize)>,
+}
+
+impl Roles {
+    /// Finds the roles' columns, each column for one role: `t` and `q`
+    /// always, `tau` when `need_tau`, `dq` when the map names it; the others
+    /// when present.
+    fn find<R: Read>(
+        table: &CsvTable<R>,
+        columns: &ColumnMap,
+        need_tau: bool,
+    ) -> Result<Self, LogError> {
+        let missing = |role: &'static str, name: &str| LogError::MissingColumn {
+            file: table.file().to_string(),
+            line: table.header_line(),
+            role,
+            name: name.to_string(),
+            header: table.names().join(","),
+        };
+        let mut read = Vec::with_capacity(6);
+        for (role, name, required) in [
+            ("t", &columns.t, true),
+            ("q", &columns.q, true),
+            ("tau", &columns.tau, need_tau),
+            ("dq", &columns.dq, columns.dq_required),
+            ("ddq", &columns.ddq, false),
+            ("load", &columns.load, false),
+        ] {
+            // A column already read for another role (`q=dq` leaves the
+            // default `dq` name to `q`) is not an optional role's.
+            match table.column(name) {
+                Some(c) => match read.iter().find(|(_, used)| *used == c) {
+                    None => read.push((role, c)),
+                    Some((other, _)) if required => {
+                        return Err(LogError::BadMapping {
+                            text: columns.to_string(),
+                            reason: format!(
+                                "column `{name}` is given to both `{other}` and `{role}`"
+                            ),
+                        });
+                    }
+                    Some(_) => {}
+                },
+                None if required => return Err(missing(role, name)),
+                None => {}
+            }
+        }
+        Ok(Self { read })
+    }
+
+    /// The slot of `role` in a parsed row, if the log has its column.
+    fn slot(&self, role: &str) -> Option<usize> {
+        self.read.iter().position(|(r, _)| *r == role)
+    }
 }
 
 /// The reader behind both entry points: the torque column is required when
@@ -410,125 +404,46 @@ fn read(
     columns: &ColumnMap,
     need_tau: bool,
 ) -> Result<(JointMotion, Option<Vec<f64>>), LogError> {
-    let io = |e: std::io::Error| LogError::Io {
-        file: file.to_string(),
-        source: e,
-    };
-    let mut lines = reader.lines().enumerate();
-    let mut header: Option<(u64, Vec<String>)> = None;
-    for (i, line) in lines.by_ref() {
-        let line = line.map_err(io)?;
-        let s = line.trim();
-        if s.is_empty() || s.starts_with('#') {
-            continue;
-        }
-        header = Some((
-            i as u64 + 1,
-            s.split(',').map(|f| f.trim().to_string()).collect(),
-        ));
-        break;
-    }
-    let (hline, names) = header.ok_or_else(|| LogError::NoHeader {
-        file: file.to_string(),
-    })?;
-    let find = |name: &str| names.iter().position(|n| n == name);
-    let missing = |role: &'static str, name: &str| LogError::MissingColumn {
-        file: file.to_string(),
-        line: hline,
-        role,
-        name: name.to_string(),
-        header: names.join(","),
-    };
-    let it = find(&columns.t).ok_or_else(|| missing("t", &columns.t))?;
-    let iq = find(&columns.q).ok_or_else(|| missing("q", &columns.q))?;
-    let itau = find(&columns.tau);
-    if itau.is_none() && need_tau {
-        return Err(missing("tau", &columns.tau));
-    }
-    let idq = find(&columns.dq);
-    if idq.is_none() && columns.dq_required {
-        return Err(missing("dq", &columns.dq));
-    }
-    let iddq = find(&columns.ddq);
-    let iload = find(&columns.load);
-    let used: Vec<(usize, &str)> = [
-        Some((it, columns.t.as_str())),
-        Some((iq, columns.q.as_str())),
-        itau.map(|i| (i, columns.tau.as_str())),
-        idq.map(|i| (i, columns.dq.as_str())),
-        iddq.map(|i| (i, columns.ddq.as_str())),
-        iload.map(|i| (i, columns.load.as_str())),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
-    let need = used.iter().map(|u| u.0).max().unwrap_or(0) + 1;
-    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); used.len()];
+    let mut table = CsvTable::new(reader, file)?;
+    let roles = Roles::find(&table, columns, need_tau)?;
+    let picks: Vec<(usize, String)> = roles
+        .read
+        .iter()
+        .map(|&(_, c)| (c, table.names()[c].clone()))
+        .collect();
+    let pick = RowColumns::new(table.names().len(), &picks)?;
+    let mut cols: Vec<Vec<f64>> = vec![Vec::new(); picks.len()];
     let mut data_lines: Vec<u64> = Vec::new();
-    for (i, line) in lines {
-        let line = line.map_err(io)?;
-        let s = line.trim();
-        if s.is_empty() || s.starts_with('#') {
-            continue;
-        }
-        let lno = i as u64 + 1;
-        data_lines.push(lno);
-        let fields: Vec<&str> = s.split(',').map(str::trim).collect();
-        if fields.len() < need {
-            return Err(LogError::RowLength {
+    let mut row = vec![0.0; picks.len()];
+    while let Some(line) = table.next_row(&pick, &mut row)? {
+        if let Some(&previous) = cols[0].last()
+            && row[0] <= previous
+        {
+            return Err(aras_log::LogError::TimeNotIncreasing {
                 file: file.to_string(),
-                line: lno,
-                expected: names.len(),
-                found: fields.len(),
-            });
+                line,
+                column: picks[0].0 + 1,
+                previous,
+                t: row[0],
+            }
+            .into());
         }
-        for (k, &(c, cname)) in used.iter().enumerate() {
-            let text = fields[c];
-            let v: f64 = text.parse().map_err(|_| LogError::NotANumber {
-                file: file.to_string(),
-                line: lno,
-                column: c + 1,
-                name: cname.to_string(),
-                text: text.to_string(),
-            })?;
-            if !v.is_finite() {
-                return Err(LogError::NonFinite {
-                    file: file.to_string(),
-                    line: lno,
-                    column: c + 1,
-                    name: cname.to_string(),
-                    text: text.to_string(),
-                });
-            }
-            if k == 0
-                && let Some(&prev) = cols[0].last()
-                && v <= prev
-            {
-                return Err(LogError::TimeNotIncreasing {
-                    file: file.to_string(),
-                    line: lno,
-                    column: c + 1,
-                    previous: prev,
-                    value: v,
-                });
-            }
-            cols[k].push(v);
+        data_lines.push(line);
+        for (c, v) in cols.iter_mut().zip(&row) {
+            c.push(*v);
         }
     }
     if cols[0].len() < MIN_ROWS {
-        return Err(LogError::TooFewRows {
+        return Err(aras_log::LogError::TooFewRows {
             file: file.to_string(),
-            found: cols[0].len(),
+            rows: cols[0].len(),
             needed: MIN_ROWS,
-        });
+        }
+        .into());
     }
-    let mut it = cols.into_iter();
-    let t = it.next().unwrap_or_default();
-    let q = it.next().unwrap_or_default();
-    let tau = if itau.is_some() { it.next() } else { None };
-    let mut dq_logged = if idq.is_some() { it.next() } else { None };
-    let mut ddq = if iddq.is_some() { it.next() } else { None };
-    let load = if iload.is_some() { it.next() } else { None };
+    let mut take = |role: &str| roles.slot(role).map(|k| std::mem::take(&mut cols[k]));
+    let (t, q) = (take("t").unwrap_or_default(), take("q").unwrap_or_default());
+    let (tau, mut dq_logged, mut ddq, load) = (take("tau"), take("dq"), take("ddq"), take("load"));
     let mut notes = Vec::new();
     if let Some(v) = &dq_logged
         && is_placeholder(&t, &q, v)
@@ -782,6 +697,35 @@ mod tests {
             .to_string();
         assert!(e.contains("column `t`") && e.contains("a,b"), "{e}");
         assert!("t=time,z=3".parse::<ColumnMap>().is_err());
+        // The CSV's own rules are the robot log's: one field per column,
+        // commas between them.
+        let e = read("t,q,dq,tau\n0,0,0,0,5\n", &ColumnMap::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("x.csv:2: the row has 5 fields but the header has 4"),
+            "{e}"
+        );
+        let e = read("t;q;dq;tau\n", &ColumnMap::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("separated by ';'"), "{e}");
+    }
+
+    #[test]
+    fn a_column_serves_one_role() {
+        // `q=dq` reads the position from the column named `dq`; the
+        // velocity, whose default name that is, is derived.
+        let map: ColumnMap = "q=dq".parse().unwrap();
+        let log = read(&rows("t,dq,x,tau,y", 20), &map).unwrap();
+        assert!(log.dq_from_q);
+        assert!((log.q[3] - log.t[3].sin()).abs() < 1e-15);
+        // A required role on a column another role reads is a mapping error.
+        let map: ColumnMap = "t=q".parse().unwrap();
+        let e = read(&rows("a,q,dq,tau,b", 20), &map)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("column `q` is given to both `t` and `q`"), "{e}");
     }
 
     #[test]

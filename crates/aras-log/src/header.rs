@@ -9,6 +9,7 @@ use std::f64::consts::TAU;
 
 use super::sidecar::Sensors;
 use crate::error::LogError;
+use crate::table::{RowColumns, clean};
 
 /// A per-joint column of the format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -216,16 +217,13 @@ impl TorqueSource {
 pub(crate) struct Layout {
     /// Number of joints.
     pub joints: usize,
-    /// Number of fields every row must have.
-    pub fields: usize,
-    /// Column names as written (trimmed).
+    /// Column names as written (cleaned).
     pub names: Vec<String>,
-    /// For each column, the slot it is parsed into, or `None` if ignored.
-    pub slot_of: Vec<Option<usize>>,
+    /// Which columns a row is parsed from, into the slots of
+    /// [`Field::slot`].
+    pub row_columns: RowColumns,
     /// 1-based column of each slot (0 if absent).
     pub column_of: Vec<usize>,
-    /// The standard name of each slot, for messages.
-    pub slot_names: Vec<String>,
     pub angles: AngleSource,
     pub torques: TorqueSource,
     pub has_velocity: bool,
@@ -234,16 +232,6 @@ pub(crate) struct Layout {
     pub notes: Vec<String>,
 }
 
-fn clean(name: &str) -> String {
-    let n = name.trim();
-    let n = n
-        .strip_prefix('"')
-        .and_then(|n| n.strip_suffix('"'))
-        .unwrap_or(n);
-    n.trim().to_ascii_lowercase()
-}
-
-/// `theta1, theta2`, `enc1 … enc7`: the columns of a role, for messages.
 fn columns_of(role: Role, joints: usize) -> String {
     let name = |j: usize| Field::Joint(role, j).name();
     match joints {
@@ -288,54 +276,34 @@ fn per_joint<'a>(
     Ok(v)
 }
 
-impl Layout {
-    /// Resolves a header line against the format; `sensors` are the
-    /// effective constants (sidecar with overrides), `sidecar_name` where the
-    /// sidecar was (for messages), `joints` the expected joint count (`None`:
-    /// as many as the header's highest joint number).
-    pub fn parse(
-        header: &str,
-        file: &str,
-        line: u64,
-        sensors: &Sensors,
-        sidecar_name: &str,
-        columns: &ColumnNames,
+/// The header resolved against the format: which field each column holds
+/// and which slots are read, with what a message about it needs.
+struct Header<'h> {
+    /// Number of joints.
+    n: usize,
+    /// The field of each column (`None`: not a column of the format).
+    fields: Vec<Option<Field>>,
+    /// 1-based column of each slot (0 if absent).
+    column_of: Vec<usize>,
+    /// The slots read.
+    used: Vec<bool>,
+    names: &'h [String],
+    columns: &'h ColumnNames,
+    file: &'h str,
+    line: u64,
+}
+
+impl<'h> Header<'h> {
+    /// The fields of `names`; joints as told, else the highest joint
+    /// number of the header.
+    fn new(
+        names: &'h [String],
+        columns: &'h ColumnNames,
         joints: Option<usize>,
-    ) -> Result<Self, LogError> {
-        if header.contains(';') {
-            return Err(LogError::Semicolon {
-                file: file.into(),
-                line,
-            });
-        }
-        if header.contains('\t') && !header.contains(',') {
-            return Err(LogError::TabSeparated {
-                file: file.into(),
-                line,
-            });
-        }
-        let names: Vec<String> = header.split(',').map(clean).collect();
-        let mut fields = Vec::with_capacity(names.len());
-        for (j, name) in names.iter().enumerate() {
-            if name.is_empty() {
-                return Err(LogError::EmptyColumnName {
-                    file: file.into(),
-                    line,
-                    column: j + 1,
-                });
-            }
-            if let Some(first) = names[..j].iter().position(|n| n == name) {
-                return Err(LogError::DuplicateColumn {
-                    file: file.into(),
-                    line,
-                    column: j + 1,
-                    first: first + 1,
-                    name: name.clone(),
-                });
-            }
-            fields.push(columns.field_of(name));
-        }
-        // Joints: as told, else the highest joint number of the header.
+        file: &'h str,
+        line: u64,
+    ) -> Self {
+        let fields: Vec<Option<Field>> = names.iter().map(|n| columns.field_of(n)).collect();
         let n = joints.unwrap_or_else(|| {
             fields
                 .iter()
@@ -350,194 +318,237 @@ impl Layout {
             .into_iter()
             .map(|f| f.filter(|f| !matches!(f, Field::Joint(_, j) if *j >= n)))
             .collect();
-        let slot_count = slots(n);
-        let mut column_of = vec![0usize; slot_count];
-        let mut extra = Vec::new();
-        for (j, (name, field)) in names.iter().zip(&fields).enumerate() {
-            match field {
-                Some(f) => column_of[f.slot(n)] = j + 1,
-                None => extra.push(name.clone()),
+        let mut column_of = vec![0usize; slots(n)];
+        for (j, field) in fields.iter().enumerate() {
+            if let Some(f) = field {
+                column_of[f.slot(n)] = j + 1;
             }
         }
-        let has = |f: Field| column_of[f.slot(n)] != 0;
-        let header_list = names.join(", ");
-        let missing = |name: &str, hint: &str| LogError::MissingColumn {
-            file: file.into(),
-            line,
-            name: name.into(),
-            header: header_list.clone(),
-            hint: hint.into(),
-        };
-        // A role is given for every joint or for none.
-        let all = |role: Role| -> Result<bool, LogError> {
-            let present: Vec<bool> = (0..n).map(|j| has(Field::Joint(role, j))).collect();
-            match (
-                present.iter().position(|p| *p),
-                present.iter().position(|p| !p),
-            ) {
-                (None, _) => Ok(false),
-                (Some(_), None) => Ok(true),
-                (Some(p), Some(m)) => Err(LogError::UnpairedColumn {
-                    file: file.into(),
-                    line,
-                    present: columns.label(Field::Joint(role, p)),
-                    missing: columns.label(Field::Joint(role, m)),
-                }),
-            }
-        };
-        if !has(Field::T) {
-            return Err(missing(
-                &columns.label(Field::T),
-                "name the time column `t` (seconds), or map yours with columns t=NAME",
-            ));
-        }
-        let mut notes = Vec::new();
-        let mut used = vec![false; slot_count];
+        let mut used = vec![false; slots(n)];
         used[Field::T.slot(n)] = true;
-        let mut use_role = |role: Role| {
-            for j in 0..n {
-                used[Field::Joint(role, j).slot(n)] = true;
-            }
-        };
-        let any = |role: Role| (0..n).any(|j| has(Field::Joint(role, j)));
-        let first_missing = |role: Role| {
-            (0..n)
-                .map(|j| Field::Joint(role, j))
-                .find(|f| !has(*f))
-                .map_or_else(String::new, |f| columns.label(f))
-        };
-
-        let place = Place {
-            joints: n,
+        Self {
+            n,
+            fields,
+            column_of,
+            used,
+            names,
+            columns,
             file,
-            sidecar: sidecar_name,
-        };
+            line,
+        }
+    }
 
-        // Angles: theta columns, else encoder counts.
-        let has_enc = all(Role::Enc)?;
+    fn has(&self, f: Field) -> bool {
+        self.column_of[f.slot(self.n)] != 0
+    }
+
+    fn any(&self, role: Role) -> bool {
+        (0..self.n).any(|j| self.has(Field::Joint(role, j)))
+    }
+
+    /// Whether a role is given; it must be for every joint or for none.
+    fn all(&self, role: Role) -> Result<bool, LogError> {
+        let present: Vec<bool> = (0..self.n)
+            .map(|j| self.has(Field::Joint(role, j)))
+            .collect();
+        match (
+            present.iter().position(|p| *p),
+            present.iter().position(|p| !p),
+        ) {
+            (None, _) => Ok(false),
+            (Some(_), None) => Ok(true),
+            (Some(p), Some(m)) => Err(LogError::UnpairedColumn {
+                file: self.file.into(),
+                line: self.line,
+                present: self.columns.label(Field::Joint(role, p)),
+                missing: self.columns.label(Field::Joint(role, m)),
+            }),
+        }
+    }
+
+    /// The label of the first joint's column of `role` that is missing.
+    fn first_missing(&self, role: Role) -> String {
+        (0..self.n)
+            .map(|j| Field::Joint(role, j))
+            .find(|f| !self.has(*f))
+            .map_or_else(String::new, |f| self.columns.label(f))
+    }
+
+    /// A required column is missing; `hint` says what to give.
+    fn missing(&self, name: &str, hint: &str) -> LogError {
+        LogError::MissingColumn {
+            file: self.file.into(),
+            line: self.line,
+            name: name.into(),
+            header: self.names.join(", "),
+            hint: hint.into(),
+        }
+    }
+
+    /// Marks every joint's slot of `role` as read.
+    fn use_role(&mut self, role: Role) {
+        for j in 0..self.n {
+            self.used[Field::Joint(role, j).slot(self.n)] = true;
+        }
+    }
+
+    /// Angles: `thetaJ` columns, else encoder counts with the sensors'
+    /// counts per revolution and gear ratios.
+    fn angles(
+        &mut self,
+        place: &Place<'_>,
+        sensors: &Sensors,
+        notes: &mut Vec<String>,
+    ) -> Result<AngleSource, LogError> {
+        let n = self.n;
+        let has_enc = self.all(Role::Enc)?;
         let thetas = columns_of(Role::Theta, n);
-        let angles = if any(Role::Theta) {
-            if !all(Role::Theta).unwrap_or(false) {
-                return Err(missing(
-                    &first_missing(Role::Theta),
+        if self.any(Role::Theta) {
+            if !self.all(Role::Theta).unwrap_or(false) {
+                return Err(self.missing(
+                    &self.first_missing(Role::Theta),
                     &format!("give every joint angle {thetas} (rad)"),
                 ));
             }
-            use_role(Role::Theta);
+            self.use_role(Role::Theta);
             if has_enc {
                 notes.push(format!(
                     "columns {} ignored: {thetas} are given",
                     columns_of(Role::Enc, n)
                 ));
             }
-            AngleSource::Theta
+            Ok(AngleSource::Theta)
         } else if has_enc {
             let cpr = per_joint(
                 sensors.counts_per_rev.as_deref(),
                 "counts_per_rev",
                 Role::Enc,
-                &place,
+                place,
             )?;
             let gear = per_joint(
                 sensors.gear_ratios.as_deref(),
                 "gear_ratios",
                 Role::Enc,
-                &place,
+                place,
             )?;
-            use_role(Role::Enc);
+            self.use_role(Role::Enc);
             notes.push(format!(
                 "joint angles from encoder counts: theta = 2π·enc/(counts_per_rev·gear_ratio), \
                  counts_per_rev = {cpr:?}, gear_ratios = {gear:?}"
             ));
-            AngleSource::Encoder {
+            Ok(AngleSource::Encoder {
                 scale: cpr.iter().zip(gear).map(|(c, g)| TAU / (c * g)).collect(),
-            }
+            })
         } else {
-            return Err(missing(
+            Err(self.missing(
                 "theta1",
                 &format!(
                     "give joint angles {thetas} (rad), or encoder counts {} with \
                      sensors.counts_per_rev and sensors.gear_ratios",
                     columns_of(Role::Enc, n)
                 ),
-            ));
-        };
+            ))
+        }
+    }
 
-        // Torques: tau columns, else motor currents.
-        let has_i = all(Role::Current)?;
+    /// Torques: `tauJ` columns, else motor currents with the sensors'
+    /// torque constants and gear ratios.
+    fn torques(
+        &mut self,
+        place: &Place<'_>,
+        sensors: &Sensors,
+        notes: &mut Vec<String>,
+    ) -> Result<TorqueSource, LogError> {
+        let n = self.n;
+        let has_i = self.all(Role::Current)?;
         let taus = columns_of(Role::Tau, n);
         let currents = columns_of(Role::Current, n);
-        let torques = if any(Role::Tau) {
-            if !all(Role::Tau).unwrap_or(false) {
-                return Err(missing(
-                    &first_missing(Role::Tau),
+        if self.any(Role::Tau) {
+            if !self.all(Role::Tau).unwrap_or(false) {
+                return Err(self.missing(
+                    &self.first_missing(Role::Tau),
                     &format!("give every joint torque {taus} (N·m)"),
                 ));
             }
-            use_role(Role::Tau);
+            self.use_role(Role::Tau);
             if has_i {
                 notes.push(format!("columns {currents} ignored: {taus} are given"));
             }
-            TorqueSource::Tau
+            Ok(TorqueSource::Tau)
         } else if has_i {
             let kt = per_joint(
                 sensors.torque_constants.as_deref(),
                 "torque_constants",
                 Role::Current,
-                &place,
+                place,
             )?;
             let gear = per_joint(
                 sensors.gear_ratios.as_deref(),
                 "gear_ratios",
                 Role::Current,
-                &place,
+                place,
             )?;
-            for (i, k) in kt.iter().enumerate() {
-                if *k == 0.0 {
-                    return Err(LogError::SidecarValue {
-                        file: sidecar_name.into(),
-                        key: format!("sensors.torque_constants[{i}]"),
-                        value: "0".into(),
-                        reason: "a zero torque constant turns every current into zero torque: \
-                                 give the motor's constant in N·m/A"
-                            .into(),
-                    });
-                }
+            if let Some(i) = kt.iter().position(|k| *k == 0.0) {
+                return Err(LogError::SidecarValue {
+                    file: place.sidecar.into(),
+                    key: format!("sensors.torque_constants[{i}]"),
+                    value: "0".into(),
+                    reason: "a zero torque constant turns every current into zero torque: \
+                             give the motor's constant in N·m/A"
+                        .into(),
+                });
             }
-            use_role(Role::Current);
+            self.use_role(Role::Current);
             notes.push(format!(
                 "joint torques from motor currents: tau = i·torque_constant·gear_ratio, \
                  torque_constants = {kt:?} N·m/A, gear_ratios = {gear:?}"
             ));
-            TorqueSource::Current {
+            Ok(TorqueSource::Current {
                 scale: kt.iter().zip(gear).map(|(k, g)| k * g).collect(),
-            }
+            })
         } else {
-            return Err(missing(
+            Err(self.missing(
                 "tau1",
                 &format!(
                     "give joint torques {taus} (N·m), or motor currents {currents} with \
                      sensors.torque_constants and sensors.gear_ratios"
                 ),
-            ));
-        };
+            ))
+        }
+    }
 
-        let has_velocity = all(Role::Dtheta)?;
-        let has_acceleration = all(Role::Ddtheta)?;
+    /// The logged derivatives: each role for every joint or none.
+    fn rates(&mut self) -> Result<(bool, bool), LogError> {
+        let has_velocity = self.all(Role::Dtheta)?;
+        let has_acceleration = self.all(Role::Ddtheta)?;
         if has_velocity {
-            use_role(Role::Dtheta);
+            self.use_role(Role::Dtheta);
         }
         if has_acceleration {
-            use_role(Role::Ddtheta);
+            self.use_role(Role::Ddtheta);
         }
-        if !extra.is_empty() {
-            notes.push(format!("extra columns ignored: {}", extra.join(", ")));
-        }
-        let slot_of = fields
+        Ok((has_velocity, has_acceleration))
+    }
+
+    /// The columns that are not of the format, for a note.
+    fn extra(&self) -> Vec<&str> {
+        self.names
             .iter()
-            .map(|f| f.map(|f| f.slot(n)).filter(|&slot| used[slot]))
+            .zip(&self.fields)
+            .filter(|(_, f)| f.is_none())
+            .map(|(name, _)| name.as_str())
+            .collect()
+    }
+
+    /// The columns a row is parsed from: each read field into its slot.
+    fn row_columns(&self) -> RowColumns {
+        let n = self.n;
+        let slot_of = self
+            .fields
+            .iter()
+            .map(|f| f.map(|f| f.slot(n)).filter(|&slot| self.used[slot]))
             .collect();
-        let mut slot_names = vec![String::new(); slot_count];
+        let mut slot_names = vec![String::new(); slots(n)];
         slot_names[0] = Field::T.name();
         for (role, _) in ROLES {
             for j in 0..n {
@@ -545,13 +556,50 @@ impl Layout {
                 slot_names[f.slot(n)] = f.name();
             }
         }
+        RowColumns::from_slots(slot_of, slot_names)
+    }
+}
+
+impl Layout {
+    /// Resolves a header's (cleaned) column names against the format;
+    /// `sensors` are the effective constants (sidecar with overrides),
+    /// `sidecar_name` where the sidecar was (for messages), `joints` the
+    /// expected joint count (`None`: as many as the header's highest joint
+    /// number).
+    pub fn parse(
+        names: &[String],
+        file: &str,
+        line: u64,
+        sensors: &Sensors,
+        sidecar_name: &str,
+        columns: &ColumnNames,
+        joints: Option<usize>,
+    ) -> Result<Self, LogError> {
+        let mut header = Header::new(names, columns, joints, file, line);
+        if !header.has(Field::T) {
+            return Err(header.missing(
+                &columns.label(Field::T),
+                "name the time column `t` (seconds), or map yours with columns t=NAME",
+            ));
+        }
+        let place = Place {
+            joints: header.n,
+            file,
+            sidecar: sidecar_name,
+        };
+        let mut notes = Vec::new();
+        let angles = header.angles(&place, sensors, &mut notes)?;
+        let torques = header.torques(&place, sensors, &mut notes)?;
+        let (has_velocity, has_acceleration) = header.rates()?;
+        let extra = header.extra();
+        if !extra.is_empty() {
+            notes.push(format!("extra columns ignored: {}", extra.join(", ")));
+        }
         Ok(Self {
-            joints: n,
-            fields: names.len(),
-            names,
-            slot_of,
-            column_of,
-            slot_names,
+            joints: header.n,
+            names: names.to_vec(),
+            row_columns: header.row_columns(),
+            column_of: header.column_of,
             angles,
             torques,
             has_velocity,

@@ -29,6 +29,9 @@
 //! The CSV is parsed by a small purpose-built scanner rather than the `csv`
 //! crate: the format is plain numeric, and the scanner gives exact line and
 //! column positions and reads an hour at 1 kHz in a fraction of a second.
+//! It is public as [`CsvTable`] for other numeric CSV formats (one joint's
+//! friction log), so that every CSV of the workspace is read by one set of
+//! rules with one set of messages.
 
 #![warn(missing_docs)]
 
@@ -40,6 +43,7 @@ mod header;
 mod number;
 mod reader;
 mod sidecar;
+mod table;
 pub mod units;
 mod writer;
 
@@ -58,8 +62,9 @@ pub use glitch::{
     TORQUE_FLOOR, apply_glitches, find_glitches,
 };
 pub use header::ColumnNames;
-pub use reader::{Columns, LogReader, LogReport, LogSummary, MAX_MAGNITUDE, RowLines, Timing};
+pub use reader::{Columns, LogReader, LogReport, LogSummary, RowLines, Timing};
 pub use sidecar::{Excitation, FORMAT, FoundSidecar, Sensors, Sidecar, TorqueTiming, find_sidecar};
+pub use table::{CsvTable, MAX_MAGNITUDE, RowColumns};
 pub use writer::{new_temp_file, sidecar_path, write_atomic, write_log};
 
 /// Where to find the JSON sidecar.

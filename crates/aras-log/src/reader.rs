@@ -2,8 +2,7 @@
 //! chunks, so arbitrarily long logs can be consumed in bounded memory.
 
 use std::fs::File;
-use std::io::{ErrorKind, Read};
-use std::ops::Range;
+use std::io::Read;
 use std::path::Path;
 
 use serde::Serialize;
@@ -12,9 +11,9 @@ use super::ReadOptions;
 use super::TimeUnit;
 use super::checks::{Checks, StepDeviation, Warning};
 use super::header::{AngleSource, Field, Layout, Role, TorqueSource, slots};
-use super::number::parse_f64;
 use super::sidecar::Sidecar;
 use crate::error::LogError;
+use crate::table::CsvTable;
 
 /// Rows of a log in SI units, structure-of-arrays.
 ///
@@ -183,80 +182,9 @@ pub struct LogReport {
     pub warnings: Vec<Warning>,
 }
 
-/// Splits the input into lines without copying, growing its buffer only for
-/// lines longer than it.
-struct Lines<R> {
-    src: R,
-    buf: Vec<u8>,
-    start: usize,
-    end: usize,
-    eof: bool,
-    line: u64,
-}
-
-impl<R: Read> Lines<R> {
-    fn new(src: R) -> Self {
-        Self {
-            src,
-            buf: vec![0; 1 << 20],
-            start: 0,
-            end: 0,
-            eof: false,
-            line: 0,
-        }
-    }
-
-    /// The next line (without `\n` or `\r\n`), as a range of `self.buf`.
-    fn next(&mut self) -> std::io::Result<Option<Range<usize>>> {
-        let mut scanned = self.start;
-        loop {
-            if let Some(pos) = find_byte(&self.buf[scanned..self.end], b'\n') {
-                let nl = scanned + pos;
-                let mut stop = nl;
-                if stop > self.start && self.buf[stop - 1] == b'\r' {
-                    stop -= 1;
-                }
-                let r = self.start..stop;
-                self.start = nl + 1;
-                self.line += 1;
-                return Ok(Some(r));
-            }
-            if self.eof {
-                if self.start < self.end {
-                    let mut stop = self.end;
-                    if self.buf[stop - 1] == b'\r' {
-                        stop -= 1;
-                    }
-                    let r = self.start..stop;
-                    self.start = self.end;
-                    self.line += 1;
-                    return Ok(Some(r));
-                }
-                return Ok(None);
-            }
-            let done = self.end - self.start;
-            if self.start > 0 {
-                self.buf.copy_within(self.start..self.end, 0);
-                self.end -= self.start;
-                self.start = 0;
-            }
-            if self.end == self.buf.len() {
-                self.buf.resize(2 * self.buf.len(), 0);
-            }
-            scanned = done;
-            match self.src.read(&mut self.buf[self.end..]) {
-                Ok(0) => self.eof = true,
-                Ok(n) => self.end += n,
-                Err(e) if e.kind() == ErrorKind::Interrupted => {}
-                Err(e) => return Err(e),
-            }
-        }
-    }
-}
-
 /// Where the rows come from: CSV text, or a ROS 2 bag decoded on opening.
 enum Source<R> {
-    Csv(Lines<R>),
+    Csv(CsvTable<R>),
     Bag { rows: Columns, next: usize },
 }
 
@@ -480,40 +408,19 @@ impl<R: Read> LogReader<R> {
             _ => {}
         }
         let sensors = sidecar.sensors.overridden_by(&opts.sensors);
-        let mut lines = Lines::new(src);
-        let io = |source| LogError::Io {
-            file: name.clone(),
-            source,
-        };
+        let table = CsvTable::new(src, &name)?;
         let where_sidecar = sidecar_name
             .clone()
             .unwrap_or_else(|| "(none found: LOG.json next to LOG.csv)".into());
-        let layout = loop {
-            let Some(r) = lines.next().map_err(io)? else {
-                return Err(LogError::NoHeader { file: name });
-            };
-            let mut bytes = &lines.buf[r];
-            if lines.line == 1 && bytes.starts_with(&[0xEF, 0xBB, 0xBF]) {
-                bytes = &bytes[3..];
-            }
-            let text = std::str::from_utf8(bytes).map_err(|_| LogError::NotUtf8 {
-                file: name.clone(),
-                line: lines.line,
-            })?;
-            let trimmed = text.trim();
-            if trimmed.is_empty() || trimmed.starts_with('#') {
-                continue;
-            }
-            break Layout::parse(
-                trimmed,
-                &name,
-                lines.line,
-                &sensors,
-                &where_sidecar,
-                &opts.columns,
-                opts.joints,
-            )?;
-        };
+        let layout = Layout::parse(
+            table.names(),
+            &name,
+            table.header_line(),
+            &sensors,
+            &where_sidecar,
+            &opts.columns,
+            opts.joints,
+        )?;
         let mut notes = layout.notes.clone();
         notes.extend(sidecar_note);
         if opts.sensors != Default::default() {
@@ -525,7 +432,7 @@ impl<R: Read> LogReader<R> {
         let mut layout = layout;
         layout.notes = notes;
         Ok(Self {
-            source: Source::Csv(lines),
+            source: Source::Csv(table),
             name,
             layout,
             sidecar,
@@ -587,7 +494,7 @@ impl<R: Read> LogReader<R> {
     /// Appends up to `max_rows` rows to `out`; returns how many (0 at the
     /// end of the log). Stops at the first defective row with its error.
     pub fn read_rows(&mut self, out: &mut Columns, max_rows: usize) -> Result<usize, LogError> {
-        let Source::Csv(lines) = &mut self.source else {
+        let Source::Csv(table) = &mut self.source else {
             return self.read_bag_rows(out, max_rows);
         };
         let mut count = 0;
@@ -595,20 +502,10 @@ impl<R: Read> LogReader<R> {
         out.resize_joints(n);
         let row = &mut self.row;
         while count < max_rows && !self.done {
-            let Some(r) = lines.next().map_err(|source| LogError::Io {
-                file: self.name.clone(),
-                source,
-            })?
-            else {
+            let Some(line) = table.next_row(&self.layout.row_columns, &mut row.vals)? else {
                 self.done = true;
                 break;
             };
-            let line = lines.line;
-            let bytes = trim(&lines.buf[r]);
-            if bytes.is_empty() || bytes[0] == b'#' {
-                continue;
-            }
-            parse_row(bytes, &self.layout, &self.name, line, &mut row.vals)?;
             let vals = &row.vals;
             let raw_t = vals[0];
             // A clock epoch: subtract the first stamp in the file's own unit
@@ -752,174 +649,5 @@ impl<R: Read> LogReader<R> {
             notes: self.layout.notes,
             warnings,
         })
-    }
-}
-
-/// Position of the first `needle` in `hay`, eight bytes at a time (SWAR):
-/// a byte of `w ^ needle·0x01…01` is zero exactly where `needle` is, and
-/// `(v − 0x01…01) & !v & 0x80…80` flags the first zero byte exactly (borrows
-/// only propagate above it). Logs are scanned twice per byte (newline, then
-/// comma), so this matters for reading speed.
-#[inline]
-fn find_byte(hay: &[u8], needle: u8) -> Option<usize> {
-    const LO: u64 = 0x0101_0101_0101_0101;
-    const HI: u64 = 0x8080_8080_8080_8080;
-    let pattern = LO * u64::from(needle);
-    let mut chunks = hay.chunks_exact(8);
-    let mut offset = 0;
-    for c in &mut chunks {
-        let w = u64::from_le_bytes(c.try_into().expect("8 bytes")) ^ pattern;
-        let found = w.wrapping_sub(LO) & !w & HI;
-        if found != 0 {
-            return Some(offset + (found.trailing_zeros() / 8) as usize);
-        }
-        offset += 8;
-    }
-    chunks
-        .remainder()
-        .iter()
-        .position(|&b| b == needle)
-        .map(|p| offset + p)
-}
-
-/// Fields of a row: `split(',')` with [`find_byte`].
-struct Fields<'a> {
-    rest: Option<&'a [u8]>,
-}
-
-impl<'a> Iterator for Fields<'a> {
-    type Item = &'a [u8];
-
-    #[inline]
-    fn next(&mut self) -> Option<&'a [u8]> {
-        let r = self.rest?;
-        match find_byte(r, b',') {
-            Some(p) => {
-                self.rest = Some(&r[p + 1..]);
-                Some(&r[..p])
-            }
-            None => {
-                self.rest = None;
-                Some(r)
-            }
-        }
-    }
-}
-
-#[inline]
-fn trim(mut b: &[u8]) -> &[u8] {
-    while let [first, rest @ ..] = b {
-        if first.is_ascii_whitespace() {
-            b = rest;
-        } else {
-            break;
-        }
-    }
-    while let [rest @ .., last] = b {
-        if last.is_ascii_whitespace() {
-            b = rest;
-        } else {
-            break;
-        }
-    }
-    b
-}
-
-/// Largest magnitude of a logged value other than time: beyond it a cell is
-/// corrupt (no angle, torque, current, count or derivative of a robot
-/// reaches 10¹²), and such values would overflow the sums of squares of the
-/// identification to infinity far from the cell that caused it. Time stamps
-/// may be clock epochs in ms or ns (≈ 1.7·10¹², 1.7·10¹⁸): only finite.
-pub const MAX_MAGNITUDE: f64 = 1e12;
-
-/// Parses the used fields of one data row into `vals`.
-#[inline]
-fn parse_row(
-    bytes: &[u8],
-    layout: &Layout,
-    file: &str,
-    line: u64,
-    vals: &mut [f64],
-) -> Result<(), LogError> {
-    let mut found = 0;
-    for (j, field) in (Fields { rest: Some(bytes) }).enumerate() {
-        found = j + 1;
-        if j >= layout.fields {
-            continue;
-        }
-        let Some(slot) = layout.slot_of[j] else {
-            continue;
-        };
-        let f = trim(field);
-        match parse_f64(f) {
-            // Time may be a clock epoch in ms or ns (1.7e12, 1.7e18): its
-            // offset is removed later; the magnitude limit is for values.
-            Some(v) if v.abs() <= MAX_MAGNITUDE || (slot == 0 && v.is_finite()) => vals[slot] = v,
-            Some(v) if v.is_finite() => {
-                return Err(LogError::OutOfRange {
-                    file: file.into(),
-                    line,
-                    column: j + 1,
-                    name: layout.slot_names[slot].clone(),
-                    text: String::from_utf8_lossy(f).into_owned(),
-                    limit: MAX_MAGNITUDE,
-                });
-            }
-            Some(_) => {
-                return Err(LogError::NonFinite {
-                    file: file.into(),
-                    line,
-                    column: j + 1,
-                    name: layout.slot_names[slot].clone(),
-                    text: String::from_utf8_lossy(f).into_owned(),
-                });
-            }
-            None => {
-                let hint = if f.contains(&b';') {
-                    ": the separator must be ',' not ';'"
-                } else if f.is_empty() {
-                    ": the field is empty; every row needs a value in every column"
-                } else {
-                    ""
-                };
-                return Err(LogError::NotANumber {
-                    file: file.into(),
-                    line,
-                    column: j + 1,
-                    name: layout.slot_names[slot].clone(),
-                    text: String::from_utf8_lossy(f).into_owned(),
-                    hint: hint.into(),
-                });
-            }
-        }
-    }
-    if found != layout.fields {
-        return Err(LogError::FieldCount {
-            file: file.into(),
-            line,
-            expected: layout.fields,
-            found,
-        });
-    }
-    Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use proptest::prelude::*;
-
-    proptest! {
-        #[test]
-        fn find_byte_equals_position(hay in proptest::collection::vec(any::<u8>(), 0..40), needle in any::<u8>()) {
-            prop_assert_eq!(find_byte(&hay, needle), hay.iter().position(|&b| b == needle));
-        }
-
-        #[test]
-        fn fields_equal_split(hay in proptest::collection::vec(prop_oneof![Just(b','), Just(b'1'), any::<u8>()], 0..40)) {
-            let ours: Vec<&[u8]> = (Fields { rest: Some(&hay) }).collect();
-            let std: Vec<&[u8]> = hay.split(|&b| b == b',').collect();
-            prop_assert_eq!(ours, std);
-        }
     }
 }
