@@ -597,18 +597,26 @@ pub(crate) fn read_joints(
     stamps: Stamps,
     wanted: Wanted<'_>,
 ) -> Result<JointRows, LogError> {
-    let bag_err = |e: mcap::McapError| LogError::Bag {
-        file: file.into(),
-        reason: e.to_string(),
-    };
-    check_chunk_sizes(bytes).map_err(|reason| LogError::Bag {
+    let bag_err = |reason: String| LogError::Bag {
         file: file.into(),
         reason,
-    })?;
-    // Pass 1: the topics and their message counts.
+    };
+    check_chunk_sizes(bytes).map_err(bag_err)?;
+    let all = messages(bytes).map_err(|e| bag_err(e.to_string()))?;
+    let topics = topic_infos(&all);
+    let topic = choose_topic(&topics, topic, file)?;
+    let mut rows = TopicRows::new(file, topic.clone(), stamps, &wanted);
+    for msg in all.iter().filter(|m| m.topic == topic) {
+        rows.message(msg)?;
+    }
+    Ok(rows.finish(&topics))
+}
+
+/// Pass 1: the bag's topics and their message counts.
+#[cfg(feature = "bags")]
+fn topic_infos(all: &[BagMessage]) -> BTreeMap<String, TopicInfo> {
     let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
-    let all = messages(bytes).map_err(bag_err)?;
-    for m in &all {
+    for m in all {
         let info = topics.entry(m.topic.clone()).or_insert_with(|| TopicInfo {
             schema: m.schema.clone(),
             encoding: m.encoding.clone(),
@@ -616,10 +624,21 @@ pub(crate) fn read_joints(
         });
         info.messages += 1;
     }
+    topics
+}
+
+/// The `JointState` topic to read: the one asked for, else the bag's only
+/// one; it must be CDR-encoded.
+#[cfg(feature = "bags")]
+fn choose_topic(
+    topics: &BTreeMap<String, TopicInfo>,
+    topic: Option<&str>,
+    file: &str,
+) -> Result<String, LogError> {
     let topic_err = |problem: String| LogError::BagTopic {
         file: file.into(),
         problem,
-        topics: topic_list(&topics, false),
+        topics: topic_list(topics, false),
     };
     let topic = match topic {
         Some(t) => match topics.get(t) {
@@ -649,7 +668,7 @@ pub(crate) fn read_joints(
                              (BagOptions::topic)",
                             js.len()
                         ),
-                        topics: topic_list(&topics, true),
+                        topics: topic_list(topics, true),
                     });
                 }
             }
@@ -662,254 +681,338 @@ pub(crate) fn read_joints(
             info.encoding
         )));
     }
-    // Pass 2: decode the topic's messages.
-    let mut count = wanted
-        .names
-        .as_ref()
-        .map_or(wanted.count, |n| Some(n.len()));
-    let mut t_out = Vec::new();
-    let mut pos_out = vec![Vec::new(); count.unwrap_or(0)];
-    let mut vel_out = vec![Vec::new(); count.unwrap_or(0)];
-    let mut eff_out = vec![Vec::new(); count.unwrap_or(0)];
-    let mut has_velocity = true;
-    let mut notes = Vec::new();
-    let mut joints = wanted.names.clone();
-    let mut first_ns: Option<i64> = None;
-    let mut prev_ns = 0i64;
-    let mut steps: Vec<i64> = Vec::new();
-    let mut latency: Option<[i64; 2]> = None;
-    let mut extra: Vec<String> = Vec::new();
-    let mut number = 0u64;
-    for msg in &all {
-        if msg.topic != topic {
-            continue;
-        }
-        number += 1;
-        let at = |problem: String| LogError::BagMessage {
+    Ok(topic)
+}
+
+/// Pass 2: the chosen joints' rows decoded from the topic's messages, one
+/// message at a time, with what the notes report about them.
+#[cfg(feature = "bags")]
+struct TopicRows<'w> {
+    file: String,
+    topic: String,
+    stamps: Stamps,
+    wanted: &'w Wanted<'w>,
+    /// Joints expected before the first message fixes them.
+    count: Option<usize>,
+    /// The joints read, by name (`None` until the first message when not
+    /// given).
+    joints: Option<Vec<String>>,
+    t: Vec<f64>,
+    position: Vec<Vec<f64>>,
+    velocity: Vec<Vec<f64>>,
+    effort: Vec<Vec<f64>>,
+    /// True while every message has every joint's velocity.
+    has_velocity: bool,
+    notes: Vec<String>,
+    /// The first message's time and the previous one's (ns).
+    first_ns: Option<i64>,
+    prev_ns: i64,
+    /// Steps between messages (ns), for the rate note.
+    steps: Vec<i64>,
+    /// Range of the log time's lag behind `header.stamp` (ns).
+    latency: Option<[i64; 2]>,
+    /// Joints in the messages that are not read.
+    extra: Vec<String>,
+    /// The current message's number on the topic (1-based).
+    number: u64,
+}
+
+#[cfg(feature = "bags")]
+impl<'w> TopicRows<'w> {
+    fn new(file: &str, topic: String, stamps: Stamps, wanted: &'w Wanted<'w>) -> Self {
+        let count = wanted
+            .names
+            .as_ref()
+            .map_or(wanted.count, |n| Some(n.len()));
+        let columns = vec![Vec::new(); count.unwrap_or(0)];
+        Self {
             file: file.into(),
-            topic: topic.clone(),
-            message: number,
+            topic,
+            stamps,
+            wanted,
+            count,
+            joints: wanted.names.clone(),
+            t: Vec::new(),
+            position: columns.clone(),
+            velocity: columns.clone(),
+            effort: columns,
+            has_velocity: true,
+            notes: Vec::new(),
+            first_ns: None,
+            prev_ns: 0,
+            steps: Vec::new(),
+            latency: None,
+            extra: Vec::new(),
+            number: 0,
+        }
+    }
+
+    /// An error about the current message.
+    fn at(&self, problem: String) -> LogError {
+        LogError::BagMessage {
+            file: self.file.clone(),
+            topic: self.topic.clone(),
+            message: self.number,
             problem,
-        };
+        }
+    }
+
+    /// Decodes one message of the topic into a row.
+    fn message(&mut self, msg: &BagMessage) -> Result<(), LogError> {
+        self.number += 1;
         let mut state = JointState::default();
-        decode(&msg.data, &mut state).map_err(&at)?;
+        decode(&msg.data, &mut state).map_err(|p| self.at(p))?;
         let stamp_ns = i64::from(state.sec) * 1_000_000_000 + i64::from(state.nanosec);
         let log_ns = i64::try_from(msg.log_time).unwrap_or(i64::MAX);
-        let ns = match stamps {
+        let ns = match self.stamps {
             Stamps::Header => stamp_ns,
             Stamps::Log => log_ns,
         };
-        let names = &state.names;
-        if joints.is_none() {
-            if count.is_some_and(|c| names.len() != c) || names.is_empty() {
-                return Err(LogError::BagJoints {
-                    file: file.into(),
-                    topic: topic.clone(),
-                    problem: format!(
-                        "the first message names {} joints ({}): say which {} with {}",
-                        names.len(),
-                        names.join(", "),
-                        wanted.which,
-                        wanted.flag
-                    ),
-                });
-            }
-            let c = names.len();
-            count = Some(c);
-            for out in [&mut pos_out, &mut vel_out, &mut eff_out] {
-                out.resize(c, Vec::new());
-            }
-            let roles: Vec<String> = names
-                .iter()
-                .enumerate()
-                .map(|(k, n)| format!("{} = joint `{n}`", (wanted.role)(k)))
-                .collect();
-            notes.push(format!(
-                "{}: {} (choose with {})",
-                roles.join(", "),
-                match c {
-                    1 => "the only joint of the first message".to_string(),
-                    2 => "the two joints in the order of the first message".to_string(),
-                    n => format!("the {n} joints in the order of the first message"),
-                },
-                wanted.flag
-            ));
-            joints = Some(names.iter().map(|n| n.to_string()).collect());
+        if self.joints.is_none() {
+            self.first_joints(&state.names)?;
         }
-        let Some(chosen) = joints.as_ref() else {
-            continue;
+        let Some(index) = self.indices(&state.names)? else {
+            return Ok(());
         };
-        let count = chosen.len();
-        let mut index = vec![0usize; count];
+        self.check_lengths(&state)?;
+        let t = self.time(ns, stamp_ns)?;
+        self.prev_ns = ns;
+        if self.stamps == Stamps::Header {
+            let d = log_ns.saturating_sub(stamp_ns);
+            self.latency = Some(
+                self.latency
+                    .map_or([d, d], |[lo, hi]| [lo.min(d), hi.max(d)]),
+            );
+        }
+        self.t.push(t);
+        for (k, &i) in index.iter().enumerate() {
+            let p = self.value(&state.position, i, k, "position")?;
+            self.position[k].push(p);
+            let e = self.value(&state.effort, i, k, "effort")?;
+            self.effort[k].push(e);
+            if self.has_velocity {
+                let v = self.value(&state.velocity, i, k, "velocity")?;
+                self.velocity[k].push(v);
+            }
+        }
+        Ok(())
+    }
+
+    /// No joints named: the first message's, if it names as many as
+    /// wanted, in its order (with a note).
+    fn first_joints(&mut self, names: &[&str]) -> Result<(), LogError> {
+        let wanted = self.wanted;
+        if self.count.is_some_and(|c| names.len() != c) || names.is_empty() {
+            return Err(LogError::BagJoints {
+                file: self.file.clone(),
+                topic: self.topic.clone(),
+                problem: format!(
+                    "the first message names {} joints ({}): say which {} with {}",
+                    names.len(),
+                    names.join(", "),
+                    wanted.which,
+                    wanted.flag
+                ),
+            });
+        }
+        let c = names.len();
+        self.count = Some(c);
+        for out in [&mut self.position, &mut self.velocity, &mut self.effort] {
+            out.resize(c, Vec::new());
+        }
+        let roles: Vec<String> = names
+            .iter()
+            .enumerate()
+            .map(|(k, n)| format!("{} = joint `{n}`", (wanted.role)(k)))
+            .collect();
+        self.notes.push(format!(
+            "{}: {} (choose with {})",
+            roles.join(", "),
+            match c {
+                1 => "the only joint of the first message".to_string(),
+                2 => "the two joints in the order of the first message".to_string(),
+                n => format!("the {n} joints in the order of the first message"),
+            },
+            wanted.flag
+        ));
+        self.joints = Some(names.iter().map(|n| n.to_string()).collect());
+        Ok(())
+    }
+
+    /// Where each chosen joint is in this message's arrays; the joints it
+    /// names beyond them are noted.
+    fn indices(&mut self, names: &[&str]) -> Result<Option<Vec<usize>>, LogError> {
+        let Some(chosen) = self.joints.as_ref() else {
+            return Ok(None);
+        };
+        let mut index = vec![0usize; chosen.len()];
         for (k, j) in chosen.iter().enumerate() {
             index[k] = names.iter().position(|n| *n == j.as_str()).ok_or_else(|| {
-                at(format!(
+                self.at(format!(
                     "joint `{j}` ({}) is not in the message, which names: {}; check {}",
-                    (wanted.role)(k),
+                    (self.wanted.role)(k),
                     if names.is_empty() {
                         "no joints".to_string()
                     } else {
                         names.join(", ")
                     },
-                    wanted.flag
+                    self.wanted.flag
                 ))
             })?;
         }
         for n in names {
-            if !chosen.iter().any(|c| c == n) && !extra.iter().any(|e| e == n) {
-                extra.push(n.to_string());
+            if !chosen.iter().any(|c| c == n) && !self.extra.iter().any(|e| e == n) {
+                self.extra.push(n.to_string());
             }
         }
-        if state.position.len() != names.len() {
-            return Err(at(format!(
-                "it names {} joints but has {} positions: each joint needs its position",
-                names.len(),
+        Ok(Some(index))
+    }
+
+    /// Every joint needs its position and effort; a message without every
+    /// velocity turns the velocities off for the log.
+    fn check_lengths(&mut self, state: &JointState<'_>) -> Result<(), LogError> {
+        let n = state.names.len();
+        if state.position.len() != n {
+            return Err(self.at(format!(
+                "it names {n} joints but has {} positions: each joint needs its position",
                 state.position.len()
             )));
         }
         if state.effort.is_empty() {
-            return Err(at(format!(
+            return Err(self.at(format!(
                 "it has no effort: aras needs the joint torques (N·m); record effort in the \
                  {JOINT_STATE} messages (the joint driver's measured torque), or give a CSV log \
                  with tau1, tau2"
             )));
         }
-        if state.effort.len() != names.len() {
-            return Err(at(format!(
-                "it names {} joints but has {} efforts: each joint needs its effort",
-                names.len(),
+        if state.effort.len() != n {
+            return Err(self.at(format!(
+                "it names {n} joints but has {} efforts: each joint needs its effort",
                 state.effort.len()
             )));
         }
-        if has_velocity && state.velocity.len() != names.len() {
-            has_velocity = false;
-            if number > 1 {
-                notes.push(format!(
-                    "message {number} has no velocity for every joint: joint rates are computed \
-                     from the angles"
+        if self.has_velocity && state.velocity.len() != n {
+            self.has_velocity = false;
+            if self.number > 1 {
+                self.notes.push(format!(
+                    "message {} has no velocity for every joint: joint rates are computed \
+                     from the angles",
+                    self.number
                 ));
             }
         }
-        let t = match first_ns {
-            None => {
-                first_ns = Some(ns);
-                0.0
-            }
-            Some(ns0) => {
-                if ns <= prev_ns {
-                    let hint = match stamps {
-                        Stamps::Header if stamp_ns == 0 => {
-                            "header.stamp is zero: the driver does not fill it; read the bag's \
-                             log time instead with --stamps log (BagOptions::stamps)"
-                        }
-                        Stamps::Header => {
-                            "the driver's stamps go backwards or repeat; if they are unreliable, \
-                             read the bag's log time with --stamps log"
-                        }
-                        Stamps::Log => "the bag's log time goes backwards or repeats",
-                    };
-                    return Err(at(format!(
-                        "its time {} s does not follow the previous message's {} s: {hint}",
-                        (ns - ns0) as f64 / 1e9,
-                        (prev_ns - ns0) as f64 / 1e9
-                    )));
+        Ok(())
+    }
+
+    /// The message's time (s) from the first message's; it must increase.
+    fn time(&mut self, ns: i64, stamp_ns: i64) -> Result<f64, LogError> {
+        let Some(ns0) = self.first_ns else {
+            self.first_ns = Some(ns);
+            return Ok(0.0);
+        };
+        if ns <= self.prev_ns {
+            let hint = match self.stamps {
+                Stamps::Header if stamp_ns == 0 => {
+                    "header.stamp is zero: the driver does not fill it; read the bag's \
+                     log time instead with --stamps log (BagOptions::stamps)"
                 }
-                steps.push(ns - prev_ns);
-                (ns - ns0) as f64 / 1e9
+                Stamps::Header => {
+                    "the driver's stamps go backwards or repeat; if they are unreliable, \
+                     read the bag's log time with --stamps log"
+                }
+                Stamps::Log => "the bag's log time goes backwards or repeats",
+            };
+            return Err(self.at(format!(
+                "its time {} s does not follow the previous message's {} s: {hint}",
+                (ns - ns0) as f64 / 1e9,
+                (self.prev_ns - ns0) as f64 / 1e9
+            )));
+        }
+        self.steps.push(ns - self.prev_ns);
+        Ok((ns - ns0) as f64 / 1e9)
+    }
+
+    /// Joint `k`'s value at index `i` of `v`, which must be finite.
+    fn value(&self, v: &[f64], i: usize, k: usize, field: &str) -> Result<f64, LogError> {
+        let x = v[i];
+        if x.is_finite() {
+            return Ok(x);
+        }
+        let joint = self.joints.as_ref().map_or("", |j| j[k].as_str());
+        Err(self.at(format!(
+            "{field} of joint `{joint}` is {x}: logs must hold finite numbers only (drop the \
+             message or repair the recording)"
+        )))
+    }
+
+    /// The rows, with the notes: the topic and time origin first, then the
+    /// message rate, the log time's lag, the joints and topics ignored.
+    fn finish(mut self, topics: &BTreeMap<String, TopicInfo>) -> JointRows {
+        let origin = self.first_ns.map_or(0.0, |n| n as f64 / 1e9);
+        let time = match self.stamps {
+            Stamps::Header => format!("t = 0 at the first message's header.stamp ({origin} s)"),
+            Stamps::Log => {
+                format!("t = 0 at the first message's log time ({origin} s; --stamps log)")
             }
         };
-        prev_ns = ns;
-        if stamps == Stamps::Header {
-            let d = log_ns.saturating_sub(stamp_ns);
-            latency = Some(latency.map_or([d, d], |[lo, hi]| [lo.min(d), hi.max(d)]));
+        self.notes.insert(
+            0,
+            format!(
+                "ROS 2 bag: topic {}, {} {JOINT_STATE} messages; {time}{}",
+                self.topic,
+                self.number,
+                if self.has_velocity {
+                    "; joint rates from velocity"
+                } else {
+                    ""
+                }
+            ),
+        );
+        if !self.steps.is_empty() {
+            let mut sorted = self.steps.clone();
+            sorted.sort_unstable();
+            let median = sorted[sorted.len() / 2];
+            let (lo, hi) = (sorted[0], sorted[sorted.len() - 1]);
+            self.notes.push(format!(
+                "message rate {} Hz (median step {} ms; steps {}–{} ms, i.e. {}–{} Hz)",
+                crate::error::sig(1e9 / median as f64),
+                ms(median),
+                ms(lo),
+                ms(hi),
+                crate::error::sig(1e9 / hi as f64),
+                crate::error::sig(1e9 / lo as f64),
+            ));
         }
-        let value = |v: &[f64], k: usize, field: &str| {
-            let x = v[index[k]];
-            if x.is_finite() {
-                Ok(x)
-            } else {
-                Err(at(format!(
-                    "{field} of joint `{}` is {x}: logs must hold finite numbers only (drop the \
-                     message or repair the recording)",
-                    chosen[k]
-                )))
-            }
-        };
-        t_out.push(t);
-        for k in 0..count {
-            pos_out[k].push(value(&state.position, k, "position")?);
-            eff_out[k].push(value(&state.effort, k, "effort")?);
-            if has_velocity {
-                vel_out[k].push(value(&state.velocity, k, "velocity")?);
-            }
+        if let Some([lo, hi]) = self.latency {
+            self.notes.push(format!(
+                "the bag's log time trails header.stamp by {}–{} ms",
+                ms(lo),
+                ms(hi)
+            ));
+        }
+        if !self.extra.is_empty() {
+            self.notes
+                .push(format!("joints ignored: {}", self.extra.join(", ")));
+        }
+        let others: Vec<&str> = topics
+            .keys()
+            .map(String::as_str)
+            .filter(|t| *t != self.topic)
+            .collect();
+        if !others.is_empty() {
+            self.notes
+                .push(format!("other topics ignored: {}", others.join(", ")));
+        }
+        JointRows {
+            t: self.t,
+            position: self.position,
+            velocity: self.has_velocity.then_some(self.velocity),
+            effort: self.effort,
+            topic: self.topic,
+            joints: self.joints.unwrap_or_default(),
+            notes: self.notes,
         }
     }
-    let time = match stamps {
-        Stamps::Header => format!(
-            "t = 0 at the first message's header.stamp ({} s)",
-            first_ns.map_or(0.0, |n| n as f64 / 1e9)
-        ),
-        Stamps::Log => format!(
-            "t = 0 at the first message's log time ({} s; --stamps log)",
-            first_ns.map_or(0.0, |n| n as f64 / 1e9)
-        ),
-    };
-    notes.insert(
-        0,
-        format!(
-            "ROS 2 bag: topic {topic}, {number} {JOINT_STATE} messages; {time}{}",
-            if has_velocity {
-                "; joint rates from velocity"
-            } else {
-                ""
-            }
-        ),
-    );
-    if !steps.is_empty() {
-        let mut sorted = steps.clone();
-        sorted.sort_unstable();
-        let median = sorted[sorted.len() / 2];
-        let (lo, hi) = (sorted[0], sorted[sorted.len() - 1]);
-        notes.push(format!(
-            "message rate {} Hz (median step {} ms; steps {}–{} ms, i.e. {}–{} Hz)",
-            crate::error::sig(1e9 / median as f64),
-            ms(median),
-            ms(lo),
-            ms(hi),
-            crate::error::sig(1e9 / hi as f64),
-            crate::error::sig(1e9 / lo as f64),
-        ));
-    }
-    if let Some([lo, hi]) = latency {
-        notes.push(format!(
-            "the bag's log time trails header.stamp by {}–{} ms",
-            ms(lo),
-            ms(hi)
-        ));
-    }
-    if !extra.is_empty() {
-        notes.push(format!("joints ignored: {}", extra.join(", ")));
-    }
-    let others: Vec<&String> = topics.keys().filter(|t| **t != topic).collect();
-    if !others.is_empty() {
-        notes.push(format!(
-            "other topics ignored: {}",
-            others
-                .iter()
-                .map(|t| t.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
-    }
-    Ok(JointRows {
-        t: t_out,
-        position: pos_out,
-        velocity: has_velocity.then_some(vel_out),
-        effort: eff_out,
-        topic,
-        joints: joints.unwrap_or_default(),
-        notes,
-    })
 }
 
 #[cfg(test)]
