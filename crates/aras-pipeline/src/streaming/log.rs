@@ -534,18 +534,15 @@ where
         None => WidthRefinement::not_refined(),
     };
     let refined = crate::friction_width::with_widths(job.model, refinement.widths())?;
-    out.used = accumulate_processed(
-        &log,
-        &popts,
-        job.options,
-        &refined,
-        job.base,
-        acc,
-        None,
-        out,
-        &mut None,
-        refinement.joints.map(|j| j.all_rows),
-    )?;
+    let job = Job {
+        model: &refined,
+        ..job
+    };
+    let rows = BlockRows {
+        window: None,
+        all_rows: refinement.joints.map(|j| j.all_rows),
+    };
+    out.used = accumulate_processed(&log, &popts, job, acc, rows, out, &mut None)?;
     Ok(refinement)
 }
 
@@ -574,18 +571,7 @@ where
             Ok(overlap(p, dt, job.options.overlap_tolerance)?
                 + reach_of(p, dt, job.options.reversal_reach)?)
         },
-        |pending, popts| {
-            process_blocks(
-                pending,
-                popts,
-                job.options,
-                job.model,
-                job.base,
-                acc,
-                out,
-                &mut spares,
-            )
-        },
+        |pending, popts| process_blocks(pending, popts, job, acc, out, &mut spares),
     )?;
     out.overlap = margin;
     out.read = rows;
@@ -875,7 +861,6 @@ type Block = (Log, (usize, usize, usize));
 /// bandwidth is fixed from the first block's angle spectrum
 /// (`aras_signal::spectrum_cutoff`), so every block uses the same filter;
 /// `popts` holds it afterwards. Returns the margin and the rows read.
-#[allow(clippy::too_many_arguments)]
 fn overlapping_blocks(
     name: &str,
     reader: &mut LogReader<std::fs::File>,
@@ -912,7 +897,6 @@ fn overlapping_blocks(
 
 /// The reading half of [`overlapping_blocks`]: hands each batch of blocks to
 /// `send`, which says whether to go on.
-#[allow(clippy::too_many_arguments)]
 fn read_blocks(
     name: &str,
     reader: &mut LogReader<std::fs::File>,
@@ -1010,13 +994,10 @@ const BLOCKS_IN_FLIGHT: usize = 2;
 /// Processes the `pending` blocks in parallel, each into its own
 /// accumulator (stacking into its lane's spare matrix, which it hands back),
 /// and merges them into `acc` and `out` in block order.
-#[allow(clippy::too_many_arguments)]
 fn process_blocks(
-    pending: &mut Vec<(Log, (usize, usize, usize))>,
+    pending: &mut Vec<Block>,
     popts: &ProcessOptions,
-    options: &StreamingOptions,
-    model: &Model,
-    base: &BaseParameters,
+    job: Job<'_>,
     acc: &mut QrAccumulator,
     out: &mut Progress,
     spares: &mut [Option<Mat<f64>>; BLOCKS_IN_FLIGHT],
@@ -1032,19 +1013,12 @@ fn process_blocks(
                     gain: out.gain,
                     ..Progress::default()
                 };
-                let used = accumulate_processed(
-                    log,
-                    popts,
-                    options,
-                    model,
-                    base,
-                    &mut a,
-                    Some(*window),
-                    &mut p,
-                    spare,
-                    [false; 2],
-                )
-                .map_err(PipelineError::into_ident)?;
+                let rows = BlockRows {
+                    window: Some(*window),
+                    all_rows: [false; 2],
+                };
+                let used = accumulate_processed(log, popts, job, &mut a, rows, &mut p, spare)
+                    .map_err(PipelineError::into_ident)?;
                 Ok((a, p, used))
             },
         )
@@ -1197,33 +1171,40 @@ fn block_log(name: &str, c: &Columns, dt: f64, sidecar: Sidecar) -> Log {
     }
 }
 
+/// Which rows of a processed record [`accumulate_processed`] pushes.
+#[derive(Debug, Clone, Copy)]
+struct BlockRows {
+    /// The samples with global indices in `done..keep_end`, as
+    /// `(first index of the record, done, keep_end)`; every sample if `None`.
+    window: Option<(usize, usize, usize)>,
+    /// Per joint, every row (a joint fitted on every row) instead of those
+    /// the reversal exclusion keeps.
+    all_rows: [bool; 2],
+}
+
 /// Processes `log` as in memory (process → stack → filter → reversal
-/// exclusion → base columns) and pushes the kept rows of the samples with
-/// global indices in `done..keep_end` (`window = (first index of log, done,
-/// keep_end)`; all rows if `None`). Returns the samples in the window;
-/// sets `gain` (the filter's noise gain) on the first call. Stacks into
-/// `spare` when it has the block's shape and leaves the block's matrix
-/// there for the next block.
-#[allow(clippy::too_many_arguments)]
+/// exclusion → base columns) and pushes the kept rows of the samples
+/// `rows` chooses. Returns the samples in the window; sets `gain` (the
+/// filter's noise gain) on the first call. Stacks into `spare` when it has
+/// the block's shape and leaves the block's matrix there for the next
+/// block.
 fn accumulate_processed(
     log: &Log,
     popts: &ProcessOptions,
-    options: &StreamingOptions,
-    model: &Model,
-    base: &BaseParameters,
+    job: Job<'_>,
     acc: &mut QrAccumulator,
-    window: Option<(usize, usize, usize)>,
+    rows: BlockRows,
     out: &mut Progress,
     spare: &mut Option<Mat<f64>>,
-    all_rows: [bool; 2],
 ) -> Result<usize, PipelineError> {
+    let options = job.options;
     let mut block = prepare_block_rows(
         log,
         popts,
-        model,
+        job.model,
         &options.geometry,
         options.filter_mode,
-        RegressorColumns::Base(base),
+        RegressorColumns::Base(job.base),
         (options.min_speed, options.reversal_reach),
         spare.take(),
     )?;
@@ -1231,8 +1212,8 @@ fn accumulate_processed(
     if out.gain.is_none() {
         out.gain = block.noise_gain;
     }
-    keep_every_row(&mut block.keep, all_rows);
-    let Range { start: i0, end: i1 } = window.map_or(0..n, |w| kept_range(w, log.len(), n));
+    keep_every_row(&mut block.keep, rows.all_rows);
+    let Range { start: i0, end: i1 } = rows.window.map_or(0..n, |w| kept_range(w, log.len(), n));
     if i1 == i0 {
         *spare = Some(block.stacked.w);
         return Ok(0);
