@@ -838,7 +838,6 @@ impl<M: DiagnosisModel> Context<'_, M> {
     /// The prediction of the selected model `fit` (coefficients `beta`,
     /// candidates `used`) on joint `g`'s rows `a..b` of a window starting
     /// at record sample `wl` with `nw` samples.
-    #[allow(clippy::too_many_arguments)]
     fn predict_rows(
         &self,
         (beta, used): (&[f64], &[usize]),

@@ -683,7 +683,6 @@ fn scale_motion(cons: &GridConstraints, p: &mut [f64], s: f64) {
 
 /// One start: ALM/PANOC from `p`, then exact repair onto the tightened
 /// bounds (and into the pose constraint).
-#[allow(clippy::too_many_arguments)]
 fn run_start<R: Regressor, C: PoseConstraint, D: Dim>(
     regressor: &R,
     projection: &DMatrix<f64>,
