@@ -29,7 +29,11 @@ use crate::fourier::Fourier;
 use crate::{BandLimit, Butterworth, HarmonicBand, Sos};
 use aras_log::{Log, Warning};
 
+mod run;
 mod stages;
+
+use run::Run;
+use stages::{BandChoice, PeriodChoice};
 
 /// Low-pass filter settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -564,267 +568,50 @@ pub fn process_in<D: Dim>(
 where
     DefaultAllocator: Allocator<D>,
 {
-    let nj = log.joints();
-    if let Some(expected) = D::try_to_usize()
-        && expected != nj
-    {
-        return Err(ProcessError::Joints {
-            log: log.name.clone(),
-            joints: nj,
-            expected,
-        });
-    }
-    let dt = log.summary.nominal_step_s;
-    let fs = 1.0 / dt;
-    let mut notes = log.notes.clone();
-    let mut warnings = log.warnings.clone();
-    if !(opts.max_period_spread.is_finite() && opts.max_period_spread > 0.0) {
-        return Err(ProcessError::InvalidOption {
-            name: "max_period_spread",
-            value: opts.max_period_spread.to_string(),
-            reason: "give a positive relative RMS such as 0.1".into(),
-        });
-    }
-    let logged_vel = opts
-        .use_logged_derivatives
-        .then_some(log.theta_dot.as_ref())
-        .flatten();
-    let logged_acc = logged_vel.and(log.theta_ddot.as_ref());
-    if let Some(v) = logged_vel {
-        check_logged_derivatives(log, v, logged_acc)?;
-    }
-    if !opts.use_logged_derivatives && (log.theta_dot.is_some() || log.theta_ddot.is_some()) {
-        notes.push(
-            "logged derivative columns ignored; θ̇, θ̈ differentiated from θ \
-             (ProcessOptions::use_logged_derivatives)"
-                .into(),
-        );
-    }
-    let every_row = opts.rows == OutputRows::EveryRow;
-    // Held torques act over [t_k, t_k+1): the motion estimated from the
-    // angles (band-limited, so it averages the steps around t_k) balances
-    // τ_k at the hold's midpoint (`aras_log::TorqueTiming`). Logged
-    // derivatives are the instantaneous motion at t_k, which the torque held
-    // from t_k balances as it is: they are not moved.
-    let shift = if logged_vel.is_some() {
-        0.0
-    } else {
-        log.torque_timing().offset_steps()
-    };
-
+    let mut run = Run::new(log, opts, D::try_to_usize())?;
     // Logged derivatives, every row: the log as it is.
-    if let (Some(v), Some(a), true) = (logged_vel, logged_acc, every_row) {
-        return as_logged(log, v, a, coordinates, notes, warnings);
+    if let (Some(v), Some(a), true) = (run.logged_vel, run.logged_acc, run.every_row) {
+        return as_logged(log, v, a, coordinates, run.notes, run.warnings);
     }
-
-    // 0. A uniform grid.
-    let grid = stages::uniform_grid(log, logged_vel, logged_acc);
-    let (irregular, nu) = (grid.irregular, grid.t.len());
-
-    // 1. Period: given, from the sidecar, or detected.
-    let choice = stages::choose_period(log, opts, &grid.raw[..nj], logged_vel.is_some());
-    let mut averaged = stages::average(&grid, &choice, opts, nj, dt, &mut notes)?;
-    let period_used = averaged.as_ref().and(choice.period);
-    // Prediction on every row: periods that are outliers (a start-up
-    // transient) are left out of the average, and what is not periodic is
-    // kept as an aperiodic remainder (below).
-    let aperiodic_input = (every_row
-        && averaged.is_some()
-        && !irregular
-        && logged_vel.is_none()
-        && opts.filter == Bandwidth::Auto)
-        .then(|| grid.raw[..nj].to_vec());
-    let mut rejected = 0;
-    if let (Some(avg), Some(_)) = (&mut averaged, &aperiodic_input) {
-        rejected = reject_outlier_blocks(avg, &grid.raw, nj);
-    }
-    let resampling = grid.resampling.clone();
-    let mut record = stages::record(averaged, grid, choice.period, opts, nj, &mut warnings);
-    let periodic = record.periods.is_some();
-    let n = record.t.len();
-    let mut fourier = periodic.then(|| Fourier::new(n));
-
+    // 0–1. A uniform grid, the period and its average.
+    let mut periods = run.periods()?;
     // 2–3. Bandwidth and derivatives.
-    let logged = logged_vel.is_some();
-    let band_choice = stages::choose_band(
-        &mut record,
-        fourier.as_mut(),
-        opts,
-        logged.then_some(logged_acc.is_some()),
-        nj,
-        dt,
-    );
-    let filter_summary = match band_choice.filter {
-        Some(spec) => Some(stages::low_pass(
-            spec,
-            &mut record.data,
-            fourier.as_mut(),
-            log,
-            nj,
-        )?),
-        None => None,
-    };
-    let (method, theta_dot, theta_ddot, edge) = stages::differentiate(
-        band_choice.derivatives,
-        &record.data[..nj],
-        fourier.as_mut(),
-        opts.derivative,
-        dt,
-    )?;
-    let source = if logged {
-        "logged dtheta/ddtheta columns"
-    } else {
-        "differentiated θ"
-    };
-    let harmonics = band_choice.harmonics;
-    let spec_used = band_choice.filter;
-    let mut bandwidth = describe(
-        logged,
-        harmonics.clone(),
-        spec_used,
-        band_choice.spectrum,
-        period_used,
-        choice.origin.filter(|_| period_used.is_some()),
-        choice.detection,
-        resampling,
-        opts.filter,
-    );
-
-    // Output rows.
-    let mut aperiodic = None;
-    let keep = edge..n - edge;
-    let theta: Pair = record.data[..nj]
-        .iter()
-        .map(|c| c[keep.clone()].to_vec())
-        .collect();
-    let t = &record.t;
-    let mut dropped = record.dropped;
-    let s;
-    let map = if every_row && (irregular || periodic) {
-        // Evaluate at the logged times: exact indices on a uniform grid,
-        // cubic Hermite (with the derivatives as slopes) between grid points.
-        let mut motion = stages::at_log_times(
-            &log.t,
-            t[edge],
-            [&theta, &theta_dot, &theta_ddot],
-            dt,
-            shift,
-            irregular,
-            periodic,
-        );
-        if let Some(th) = &aperiodic_input {
-            aperiodic = Some(stages::add_aperiodic_remainder(
-                th,
-                &mut motion,
-                harmonics.as_deref(),
-                log,
-            )?);
-        }
-        let [mut x, mut v, mut a] = motion;
-        if !irregular && shift != 0.0 {
-            shift_motion(&mut x, &mut v, &mut a, shift, dt, false);
-        }
-        s = samples_from(log.t.clone(), x, v, a, log.tau.clone());
-        dropped = 0;
-        RowMap::Direct { edge: 0 }
-    } else if irregular && !periodic {
-        // Every row of the log again, with its raw torque.
-        let [x, v, a] = stages::resampled_at_log_times(
-            &t[keep.clone()],
-            [&theta, &theta_dot, &theta_ddot],
-            &log.t,
-            shift,
-            dt,
-        );
-        s = samples_from(log.t.clone(), x, v, a, log.tau.clone());
-        RowMap::Direct { edge: 0 }
-    } else {
-        let tau = record.data[nj..2 * nj]
-            .iter()
-            .map(|c| c[keep.clone()].to_vec())
-            .collect();
-        dropped += 2 * edge;
-        let (mut theta, mut theta_dot, mut theta_ddot) = (theta, theta_dot, theta_ddot);
-        if shift != 0.0 {
-            shift_motion(
-                &mut theta,
-                &mut theta_dot,
-                &mut theta_ddot,
-                shift,
-                dt,
-                periodic,
-            );
-        }
-        s = samples_from(t[keep.clone()].to_vec(), theta, theta_dot, theta_ddot, tau);
-        match record.map {
-            RowMap::Direct { .. } => RowMap::Direct { edge },
-            p => p,
-        }
-    };
-    let mut s = s;
-
-    if rejected > 0 {
-        bandwidth.reason += &format!(
-            "; {rejected} period block(s) left out of the average as outliers (θ deviating more \
-             than {OUTLIER_BLOCK}× the median block)"
-        );
-    }
-    let remainder_hz = aperiodic.as_ref().map(|c| c.cutoff_hz);
-    if let Some(c) = aperiodic {
-        bandwidth.reason += &format!(
-            "; the aperiodic remainder (θ − series, e.g. a start-up transient) low-passed at \
-             {:.1} Hz (where its spectrum meets the noise, at most the highest harmonic)",
-            c.cutoff_hz
-        );
-        bandwidth.aperiodic = Some(c);
-    }
-
-    // The operator the angles passed, for whatever is computed from them.
-    let band = band_of(BandInputs {
-        logged,
-        harmonics: harmonics.as_deref(),
-        spec_used,
-        remainder_hz,
-        periods: record.periods.as_ref(),
-        every_row,
-        irregular,
-        rows: nu,
-        block: n,
-        fs,
-    })
-    .map_err(|source| ProcessError::Filter {
-        context: format!("designing the band-limiting of {}", log.name),
-        source,
-    })?;
-    if shift != 0.0 {
-        bandwidth.reason += "; torques held over each step (zero-order hold): the motion is \
-                             evaluated at the hold's midpoint, half a step after each sample";
-    }
-
+    let smoothed = run.smooth(&mut periods.record)?;
+    let harmonics = smoothed.band.harmonics.as_deref();
+    // The output rows, the band they passed and the account of the choice.
+    let rows = run.rows(&periods, smoothed.rates, smoothed.edge, harmonics)?;
+    let band = run.band(&periods, &smoothed.band, &rows)?;
+    let bandwidth = run.bandwidth(&periods, &smoothed.band, rows.aperiodic);
     // 4. Kinematics.
+    let mut s = rows.samples;
     model_coordinates(&mut s, coordinates)?;
 
     Ok(Processed {
         summary: ProcessSummary {
             input_samples: log.len(),
             output_samples: s.len(),
-            sample_rate_hz: fs,
-            filter: filter_summary,
-            periods: record.periods,
+            sample_rate_hz: run.fs,
+            filter: smoothed.filter,
+            periods: periods.record.periods,
             bandwidth,
-            samples_dropped: dropped,
-            derivative: method,
-            derivative_source: source.into(),
+            samples_dropped: rows.dropped,
+            derivative: smoothed.method,
+            derivative_source: if run.logged_vel.is_some() {
+                "logged dtheta/ddtheta columns"
+            } else {
+                "differentiated θ"
+            }
+            .into(),
             angle_source: log.summary.angle_source.clone(),
             torque_source: log.summary.torque_source.clone(),
             torque_timing: log.torque_timing(),
-            motion_shift_steps: shift,
+            motion_shift_steps: run.shift,
         },
         samples: s,
-        notes,
-        warnings,
+        notes: run.notes,
+        warnings: run.warnings,
         log_tau: log.tau.clone(),
-        map,
+        map: rows.map,
         band,
     })
 }
@@ -1022,18 +809,20 @@ fn periodic_slopes(y: &[f64], dt: f64, periodic: bool) -> Vec<f64> {
         .collect()
 }
 
-#[allow(clippy::too_many_arguments)]
+/// The bandwidth chosen and why, for reports and `summary.json`: the
+/// `band` chosen for a run with `logged` derivatives or not, the `period`
+/// used (none when no average was made), how an irregular log was brought
+/// to a uniform grid, and the bandwidth `asked` for.
 fn describe(
     logged: bool,
-    harmonics: Option<Vec<HarmonicSelection>>,
-    spec: Option<FilterSpec>,
-    spectrum: Option<SpectrumCutoff>,
-    period_s: Option<f64>,
-    period_origin: Option<PeriodOrigin>,
-    detection: Option<PeriodDetection>,
+    band: &BandChoice,
+    period: &PeriodChoice,
     resampling: Option<String>,
     asked: Bandwidth,
 ) -> BandwidthChoice {
+    let (harmonics, spec, spectrum) = (band.harmonics.clone(), band.filter, band.spectrum.clone());
+    let (period_s, period_origin, detection) =
+        (period.period, period.origin, period.detection.clone());
     let declined = detection
         .as_ref()
         .and_then(|d| d.declined.clone())

@@ -422,7 +422,6 @@ pub(super) fn differentiate(
 /// start) at the log's own times: exact indices on a uniform log (wrapping
 /// for a periodic record), cubic Hermite with the derivatives as slopes
 /// between grid points of a resampled one (shifted by `shift` steps).
-#[allow(clippy::too_many_arguments)]
 pub(super) fn at_log_times(
     log_t: &[f64],
     t0: f64,
