@@ -3,13 +3,15 @@
 //! the training data *and* helps every validation set may be added (the
 //! lowest ΔBIC wins, the held-out gain breaking a tie); repeat until none is.
 
-use rayon::prelude::*;
 use serde::Serialize;
 
 use super::accumulate::{Accumulator, Layout, Sums};
 use super::fit::{ModelFit, fit};
 use crate::error::IdentError;
-use crate::stats::f_sf;
+
+mod round;
+
+use round::{Round, Sets};
 
 /// Settings of [`select`]; `Default` gives the documented values.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -341,16 +343,16 @@ where
 {
     opts.check()?;
     check_sets(train, validation)?;
-    let layout = train.layout();
     let t = train.snapshot();
-    let v: Vec<Sums> = validation.iter().map(|a| a.snapshot()).collect();
-    let run = |added: &[usize]| {
-        let (cols, target) = model_columns(layout, added);
-        fit(&t, &v, &cols, target, opts.rank_tolerance, opts.noise_gain)
+    let rows = t.rows.iter().sum::<usize>() as f64;
+    let sets = Sets {
+        layout: train.layout(),
+        train: t,
+        validation: validation.iter().map(|a| a.snapshot()).collect(),
+        opts,
+        rows,
     };
-    let initial = run(&[])?;
-    let n: f64 = t.rows.iter().sum::<usize>() as f64;
-    let ne = opts.effective_fraction * n;
+    let initial = sets.fit(&[])?;
     let mut added: Vec<usize> = Vec::new();
     let mut current = initial.clone();
     let mut steps = Vec::new();
@@ -359,189 +361,26 @@ where
         if steps.len() >= opts.max_steps {
             break SelectionStatus::StepLimit;
         }
-        let used: Vec<&str> = added
-            .iter()
-            .map(|&k| layout.candidates()[k].family.as_str())
-            .collect();
-        let trial: Vec<usize> = (0..layout.candidates().len())
-            .filter(|&k| !used.contains(&layout.candidates()[k].family.as_str()))
-            .collect();
+        let trial = sets.untried(&added);
         if trial.is_empty() {
             break SelectionStatus::CandidatesExhausted;
         }
-        let level = opts.alpha / trial.len() as f64;
-        let before = current.mean_fitness();
-        let target_swaps = added
-            .iter()
-            .filter(|&&k| layout.candidates()[k].replaces_target)
-            .count();
-        let scored: Vec<(CandidateEvaluation, Option<ModelFit>)> = trial
-            .par_iter()
-            .map(|&k| {
-                let spec = &layout.candidates()[k];
-                let mut eval = CandidateEvaluation {
-                    candidate: k,
-                    name: spec.name.clone(),
-                    family: spec.family.clone(),
-                    added_parameters: 0,
-                    rss_drop_percent: 0.0,
-                    n_eff: ne,
-                    f: 0.0,
-                    p_value: 1.0,
-                    delta_bic: 0.0,
-                    gain: vec![0.0; before.len()],
-                    mean_gain: 0.0,
-                    gain_per_set: vec![0.0; validation.len()],
-                    status: EvaluationStatus::Failed,
-                    note: String::new(),
-                };
-                let mut with = added.clone();
-                with.push(k);
-                let f1 = match run(&with) {
-                    Ok(f) => f,
-                    Err(e) => {
-                        eval.note = e.to_string();
-                        return (eval, None);
-                    }
-                };
-                let k_add = if spec.replaces_target {
-                    1
-                } else {
-                    f1.columns.len().saturating_sub(current.columns.len())
-                };
-                let swaps = target_swaps + usize::from(spec.replaces_target);
-                let p1 = (f1.columns.len() + swaps) as f64;
-                let (rss0, rss1) = (current.total_rss(), f1.total_rss());
-                eval.added_parameters = k_add;
-                eval.rss_drop_percent = if rss0 > 0.0 {
-                    100.0 * (rss0 - rss1) / rss0
-                } else {
-                    0.0
-                };
-                let after = f1.mean_fitness();
-                eval.gain = after.iter().zip(&before).map(|(a, b)| a - b).collect();
-                // Judged on the groups it acts on (every group by default).
-                let on = |g: &[f64]| -> f64 {
-                    match &spec.groups {
-                        Some(idx) => {
-                            idx.iter().filter_map(|&i| g.get(i)).sum::<f64>()
-                                / idx.len().max(1) as f64
-                        }
-                        None => g.iter().sum::<f64>() / g.len().max(1) as f64,
-                    }
-                };
-                eval.mean_gain = on(&eval.gain);
-                eval.gain_per_set = f1
-                    .fitness
-                    .iter()
-                    .zip(&current.fitness)
-                    .map(|(a, b)| on(&a.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<_>>()))
-                    .collect();
-                if k_add == 0 {
-                    eval.status = EvaluationStatus::NoNewParameters;
-                    return (eval, None);
-                }
-                let every = eval.gain_per_set.iter().all(|g| *g >= opts.min_gain);
-                let test = |ne: f64| {
-                    (ne > p1 + 1.0 && rss1 > 0.0 && rss0 > 0.0).then(|| {
-                        let kk = k_add as f64;
-                        let fs = (((rss0 - rss1) / kk) / (rss1 / (ne - p1))).max(0.0);
-                        (
-                            fs,
-                            f_sf(fs, kk, ne - p1),
-                            ne * (rss1 / rss0).ln() + kk * ne.ln(),
-                        )
-                    })
-                };
-                // Fewer samples only weaken the F-test: a candidate that
-                // fails with every row, or on a validation set, fails at any
-                // fraction, and its own fraction is not measured.
-                let hopeless = !every || test(n).is_none_or(|(_, p, _)| p >= level);
-                let fraction = if hopeless { f64::NAN } else { effective(&f1) };
-                let fraction = if fraction.is_nan() {
-                    opts.effective_fraction
-                } else {
-                    fraction.clamp(1e-9, 1.0)
-                };
-                let ne = fraction * n;
-                eval.n_eff = ne;
-                if let Some((f, p, bic)) = test(ne) {
-                    eval.f = f;
-                    eval.p_value = p;
-                    eval.delta_bic = bic;
-                }
-                if eval.p_value < level && every {
-                    eval.status = EvaluationStatus::Significant;
-                    (eval, Some(f1))
-                } else {
-                    eval.status = EvaluationStatus::NotSignificant;
-                    (eval, None)
-                }
-            })
-            .collect();
-        let significant = || {
-            scored
-                .iter()
-                .filter(|x| x.0.status == EvaluationStatus::Significant)
-        };
-        let lowest = significant()
-            .map(|x| x.0.delta_bic)
-            .fold(f64::INFINITY, f64::min);
-        let top = significant()
-            .filter(|x| x.0.delta_bic <= lowest + opts.bic_tie)
-            .max_by(|a, b| {
-                a.0.mean_gain
-                    .total_cmp(&b.0.mean_gain)
-                    .then(b.0.delta_bic.total_cmp(&a.0.delta_bic))
-                    .then(b.0.candidate.cmp(&a.0.candidate))
-            })
-            .map(|x| x.0.clone());
-        let alias_of = |x: &CandidateEvaluation, best: &CandidateEvaluation| {
-            x.family != best.family
-                && x.added_parameters == best.added_parameters
-                && (x.rss_drop_percent - best.rss_drop_percent).abs()
-                    <= opts.alias_tolerance * best.rss_drop_percent.abs()
-        };
-        let round: Vec<CandidateEvaluation> = scored.iter().map(|x| x.0.clone()).collect();
-        rounds.push(round);
-        let Some(top) = top else {
+        let scored = Round::new(&sets, &added, &current, trial.len()).score(&trial, &effective);
+        let chosen = round::choose(&scored, opts);
+        let evaluations: Vec<CandidateEvaluation> = scored.iter().map(|x| x.0.clone()).collect();
+        rounds.push(evaluations);
+        let Some(chosen) = chosen else {
             break SelectionStatus::NothingSignificant;
         };
-        let chosen = scored
-            .iter()
-            .filter(|x| {
-                x.0.status == EvaluationStatus::Significant
-                    && (x.0.candidate == top.candidate || alias_of(&x.0, &top))
-            })
-            .map(|x| x.0.candidate)
-            .min()
-            .unwrap_or(top.candidate);
-        let Some((eval, Some(f1))) = scored.into_iter().find(|x| x.0.candidate == chosen) else {
-            return Err(IdentError::InvalidSelection {
-                reason: "internal: the selected candidate lost its fit".into(),
-            });
-        };
-        let mut aliases: Vec<String> = rounds
-            .last()
-            .map(|r| {
-                r.iter()
-                    .filter(|x| x.candidate != chosen && alias_of(x, &eval))
-                    .map(|x| x.family.clone())
-                    .collect()
-            })
-            .unwrap_or_default();
-        aliases.sort();
-        aliases.dedup();
+        let step = round::step(
+            scored,
+            chosen,
+            rounds.last().map_or(&[], Vec::as_slice),
+            opts,
+        )?;
         added.push(chosen);
-        current = f1.clone();
-        steps.push(SelectionStep {
-            candidate: chosen,
-            name: eval.name.clone(),
-            family: eval.family.clone(),
-            aliases,
-            evaluation: eval,
-            fit: f1,
-        });
+        current = step.fit.clone();
+        steps.push(step);
     };
     Ok(Selection {
         initial,
