@@ -3,14 +3,17 @@
 //! settings that choose gravity, the base placement and the friction and
 //! armature columns.
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::UrdfError;
-use crate::parse::{self, RawKind, RawRobot};
+use crate::parse::{self, RawRobot};
 use crate::spatial::{IDENTITY, M3, V3, mat_mul, mul, rpy_matrix, skew, transpose};
+
+mod tree;
+
+use tree::Tree;
 
 /// Standard parameters per body, in Pinocchio's order of dynamic
 /// parameters: `m, m·cx, m·cy, m·cz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz`, the
@@ -319,231 +322,19 @@ impl UrdfModel {
         Self::build(raw, file, settings)
     }
 
+    /// The model of the parsed URDF `raw` (from `file`) with `settings`:
+    /// the settings checked, the links and joints resolved into one tree,
+    /// its movable joints and their bodies with the inertials merged, then
+    /// the per-joint settings resolved against those joints.
     fn build(raw: RawRobot, file: &str, settings: ModelSettings) -> Result<Self, UrdfError> {
         check_settings(&settings)?;
-        let structure = |problem: String, fix: &str| UrdfError::Structure {
-            file: file.to_owned(),
-            problem,
-            fix: fix.to_owned(),
-        };
-        let element = |line: u32, element: String, problem: String, fix: &str| UrdfError::Element {
-            file: file.to_owned(),
-            line,
-            element,
-            problem,
-            fix: fix.to_owned(),
-        };
-        let mut link_index = HashMap::new();
-        for (k, l) in raw.links.iter().enumerate() {
-            if link_index.insert(l.name.as_str(), k).is_some() {
-                return Err(element(
-                    l.line,
-                    format!("<link name=\"{}\">", l.name),
-                    "repeats a link name".to_owned(),
-                    "give every link a unique name",
-                ));
-            }
-        }
-        let mut joint_names = HashMap::new();
-        // The joint whose child each link is.
-        let mut parent_joint: Vec<Option<usize>> = vec![None; raw.links.len()];
-        let mut children: Vec<Vec<usize>> = vec![Vec::new(); raw.links.len()];
-        for (k, j) in raw.joints.iter().enumerate() {
-            let here = format!("<joint name=\"{}\">", j.name);
-            if joint_names.insert(j.name.as_str(), k).is_some() {
-                return Err(element(
-                    j.line,
-                    here,
-                    "repeats a joint name".to_owned(),
-                    "give every joint a unique name",
-                ));
-            }
-            let find = |l: &str, role: &str| {
-                link_index.get(l).copied().ok_or_else(|| {
-                    element(
-                        j.line,
-                        here.clone(),
-                        format!("its {role} link \"{l}\" is not defined"),
-                        "define the link with <link name=\"…\"> or correct the name",
-                    )
-                })
-            };
-            let p = find(&j.parent, "parent")?;
-            let c = find(&j.child, "child")?;
-            if let Some(other) = parent_joint[c] {
-                return Err(element(
-                    j.line,
-                    here,
-                    format!(
-                        "link \"{}\" is already the child of joint \"{}\": this closes a kinematic loop",
-                        j.child, raw.joints[other].name
-                    ),
-                    "the model takes trees only: every link has at most one parent joint",
-                ));
-            }
-            parent_joint[c] = Some(k);
-            children[p].push(k);
-        }
-        let roots: Vec<usize> = (0..raw.links.len())
-            .filter(|&l| parent_joint[l].is_none())
-            .collect();
-        let root = match roots.as_slice() {
-            [r] => *r,
-            [] if raw.links.is_empty() => {
-                return Err(structure(
-                    "has no <link>".to_owned(),
-                    "give a URDF with links and joints",
-                ));
-            }
-            [] => {
-                return Err(structure(
-                    "every link is some joint's child, so the joints form a closed loop".to_owned(),
-                    "the model takes trees only: remove the joint that closes the loop",
-                ));
-            }
-            many => {
-                let names: Vec<&str> = many.iter().map(|&l| raw.links[l].name.as_str()).collect();
-                return Err(structure(
-                    format!(
-                        "has {} root links ({}), not one tree",
-                        many.len(),
-                        names.join(", ")
-                    ),
-                    "connect every part to the base by joints (a fixed joint for a rigid mount) or remove the unconnected links",
-                ));
-            }
-        };
-
-        // Depth-first from the root: every link's body (the movable joint
-        // it moves with, None for the base) and its frame in that body.
-        let mut joints: Vec<Joint> = Vec::new();
-        let mut link_body: Vec<Option<(Option<usize>, Frame)>> = vec![None; raw.links.len()];
-        link_body[root] = Some((None, Frame::ID));
-        let mut stack: Vec<usize> = children[root].iter().rev().copied().collect();
-        let mut visited = 1;
-        while let Some(k) = stack.pop() {
-            let j = &raw.joints[k];
-            let (p, c) = (link_index[j.parent.as_str()], link_index[j.child.as_str()]);
-            let (body, in_body) = link_body[p].expect("parents are visited first");
-            let origin = in_body.then(&Frame::from_origin(j.xyz, j.rpy));
-            let kind = match j.kind {
-                RawKind::Fixed => None,
-                RawKind::Revolute => Some(JointKind::Revolute),
-                RawKind::Continuous => Some(JointKind::Continuous),
-                RawKind::Prismatic => Some(JointKind::Prismatic),
-            };
-            link_body[c] = Some(match kind {
-                None => (body, origin),
-                Some(kind) => {
-                    joints.push(Joint {
-                        name: j.name.clone(),
-                        link: j.child.clone(),
-                        merged: Vec::new(),
-                        kind,
-                        parent: body,
-                        axis: j.axis,
-                        origin_rotation: origin.r,
-                        origin_translation: origin.p,
-                        limits: j.limit.as_ref().map(|l| JointLimits {
-                            lower: l.lower,
-                            upper: l.upper,
-                            effort: l.effort,
-                            velocity: l.velocity,
-                        }),
-                        inertial: [0.0; LINK_COLUMNS],
-                    });
-                    (Some(joints.len() - 1), Frame::ID)
-                }
-            });
-            visited += 1;
-            stack.extend(children[c].iter().rev().copied());
-        }
-        if visited != raw.links.len() {
-            let stray: Vec<&str> = (0..raw.links.len())
-                .filter(|&l| link_body[l].is_none())
-                .map(|l| raw.links[l].name.as_str())
-                .collect();
-            return Err(structure(
-                format!(
-                    "links {} form a closed loop apart from the tree",
-                    stray.join(", ")
-                ),
-                "the model takes trees only: remove the joint that closes the loop",
-            ));
-        }
-        if joints.is_empty() {
-            return Err(structure(
-                "has no revolute, continuous or prismatic joint".to_owned(),
-                "give a robot with at least one movable joint",
-            ));
-        }
-        // Inertials into their bodies (links fixed to the base are part of
-        // the world and carry no parameter).
-        for (l, link) in raw.links.iter().enumerate() {
-            let (Some((Some(b), in_body)), Some(inertial)) = (link_body[l], &link.inertial) else {
-                continue;
-            };
-            let f = in_body.then(&Frame::from_origin(inertial.xyz, inertial.rpy));
-            let [xx, xy, xz, yy, yz, zz] = inertial.inertia;
-            let ic = [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]];
-            let s = standard_in(&f, inertial.mass, &ic);
-            let joint = &mut joints[b];
-            for (t, v) in joint.inertial.iter_mut().zip(s) {
-                *t += v;
-            }
-            if link.name != joint.link {
-                joint.merged.push(link.name.clone());
-            }
-        }
+        let tree = Tree::new(&raw, file)?;
+        let root = tree.root()?;
+        let (mut joints, link_body) = tree.joints(root)?;
+        tree.add_inertials(&link_body, &mut joints);
         let bodies = joints.iter().map(body_of).collect();
-        let n = joints.len();
-        let widths = match &settings.coulomb_width {
-            CoulombWidth::Uniform(w) => vec![*w; n],
-            CoulombWidth::PerJoint(w) if w.len() == n => w.clone(),
-            CoulombWidth::PerJoint(w) => {
-                return Err(UrdfError::Setting {
-                    name: "coulomb_width".to_owned(),
-                    problem: format!(
-                        "{} widths for {n} movable joints; give one per joint or a single number",
-                        w.len()
-                    ),
-                });
-            }
-        };
-        let mut stribeck: Vec<(usize, f64)> = Vec::new();
-        for c in &settings.stribeck {
-            let bad = |problem: String| UrdfError::Setting {
-                name: "stribeck".to_owned(),
-                problem,
-            };
-            let j = joints
-                .iter()
-                .position(|j| j.name == c.joint)
-                .ok_or_else(|| {
-                    bad(format!(
-                        "joint `{}` is not a movable joint of this URDF ({}); name one of them",
-                        c.joint,
-                        joints
-                            .iter()
-                            .map(|j| j.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ))
-                })?;
-            if !(c.v_s.is_finite() && c.v_s > 0.0) {
-                return Err(bad(format!(
-                    "joint `{}`: v_s = {} must be a finite velocity > 0 (rad/s or m/s)",
-                    c.joint, c.v_s
-                )));
-            }
-            if stribeck.iter().any(|(k, _)| *k == j) {
-                return Err(bad(format!(
-                    "joint `{}` has two Stribeck columns; give one per joint",
-                    c.joint
-                )));
-            }
-            stribeck.push((j, c.v_s));
-        }
+        let widths = coulomb_widths(&settings.coulomb_width, joints.len())?;
+        let stribeck = stribeck_columns(&settings.stribeck, &joints)?;
         let base_rotation = rpy_matrix(settings.base_rpy);
         let g = settings.gravity;
         let gravity_root = crate::spatial::mul_t(&base_rotation, g);
@@ -747,6 +538,7 @@ pub struct LinkColumns {
     pub inertia: [usize; 6],
 }
 
+/// The constant parts of the motion of joint `j`'s body ([`Body`]).
 fn body_of(j: &Joint) -> Body {
     let a = j.origin_rotation;
     let axis = j.axis;
@@ -770,6 +562,68 @@ fn body_of(j: &Joint) -> Body {
     }
 }
 
+/// The Coulomb width of each of the `n` movable joints: the uniform one
+/// for all, or one given per joint.
+fn coulomb_widths(width: &CoulombWidth, n: usize) -> Result<Vec<f64>, UrdfError> {
+    match width {
+        CoulombWidth::Uniform(w) => Ok(vec![*w; n]),
+        CoulombWidth::PerJoint(w) if w.len() == n => Ok(w.clone()),
+        CoulombWidth::PerJoint(w) => Err(UrdfError::Setting {
+            name: "coulomb_width".to_owned(),
+            problem: format!(
+                "{} widths for {n} movable joints; give one per joint or a single number",
+                w.len()
+            ),
+        }),
+    }
+}
+
+/// The Stribeck columns as (joint index, `v_s`) in the order given: each
+/// on a movable joint of `joints`, with a finite `v_s > 0`, at most one
+/// per joint.
+fn stribeck_columns(
+    columns: &[StribeckColumn],
+    joints: &[Joint],
+) -> Result<Vec<(usize, f64)>, UrdfError> {
+    let mut stribeck: Vec<(usize, f64)> = Vec::new();
+    for c in columns {
+        let bad = |problem: String| UrdfError::Setting {
+            name: "stribeck".to_owned(),
+            problem,
+        };
+        let j = joints
+            .iter()
+            .position(|j| j.name == c.joint)
+            .ok_or_else(|| {
+                bad(format!(
+                    "joint `{}` is not a movable joint of this URDF ({}); name one of them",
+                    c.joint,
+                    joints
+                        .iter()
+                        .map(|j| j.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })?;
+        if !(c.v_s.is_finite() && c.v_s > 0.0) {
+            return Err(bad(format!(
+                "joint `{}`: v_s = {} must be a finite velocity > 0 (rad/s or m/s)",
+                c.joint, c.v_s
+            )));
+        }
+        if stribeck.iter().any(|(k, _)| *k == j) {
+            return Err(bad(format!(
+                "joint `{}` has two Stribeck columns; give one per joint",
+                c.joint
+            )));
+        }
+        stribeck.push((j, c.v_s));
+    }
+    Ok(stribeck)
+}
+
+/// Refuses non-finite gravity or base placement and a negative or
+/// non-finite Coulomb width.
 fn check_settings(s: &ModelSettings) -> Result<(), UrdfError> {
     let finite = |name: &str, v: &[f64]| {
         if v.iter().all(|x| x.is_finite()) {
