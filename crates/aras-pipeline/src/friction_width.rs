@@ -330,7 +330,7 @@ fn write_column(
 
 /// Sets both widths: `prepared`'s Coulomb columns (filtered and unfiltered)
 /// and the model's friction effect. Returns the model with the widths.
-pub fn apply_widths(
+pub(crate) fn apply_widths(
     prepared: &mut Prepared,
     model: &Model,
     mode: FilterMode,
@@ -512,7 +512,7 @@ pub fn moving_rows_cost(
 /// ([`WidthStatus::ReversalsNotDescribed`]), the worst first, and the
 /// others are checked again without them. A refinement that
 /// fails falls back on both joints ([`WidthRefinement::failed`]).
-pub fn refine_checked_widths(
+pub(crate) fn refine_checked_widths(
     prepared: &mut Prepared,
     model: &Model,
     base: &BaseParameters,

@@ -282,7 +282,7 @@ pub fn consistent_fit(
 /// with [`FitRows::AwayFromReversals`] the sign law. A refinement that
 /// fails, and a joint whose every-row fit costs its rows away from
 /// reversals more than `settings.width.max_moving_rows_cost`
-/// ([`refine_checked_widths`]), fall back to the rows away from reversals
+/// ([`moving_rows_cost`](crate::friction_width::moving_rows_cost)), fall back to the rows away from reversals
 /// (the reason kept in the result); neither stops the identification.
 /// Returns the model, the refinement and the rows to fit (joint-major).
 pub fn friction_widths(

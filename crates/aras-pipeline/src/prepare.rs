@@ -3,7 +3,7 @@
 //! regressor columns alike (`docs/processing.md`, "Parallel filtering").
 //! The in-memory identification, every block of the streaming route and the
 //! diagnosis's data sets start here; the diagnosis's bounded-memory pass
-//! runs the regressor step alone ([`columns_on`]) window by window.
+//! runs the regressor step alone, window by window.
 
 use crate::PipelineError;
 use aras_dyn::Model;
@@ -46,7 +46,7 @@ impl RegressorColumns<'_> {
 /// then `low_pass` (the processing's filter, and whether the record is one
 /// period, filtered circularly) on every column. The torques are left to
 /// the caller, who filters them once per record.
-pub fn columns_on(
+pub(crate) fn columns_on(
     model: &Model,
     columns: RegressorColumns<'_>,
     kinematics: &[KinematicSample],
@@ -373,7 +373,12 @@ impl Prepared {
         }
     }
 
-    /// Rows kept away from velocity reversals ([`record_keep_mask`]).
+    /// Rows kept away from velocity reversals: joint `j`'s rows with
+    /// `|θ̇_j| < min_speed` are dropped
+    /// ([`reversal_mask`]), widened by
+    /// the regressor filter's reach down to `reach_tol` of its
+    /// impulse-response peak, because filtering spreads the misfit at a
+    /// reversal in time.
     /// Joint-major, like [`Self::stacked`].
     pub fn keep_mask(&self, min_speed: f64, reach_tol: f64) -> Result<Vec<bool>, PipelineError> {
         record_keep_mask(
@@ -391,7 +396,7 @@ impl Prepared {
 /// zero-phase `filter`'s reach down to `reach_tol` of its impulse-response
 /// peak ([`filter_reach`]; no widening unfiltered), because filtering
 /// spreads the misfit at a reversal in time. Joint-major.
-pub fn record_keep_mask(
+pub(crate) fn record_keep_mask(
     theta_dot: &[Vec<f64>],
     filter: Option<&Sos>,
     periodic: bool,
