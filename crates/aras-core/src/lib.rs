@@ -13,6 +13,11 @@
 //! * [`LuGreLaw`] and [`stribeck_decay`]: the equations of LuGre friction
 //!   (presliding, Stribeck, hysteresis) of one joint, evaluated by the
 //!   simulator's plant and by the friction identification.
+//! * [`drive`] and [`Rk4`]: the simulated joint drive — encoder
+//!   quantisation, current-noise size, the filtered velocity estimate and
+//!   PD feedback of [`drive::PdDrive`], torque limits — and the classical
+//!   RK4 step on a flat state, for any number of joints: the ARAS-Diamond
+//!   simulator and the URDF arm simulator share them.
 //!
 //! They live here, apart from the kinematics and the model, so that the
 //! robot-agnostic crates (processing, identification, excitation design)
@@ -24,10 +29,13 @@
 
 #![warn(missing_docs)]
 
+pub mod drive;
 mod inertia;
 mod lugre;
 mod motion;
+mod ode;
 
 pub use inertia::Inertia;
 pub use lugre::{LuGreLaw, stribeck_decay};
 pub use motion::{DMotion, Motion};
+pub use ode::Rk4;

@@ -3,6 +3,8 @@
 //!
 //! The drive, controller and sensor models are the ARAS-Diamond
 //! simulator's (`docs/simulator.md`), per joint of any number of joints:
+//! both drive their joints with [`aras_core::drive::PdDrive`] and step
+//! their plant with [`aras_core::Rk4`].
 //!
 //! * **Plant**: `M(q) q̈ = τ − b(q, q̇)` of the truth parameters (rigid
 //!   bodies, armature and the model's friction columns, Coulomb as
@@ -22,6 +24,8 @@
 //!
 //! Seeded: the same settings give the same bytes.
 
+use aras_core::Rk4;
+use aras_core::drive::{self, PdDrive};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -58,22 +62,23 @@ impl ArmSensors {
         }
     }
 
-    /// Joint position resolution `2π/(counts · ratio)`.
+    /// Joint position resolution `2π/(counts · ratio)`
+    /// ([`drive::encoder_resolution`]).
     pub fn resolution(&self) -> Vec<f64> {
         self.counts_per_rev
             .iter()
             .zip(&self.gear_ratios)
-            .map(|(&c, &r)| std::f64::consts::TAU / (c as f64 * r))
+            .map(|(&c, &r)| drive::encoder_resolution(c, r))
             .collect()
     }
 
-    /// Joint torque noise `σ_i K_t N`, N·m.
+    /// Joint torque noise `σ_i K_t N`, N·m ([`drive::torque_noise_std`]).
     pub fn torque_noise_std(&self) -> Vec<f64> {
         self.current_noise_std
             .iter()
             .zip(&self.torque_constants)
             .zip(&self.gear_ratios)
-            .map(|((s, k), r)| s * k * r)
+            .map(|((&s, &k), &r)| drive::torque_noise_std(s, k, r))
             .collect()
     }
 }
@@ -541,23 +546,21 @@ pub fn simulate(
     let lead = (sim.lead_in_s * sim.output_rate_hz).round() as i64;
     let dt = 1.0 / sim.output_rate_hz;
     let h = dt / sim.substeps as f64;
-    let res = sim.sensors.resolution();
     let noise = sim.sensors.torque_noise_std();
     let c = &sim.controller;
-    let alpha = 1.0 - (-std::f64::consts::TAU * c.velocity_cutoff_hz * dt).exp();
     let mut rng = StdRng::seed_from_u64(sim.seed);
     let (mut qd_des, mut vd_des, mut ad_des) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let t0 = -lead as f64 * dt;
     trajectory.eval_into(t0, &mut qd_des, &mut vd_des, &mut ad_des);
-    let (mut q, mut v) = (qd_des.clone(), vd_des.clone());
-    let quantise = |q: &[f64]| -> Vec<f64> {
-        q.iter()
-            .zip(&res)
-            .map(|(x, r)| (x / r).round() * r)
-            .collect()
-    };
-    let mut q_prev = quantise(&q);
-    let mut v_est = v.clone();
+    // The state `[q, q̇]`, starting on the trajectory.
+    let mut x = [qd_des.as_slice(), vd_des.as_slice()].concat();
+    let mut drive = PdDrive::new(
+        sim.sensors.resolution(),
+        vd_des.clone(),
+        c.velocity_cutoff_hz,
+        dt,
+    );
+    let mut rk4 = Rk4::new(2 * n);
     let mut log = ArmLog {
         joint_names: model.joint_names(),
         t: Vec::with_capacity(rows),
@@ -568,21 +571,15 @@ pub fn simulate(
         qd: vec![Vec::with_capacity(rows); n],
         qdd: vec![Vec::with_capacity(rows); n],
     };
-    let (mut tau, mut plant) = (vec![0.0; n], vec![0.0; n]);
+    let (mut tau, mut driving) = (vec![0.0; n], vec![0.0; n]);
     let plant_of = Plant {
         hidden: &sim.hidden,
         widths: &widths,
     };
     for k in -lead..rows as i64 {
         let t = k as f64 * dt;
-        let q_meas = quantise(&q);
-        if k > -lead {
-            for j in 0..n {
-                let raw = (q_meas[j] - q_prev[j]) / dt;
-                v_est[j] += (raw - v_est[j]) * alpha;
-            }
-        }
-        q_prev.clone_from(&q_meas);
+        let (q, v) = x.split_at(n);
+        drive.sense(q);
         trajectory.eval_into(t, &mut qd_des, &mut vd_des, &mut ad_des);
         match &c.feedforward {
             Some(p) => {
@@ -590,15 +587,14 @@ pub fn simulate(
             }
             None => tau.fill(0.0),
         }
-        for j in 0..n {
-            tau[j] += c.kp[j] * (qd_des[j] - q_meas[j]) + c.kd[j] * (vd_des[j] - v_est[j]);
-            if let Some(l) = &sim.torque_limit {
-                tau[j] = tau[j].clamp(-l[j], l[j]);
-            }
+        drive.add_torque(&c.kp, &c.kd, &qd_des, &vd_des, &mut tau);
+        if let Some(l) = &sim.torque_limit {
+            drive::saturate(&mut tau, l);
         }
         if k >= 0 {
-            plant_of.torque(&q, &v, &tau, &mut plant);
-            let a = model.forward_dynamics(&mut ws, truth, &q, &v, &plant)?;
+            let q_meas = drive.angles();
+            plant_of.torque(q, v, &tau, &mut driving);
+            let a = model.forward_dynamics(&mut ws, truth, q, v, &driving)?;
             log.t.push(t);
             for j in 0..n {
                 let z: f64 = StandardNormal.sample(&mut rng);
@@ -611,44 +607,15 @@ pub fn simulate(
             }
         }
         for _ in 0..sim.substeps {
-            rk4(model, &mut ws, truth, &plant_of, &mut q, &mut v, &tau, h)?;
+            rk4.step(&mut x, h, |s, d| {
+                let (q, v) = s.split_at(n);
+                plant_of.torque(q, v, &tau, &mut driving);
+                let a = model.forward_dynamics(&mut ws, truth, q, v, &driving)?;
+                d[..n].copy_from_slice(v);
+                d[n..].copy_from_slice(&a);
+                Ok::<(), UrdfError>(())
+            })?;
         }
     }
     Ok(log)
-}
-
-/// One classical RK4 step of `(q, q̇)` under the held torques and the
-/// hidden effects.
-#[allow(clippy::too_many_arguments)]
-fn rk4(
-    model: &UrdfModel,
-    ws: &mut Workspace<f64>,
-    params: &[f64],
-    plant: &Plant,
-    q: &mut [f64],
-    v: &mut [f64],
-    tau: &[f64],
-    h: f64,
-) -> Result<(), UrdfError> {
-    let n = q.len();
-    let mut driving = vec![0.0; n];
-    let mut f = |q: &[f64], v: &[f64]| {
-        plant.torque(q, v, tau, &mut driving);
-        model.forward_dynamics(ws, params, q, v, &driving)
-    };
-    let at = |x: &[f64], d: &[f64], s: f64| -> Vec<f64> {
-        x.iter().zip(d).map(|(x, d)| x + s * d).collect()
-    };
-    let a1 = f(q, v)?;
-    let (q2, v2) = (at(q, v, 0.5 * h), at(v, &a1, 0.5 * h));
-    let a2 = f(&q2, &v2)?;
-    let (q3, v3) = (at(q, &v2, 0.5 * h), at(v, &a2, 0.5 * h));
-    let a3 = f(&q3, &v3)?;
-    let (q4, v4) = (at(q, &v3, h), at(v, &a3, h));
-    let a4 = f(&q4, &v4)?;
-    for j in 0..n {
-        q[j] += h / 6.0 * (v[j] + 2.0 * v2[j] + 2.0 * v3[j] + v4[j]);
-        v[j] += h / 6.0 * (a1[j] + 2.0 * a2[j] + 2.0 * a3[j] + a4[j]);
-    }
-    Ok(())
 }

@@ -4,7 +4,8 @@
 //!   classical RK4 at `output_rate_hz × substeps` (default 1 kHz × 2 =
 //!   2 kHz), motor torque held constant between controller ticks (zero-order
 //!   hold, as a digital amplifier does). Motor angles come from the inverse
-//!   kinematics, so no forward kinematics is needed.
+//!   kinematics, so no forward kinematics is needed. The step is
+//!   [`aras_core::Rk4`] on the flat state `[X, Ẋ, z]`.
 //! * **Plant torques**: the truth [`Params`] — rigid links (33), viscous +
 //!   Coulomb friction with `sign` smoothed by `tanh(θ̇/w)` (no chattering, no
 //!   event handling; `w` far below the encoder's velocity resolution),
@@ -12,7 +13,8 @@
 //!   parameters (`Params::extra`), with the same smoothing.
 //! * **Controller** at the output rate: PD in motor space on the quantised
 //!   encoder angles, the velocity from a low-pass-filtered backward
-//!   difference, optional model feedforward, torque limits.
+//!   difference, optional model feedforward, torque limits: the shared
+//!   drive model [`aras_core::drive`].
 //! * **Sensors**: encoder quantisation (`counts_per_rev × gear_ratio` counts
 //!   per joint revolution), Gaussian current noise times torque constant
 //!   times gear ratio on the measured torque, an optional sample delay of the
@@ -23,6 +25,8 @@
 mod log;
 mod lugre;
 
+use aras_core::Rk4;
+use aras_core::drive::{self, PdDrive};
 use aras_kin::Motion;
 use aras_kin::{Geometry, evaluate};
 use nalgebra::Vector2;
@@ -65,17 +69,22 @@ impl Default for Sensors {
 }
 
 impl Sensors {
-    /// Joint-angle resolution `2π/(counts · ratio)` (rad).
+    /// Joint-angle resolution `2π/(counts · ratio)` (rad,
+    /// [`drive::encoder_resolution`]).
     pub fn resolution(&self) -> [f64; 2] {
         std::array::from_fn(|j| {
-            2.0 * std::f64::consts::PI / (self.counts_per_rev[j] as f64 * self.gear_ratios[j])
+            drive::encoder_resolution(self.counts_per_rev[j], self.gear_ratios[j])
         })
     }
 
-    /// Joint torque noise `σ_i K_t N` (N·m).
+    /// Joint torque noise `σ_i K_t N` (N·m, [`drive::torque_noise_std`]).
     pub fn torque_noise_std(&self) -> [f64; 2] {
         std::array::from_fn(|j| {
-            self.current_noise_std[j] * self.torque_constants[j] * self.gear_ratios[j]
+            drive::torque_noise_std(
+                self.current_noise_std[j],
+                self.torque_constants[j],
+                self.gear_ratios[j],
+            )
         })
     }
 }
@@ -306,12 +315,19 @@ struct State {
 }
 
 impl State {
-    /// `self + h · d`, with `d = (ẋ, v̇, ż)`.
-    fn step(&self, d: &(Vector2<f64>, Vector2<f64>, Vector2<f64>), h: f64) -> State {
+    /// The state as the integrator's flat vector `[X, Ẋ, z]`.
+    fn flat(&self) -> [f64; 6] {
+        [
+            self.x[0], self.x[1], self.v[0], self.v[1], self.z[0], self.z[1],
+        ]
+    }
+
+    /// The state of a flat vector `[X, Ẋ, z]`.
+    fn from_flat(s: &[f64]) -> State {
         State {
-            x: self.x + d.0 * h,
-            v: self.v + d.1 * h,
-            z: self.z + d.2 * h,
+            x: Vector2::new(s[0], s[1]),
+            v: Vector2::new(s[2], s[3]),
+            z: Vector2::new(s[4], s[5]),
         }
     }
 }
@@ -350,18 +366,21 @@ impl Plant<'_> {
         Ok((state.v, a, z_rate))
     }
 
-    /// One classical RK4 step of length `h`.
-    fn rk4(&self, state: &mut State, tau: &Vector2<f64>, h: f64) -> Result<(), DynError> {
-        let k1 = self.deriv(state, tau)?;
-        let k2 = self.deriv(&state.step(&k1, 0.5 * h), tau)?;
-        let k3 = self.deriv(&state.step(&k2, 0.5 * h), tau)?;
-        let k4 = self.deriv(&state.step(&k3, h), tau)?;
-        let sum = (
-            k1.0 + (k2.0 + k3.0) * 2.0 + k4.0,
-            k1.1 + (k2.1 + k3.1) * 2.0 + k4.1,
-            k1.2 + (k2.2 + k3.2) * 2.0 + k4.2,
-        );
-        *state = state.step(&sum, h / 6.0);
+    /// One classical RK4 step of length `h` under the held `tau`.
+    fn rk4(
+        &self,
+        rk4: &mut Rk4,
+        state: &mut State,
+        tau: &Vector2<f64>,
+        h: f64,
+    ) -> Result<(), DynError> {
+        let mut flat = state.flat();
+        rk4.step(&mut flat, h, |s, d| -> Result<(), DynError> {
+            let (xd, vd, zd) = self.deriv(&State::from_flat(s), tau)?;
+            d.copy_from_slice(&[xd[0], xd[1], vd[0], vd[1], zd[0], zd[1]]);
+            Ok(())
+        })?;
+        *state = State::from_flat(&flat);
         Ok(())
     }
 }
@@ -411,9 +430,7 @@ pub fn simulate(
     let n = (cfg.duration_s * cfg.output_rate_hz).floor() as usize;
     let dt = 1.0 / cfg.output_rate_hz;
     let h = dt / cfg.substeps as f64;
-    let res = cfg.sensors.resolution();
     let noise = cfg.sensors.torque_noise_std();
-    let alpha = 1.0 - (-2.0 * std::f64::consts::PI * cfg.controller.velocity_cutoff_hz * dt).exp();
     let c = &cfg.controller;
     let mut rng = StdRng::seed_from_u64(cfg.seed);
 
@@ -433,14 +450,13 @@ pub fn simulate(
             None => Vector2::zeros(),
         },
     };
-    let quantise = |th: &Vector2<f64>| {
-        Vector2::new(
-            (th[0] / res[0]).round() * res[0],
-            (th[1] / res[1]).round() * res[1],
-        )
-    };
-    let mut theta_prev = quantise(&d0.joint.pos);
-    let mut vel_est = d0.joint.vel;
+    let mut drive = PdDrive::new(
+        cfg.sensors.resolution().to_vec(),
+        d0.joint.vel.as_slice().to_vec(),
+        c.velocity_cutoff_hz,
+        dt,
+    );
+    let mut rk4 = Rk4::new(6);
 
     let mut log = SimLog::with_capacity(n);
     // (measured, noise-free) torque of every step from the first, for the
@@ -453,22 +469,21 @@ pub fn simulate(
         let at = |source| SimError::Dynamics { t, source };
         let s = evaluate(&g, &Motion::new(state.x, state.v, Vector2::zeros()))
             .map_err(|e| at(e.into()))?;
-        let theta_meas = quantise(&s.joint.pos);
-        if i > 0 {
-            let raw = (theta_meas - theta_prev) / dt;
-            vel_est += (raw - vel_est) * alpha;
-        }
-        theta_prev = theta_meas;
+        drive.sense(s.joint.pos.as_slice());
+        let theta_meas = drive.angles();
         let d = if i == 0 { d0 } else { desired(t)? };
         let mut tau = Vector2::zeros();
         if let Some(f) = &ff {
             tau += f.inverse(&d);
         }
-        for j in 0..2 {
-            tau[j] += c.kp[j] * (d.joint.pos[j] - theta_meas[j])
-                + c.kd[j] * (d.joint.vel[j] - vel_est[j]);
-            tau[j] = tau[j].clamp(-cfg.torque_limit[j], cfg.torque_limit[j]);
-        }
+        drive.add_torque(
+            &c.kp,
+            &c.kd,
+            d.joint.pos.as_slice(),
+            d.joint.vel.as_slice(),
+            tau.as_mut_slice(),
+        );
+        drive::saturate(tau.as_mut_slice(), &cfg.torque_limit);
         let (_, xdd, _) = plant.deriv(&state, &tau).map_err(at)?;
         let theta_ddot = s.jacobian.matrix() * xdd + s.jacobian_dot * state.v;
         let mut measured = [0.0; 2];
@@ -509,7 +524,7 @@ pub fn simulate(
                 l.check_step(fc, [w[0], w[1]], h)
                     .map_err(|ratio| SimError::StiffFriction { t, ratio })?;
             }
-            plant.rk4(&mut state, &tau, h).map_err(at)?;
+            plant.rk4(&mut rk4, &mut state, &tau, h).map_err(at)?;
         }
     }
     log.sidecar =
