@@ -33,6 +33,7 @@ pub fn torque_noise_std(current_noise_std: f64, torque_constant: f64, gear_ratio
 
 /// `angle` rounded to the nearest whole count of an encoder of step
 /// `resolution` (`round(θ/r) · r`): what the encoder reports.
+#[inline]
 pub fn quantise(angle: f64, resolution: f64) -> f64 {
     (angle / resolution).round() * resolution
 }
@@ -43,6 +44,7 @@ pub fn quantise(angle: f64, resolution: f64) -> f64 {
 /// # Panics
 ///
 /// If the slices' lengths differ.
+#[inline]
 pub fn saturate(tau: &mut [f64], limits: &[f64]) {
     assert_eq!(tau.len(), limits.len(), "one limit per joint");
     for (t, &l) in tau.iter_mut().zip(limits) {
@@ -103,6 +105,7 @@ impl PdDrive {
     /// # Panics
     ///
     /// If `angles` has not one entry per joint.
+    #[inline]
     pub fn sense(&mut self, angles: &[f64]) {
         assert_eq!(angles.len(), self.angles.len(), "one angle per joint");
         for (j, &angle) in angles.iter().enumerate() {
@@ -117,11 +120,13 @@ impl PdDrive {
     }
 
     /// The quantised angles of the last sample (zero before the first).
+    #[inline]
     pub fn angles(&self) -> &[f64] {
         &self.angles
     }
 
     /// The filtered velocity estimate of the last sample.
+    #[inline]
     pub fn velocity(&self) -> &[f64] {
         &self.velocity
     }
@@ -134,6 +139,7 @@ impl PdDrive {
     /// # Panics
     ///
     /// If a slice has not one entry per joint.
+    #[inline]
     pub fn add_torque(
         &self,
         kp: &[f64],

@@ -9,10 +9,14 @@
 /// operations. Its local error is `O(h⁵)`: exact, to rounding, for a
 /// solution polynomial of degree ≤ 4. A simulator holds the input (the
 /// motor torque) in the closure over the step, a zero-order hold.
+///
+/// The stages are stored in `S`: a `Vec<f64>` for a dimension known at run
+/// time ([`Rk4::new`]), or an array `[f64; N]` for a fixed one
+/// ([`Rk4::fixed`]), whose lengths the compiler sees through the step.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Rk4 {
-    k: [Vec<f64>; 4],
-    stage: Vec<f64>,
+pub struct Rk4<S = Vec<f64>> {
+    k: [S; 4],
+    stage: S,
 }
 
 impl Rk4 {
@@ -23,10 +27,22 @@ impl Rk4 {
             stage: vec![0.0; dim],
         }
     }
+}
 
+impl<const N: usize> Rk4<[f64; N]> {
+    /// An integrator for states of the fixed dimension `N`.
+    pub fn fixed() -> Self {
+        Self {
+            k: [[0.0; N]; 4],
+            stage: [0.0; N],
+        }
+    }
+}
+
+impl<S: AsRef<[f64]> + AsMut<[f64]>> Rk4<S> {
     /// The state dimension.
     pub fn dim(&self) -> usize {
-        self.stage.len()
+        self.stage.as_ref().len()
     }
 
     /// One step of length `h` of `x`, with `f(x, ẋ)` writing the
@@ -36,6 +52,7 @@ impl Rk4 {
     /// # Panics
     ///
     /// If `x` is not of dimension [`Self::dim`].
+    #[inline]
     pub fn step<E>(
         &mut self,
         x: &mut [f64],
@@ -44,7 +61,8 @@ impl Rk4 {
     ) -> Result<(), E> {
         assert_eq!(x.len(), self.dim(), "state dimension");
         let [k1, k2, k3, k4] = &mut self.k;
-        let stage = &mut self.stage;
+        let (k1, k2, k3, k4) = (k1.as_mut(), k2.as_mut(), k3.as_mut(), k4.as_mut());
+        let stage = self.stage.as_mut();
         let at = |stage: &mut [f64], k: &[f64], s: f64| {
             for ((y, x), k) in stage.iter_mut().zip(x.iter()).zip(k) {
                 *y = x + k * s;
@@ -58,8 +76,8 @@ impl Rk4 {
         at(stage, k3, h);
         f(stage, k4)?;
         let s = h / 6.0;
-        for (i, x) in x.iter_mut().enumerate() {
-            *x += (k1[i] + (k2[i] + k3[i]) * 2.0 + k4[i]) * s;
+        for ((((x, a), b), c), d) in x.iter_mut().zip(&*k1).zip(&*k2).zip(&*k3).zip(&*k4) {
+            *x += (a + (b + c) * 2.0 + d) * s;
         }
         Ok(())
     }

@@ -369,7 +369,7 @@ impl Plant<'_> {
     /// One classical RK4 step of length `h` under the held `tau`.
     fn rk4(
         &self,
-        rk4: &mut Rk4,
+        rk4: &mut Rk4<[f64; 6]>,
         state: &mut State,
         tau: &Vector2<f64>,
         h: f64,
@@ -456,7 +456,7 @@ pub fn simulate(
         c.velocity_cutoff_hz,
         dt,
     );
-    let mut rk4 = Rk4::new(6);
+    let mut rk4 = Rk4::fixed();
 
     let mut log = SimLog::with_capacity(n);
     // (measured, noise-free) torque of every step from the first, for the
