@@ -17,7 +17,7 @@ use crate::filtering::{
 use crate::refine::minimise_profile;
 use crate::residual::{ResidualAnalysis, ResidualSummary, Row};
 use aras_ident::selection::{
-    Accumulator, CandidateEvaluation, CandidateSpec, EvaluationStatus, Layout, ModelFit,
+    Accumulator, CandidateEvaluation, CandidateSpec, EvaluationStatus, Layout, ModelFit, Selection,
     SelectionOptions, SelectionStatus, SelectionStep, fit_model, select,
 };
 use aras_ident::streaming::QrAccumulator;
@@ -1321,225 +1321,45 @@ pub fn diagnose<M: DiagnosisModel>(
     let clock = Instant::now();
     let joints = check_inputs(model, train, validation, opts)?;
     let ctx = Context::new(model, joints, candidates)?;
-    let max_shift = ctx.max_shift;
-    let train_p = Plan::new(train, opts.min_speed, opts.reach_tol, max_shift)?
-        .with_all_rows(opts.all_rows.clone());
-    let vals_p: Vec<Plan> = validation
-        .iter()
-        .map(|v| {
-            Plan::new(v, opts.min_speed, opts.validation_reach_tol, max_shift)
-                .map(|p| p.with_all_rows(opts.all_rows.clone()))
-        })
-        .collect::<Result<_, _>>()?;
-    let train_acc = ctx.accumulate(train, &train_p)?;
-    check_rows(train_acc.rows())?;
-    let val_accs: Vec<Accumulator> = validation
-        .iter()
-        .zip(&vals_p)
-        .map(|(v, p)| {
-            let acc = ctx.accumulate(v, p)?;
-            check_rows(acc.rows())?;
-            Ok(acc)
-        })
-        .collect::<Result<_, IdentError>>()?;
-    // The filter's independent fraction of samples for the F-test and its
-    // noise gain for σ: the same number (Parseval), applied once each.
-    let dof_ratio = (train.filter_dof() / train.len() as f64).clamp(1e-9, 1.0);
-    let sel_opts = SelectionOptions {
-        alpha: opts.alpha,
-        min_gain: opts.min_gain,
-        max_steps: opts.max_steps,
-        effective_fraction: dof_ratio,
-        noise_gain: train.noise_gain()?.clamp(1e-12, 1.0),
-        ..SelectionOptions::default()
-    };
+    let sets = Sets::new(train, validation, opts, ctx.max_shift)?;
+    let (train_acc, val_accs) = ctx.accumulate_sets(&sets)?;
+    let sel_opts = selection_options(train, opts)?;
     let sel = select(&train_acc, &val_accs, &sel_opts)?;
-    let pair_rows = |f: &ModelFit| -> Vec<Vec<f64>> { f.fitness.clone() };
-    type Raw = (Vec<Option<Vec<f64>>>, Vec<Option<LogPrediction>>);
-    let raw_rows = |f: &ModelFit| -> Result<Raw, IdentError> {
-        let all = validation
-            .iter()
-            .zip(&vals_p)
-            .map(|(v, p)| ctx.raw_fitness(v, p, f))
-            .collect::<Result<Vec<_>, IdentError>>()?;
-        Ok(all
-            .into_iter()
-            .map(|x| x.map_or((None, None), |(f, p)| (Some(f), Some(p))))
-            .unzip())
-    };
-    let (fitness, predicted) = raw_rows(&sel.initial)?;
-    let mut fitness_rows = vec![FitnessRow {
-        step: 0,
-        model: describe(model, &[]),
-        fitness,
-        fitness_filtered: pair_rows(&sel.initial),
-        predicted,
-    }];
-    let mut steps: Vec<Step<M::Candidate>> = Vec::new();
-    let mut delay_samples = 0.0;
-    for st in &sel.steps {
-        let (step, delay) = ctx.step_of(st);
-        delay_samples = delay.unwrap_or(delay_samples);
-        steps.push(step);
-        let (fitness, predicted) = raw_rows(&st.fit)?;
-        fitness_rows.push(FitnessRow {
-            step: steps.len(),
-            model: describe(model, &steps),
-            fitness,
-            fitness_filtered: pair_rows(&st.fit),
-            predicted,
-        });
-    }
-    // Nonlinear settings between the grid points: one pass over TRAIN per
-    // trial value (bounded memory), the other selected candidates kept.
-    for k in 0..steps.len() {
-        let candidate = steps[k].candidate.clone();
-        if candidate.setting().is_some() {
-            let others: Vec<M::Candidate> = sel
-                .steps
-                .iter()
-                .map(|st| ctx.cands[st.candidate].clone())
-                .filter(|c| *c != candidate)
-                .collect();
-            steps[k].refinement = Some(refine_setting(
-                &ctx,
-                (train, &train_p),
-                (validation, &vals_p),
-                &others,
-                candidate,
-                &sel_opts,
-            )?);
-        }
-    }
-    let mut rounds: Vec<Vec<CandidateScore<M::Candidate>>> = sel
-        .rounds
-        .iter()
-        .map(|r| {
-            r.iter()
-                .map(|e| score_of(&ctx.cands[e.candidate], e))
-                .collect()
-        })
-        .collect();
-    for r in &mut rounds {
-        r.sort_by(|a, b| b.mean_gain.total_cmp(&a.mean_gain));
-    }
-    let stopped_clean = sel.status == SelectionStatus::NothingSignificant;
+    let (mut steps, fitness, delay_samples) = ctx.history(&sets, &sel)?;
+    ctx.refine_settings(&sets, &sel, &mut steps, &sel_opts)?;
+    let rounds = ctx.rounds(&sel);
     // The final model takes each effect at its refined setting: that is
     // the model a user carries on with, and the one whose residual the
-    // verdict below is about. It costs one more pass over each set when a
-    // refinement moved a setting off its grid value.
-    let refined: Vec<M::Candidate> = steps
-        .iter()
-        .map(|s| match &s.refinement {
-            Some(r) => s.candidate.with_setting(r.value),
-            None => s.candidate.clone(),
-        })
-        .collect();
-    let moved = steps.iter().any(|s| {
-        s.refinement
-            .as_ref()
-            .is_some_and(|r| r.value != r.grid_value)
-    });
-    let final_ctx = if moved {
-        let (cands, layout) =
-            candidate_layout(model.n_base(), joints, refined.clone(), |_, c| c.label())?;
-        Some(Context {
-            model,
-            joints,
-            cands,
-            layout,
-            max_shift,
-        })
-    } else {
-        None
-    };
-    // The refined model's sums over the validation sets, kept apart from
-    // the selection's (which `before` still needs).
-    let refined_accs: Option<Vec<Accumulator>> = match &final_ctx {
-        Some(c) => Some(
-            validation
-                .iter()
-                .zip(&vals_p)
-                .map(|(v, p)| c.accumulate(v, p))
-                .collect::<Result<_, _>>()?,
-        ),
-        None => None,
-    };
-    let final_val_accs: &[Accumulator] = refined_accs.as_deref().unwrap_or(&val_accs);
-    let (fctx, final_fit, final_added) = match &final_ctx {
-        Some(c) => {
-            let train_acc = c.accumulate(train, &train_p)?;
-            let added: Vec<usize> = (0..refined.len()).collect();
-            let fit = fit_model(&train_acc, final_val_accs, &added, &sel_opts)?;
-            (c, fit, added)
-        }
-        None => (
-            &ctx,
-            sel.final_fit().clone(),
-            sel.steps.iter().map(|st| st.candidate).collect(),
-        ),
-    };
-
-    // Residual analyses before and after: the fitted rows, and apart the
-    // rows left out near velocity reversals.
-    let analyse_fit = |ctx: &Context<'_, M>, fit: &ModelFit| {
-        validation
-            .iter()
-            .zip(&vals_p)
-            .map(|(v, p)| ctx.residual_analysis(v, p, fit))
-            .collect::<Result<Vec<_>, _>>()
-    };
-    // Whiteness is judged on what a model's columns cannot express on each
-    // set: the residual of the model refitted there (its least squares on
-    // the set's own sums), so that the TRAIN estimate's own error, which
-    // follows the motion, does not read as a missing term. The profiles,
-    // spectra and left-out rows stay those of the TRAIN estimate: a refit on
-    // one sinusoid would absorb much of a missing law.
-    let analyse = |ctx: &Context<'_, M>,
-                   accs: &[Accumulator],
-                   fit: &ModelFit,
-                   added: &[usize]|
-     -> Result<Vec<ResidualAnalysis>, IdentError> {
-        let mut out = analyse_fit(ctx, fit)?;
-        for ((a, (v, p)), acc) in out.iter_mut().zip(validation.iter().zip(&vals_p)).zip(accs) {
-            let refit = fit_model(acc, std::slice::from_ref(acc), added, &sel_opts)?;
-            a.whiteness = ctx.residual_analysis(v, p, &refit)?.whiteness;
-        }
-        Ok(out)
-    };
-    let before = analyse(&ctx, &val_accs, &sel.initial, &[])?;
-    let after = analyse(fctx, final_val_accs, &final_fit, &final_added)?;
-    let white = after
-        .iter()
-        .all(|a| a.whiteness.iter().all(|w| w.is_white()));
-    let systematic = after
-        .iter()
-        .any(|a| a.findings.iter().any(|f| f.systematic));
-    let noise_like = stopped_clean && white && !systematic;
-    let conclusion = conclusion(
-        &refined,
-        Verdict {
-            stopped_clean,
-            white,
-            systematic,
-        },
-        &after,
-        opts,
-    );
+    // verdict below is about.
+    let refined: Vec<M::Candidate> = steps.iter().map(Step::refined_candidate).collect();
+    let refitted = ctx.refitted(&sets, &refined, &steps, &sel_opts)?;
+    let (fctx, final_accs, final_fit, final_added): (_, &[Accumulator], _, Vec<usize>) =
+        match &refitted {
+            Some(r) => (&r.ctx, &r.val_accs, &r.fit, (0..refined.len()).collect()),
+            None => (
+                &ctx,
+                &val_accs,
+                sel.final_fit(),
+                sel.steps.iter().map(|st| st.candidate).collect(),
+            ),
+        };
+    let before = ctx.analyses(&sets, &val_accs, &sel.initial, &[], &sel_opts)?;
+    let after = fctx.analyses(&sets, final_accs, final_fit, &final_added, &sel_opts)?;
+    let verdict = Verdict::of(sel.status == SelectionStatus::NothingSignificant, &after);
+    let noise_like = verdict.noise_like();
+    let conclusion = conclusion(&refined, verdict, &after, opts);
 
     let final_model = model.terms(&refined)?;
-    let estimate = fctx.named_estimate(&final_fit);
+    let estimate = fctx.named_estimate(final_fit);
     let consistent = match model.consistent_refit(&refined)? {
-        Some(refit) => Some(consistent_fit(
-            &ctx,
-            (train, &train_p),
-            (validation, &vals_p),
-            &refit,
-            refined
+        Some(refit) => {
+            let delay = refined
                 .iter()
                 .find_map(|c| c.torque_shift())
-                .unwrap_or(delay_samples),
-        )?),
+                .unwrap_or(delay_samples);
+            let fit = consistent_fit(&ctx, sets.train(), sets.validation(), &refit, delay)?;
+            Some(fit)
+        }
         None => None,
     };
     Ok(Diagnosis {
@@ -1549,7 +1369,7 @@ pub fn diagnose<M: DiagnosisModel>(
         rows_fitted: train_acc.rows().to_vec(),
         steps,
         rounds,
-        fitness: fitness_rows,
+        fitness,
         before,
         after,
         noise_like,
@@ -1558,6 +1378,296 @@ pub fn diagnose<M: DiagnosisModel>(
         consistent,
         elapsed_s: clock.elapsed().as_secs_f64(),
     })
+}
+
+/// TRAIN and the validation sets, each with its row plan: the rows away
+/// from velocity reversals (TRAIN's exclusion widened by `reach_tol`, the
+/// validation sets' by `validation_reach_tol`) and the chunks read.
+struct Sets<'d> {
+    train: &'d Dataset,
+    train_plan: Plan,
+    validation: &'d [Dataset],
+    plans: Vec<Plan>,
+}
+
+impl<'d> Sets<'d> {
+    fn new(
+        train: &'d Dataset,
+        validation: &'d [Dataset],
+        opts: &EngineOptions,
+        max_shift: usize,
+    ) -> Result<Self, IdentError> {
+        let train_plan = Plan::new(train, opts.min_speed, opts.reach_tol, max_shift)?
+            .with_all_rows(opts.all_rows.clone());
+        let plans = validation
+            .iter()
+            .map(|v| {
+                Plan::new(v, opts.min_speed, opts.validation_reach_tol, max_shift)
+                    .map(|p| p.with_all_rows(opts.all_rows.clone()))
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Self {
+            train,
+            train_plan,
+            validation,
+            plans,
+        })
+    }
+
+    fn train(&self) -> (&Dataset, &Plan) {
+        (self.train, &self.train_plan)
+    }
+
+    fn validation(&self) -> (&[Dataset], &[Plan]) {
+        (self.validation, &self.plans)
+    }
+
+    /// Each validation set with its plan.
+    fn pairs(&self) -> impl Iterator<Item = (&Dataset, &Plan)> {
+        self.validation.iter().zip(&self.plans)
+    }
+}
+
+/// The selection's settings: the engine's α, minimum gain and step limit,
+/// with the filter's independent fraction of samples for the F-test and
+/// its noise gain for σ (the same number by Parseval, applied once each).
+fn selection_options(
+    train: &Dataset,
+    opts: &EngineOptions,
+) -> Result<SelectionOptions, IdentError> {
+    let dof_ratio = (train.filter_dof() / train.len() as f64).clamp(1e-9, 1.0);
+    Ok(SelectionOptions {
+        alpha: opts.alpha,
+        min_gain: opts.min_gain,
+        max_steps: opts.max_steps,
+        effective_fraction: dof_ratio,
+        noise_gain: train.noise_gain()?.clamp(1e-12, 1.0),
+        ..SelectionOptions::default()
+    })
+}
+
+impl Verdict {
+    /// The verdict on the final residuals `after` of a selection that
+    /// stopped clean or not.
+    fn of(stopped_clean: bool, after: &[ResidualAnalysis]) -> Self {
+        Self {
+            stopped_clean,
+            white: after
+                .iter()
+                .all(|a| a.whiteness.iter().all(|w| w.is_white())),
+            systematic: after
+                .iter()
+                .any(|a| a.findings.iter().any(|f| f.systematic)),
+        }
+    }
+
+    /// Nothing significant is left, the residuals are white and no bin is
+    /// systematic.
+    fn noise_like(&self) -> bool {
+        self.stopped_clean && self.white && !self.systematic
+    }
+}
+
+impl<C: Candidate> Step<C> {
+    /// The step's candidate at its refined setting, if refined.
+    fn refined_candidate(&self) -> C {
+        match &self.refinement {
+            Some(r) => self.candidate.with_setting(r.value),
+            None => self.candidate.clone(),
+        }
+    }
+}
+
+/// The final model with a setting moved off its grid value by a
+/// refinement: its own columns and validation sums (one more pass over
+/// each set), and its fit on TRAIN.
+struct Refitted<'a, M: DiagnosisModel> {
+    ctx: Context<'a, M>,
+    val_accs: Vec<Accumulator>,
+    fit: ModelFit,
+}
+
+impl<'a, M: DiagnosisModel> Context<'a, M> {
+    /// TRAIN's and each validation set's sums, each checked to have rows.
+    fn accumulate_sets(&self, sets: &Sets) -> Result<(Accumulator, Vec<Accumulator>), IdentError> {
+        let (train, plan) = sets.train();
+        let train_acc = self.accumulate(train, plan)?;
+        check_rows(train_acc.rows())?;
+        let val_accs = sets
+            .pairs()
+            .map(|(v, p)| {
+                let acc = self.accumulate(v, p)?;
+                check_rows(acc.rows())?;
+                Ok(acc)
+            })
+            .collect::<Result<_, IdentError>>()?;
+        Ok((train_acc, val_accs))
+    }
+
+    /// The fitness row of `fit` after `steps`: (78) against each
+    /// validation set's raw torques where it keeps its log's rows, and on
+    /// the filtered sums.
+    fn fitness_row(
+        &self,
+        sets: &Sets,
+        steps: &[Step<M::Candidate>],
+        fit: &ModelFit,
+    ) -> Result<FitnessRow, IdentError> {
+        let all = sets
+            .pairs()
+            .map(|(v, p)| self.raw_fitness(v, p, fit))
+            .collect::<Result<Vec<_>, IdentError>>()?;
+        let (fitness, predicted) = all
+            .into_iter()
+            .map(|x| x.map_or((None, None), |(f, p)| (Some(f), Some(p))))
+            .unzip();
+        Ok(FitnessRow {
+            step: steps.len(),
+            model: describe(self.model, steps),
+            fitness,
+            fitness_filtered: fit.fitness.clone(),
+            predicted,
+        })
+    }
+
+    /// The selected steps in order, the fitness of the starting model and
+    /// after each step, and the delay (samples) the last delay step named.
+    #[allow(clippy::type_complexity)]
+    fn history(
+        &self,
+        sets: &Sets,
+        sel: &Selection,
+    ) -> Result<(Vec<Step<M::Candidate>>, Vec<FitnessRow>, f64), IdentError> {
+        let mut rows = vec![self.fitness_row(sets, &[], &sel.initial)?];
+        let mut steps: Vec<Step<M::Candidate>> = Vec::new();
+        let mut delay_samples = 0.0;
+        for st in &sel.steps {
+            let (step, delay) = self.step_of(st);
+            delay_samples = delay.unwrap_or(delay_samples);
+            steps.push(step);
+            rows.push(self.fitness_row(sets, &steps, &st.fit)?);
+        }
+        Ok((steps, rows, delay_samples))
+    }
+
+    /// Nonlinear settings between the grid points: one pass over TRAIN per
+    /// trial value (bounded memory), the other selected candidates kept.
+    fn refine_settings(
+        &self,
+        sets: &Sets,
+        sel: &Selection,
+        steps: &mut [Step<M::Candidate>],
+        sel_opts: &SelectionOptions,
+    ) -> Result<(), IdentError> {
+        for k in 0..steps.len() {
+            let candidate = steps[k].candidate.clone();
+            if candidate.setting().is_some() {
+                let others: Vec<M::Candidate> = sel
+                    .steps
+                    .iter()
+                    .map(|st| self.cands[st.candidate].clone())
+                    .filter(|c| *c != candidate)
+                    .collect();
+                steps[k].refinement = Some(refine_setting(
+                    self,
+                    sets.train(),
+                    sets.validation(),
+                    &others,
+                    candidate,
+                    sel_opts,
+                )?);
+            }
+        }
+        Ok(())
+    }
+
+    /// Every round's candidates with their scores, best mean gain first.
+    fn rounds(&self, sel: &Selection) -> Vec<Vec<CandidateScore<M::Candidate>>> {
+        let mut rounds: Vec<Vec<CandidateScore<M::Candidate>>> = sel
+            .rounds
+            .iter()
+            .map(|r| {
+                r.iter()
+                    .map(|e| score_of(&self.cands[e.candidate], e))
+                    .collect()
+            })
+            .collect();
+        for r in &mut rounds {
+            r.sort_by(|a, b| b.mean_gain.total_cmp(&a.mean_gain));
+        }
+        rounds
+    }
+
+    /// The final model `refined` refitted when a refinement moved a setting
+    /// off its grid value; `None` when the selection's fit is the final one.
+    fn refitted(
+        &self,
+        sets: &Sets,
+        refined: &[M::Candidate],
+        steps: &[Step<M::Candidate>],
+        sel_opts: &SelectionOptions,
+    ) -> Result<Option<Refitted<'a, M>>, IdentError> {
+        let moved = steps.iter().any(|s| {
+            s.refinement
+                .as_ref()
+                .is_some_and(|r| r.value != r.grid_value)
+        });
+        if !moved {
+            return Ok(None);
+        }
+        let (cands, layout) = candidate_layout(
+            self.model.n_base(),
+            self.joints,
+            refined.to_vec(),
+            |_, c| c.label(),
+        )?;
+        let ctx = Context {
+            model: self.model,
+            joints: self.joints,
+            cands,
+            layout,
+            max_shift: self.max_shift,
+        };
+        // Kept apart from the selection's sums, which the residuals before
+        // still need.
+        let val_accs = sets
+            .pairs()
+            .map(|(v, p)| ctx.accumulate(v, p))
+            .collect::<Result<Vec<_>, _>>()?;
+        let (train, plan) = sets.train();
+        let train_acc = ctx.accumulate(train, plan)?;
+        let added: Vec<usize> = (0..refined.len()).collect();
+        let fit = fit_model(&train_acc, &val_accs, &added, sel_opts)?;
+        Ok(Some(Refitted { ctx, val_accs, fit }))
+    }
+
+    /// Residual analyses of `fit` on each validation set (its sums `accs`):
+    /// the fitted rows, and apart the rows left out near velocity
+    /// reversals. Whiteness is judged on what the model's columns (`added`
+    /// to the base) cannot express on each set: the residual of the model
+    /// refitted there (its least squares on the set's own sums), so that
+    /// the TRAIN estimate's own error, which follows the motion, does not
+    /// read as a missing term. The profiles, spectra and left-out rows stay
+    /// those of the TRAIN estimate: a refit on one sinusoid would absorb
+    /// much of a missing law.
+    fn analyses(
+        &self,
+        sets: &Sets,
+        accs: &[Accumulator],
+        fit: &ModelFit,
+        added: &[usize],
+        sel_opts: &SelectionOptions,
+    ) -> Result<Vec<ResidualAnalysis>, IdentError> {
+        let mut out = sets
+            .pairs()
+            .map(|(v, p)| self.residual_analysis(v, p, fit))
+            .collect::<Result<Vec<_>, _>>()?;
+        for ((a, (v, p)), acc) in out.iter_mut().zip(sets.pairs()).zip(accs) {
+            let refit = fit_model(acc, std::slice::from_ref(acc), added, sel_opts)?;
+            a.whiteness = self.residual_analysis(v, p, &refit)?.whiteness;
+        }
+        Ok(out)
+    }
 }
 
 /// Refinement of `candidate`'s continuous setting
