@@ -23,12 +23,7 @@
 //! not a measurement: it is dropped and derived instead, with a note in
 //! [`JointMotion::notes`].
 
-use std::{
-    fmt,
-    io::{BufRead, Read},
-    path::Path,
-    str::FromStr,
-};
+use std::{fmt, io::Read, path::Path, str::FromStr};
 
 use aras_log::{CsvTable, RowColumns};
 
@@ -287,7 +282,7 @@ pub fn read_joint_log(path: &Path, columns: &ColumnMap) -> Result<JointLog, LogE
 /// Reads a joint log from any reader; `file` names the source in errors and
 /// `name` becomes [`JointMotion::name`].
 pub fn read_joint_log_from(
-    reader: impl BufRead,
+    reader: impl Read,
     file: &str,
     name: &str,
     columns: &ColumnMap,
@@ -313,7 +308,7 @@ pub fn read_joint_motion(
 /// [`read_joint_motion`] from any reader (`file` and `name` as in
 /// [`read_joint_log_from`]).
 pub fn read_joint_motion_from(
-    reader: impl BufRead,
+    reader: impl Read,
     file: &str,
     name: &str,
     columns: &ColumnMap,
@@ -321,9 +316,9 @@ pub fn read_joint_motion_from(
     read(reader, file, name, columns, false)
 }
 
-/// The file's name for errors, its stem for the log's name, and a buffered
-/// reader of it.
-fn open(path: &Path) -> Result<(String, String, std::io::BufReader<std::fs::File>), LogError> {
+/// The file's name for errors, its stem for the log's name, and
+/// the file (unbuffered: [`CsvTable`] reads it in large blocks itself).
+fn open(path: &Path) -> Result<(String, String, std::fs::File), LogError> {
     let file = path.display().to_string();
     let f = std::fs::File::open(path).map_err(|source| LogError::Io {
         file: file.clone(),
@@ -333,7 +328,7 @@ fn open(path: &Path) -> Result<(String, String, std::io::BufReader<std::fs::File
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "log".into());
-    Ok((file, name, std::io::BufReader::new(f)))
+    Ok((file, name, f))
 }
 
 /// The columns of a joint log, by role, as found in a table's header.
@@ -398,7 +393,7 @@ impl Roles {
 /// The reader behind both entry points: the torque column is required when
 /// `need_tau`, and read when present otherwise.
 fn read(
-    reader: impl BufRead,
+    reader: impl Read,
     file: &str,
     name: &str,
     columns: &ColumnMap,

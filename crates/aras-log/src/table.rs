@@ -112,11 +112,21 @@ impl<R: Read> CsvTable<R> {
     /// Parses the next data row's chosen columns into `vals` (one value per
     /// slot of `columns`) and returns its line number, or `None` at the end
     /// of the table. Stops at the first defective row with its error.
+    ///
+    /// # Panics
+    ///
+    /// If `vals` has fewer entries than [`RowColumns::slots`].
     pub fn next_row(
         &mut self,
         columns: &RowColumns,
         vals: &mut [f64],
     ) -> Result<Option<u64>, LogError> {
+        assert!(
+            vals.len() >= columns.slots(),
+            "a row of {} slots parsed into {} values",
+            columns.slots(),
+            vals.len()
+        );
         loop {
             let Some(r) = self.lines.next().map_err(|source| LogError::Io {
                 file: self.file.clone(),
