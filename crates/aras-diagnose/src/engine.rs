@@ -379,6 +379,17 @@ pub struct Step<C> {
     pub refinement: Option<Refinement>,
 }
 
+impl<C: Candidate> Step<C> {
+    /// The step's candidate at its refined setting where it was refined:
+    /// the effect the final model carries.
+    pub fn refined_candidate(&self) -> C {
+        match &self.refinement {
+            Some(r) => self.candidate.with_setting(r.value),
+            None => self.candidate.clone(),
+        }
+    }
+}
+
 /// Whether a refined setting lies inside its search interval.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -1465,16 +1476,6 @@ impl Verdict {
     /// systematic.
     fn noise_like(&self) -> bool {
         self.stopped_clean && self.white && !self.systematic
-    }
-}
-
-impl<C: Candidate> Step<C> {
-    /// The step's candidate at its refined setting, if refined.
-    fn refined_candidate(&self) -> C {
-        match &self.refinement {
-            Some(r) => self.candidate.with_setting(r.value),
-            None => self.candidate.clone(),
-        }
     }
 }
 

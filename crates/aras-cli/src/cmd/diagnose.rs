@@ -346,7 +346,7 @@ fn effects_added(r: &mut Report, d: &Diagnosis, train: &str) -> Result<()> {
         let specs: Vec<String> = d
             .steps
             .iter()
-            .map(|s| effect_spec(&s.candidate, s.refinement.as_ref().map(|f| f.value)))
+            .map(|s| effect_spec(&s.refined_candidate(), None))
             .collect();
         r.paragraph(format!(
             "To identify the model with them (refined settings where refined): \

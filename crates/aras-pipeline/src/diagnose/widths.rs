@@ -47,11 +47,7 @@ impl Additions {
     pub fn named(steps: &[Step]) -> Self {
         let mut out = Self::default();
         for s in steps {
-            let c = s
-                .refinement
-                .as_ref()
-                .map_or(s.candidate, |f| s.candidate.with_setting(f.value));
-            match c {
+            match s.refined_candidate() {
                 Candidate::Effect { effect } => out.effects.push(effect),
                 Candidate::TimeDelay { samples } => out.torque_delay = Some(samples),
             }
